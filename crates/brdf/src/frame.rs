@@ -1,0 +1,71 @@
+//! Orthonormal shading frames.
+
+use glam::Vec3;
+
+/// An orthonormal basis (s, t, n): world ↔ local, with n the local z axis.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Frame {
+    /// Tangent (local x).
+    pub s: Vec3,
+    /// Bitangent (local y).
+    pub t: Vec3,
+    /// Normal (local z).
+    pub n: Vec3,
+}
+
+impl Frame {
+    /// A frame around unit normal `n`, branchless and continuous except at one point
+    /// (Duff et al. 2017, "Building an Orthonormal Basis, Revisited", JCGT 6(1)).
+    #[inline]
+    pub fn from_normal(n: Vec3) -> Self {
+        let sign = 1.0f32.copysign(n.z);
+        let a = -1.0 / (sign + n.z);
+        let b = n.x * n.y * a;
+        Self {
+            s: Vec3::new(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x),
+            t: Vec3::new(b, sign + n.y * n.y * a, -n.y),
+            n,
+        }
+    }
+
+    /// World direction → local coordinates.
+    #[inline]
+    pub fn to_local(&self, v: Vec3) -> Vec3 {
+        Vec3::new(v.dot(self.s), v.dot(self.t), v.dot(self.n))
+    }
+
+    /// Local coordinates → world direction.
+    #[inline]
+    pub fn to_world(&self, v: Vec3) -> Vec3 {
+        self.s * v.x + self.t * v.y + self.n * v.z
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn frames_are_orthonormal_and_round_trip() {
+        let normals = [
+            Vec3::Z,
+            -Vec3::Z,
+            Vec3::X,
+            Vec3::new(0.0, 0.0, -0.999_999),
+            Vec3::new(1.0, 2.0, 3.0).normalize(),
+            Vec3::new(-0.3, 0.1, -0.9).normalize(),
+        ];
+        for n in normals {
+            let f = Frame::from_normal(n);
+            for (a, b) in [(f.s, f.t), (f.t, f.n), (f.s, f.n)] {
+                assert!(a.dot(b).abs() < 1e-5, "{n}");
+            }
+            for v in [f.s, f.t, f.n] {
+                assert!((v.length() - 1.0).abs() < 1e-5, "{n}");
+            }
+            assert!(f.s.cross(f.t).dot(f.n) > 0.99, "right-handed for {n}");
+            let w = Vec3::new(0.2, -0.5, 0.7);
+            assert!((f.to_world(f.to_local(w)) - w).length() < 1e-5);
+        }
+    }
+}

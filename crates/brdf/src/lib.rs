@@ -1,0 +1,94 @@
+//! BSDF models behind one trait, evaluated at a path's sampled wavelengths.
+//!
+//! Every model works in a local shading frame ([`Frame`]) whose z axis is the shading
+//! normal: `cos θ = w.z`. Directions point away from the surface (ωo towards the
+//! viewer, ωi towards the light), as in pbrt. Values are [`SampledSpectrum<N>`], one
+//! per sampled wavelength (or colour channel), so a model never knows which spectral
+//! mode is rendering.
+//!
+//! This crate knows spectra and directions, nothing of rays or scenes.
+
+pub mod fresnel;
+pub mod frame;
+pub mod models;
+pub mod sampling;
+
+pub use frame::Frame;
+pub use models::{Dielectric, Lambert, Mirror};
+
+use glam::{Vec2, Vec3};
+use spectral::SampledSpectrum;
+
+/// What kind of scattering a BSDF (or one of its samples) does.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub struct ScatterFlags(u8);
+
+impl ScatterFlags {
+    /// Light leaves on the side it arrived.
+    pub const REFLECTION: Self = Self(1);
+    /// Light crosses the surface.
+    pub const TRANSMISSION: Self = Self(2);
+    /// Spread over the hemisphere (Lambert-like).
+    pub const DIFFUSE: Self = Self(4);
+    /// Spread around a preferred direction.
+    pub const GLOSSY: Self = Self(8);
+    /// A Dirac delta: one outgoing direction, not reachable by light sampling.
+    pub const SPECULAR: Self = Self(16);
+    /// The sampled direction depends on wavelength (dispersion): the integrator must
+    /// follow one wavelength only from here on.
+    pub const WAVELENGTH_DEPENDENT: Self = Self(32);
+
+    /// True if every flag of `other` is set.
+    #[inline]
+    pub fn contains(self, other: Self) -> bool {
+        self.0 & other.0 == other.0
+    }
+    /// True if the scattering is a Dirac delta.
+    #[inline]
+    pub fn is_specular(self) -> bool {
+        self.contains(Self::SPECULAR)
+    }
+    /// True if light sampling can reach it (it has a non-delta part).
+    #[inline]
+    pub fn is_non_specular(self) -> bool {
+        self.0 & (Self::DIFFUSE.0 | Self::GLOSSY.0) != 0
+    }
+}
+
+impl std::ops::BitOr for ScatterFlags {
+    type Output = Self;
+    #[inline]
+    fn bitor(self, rhs: Self) -> Self {
+        Self(self.0 | rhs.0)
+    }
+}
+
+/// One importance sample of a BSDF.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BsdfSample<const N: usize> {
+    /// The sampled incident direction, local frame.
+    pub wi: Vec3,
+    /// The BSDF value f(ωo, ωi) for that direction (for a delta lobe: its weight divided
+    /// by |cos θi|, so that f·|cos θi|/pdf is the throughput either way).
+    pub f: SampledSpectrum<N>,
+    /// The pdf with respect to solid angle (for a delta lobe: the discrete probability of
+    /// choosing it).
+    pub pdf: f32,
+    /// What kind of event was sampled.
+    pub flags: ScatterFlags,
+}
+
+/// A BSDF at one surface point, already bound to the path's wavelengths.
+///
+/// `eval` and `pdf` must agree with `sample`: the chi-square tests in this crate check
+/// that samples are distributed by `pdf` and that `sample` returns `eval` and `pdf`.
+pub trait Bsdf<const N: usize> {
+    /// What this BSDF can do.
+    fn flags(&self) -> ScatterFlags;
+    /// f(ωo, ωi), without the cosine; zero for delta lobes.
+    fn eval(&self, wo: Vec3, wi: Vec3) -> SampledSpectrum<N>;
+    /// The solid-angle pdf of sampling ωi given ωo; zero for delta lobes.
+    fn pdf(&self, wo: Vec3, wi: Vec3) -> f32;
+    /// Samples ωi given ωo: `uc` picks a lobe, `u` the direction within it.
+    fn sample(&self, wo: Vec3, uc: f32, u: Vec2) -> Option<BsdfSample<N>>;
+}

@@ -1,0 +1,62 @@
+//! Ray accelerators over triangle soups.
+//!
+//! * [`Accelerator`]: the trait the integrator calls — closest hit and any-hit occlusion;
+//! * [`Bvh`]: a binned-SAH bounding volume hierarchy, flattened depth-first into small
+//!   POD nodes ([`BvhNode`]) that a GPU can traverse unchanged;
+//! * [`BruteForce`]: tests every triangle; the oracle the tests compare against.
+//!
+//! This crate knows boxes, rays and triangles, nothing of materials.
+
+mod aabb;
+mod brute;
+mod build;
+mod ray;
+mod triangle;
+
+pub use aabb::Aabb;
+pub use brute::BruteForce;
+pub use build::{BuildConfig, Bvh, BvhNode, BvhStats};
+pub use ray::{Hit, Ray};
+pub use triangle::{Triangle, intersect_triangle};
+
+use glam::Vec3;
+
+/// Why an accelerator could not be built.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum BuildError {
+    /// A triangle has a NaN or infinite coordinate.
+    #[error("triangle {index} has a non-finite vertex coordinate {vertex:?}")]
+    NonFinite {
+        /// Index of the triangle in the input.
+        index: usize,
+        /// The offending vertex.
+        vertex: [f32; 3],
+    },
+    /// More triangles than a 32-bit index can address.
+    #[error("{0} triangles exceed the 2^32 − 1 an accelerator can index")]
+    TooManyTriangles(usize),
+}
+
+/// Finds ray–scene intersections; implemented by every acceleration structure.
+pub trait Accelerator: Send + Sync {
+    /// The closest hit with t in (`ray.t_min`, `ray.t_max`), if any.
+    fn intersect(&self, ray: &Ray) -> Option<Hit>;
+    /// True if anything is hit with t in (`ray.t_min`, `ray.t_max`): shadow rays stop at
+    /// the first hit found.
+    fn occluded(&self, ray: &Ray) -> bool;
+    /// The bounds of everything in the structure.
+    fn bounds(&self) -> Aabb;
+}
+
+/// Checks every vertex for NaN/∞ and the count for u32 indexing.
+pub(crate) fn validate(triangles: &[[Vec3; 3]]) -> Result<(), BuildError> {
+    if triangles.len() >= u32::MAX as usize {
+        return Err(BuildError::TooManyTriangles(triangles.len()));
+    }
+    for (index, tri) in triangles.iter().enumerate() {
+        if let Some(v) = tri.iter().find(|v| !v.is_finite()) {
+            return Err(BuildError::NonFinite { index, vertex: v.to_array() });
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,259 @@
+//! `spt`: the spectral path tracer's command-line tool.
+
+use anyhow::{Context, Result, bail};
+use clap::{Args, Parser, Subcommand};
+use glam::Vec3;
+use indicatif::{ProgressBar, ProgressStyle};
+use spectral::SpectralMode;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use tracer::camera::Camera;
+use tracer::integrator::PathSettings;
+use tracer::output::write_image;
+use tracer::render::PreparedScene;
+use tracer::{CpuBackend, RenderSettings, Scene};
+
+#[derive(Parser)]
+#[command(name = "spt", version, about = "A spectral, physically based path tracer")]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Render a scene to an image (PNG: 8-bit sRGB; EXR: linear float).
+    Render(RenderArgs),
+    /// Time whole renders of a scene in each spectral mode and print samples/s.
+    Bench(BenchArgs),
+}
+
+#[derive(Args, Clone)]
+struct SceneArgs {
+    /// The scene file (.obj with its .mtl).
+    scene: PathBuf,
+    /// Image width in pixels.
+    #[arg(long, default_value_t = 512)]
+    width: u32,
+    /// Image height in pixels.
+    #[arg(long, default_value_t = 512)]
+    height: u32,
+    /// Random seed: the same seed gives the same image, whatever the thread count.
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    /// Worker threads (0 = one per core).
+    #[arg(long, default_value_t = 0)]
+    threads: usize,
+    /// Maximum number of bounces; 0 = unbounded (Russian roulette only).
+    #[arg(long, default_value_t = 0)]
+    max_depth: u32,
+    /// Bounces before Russian roulette starts.
+    #[arg(long, default_value_t = 3)]
+    rr_depth: u32,
+    /// Camera position x,y,z (default: frame the scene's bounding box).
+    #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true)]
+    eye: Option<Vec3>,
+    /// Point the camera looks at, x,y,z.
+    #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true)]
+    center: Option<Vec3>,
+    /// Camera up direction x,y,z.
+    #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true, default_value = "0,1,0")]
+    up: Vec3,
+    /// Vertical field of view in degrees.
+    #[arg(long, default_value_t = tracer::camera::DEFAULT_FOV_Y_DEG)]
+    fov: f32,
+}
+
+#[derive(Args)]
+struct RenderArgs {
+    #[command(flatten)]
+    scene: SceneArgs,
+    /// Samples per pixel.
+    #[arg(long, default_value_t = 64)]
+    spp: u32,
+    /// Spectral sampling: hero (4 importance-sampled wavelengths), bins40 (the thesis's
+    /// fixed 380–770 nm bins) or rgb.
+    #[arg(long, default_value = "hero")]
+    spectral: SpectralMode,
+    /// Output image (.png or .exr).
+    #[arg(short, long, default_value = "render.png")]
+    output: PathBuf,
+    /// Also write the per-pixel standard error of the mean (linear EXR).
+    #[arg(long)]
+    stderr: Option<PathBuf>,
+}
+
+#[derive(Args)]
+struct BenchArgs {
+    #[command(flatten)]
+    scene: SceneArgs,
+    /// Samples per pixel per timed render.
+    #[arg(long, default_value_t = 16)]
+    spp: u32,
+    /// Timed renders per mode (the median is reported).
+    #[arg(long, default_value_t = 3)]
+    repeats: u32,
+    /// Spectral modes to time, comma-separated.
+    #[arg(long, value_delimiter = ',', default_value = "hero,bins40,rgb")]
+    modes: Vec<SpectralMode>,
+}
+
+fn parse_vec3(s: &str) -> Result<Vec3, String> {
+    let parts: Vec<&str> = s.split(',').collect();
+    if parts.len() != 3 {
+        return Err(format!("expected x,y,z, got '{s}'"));
+    }
+    let mut v = [0.0f32; 3];
+    for (o, p) in v.iter_mut().zip(&parts) {
+        *o = p.trim().parse().map_err(|_| format!("'{p}' is not a number"))?;
+        if !o.is_finite() {
+            return Err(format!("'{p}' is not finite"));
+        }
+    }
+    Ok(Vec3::from_array(v))
+}
+
+fn load_scene(path: &Path) -> Result<Scene> {
+    match path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref() {
+        Some("obj") => Ok(tracer::obj::load_obj(path)?),
+        _ => bail!("{}: unsupported scene format (supported: .obj)", path.display()),
+    }
+}
+
+fn settings(args: &SceneArgs, spp: u32, mode: SpectralMode, scene: &Scene) -> Result<RenderSettings> {
+    let camera = match (args.eye, args.center) {
+        (None, None) if args.fov == tracer::camera::DEFAULT_FOV_Y_DEG && args.up == Vec3::Y => None,
+        (eye, center) => {
+            let base = scene
+                .camera
+                .unwrap_or_else(|| Camera::framing(&scene.bounds(), args.width as f32 / args.height.max(1) as f32));
+            Some(Camera {
+                eye: eye.unwrap_or(base.eye),
+                center: center.unwrap_or(base.center),
+                up: args.up,
+                fov_y_deg: args.fov,
+            })
+        }
+    };
+    let s = RenderSettings {
+        width: args.width,
+        height: args.height,
+        spp,
+        seed: args.seed,
+        mode,
+        path: PathSettings { max_depth: args.max_depth, rr_depth: args.rr_depth },
+        camera,
+    };
+    s.validate()?;
+    Ok(s)
+}
+
+fn prepare(args: &SceneArgs) -> Result<PreparedScene> {
+    let scene = load_scene(&args.scene)?;
+    if scene.triangles.is_empty() {
+        bail!("{}: the scene has no triangles", args.scene.display());
+    }
+    Ok(PreparedScene::new(scene)?)
+}
+
+fn run_render(args: RenderArgs) -> Result<()> {
+    tracer::output::ImageFormat::from_path(&args.output)?;
+    if let Some(p) = &args.stderr
+        && tracer::output::ImageFormat::from_path(p)? != tracer::output::ImageFormat::Exr
+    {
+        bail!("{}: the standard-error image must be an .exr (it is linear)", p.display());
+    }
+    let prepared = prepare(&args.scene)?;
+    let settings = settings(&args.scene, args.spp, args.spectral, &prepared.scene)?;
+    let backend = CpuBackend::new(args.scene.threads)?;
+    let s = &prepared.scene;
+    eprintln!(
+        "{}: {} triangles, {} emissive, BVH built in {:.1} ms; {}×{} at {} spp, {} mode, {} threads",
+        args.scene.scene.display(),
+        s.triangles.len(),
+        prepared.lights.triangle_count(),
+        prepared.build_time.as_secs_f64() * 1e3,
+        settings.width,
+        settings.height,
+        settings.spp,
+        settings.mode.name(),
+        backend.threads()
+    );
+    if prepared.lights.is_empty() {
+        eprintln!("warning: the scene has no light (no Ke > 0 and no environment): the image will be black");
+    }
+    let total = settings.width as u64 * settings.height as u64 * settings.spp as u64;
+    let bar = ProgressBar::new(total).with_style(
+        ProgressStyle::with_template("{bar:40} {percent:>3}% {human_pos}/{human_len} samples, ETA {eta}")
+            .expect("static template"),
+    );
+    let (film, stats) = tracer::render(&backend, &prepared, &settings, &|n| bar.inc(n))?;
+    bar.finish_and_clear();
+    write_image(&args.output, film.width(), film.height(), &film.mean_rgb())?;
+    if let Some(p) = &args.stderr {
+        write_image(p, film.width(), film.height(), &film.std_error_rgb())?;
+    }
+    let secs = stats.wall.as_secs_f64();
+    eprintln!(
+        "wrote {}: {:.2} s, {:.3} M samples/s, {:.2} M rays/s, {} NaN/Inf samples dropped",
+        args.output.display(),
+        secs,
+        stats.samples_per_second() / 1e6,
+        stats.rays as f64 / secs.max(1e-9) / 1e6,
+        stats.non_finite
+    );
+    Ok(())
+}
+
+fn run_bench(args: BenchArgs) -> Result<()> {
+    if args.repeats == 0 {
+        bail!("--repeats must be at least 1");
+    }
+    let prepared = prepare(&args.scene)?;
+    let backend = CpuBackend::new(args.scene.threads)?;
+    println!(
+        "# {} {}x{} {} spp, {} threads, median of {}",
+        args.scene.scene.display(),
+        args.scene.width,
+        args.scene.height,
+        args.spp,
+        backend.threads(),
+        args.repeats
+    );
+    println!("{:<8} {:>12} {:>12} {:>10} {:>10}", "mode", "Msamples/s", "Mrays/s", "wall_s", "nan");
+    for mode in &args.modes {
+        let settings = settings(&args.scene, args.spp, *mode, &prepared.scene)?;
+        let mut runs = Vec::new();
+        for _ in 0..args.repeats {
+            let (_, stats) = tracer::render(&backend, &prepared, &settings, &|_| {})?;
+            runs.push(stats);
+        }
+        runs.sort_by(|a, b| a.wall.cmp(&b.wall));
+        let m = runs[runs.len() / 2];
+        let secs = m.wall.as_secs_f64();
+        println!(
+            "{:<8} {:>12.3} {:>12.3} {:>10.3} {:>10}",
+            mode.name(),
+            m.samples_per_second() / 1e6,
+            m.rays as f64 / secs / 1e6,
+            secs,
+            m.non_finite
+        );
+    }
+    Ok(())
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Render(a) => run_render(a).context("render failed"),
+        Command::Bench(a) => run_bench(a).context("bench failed"),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}

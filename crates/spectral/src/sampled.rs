@@ -1,0 +1,391 @@
+//! Spectra at a handful of sampled wavelengths: the per-path currency of the integrator.
+//!
+//! A path carries a [`SampledSpectrum<N>`] of throughput and radiance, one value per
+//! entry of its [`SampledWavelengths<N>`]. Three strategies ([`SpectralMode`]) choose
+//! those entries:
+//!
+//! * **hero** (default, N = 4): four wavelengths per path, stratified over [0, 1) and
+//!   importance-sampled by a pdf that follows the visual response (Radziszewski et al.
+//!   2009; Wilkie et al. 2014 "hero wavelength"; pdf from pbrt-v4 §4.6.5);
+//! * **bins40** (N = 40): the seed thesis's fixed 40 wavelengths 380, 390, …, 770 nm,
+//!   a 10 nm Riemann sum — deterministic in λ (no colour noise) but biased by the
+//!   quadrature and blind outside 380–770 nm;
+//! * **rgb** (N = 3): the three linear-sRGB channels, not spectral at all; for comparison
+//!   with RGB renderers.
+
+use crate::colour::{cie_xyz, xyz_to_linear_srgb};
+use crate::tables::CIE_Y_INTEGRAL;
+use std::ops::{Add, AddAssign, Div, DivAssign, Index, IndexMut, Mul, MulAssign, Sub};
+
+/// Shortest wavelength the renderer samples, nm (the CIE tables' range).
+pub const LAMBDA_MIN: f32 = 360.0;
+/// Longest wavelength the renderer samples, nm.
+pub const LAMBDA_MAX: f32 = 830.0;
+
+/// Values of a spectrum (or, in RGB mode, of three colour channels) at N sampled points.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SampledSpectrum<const N: usize>(pub [f32; N]);
+
+impl<const N: usize> SampledSpectrum<N> {
+    /// Every entry equal to `v`.
+    #[inline]
+    pub const fn splat(v: f32) -> Self {
+        Self([v; N])
+    }
+    /// All zeros.
+    #[inline]
+    pub const fn zero() -> Self {
+        Self([0.0; N])
+    }
+    /// All ones.
+    #[inline]
+    pub const fn one() -> Self {
+        Self([1.0; N])
+    }
+    /// True if every entry is zero.
+    #[inline]
+    pub fn is_black(&self) -> bool {
+        self.0.iter().all(|&v| v == 0.0)
+    }
+    /// True if no entry is NaN or infinite.
+    #[inline]
+    pub fn is_finite(&self) -> bool {
+        self.0.iter().all(|v| v.is_finite())
+    }
+    /// The largest entry.
+    #[inline]
+    pub fn max_component(&self) -> f32 {
+        self.0.iter().copied().fold(f32::NEG_INFINITY, f32::max)
+    }
+    /// The mean of the entries.
+    #[inline]
+    pub fn average(&self) -> f32 {
+        self.0.iter().sum::<f32>() / N as f32
+    }
+    /// Applies `f` to every entry.
+    #[inline]
+    pub fn map(self, f: impl Fn(f32) -> f32) -> Self {
+        Self(self.0.map(f))
+    }
+    /// Division that yields 0 where the divisor is 0 (for MIS weights and throughputs).
+    #[inline]
+    pub fn safe_div(self, rhs: Self) -> Self {
+        let mut out = self.0;
+        for (o, d) in out.iter_mut().zip(rhs.0) {
+            *o = if d != 0.0 { *o / d } else { 0.0 };
+        }
+        Self(out)
+    }
+}
+
+macro_rules! elementwise {
+    ($tr:ident, $f:ident, $tra:ident, $fa:ident, $op:tt) => {
+        impl<const N: usize> $tr for SampledSpectrum<N> {
+            type Output = Self;
+            #[inline]
+            fn $f(mut self, rhs: Self) -> Self {
+                for (a, b) in self.0.iter_mut().zip(rhs.0) {
+                    *a = *a $op b;
+                }
+                self
+            }
+        }
+        impl<const N: usize> $tr<f32> for SampledSpectrum<N> {
+            type Output = Self;
+            #[inline]
+            fn $f(mut self, rhs: f32) -> Self {
+                for a in self.0.iter_mut() {
+                    *a = *a $op rhs;
+                }
+                self
+            }
+        }
+        impl<const N: usize> $tra for SampledSpectrum<N> {
+            #[inline]
+            fn $fa(&mut self, rhs: Self) {
+                *self = *self $op rhs;
+            }
+        }
+        impl<const N: usize> $tra<f32> for SampledSpectrum<N> {
+            #[inline]
+            fn $fa(&mut self, rhs: f32) {
+                *self = *self $op rhs;
+            }
+        }
+    };
+}
+elementwise!(Add, add, AddAssign, add_assign, +);
+elementwise!(Mul, mul, MulAssign, mul_assign, *);
+elementwise!(Div, div, DivAssign, div_assign, /);
+
+impl<const N: usize> Sub for SampledSpectrum<N> {
+    type Output = Self;
+    #[inline]
+    fn sub(mut self, rhs: Self) -> Self {
+        for (a, b) in self.0.iter_mut().zip(rhs.0) {
+            *a -= b;
+        }
+        self
+    }
+}
+
+impl<const N: usize> Mul<SampledSpectrum<N>> for f32 {
+    type Output = SampledSpectrum<N>;
+    #[inline]
+    fn mul(self, rhs: SampledSpectrum<N>) -> SampledSpectrum<N> {
+        rhs * self
+    }
+}
+
+impl<const N: usize> Index<usize> for SampledSpectrum<N> {
+    type Output = f32;
+    #[inline]
+    fn index(&self, i: usize) -> &f32 {
+        &self.0[i]
+    }
+}
+
+impl<const N: usize> IndexMut<usize> for SampledSpectrum<N> {
+    #[inline]
+    fn index_mut(&mut self, i: usize) -> &mut f32 {
+        &mut self.0[i]
+    }
+}
+
+/// How a render samples the spectrum; chosen once per render.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum SpectralMode {
+    /// Four stratified, importance-sampled wavelengths per path (N = 4).
+    #[default]
+    Hero,
+    /// The thesis's fixed 40 wavelengths, 380–770 nm in 10 nm steps (N = 40).
+    Bins40,
+    /// Three linear-sRGB channels (N = 3): an RGB renderer, for comparison.
+    Rgb,
+}
+
+impl SpectralMode {
+    /// Every mode, for sweeps and help texts.
+    pub const ALL: [SpectralMode; 3] = [Self::Hero, Self::Bins40, Self::Rgb];
+
+    /// The mode's name as the CLI spells it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Hero => "hero",
+            Self::Bins40 => "bins40",
+            Self::Rgb => "rgb",
+        }
+    }
+
+    /// How many values a path carries in this mode.
+    pub fn lanes(self) -> usize {
+        match self {
+            Self::Hero => 4,
+            Self::Bins40 => 40,
+            Self::Rgb => 3,
+        }
+    }
+}
+
+impl std::str::FromStr for SpectralMode {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        Self::ALL
+            .into_iter()
+            .find(|m| m.name().eq_ignore_ascii_case(s))
+            .ok_or_else(|| format!("unknown spectral mode '{s}' (expected hero, bins40 or rgb)"))
+    }
+}
+
+/// The points at which a path's spectra are sampled, with the weight each gets when the
+/// path's radiance is turned into colour.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SampledWavelengths<const N: usize> {
+    /// Wavelengths in nm (unused in RGB mode).
+    pub lambda: [f32; N],
+    /// Per-entry estimator weight: 1 / (N · pdf(λ)) for the spectral modes, so that
+    /// XYZ = Σ wᵢ · L(λᵢ) · cmf(λᵢ) / ∫ȳ; 1 for RGB.
+    pub weight: [f32; N],
+    rgb: bool,
+}
+
+/// Normalisation constants of the visible-wavelength pdf p(λ) ∝ sech²(k(λ − 538 nm)),
+/// k = 0.0072 nm⁻¹, on [360, 830] nm (pbrt-v4 §4.6.5); derived here from k and the range.
+const VIS_K: f32 = 0.0072;
+const VIS_CENTRE: f32 = 538.0;
+
+#[inline]
+fn visible_tanh_bounds() -> (f32, f32) {
+    (
+        (VIS_K * (LAMBDA_MIN - VIS_CENTRE)).tanh(),
+        (VIS_K * (LAMBDA_MAX - VIS_CENTRE)).tanh(),
+    )
+}
+
+/// The pdf (per nm) of [`sample_visible_wavelength`].
+#[inline]
+pub fn visible_wavelength_pdf(lambda: f32) -> f32 {
+    if !(LAMBDA_MIN..=LAMBDA_MAX).contains(&lambda) {
+        return 0.0;
+    }
+    let (lo, hi) = visible_tanh_bounds();
+    let c = (VIS_K * (lambda - VIS_CENTRE)).cosh();
+    VIS_K / ((hi - lo) * c * c)
+}
+
+/// Maps u ∈ [0, 1) to a wavelength distributed by [`visible_wavelength_pdf`]
+/// (inverse of its CDF, F(λ) = (tanh k(λ−538) − tanh k(360−538)) / (tanh k(830−538) − tanh k(360−538))).
+#[inline]
+pub fn sample_visible_wavelength(u: f32) -> f32 {
+    let (lo, hi) = visible_tanh_bounds();
+    let t = (lo + u * (hi - lo)).clamp(-0.999_999, 0.999_999);
+    (VIS_CENTRE + t.atanh() / VIS_K).clamp(LAMBDA_MIN, LAMBDA_MAX)
+}
+
+impl<const N: usize> SampledWavelengths<N> {
+    /// Hero sampling: N wavelengths from u, u + 1/N, … (mod 1) through the visible pdf.
+    pub fn sample_hero(u: f32) -> Self {
+        let mut lambda = [0.0; N];
+        let mut weight = [0.0; N];
+        for i in 0..N {
+            let ui = (u + i as f32 / N as f32).fract();
+            lambda[i] = sample_visible_wavelength(ui);
+            weight[i] = 1.0 / (N as f32 * visible_wavelength_pdf(lambda[i]));
+        }
+        Self { lambda, weight, rgb: false }
+    }
+
+    /// Equally spaced wavelengths `first`, `first + step`, … with Riemann weights `step`.
+    pub fn fixed_bins(first: f32, step: f32) -> Self {
+        Self {
+            lambda: std::array::from_fn(|i| first + step * i as f32),
+            weight: [step; N],
+            rgb: false,
+        }
+    }
+
+    /// The three linear-sRGB channels (only meaningful for N = 3).
+    pub fn rgb() -> Self {
+        Self { lambda: [0.0; N], weight: [1.0; N], rgb: true }
+    }
+
+    /// True in RGB mode: entries are colour channels, not wavelengths.
+    #[inline]
+    pub fn is_rgb(&self) -> bool {
+        self.rgb
+    }
+
+    /// Evaluates a spectrum at every sampled wavelength.
+    #[inline]
+    pub fn eval(&self, spectrum: impl Fn(f32) -> f32) -> SampledSpectrum<N> {
+        SampledSpectrum(self.lambda.map(spectrum))
+    }
+
+    /// The linear-sRGB colour of a radiance estimate at these wavelengths.
+    #[inline]
+    pub fn to_linear_srgb(&self, radiance: &SampledSpectrum<N>) -> [f32; 3] {
+        if self.rgb {
+            return std::array::from_fn(|i| if i < N { radiance.0[i] } else { 0.0 });
+        }
+        let mut xyz = [0.0f32; 3];
+        for i in 0..N {
+            let l = radiance.0[i] * self.weight[i];
+            if l != 0.0 {
+                let c = cie_xyz(self.lambda[i]);
+                xyz[0] += l * c[0];
+                xyz[1] += l * c[1];
+                xyz[2] += l * c[2];
+            }
+        }
+        xyz_to_linear_srgb(xyz.map(|v| v / CIE_Y_INTEGRAL))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn visible_pdf_integrates_to_one() {
+        // Midpoint rule at 0.01 nm over the support.
+        let n = 47_000;
+        let h = (LAMBDA_MAX - LAMBDA_MIN) as f64 / n as f64;
+        let integral: f64 = (0..n)
+            .map(|i| visible_wavelength_pdf(LAMBDA_MIN + ((i as f64 + 0.5) * h) as f32) as f64 * h)
+            .sum();
+        assert!((integral - 1.0).abs() < 1e-4, "∫pdf = {integral}");
+    }
+
+    #[test]
+    fn sampling_inverts_the_cdf() {
+        // The fraction of samples below λ must equal ∫pdf up to λ (a Kolmogorov–Smirnov
+        // style check on a deterministic, uniform grid of u).
+        let n = 100_000;
+        let mut lambdas: Vec<f32> =
+            (0..n).map(|i| sample_visible_wavelength((i as f32 + 0.5) / n as f32)).collect();
+        lambdas.sort_by(f32::total_cmp);
+        for probe in [400.0f32, 500.0, 538.0, 600.0, 700.0, 800.0] {
+            let below = lambdas.partition_point(|&l| l < probe) as f64 / n as f64;
+            let steps = 20_000;
+            let h = (probe - LAMBDA_MIN) as f64 / steps as f64;
+            let cdf: f64 = (0..steps)
+                .map(|i| visible_wavelength_pdf(LAMBDA_MIN + ((i as f64 + 0.5) * h) as f32) as f64 * h)
+                .sum();
+            assert!((below - cdf).abs() < 1e-3, "λ={probe}: empirical {below}, cdf {cdf}");
+        }
+    }
+
+    #[test]
+    fn hero_wavelengths_are_stratified_and_in_range() {
+        for k in 0..100 {
+            let wl = SampledWavelengths::<4>::sample_hero(k as f32 / 100.0);
+            for (&l, &w) in wl.lambda.iter().zip(&wl.weight) {
+                assert!((LAMBDA_MIN..=LAMBDA_MAX).contains(&l));
+                assert!(w.is_finite() && w > 0.0);
+            }
+            let mut sorted = wl.lambda;
+            sorted.sort_by(f32::total_cmp);
+            // One wavelength in each quarter of the CDF: no two share a stratum.
+            let strata: Vec<usize> = sorted
+                .iter()
+                .map(|&l| {
+                    let (lo, hi) = visible_tanh_bounds();
+                    let u = ((VIS_K * (l - VIS_CENTRE)).tanh() - lo) / (hi - lo);
+                    ((u * 4.0) as usize).min(3)
+                })
+                .collect();
+            let mut s = strata.clone();
+            s.dedup();
+            assert_eq!(s.len(), 4, "strata {strata:?} for u = {}", k as f32 / 100.0);
+        }
+    }
+
+    #[test]
+    fn hero_estimate_of_a_constant_spectrum_is_unbiased() {
+        // E[XYZ] of a constant spectrum 1 is the CMF integral / ∫ȳ → Y = 1.
+        let n = 20_000;
+        let mut y = 0.0f64;
+        for i in 0..n {
+            let wl = SampledWavelengths::<4>::sample_hero((i as f32 + 0.5) / n as f32);
+            let rgb = wl.to_linear_srgb(&SampledSpectrum::one());
+            y += (0.212_639 * rgb[0] + 0.715_168_7 * rgb[1] + 0.072_192_3 * rgb[2]) as f64;
+        }
+        let y = y / n as f64;
+        assert!((y - 1.0).abs() < 2e-3, "Y = {y}");
+    }
+
+    #[test]
+    fn rgb_mode_passes_channels_through() {
+        let wl = SampledWavelengths::<3>::rgb();
+        assert_eq!(wl.to_linear_srgb(&SampledSpectrum([0.1, 0.2, 0.3])), [0.1, 0.2, 0.3]);
+    }
+
+    #[test]
+    fn mode_names_round_trip() {
+        for m in SpectralMode::ALL {
+            assert_eq!(m.name().parse::<SpectralMode>().unwrap(), m);
+        }
+        assert!("rgb8".parse::<SpectralMode>().is_err());
+    }
+}

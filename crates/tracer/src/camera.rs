@@ -1,0 +1,133 @@
+//! The pinhole camera of the thesis (ch. 5.1): eye, centre, up and a vertical field of view.
+
+use bvh::{Aabb, Ray};
+use glam::{Vec2, Vec3};
+
+/// A pinhole camera. Image rows run top (up) to bottom; image right is view × up.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Camera {
+    /// Eye position.
+    pub eye: Vec3,
+    /// The point looked at.
+    pub center: Vec3,
+    /// Up direction (need not be orthogonal to the view direction).
+    pub up: Vec3,
+    /// Vertical field of view, degrees.
+    pub fov_y_deg: f32,
+}
+
+/// The default vertical field of view, degrees (the Cornell box reference's).
+pub const DEFAULT_FOV_Y_DEG: f32 = 39.3077;
+
+impl Camera {
+    /// Checks that the camera is usable: finite, eye ≠ centre, up not along the view, and
+    /// 0 < fov < 180°.
+    pub fn validate(&self) -> Result<(), String> {
+        let all = [self.eye, self.center, self.up];
+        if all.iter().any(|v| !v.is_finite()) || !self.fov_y_deg.is_finite() {
+            return Err("camera values must be finite".into());
+        }
+        let dir = self.center - self.eye;
+        if dir.length_squared() == 0.0 {
+            return Err("camera eye and center coincide".into());
+        }
+        if dir.normalize().cross(self.up).length_squared() < 1e-12 {
+            return Err("camera up is parallel to the view direction (or zero)".into());
+        }
+        if !(self.fov_y_deg > 0.0 && self.fov_y_deg < 180.0) {
+            return Err(format!("field of view {}° is not in (0°, 180°)", self.fov_y_deg));
+        }
+        Ok(())
+    }
+
+    /// The documented default view of a scene without a camera: looking down −z at the
+    /// bounding box's centre, with +y up and a 39.3077° vertical field of view, from just
+    /// far enough (plus 2.5 %) that the box's front face (its +z face) fills the frame
+    /// for the given aspect ratio. For the Cornell box this lands within a few per cent
+    /// of the classic view (eye ≈ (0, 1, 3.9)).
+    pub fn framing(bounds: &Aabb, aspect: f32) -> Self {
+        let (centre, extent) = if bounds.is_empty() {
+            (Vec3::ZERO, Vec3::ONE)
+        } else {
+            (bounds.centre(), bounds.extent().max(Vec3::splat(1e-6)))
+        };
+        let tan_y = (0.5 * DEFAULT_FOV_Y_DEG.to_radians()).tan();
+        let tan_x = tan_y * aspect;
+        let dist = (0.5 * extent.y / tan_y).max(0.5 * extent.x / tan_x) * 1.025 + 0.5 * extent.z;
+        Self { eye: centre + Vec3::Z * dist, center: centre, up: Vec3::Y, fov_y_deg: DEFAULT_FOV_Y_DEG }
+    }
+
+    /// Precomputes the ray generator for an image size.
+    pub fn rays(&self, width: u32, height: u32) -> RayGenerator {
+        let forward = (self.center - self.eye).normalize();
+        let right = forward.cross(self.up).normalize();
+        let up = right.cross(forward);
+        let tan_y = (0.5 * self.fov_y_deg.to_radians()).tan();
+        let tan_x = tan_y * width as f32 / height as f32;
+        RayGenerator {
+            eye: self.eye,
+            forward,
+            right: right * tan_x,
+            up: up * tan_y,
+            inv_size: Vec2::new(1.0 / width as f32, 1.0 / height as f32),
+        }
+    }
+}
+
+/// Turns film positions into primary rays.
+#[derive(Clone, Copy, Debug)]
+pub struct RayGenerator {
+    eye: Vec3,
+    forward: Vec3,
+    right: Vec3,
+    up: Vec3,
+    inv_size: Vec2,
+}
+
+impl RayGenerator {
+    /// The ray through film position (x, y) in pixels from the top-left corner; a pixel
+    /// spans [x, x+1) × [y, y+1), so jittering within it is a box filter.
+    #[inline]
+    pub fn ray(&self, film: Vec2) -> Ray {
+        let ndc = Vec2::new(2.0 * film.x * self.inv_size.x - 1.0, 1.0 - 2.0 * film.y * self.inv_size.y);
+        let dir = (self.forward + ndc.x * self.right + ndc.y * self.up).normalize();
+        Ray::new(self.eye, dir)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn centre_ray_looks_at_center_and_corners_span_the_fov() {
+        let cam = Camera { eye: Vec3::new(0.0, 1.0, 3.9), center: Vec3::new(0.0, 1.0, 0.0), up: Vec3::Y, fov_y_deg: 40.0 };
+        let g = cam.rays(200, 100);
+        let mid = g.ray(Vec2::new(100.0, 50.0));
+        assert!((mid.dir - -Vec3::Z).length() < 1e-6);
+        let top = g.ray(Vec2::new(100.0, 0.0));
+        let angle = top.dir.dot(-Vec3::Z).acos().to_degrees();
+        assert!((angle - 20.0).abs() < 1e-3, "{angle}");
+        assert!(top.dir.y > 0.0, "image top is up");
+        let right = g.ray(Vec2::new(200.0, 50.0));
+        assert!(right.dir.x > 0.0, "image right is view × up");
+    }
+
+    #[test]
+    fn default_framing_of_the_cornell_box_is_close_to_the_classic_view() {
+        let b = Aabb { min: Vec3::new(-1.02, 0.0, -1.04), max: Vec3::new(1.0, 1.99, 0.99) };
+        let cam = Camera::framing(&b, 1.0);
+        assert!((cam.eye.z - 3.9).abs() < 0.1, "{}", cam.eye);
+        assert!(cam.validate().is_ok());
+    }
+
+    #[test]
+    fn invalid_cameras_are_rejected() {
+        let ok = Camera { eye: Vec3::Z, center: Vec3::ZERO, up: Vec3::Y, fov_y_deg: 40.0 };
+        assert!(ok.validate().is_ok());
+        assert!(Camera { center: Vec3::Z, ..ok }.validate().is_err());
+        assert!(Camera { up: Vec3::Z, ..ok }.validate().is_err());
+        assert!(Camera { fov_y_deg: 180.0, ..ok }.validate().is_err());
+        assert!(Camera { eye: Vec3::NAN, ..ok }.validate().is_err());
+    }
+}

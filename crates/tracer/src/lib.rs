@@ -1,0 +1,77 @@
+//! The path tracer: scenes, loaders, the integrator, the film and image output, behind a
+//! backend-agnostic renderer API.
+//!
+//! Data flows one way: a [`Scene`] (flat, `bytemuck`-friendly arrays of vertices,
+//! triangles and per-triangle material ids, plus materials, lights and a camera) →
+//! an accelerator from the `bvh` crate → the [`integrator`] → a [`Film`] → images.
+//! A [`Backend`] renders passes of samples into a film; [`CpuBackend`] does it with
+//! rayon, tile-parallel and bit-identical for a given seed whatever the thread count.
+
+pub mod camera;
+pub mod film;
+pub mod integrator;
+pub mod lights;
+pub mod material;
+pub mod mesh;
+pub mod obj;
+pub mod output;
+pub mod render;
+pub mod sampler;
+pub mod scene;
+
+pub use camera::Camera;
+pub use film::Film;
+pub use material::Material;
+pub use render::{Backend, CpuBackend, RenderSettings, RenderStats, render};
+pub use scene::{Environment, Scene};
+pub use spectral::SpectralMode;
+
+use std::path::PathBuf;
+
+/// Everything that can go wrong between a scene file and an image.
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    /// A file could not be read or written.
+    #[error("{path}: {source}")]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// What the OS said.
+        source: std::io::Error,
+    },
+    /// A scene file is malformed.
+    #[error("{path}{}: {message}", line.map(|l| format!(":{l}")).unwrap_or_default())]
+    Parse {
+        /// The file.
+        path: PathBuf,
+        /// The 1-based line, where known.
+        line: Option<usize>,
+        /// What is wrong.
+        message: String,
+    },
+    /// A material or light colour is invalid.
+    #[error("material '{material}': {source}")]
+    Material {
+        /// The material's name.
+        material: String,
+        /// Why.
+        source: spectral::SpectralError,
+    },
+    /// The geometry cannot be put in an accelerator.
+    #[error("geometry: {0}")]
+    Geometry(#[from] bvh::BuildError),
+    /// A render setting is out of range.
+    #[error("invalid setting: {0}")]
+    Setting(String),
+    /// An image could not be encoded.
+    #[error("{path}: {message}")]
+    Image {
+        /// The file.
+        path: PathBuf,
+        /// What went wrong.
+        message: String,
+    },
+}
+
+/// Result with this crate's [`Error`].
+pub type Result<T, E = Error> = std::result::Result<T, E>;

@@ -1,0 +1,201 @@
+//! Wavefront OBJ/MTL scenes, parsed by `tobj`.
+//!
+//! Material mapping (the thesis's MTL extensions come with the loaders issue):
+//! * `Ke` > 0 → a one-sided area light of radiance `Ke` (front = counter-clockwise);
+//! * `illum` 4, 6, 7, or `d` < 1 → smooth dielectric with index `Ni` (default 1.5) and
+//!   tint `Tf`-less white;
+//! * `illum` 3 or 5 → perfect mirror with reflectance `Ks`;
+//! * otherwise → Lambertian with albedo `Kd` (default 0.5 grey, Mitsuba's default).
+//!
+//! Faces are fan-triangulated. Before `tobj` parses, a line-by-line check finds the
+//! first malformed or non-finite `v`/`vn`/`vt`/`f` line and reports its line number,
+//! which `tobj`'s errors do not carry.
+
+use crate::material::{Material, Surface};
+use crate::scene::Scene;
+use crate::{Error, Result};
+use brdf::models::FresnelModel;
+use glam::Vec3;
+use spectral::spectrum::Colour;
+use std::path::Path;
+
+/// Albedo of faces without a material.
+pub const DEFAULT_ALBEDO: f32 = 0.5;
+
+/// Loads an OBJ file and the MTL libraries it names.
+pub fn load_obj(path: &Path) -> Result<Scene> {
+    let text = std::fs::read(path).map_err(|source| Error::Io { path: path.to_path_buf(), source })?;
+    let text = String::from_utf8_lossy(&text);
+    if let Some((line, message)) = check_obj_text(&text) {
+        return Err(Error::Parse { path: path.to_path_buf(), line: Some(line), message });
+    }
+    let options = tobj::LoadOptions { triangulate: true, single_index: true, ignore_points: true, ignore_lines: true };
+    let (models, materials) = tobj::load_obj(path, &options)
+        .map_err(|e| Error::Parse { path: path.to_path_buf(), line: None, message: e.to_string() })?;
+    let materials = match materials {
+        Ok(m) => m,
+        Err(e) => {
+            let lib = find_mtllib(&text).map(|l| path.with_file_name(l));
+            if let Some(lib) = &lib
+                && let Ok(mtl) = std::fs::read_to_string(lib)
+                && let Some((line, message)) = check_mtl_text(&mtl)
+            {
+                return Err(Error::Parse { path: lib.clone(), line: Some(line), message });
+            }
+            if lib.is_some() {
+                return Err(Error::Parse {
+                    path: lib.unwrap_or_else(|| path.to_path_buf()),
+                    line: None,
+                    message: format!("cannot load the material library named by the OBJ: {e}"),
+                });
+            }
+            Vec::new()
+        }
+    };
+    let converted: Vec<Material> = materials.iter().map(convert_material).collect::<Result<_>>()?;
+    let mut scene = Scene::default();
+    let default = Material::diffuse("(default)", Colour::constant(DEFAULT_ALBEDO));
+    for model in &models {
+        let mesh = &model.mesh;
+        let positions: Vec<Vec3> = mesh.positions.chunks_exact(3).map(|p| Vec3::new(p[0], p[1], p[2])).collect();
+        let normals: Option<Vec<Vec3>> = (mesh.normals.len() == mesh.positions.len() && !mesh.normals.is_empty())
+            .then(|| mesh.normals.chunks_exact(3).map(|n| Vec3::new(n[0], n[1], n[2])).collect());
+        let tris: Vec<[u32; 3]> = mesh.indices.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect();
+        if tris.is_empty() {
+            continue;
+        }
+        let material = mesh.material_id.and_then(|i| converted.get(i)).cloned().unwrap_or_else(|| default.clone());
+        scene.add_mesh(&positions, normals.as_deref(), &tris, material);
+    }
+    Ok(scene)
+}
+
+fn convert_material(m: &tobj::Material) -> Result<Material> {
+    let wrap = |source| Error::Material { material: m.name.clone(), source };
+    let emission = match m.emissive {
+        Some(ke) if ke.iter().any(|&v| v != 0.0) => Some(Colour::illuminant_rgb(ke).map_err(wrap)?),
+        _ => None,
+    };
+    let illum = m.illumination_model.unwrap_or(2);
+    let dissolve = m.dissolve.unwrap_or(1.0);
+    let surface = if matches!(illum, 4 | 6 | 7) || dissolve < 1.0 {
+        let ior = m.optical_density.unwrap_or(1.5);
+        if !(ior.is_finite() && ior > 0.0) {
+            return Err(Error::Setting(format!("material '{}': Ni = {ior} must be a positive number", m.name)));
+        }
+        Surface::Dielectric { ior, tint: Colour::constant(1.0), fresnel: FresnelModel::Exact }
+    } else if matches!(illum, 3 | 5) {
+        Surface::Mirror { reflectance: Colour::reflectance_rgb(m.specular.unwrap_or([1.0; 3])).map_err(wrap)? }
+    } else {
+        Surface::Diffuse { albedo: Colour::reflectance_rgb(m.diffuse.unwrap_or([DEFAULT_ALBEDO; 3])).map_err(wrap)? }
+    };
+    Ok(Material { name: m.name.clone(), surface, emission })
+}
+
+fn find_mtllib(text: &str) -> Option<String> {
+    text.lines().find_map(|l| l.trim().strip_prefix("mtllib").map(|rest| rest.trim().to_string()))
+}
+
+fn parse_floats(rest: &str, min: usize, max: usize, what: &str) -> std::result::Result<(), String> {
+    let mut n = 0;
+    for tok in rest.split_whitespace() {
+        if tok.starts_with('#') {
+            break;
+        }
+        let v: f32 = tok.parse().map_err(|_| format!("{what}: '{tok}' is not a number"))?;
+        if !v.is_finite() {
+            return Err(format!("{what}: '{tok}' is not finite"));
+        }
+        n += 1;
+    }
+    if n < min || n > max {
+        return Err(format!("{what}: expected {min}–{max} numbers, found {n}"));
+    }
+    Ok(())
+}
+
+/// The first malformed geometry line of an OBJ text: (1-based line, message).
+pub fn check_obj_text(text: &str) -> Option<(usize, String)> {
+    let (mut nv, mut nt, mut nn) = (0i64, 0i64, 0i64);
+    for (i, raw) in text.lines().enumerate() {
+        let line = raw.trim();
+        let (key, rest) = line.split_once(char::is_whitespace).unwrap_or((line, ""));
+        let result = match key {
+            "v" => parse_floats(rest, 3, 7, "vertex").map(|_| nv += 1),
+            "vn" => parse_floats(rest, 3, 3, "normal").map(|_| nn += 1),
+            "vt" => parse_floats(rest, 1, 3, "texture coordinate").map(|_| nt += 1),
+            "f" => check_face(rest, nv, nt, nn),
+            _ => Ok(()),
+        };
+        if let Err(message) = result {
+            return Some((i + 1, message));
+        }
+    }
+    None
+}
+
+fn check_face(rest: &str, nv: i64, nt: i64, nn: i64) -> std::result::Result<(), String> {
+    let corners: Vec<&str> = rest.split_whitespace().take_while(|t| !t.starts_with('#')).collect();
+    if corners.len() < 3 {
+        return Err(format!("face: needs at least 3 vertices, found {}", corners.len()));
+    }
+    for c in corners {
+        for (k, (part, count, what)) in
+            c.split('/').zip([nv, nt, nn]).zip(["vertex", "texture coordinate", "normal"]).map(|((p, n), w)| (p, n, w)).enumerate()
+        {
+            if part.is_empty() && k > 0 {
+                continue;
+            }
+            let idx: i64 = part.parse().map_err(|_| format!("face: '{c}' is not a valid vertex reference"))?;
+            let resolved = if idx < 0 { count + idx } else { idx - 1 };
+            if idx == 0 || resolved < 0 || resolved >= count {
+                return Err(format!("face: {what} index {idx} is out of range (only {count} defined so far)"));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The first malformed numeric statement of an MTL text: (1-based line, message).
+pub fn check_mtl_text(text: &str) -> Option<(usize, String)> {
+    for (i, raw) in text.lines().enumerate() {
+        let line = raw.trim();
+        let (key, rest) = line.split_once(char::is_whitespace).unwrap_or((line, ""));
+        let result = match key {
+            "Ka" | "Kd" | "Ks" | "Ke" | "Tf" => parse_floats(rest, 1, 3, key),
+            "Ns" | "Ni" | "d" | "Tr" => parse_floats(rest, 1, 1, key),
+            "illum" => rest
+                .split_whitespace()
+                .next()
+                .and_then(|t| t.parse::<u8>().ok())
+                .map(|_| ())
+                .ok_or_else(|| format!("illum: '{}' is not a model number 0–10", rest.trim())),
+            _ => Ok(()),
+        };
+        if let Err(message) = result {
+            return Some((i + 1, message));
+        }
+    }
+    None
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn finds_the_bad_line() {
+        let obj = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nv 1 x 0\n";
+        assert_eq!(check_obj_text(obj).map(|(l, _)| l), Some(5));
+        let obj = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n";
+        let (line, msg) = check_obj_text(obj).unwrap();
+        assert_eq!(line, 4);
+        assert!(msg.contains("out of range"), "{msg}");
+        assert_eq!(check_obj_text("v 0 0 nan\n").map(|(l, _)| l), Some(1));
+        assert_eq!(check_obj_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nf -3 -2 -1\nf 1/1 2/2 3/3\n").map(|(l, _)| l), Some(5));
+        assert_eq!(check_obj_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nf 1//1 2//1 3//1 # c\n"), None);
+        assert_eq!(check_obj_text("f 1 2\n").map(|(l, _)| l), Some(1));
+        assert_eq!(check_mtl_text("newmtl a\nKd 0.5 0.5 zz\n").map(|(l, _)| l), Some(2));
+        assert_eq!(check_mtl_text("newmtl a\nKd 0.5 0.5 0.5\nillum 2\n"), None);
+    }
+}

@@ -1,0 +1,110 @@
+//! The scene: flat arrays of geometry plus materials, lights, camera and environment.
+
+use crate::camera::Camera;
+use crate::material::Material;
+use crate::{Error, Result};
+use bvh::Aabb;
+use glam::Vec3;
+use spectral::spectrum::Colour;
+
+/// Light arriving from infinitely far away in every direction that hits nothing.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Environment {
+    /// Radiance, the same from every direction (the thesis's "sky" SPD).
+    pub radiance: Colour,
+}
+
+/// A renderable scene. Geometry is a triangle soup over shared vertices, kept as flat,
+/// `bytemuck`-castable arrays (`[f32; 3]`, `[u32; 3]`, `u32`) so that a GPU backend can
+/// upload exactly what the CPU traverses.
+#[derive(Clone, Debug, Default)]
+pub struct Scene {
+    /// Vertex positions.
+    pub positions: Vec<[f32; 3]>,
+    /// Per-vertex shading normals (same length as `positions`), or empty for flat shading.
+    pub normals: Vec<[f32; 3]>,
+    /// Triangles as vertex indices; counter-clockwise seen from the front.
+    pub triangles: Vec<[u32; 3]>,
+    /// Material index of each triangle.
+    pub material_ids: Vec<u32>,
+    /// Materials.
+    pub materials: Vec<Material>,
+    /// The camera, if the scene file gave one.
+    pub camera: Option<Camera>,
+    /// Uniform environment light, if any.
+    pub environment: Option<Environment>,
+}
+
+impl Scene {
+    /// Appends a mesh with one material; returns the material's index.
+    pub fn add_mesh(&mut self, positions: &[Vec3], normals: Option<&[Vec3]>, triangles: &[[u32; 3]], material: Material) -> u32 {
+        let base = self.positions.len() as u32;
+        let had_normals = !self.normals.is_empty() || self.positions.is_empty();
+        self.positions.extend(positions.iter().map(|p| p.to_array()));
+        match normals {
+            Some(ns) => {
+                if !had_normals {
+                    // Earlier meshes were flat: give them their geometric normals' role
+                    // by marking with zero (zero normal = use the geometric normal).
+                    self.normals.resize(base as usize, [0.0; 3]);
+                }
+                self.normals.extend(ns.iter().map(|n| n.to_array()));
+            }
+            None if !self.normals.is_empty() => self.normals.resize(self.positions.len(), [0.0; 3]),
+            None => {}
+        }
+        let id = self.materials.len() as u32;
+        self.materials.push(material);
+        self.triangles.extend(triangles.iter().map(|t| t.map(|i| i + base)));
+        self.material_ids.extend(std::iter::repeat_n(id, triangles.len()));
+        id
+    }
+
+    /// Appends a procedural [`crate::mesh::Mesh`] with one material; returns the material's index.
+    pub fn add(&mut self, mesh: &crate::mesh::Mesh, material: Material) -> u32 {
+        self.add_mesh(&mesh.positions, Some(&mesh.normals), &mesh.triangles, material)
+    }
+
+    /// The three vertices of triangle `i`.
+    #[inline]
+    pub fn triangle_vertices(&self, i: usize) -> [Vec3; 3] {
+        self.triangles[i].map(|v| Vec3::from_array(self.positions[v as usize]))
+    }
+
+    /// Every triangle's vertices, in order (the accelerator's input).
+    pub fn triangle_soup(&self) -> Vec<[Vec3; 3]> {
+        (0..self.triangles.len()).map(|i| self.triangle_vertices(i)).collect()
+    }
+
+    /// The bounds of all geometry.
+    pub fn bounds(&self) -> Aabb {
+        self.positions.iter().fold(Aabb::EMPTY, |b, p| b.grow(Vec3::from_array(*p)))
+    }
+
+    /// Checks internal consistency: indices in range, one material id per triangle,
+    /// finite coordinates, normals matching positions.
+    pub fn validate(&self) -> Result<()> {
+        let bad = |m: String| Err(Error::Setting(m));
+        if self.material_ids.len() != self.triangles.len() {
+            return bad(format!("{} material ids for {} triangles", self.material_ids.len(), self.triangles.len()));
+        }
+        if !self.normals.is_empty() && self.normals.len() != self.positions.len() {
+            return bad(format!("{} normals for {} vertices", self.normals.len(), self.positions.len()));
+        }
+        let nv = self.positions.len() as u32;
+        if let Some((i, t)) = self.triangles.iter().enumerate().find(|(_, t)| t.iter().any(|&v| v >= nv)) {
+            return bad(format!("triangle {i} indexes vertex {t:?}, but there are {nv} vertices"));
+        }
+        let nm = self.materials.len() as u32;
+        if let Some(i) = self.material_ids.iter().position(|&m| m >= nm) {
+            return bad(format!("triangle {i} has material {} of {nm}", self.material_ids[i]));
+        }
+        if let Some(i) = self.positions.iter().position(|p| p.iter().any(|c| !c.is_finite())) {
+            return bad(format!("vertex {i} has a non-finite coordinate {:?}", self.positions[i]));
+        }
+        if let Some(camera) = &self.camera {
+            camera.validate().map_err(Error::Setting)?;
+        }
+        Ok(())
+    }
+}
