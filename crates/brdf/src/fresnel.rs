@@ -115,7 +115,7 @@ mod tests {
             let tt = (ti.sin() / eta).asin();
             let a = fresnel_dielectric(ti.cos(), eta);
             let b = fresnel_dielectric(-tt.cos(), eta);
-            assert!((a - b).abs() < 1e-5, "θ={i}: {a} vs {b}");
+            assert!((a - b).abs() < 1e-4, "θ={i}: {a} vs {b}");
         }
     }
 
@@ -130,20 +130,21 @@ mod tests {
             assert!(wt.z < 0.0);
             let sin_t = (wt.x * wt.x + wt.y * wt.y).sqrt();
             assert!((t.sin() - eta * sin_t).abs() < 1e-5, "Snell at {i}°");
-            let back = refract_local(-wt, eta).unwrap();
-            assert!((back + wo).length() < 1e-4 || (back - wo).length() < 1e-4);
+            // Light retracing the path from inside leaves along the original direction.
+            let back = refract_local(wt, eta).unwrap();
+            assert!((back - wo).length() < 1e-4, "{i}°: {back} vs {wo}");
         }
     }
 
     #[test]
     fn schlick_error_against_exact_is_bounded() {
         // Max |Schlick − exact| over incidence angles from outside for n = 1.5:
-        // measured 0.0068 (near 80°); assert < 0.01.
+        // measured 0.0357 (at 85°), i.e. Schlick is within 4 % absolute everywhere.
         let mut worst = 0.0f32;
         for i in 0..=900 {
             let c = (i as f32 / 10.0).to_radians().cos();
             worst = worst.max((fresnel_schlick(c, 1.5) - fresnel_dielectric(c, 1.5)).abs());
         }
-        assert!(worst < 0.01 && worst > 1e-3, "worst {worst}");
+        assert!(worst < 0.04 && worst > 0.03, "worst {worst}");
     }
 }

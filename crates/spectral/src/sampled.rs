@@ -339,7 +339,9 @@ mod tests {
     #[test]
     fn hero_wavelengths_are_stratified_and_in_range() {
         for k in 0..100 {
-            let wl = SampledWavelengths::<4>::sample_hero(k as f32 / 100.0);
+            // Midpoints: u = 0 would put a wavelength exactly on a stratum boundary.
+            let u = (k as f32 + 0.5) / 100.0;
+            let wl = SampledWavelengths::<4>::sample_hero(u);
             for (&l, &w) in wl.lambda.iter().zip(&wl.weight) {
                 assert!((LAMBDA_MIN..=LAMBDA_MAX).contains(&l));
                 assert!(w.is_finite() && w > 0.0);
@@ -357,7 +359,7 @@ mod tests {
                 .collect();
             let mut s = strata.clone();
             s.dedup();
-            assert_eq!(s.len(), 4, "strata {strata:?} for u = {}", k as f32 / 100.0);
+            assert_eq!(s.len(), 4, "strata {strata:?} for u = {u}");
         }
     }
 

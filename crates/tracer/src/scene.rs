@@ -60,9 +60,11 @@ impl Scene {
         id
     }
 
-    /// Appends a procedural [`crate::mesh::Mesh`] with one material; returns the material's index.
+    /// Appends a procedural [`crate::mesh::Mesh`] with one material (flat-shaded if its
+    /// normals are empty); returns the material's index.
     pub fn add(&mut self, mesh: &crate::mesh::Mesh, material: Material) -> u32 {
-        self.add_mesh(&mesh.positions, Some(&mesh.normals), &mesh.triangles, material)
+        let normals = (!mesh.normals.is_empty()).then_some(mesh.normals.as_slice());
+        self.add_mesh(&mesh.positions, normals, &mesh.triangles, material)
     }
 
     /// The three vertices of triangle `i`.

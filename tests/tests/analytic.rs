@@ -1,0 +1,124 @@
+//! Analytic whole-renderer tests: a closed room whose walls are Lambertian with albedo ρ
+//! and emit Le everywhere has radiance Le / (1 − ρ) at every point and in every
+//! direction (the Neumann series Le·Σρᵏ). The render must match within its own
+//! confidence interval, in every spectral mode.
+
+mod common;
+
+use common::{channel_mean_and_se, sidak_z};
+use glam::Vec3;
+use spectral::spectrum::Colour;
+use spectral::{SampledSpectrum, SampledWavelengths, SpectralMode};
+use tracer::camera::Camera;
+use tracer::integrator::PathSettings;
+use tracer::material::{Material, Surface};
+use tracer::mesh::uv_sphere;
+use tracer::render::PreparedScene;
+use tracer::{CpuBackend, RenderSettings, Scene};
+
+fn glowing_room(albedo: f32, le: f32) -> PreparedScene {
+    let mut scene = Scene::default();
+    let material = Material {
+        name: "wall".into(),
+        surface: Surface::Diffuse { albedo: Colour::constant(albedo) },
+        emission: Some(Colour::constant(le)),
+    };
+    // Flat-shaded: the analytic answer holds for the faceted room with its true normals.
+    // (Interpolated shading normals do not conserve energy exactly; see the notes.)
+    let mut room = uv_sphere(Vec3::ZERO, 1.0, 24, 48, true);
+    room.normals.clear();
+    scene.add(&room, material);
+    scene.camera = Some(Camera { eye: Vec3::new(0.1, 0.2, 0.3), center: Vec3::new(0.0, 0.0, -1.0), up: Vec3::Y, fov_y_deg: 90.0 });
+    PreparedScene::new(scene).unwrap()
+}
+
+/// The colour a constant spectrum of 1 has in each mode (E is not sRGB white; the
+/// 40 fixed bins have their own Riemann-sum weights).
+fn unit_colour(mode: SpectralMode) -> [f64; 3] {
+    match mode {
+        SpectralMode::Rgb => [1.0; 3],
+        SpectralMode::Hero => spectral::colour::spectrum_to_linear_srgb(|_| 1.0).map(|v| v as f64),
+        SpectralMode::Bins40 => {
+            SampledWavelengths::<40>::fixed_bins(380.0, 10.0).to_linear_srgb(&SampledSpectrum::one()).map(|v| v as f64)
+        }
+    }
+}
+
+fn check_room(albedo: f32, mode: SpectralMode, spp: u32) {
+    let le = 0.5f32;
+    let prepared = glowing_room(albedo, le);
+    let settings = RenderSettings {
+        width: 12,
+        height: 12,
+        spp,
+        seed: 11,
+        mode,
+        path: PathSettings { max_depth: 0, rr_depth: 3 },
+        camera: None,
+    };
+    let backend = CpuBackend::new(2).unwrap();
+    let (film, stats) = tracer::render(&backend, &prepared, &settings, &|_| {}).unwrap();
+    assert_eq!(stats.non_finite, 0);
+    let expected = unit_colour(mode).map(|c| c * (le / (1.0 - albedo)) as f64);
+    // Image means against the analytic value, at a 4.5σ bound on the mean's own error.
+    for c in 0..3 {
+        let (mean, se) = channel_mean_and_se(&film, c);
+        let z = (mean - expected[c]) / se;
+        assert!(z.abs() < 4.5, "ρ={albedo} {mode:?} channel {c}: mean {mean} vs {} (se {se}, z {z})", expected[c]);
+        // And not merely within noise: within 1 % as well.
+        assert!((mean / expected[c] - 1.0).abs() < 0.01, "ρ={albedo} {mode:?} channel {c}: {mean} vs {}", expected[c]);
+    }
+    // Every pixel-channel, Šidák-corrected at α = 0.01. Russian roulette makes the
+    // per-sample distribution right-skewed (p50 ≈ 0.91, p99 ≈ 2.4 for a mean of 1 at
+    // ρ = 0.5), so per-pixel means need a few hundred samples before the normal
+    // approximation behind the z-test holds; at 64 spp ~3 % of pixels fail low.
+    let z_max = sidak_z(0.01, film.pixels().len() * 3);
+    let mut fails = 0;
+    for p in film.pixels() {
+        for c in 0..3 {
+            let z = (p.mean[c] - expected[c]) / p.std_error()[c].max(1e-12);
+            if z.abs() > z_max {
+                fails += 1;
+            }
+        }
+    }
+    assert!(fails as f64 <= 0.01 * (film.pixels().len() * 3) as f64, "{mode:?}: {fails} pixel-channels fail");
+}
+
+#[test]
+fn closed_room_albedo_half() {
+    for mode in SpectralMode::ALL {
+        check_room(0.5, mode, 512);
+    }
+}
+
+#[test]
+fn closed_room_albedo_0_9_needs_long_paths_and_russian_roulette() {
+    for mode in [SpectralMode::Rgb, SpectralMode::Hero] {
+        check_room(0.9, mode, 512);
+    }
+}
+
+#[test]
+fn a_depth_limit_cuts_the_series() {
+    // With at most k bounces the radiance is Le·Σ_{j≤k} ρʲ: the test can tell a bounded
+    // from an unbounded path.
+    let (albedo, le) = (0.5f32, 0.5f32);
+    let prepared = glowing_room(albedo, le);
+    for k in [1u32, 2] {
+        let settings = RenderSettings {
+            width: 16,
+            height: 16,
+            spp: 64,
+            seed: 5,
+            mode: SpectralMode::Rgb,
+            path: PathSettings { max_depth: k, rr_depth: 100 },
+            camera: None,
+        };
+        let backend = CpuBackend::new(2).unwrap();
+        let (film, _) = tracer::render(&backend, &prepared, &settings, &|_| {}).unwrap();
+        let expected: f64 = (0..=k).map(|j| (le * albedo.powi(j as i32)) as f64).sum();
+        let (mean, se) = channel_mean_and_se(&film, 1);
+        assert!(((mean - expected) / se).abs() < 4.5, "k={k}: {mean} vs {expected} (se {se})");
+    }
+}
