@@ -28,7 +28,8 @@ fn glowing_room(albedo: f32, le: f32) -> PreparedScene {
     let mut room = uv_sphere(Vec3::ZERO, 1.0, 24, 48, true);
     room.normals.clear();
     scene.add(&room, material);
-    scene.camera = Some(Camera { eye: Vec3::new(0.1, 0.2, 0.3), center: Vec3::new(0.0, 0.0, -1.0), up: Vec3::Y, fov_y_deg: 90.0 });
+    scene.camera =
+        Some(Camera { eye: Vec3::new(0.1, 0.2, 0.3), center: Vec3::new(0.0, 0.0, -1.0), up: Vec3::Y, fov_y_deg: 90.0 });
     PreparedScene::new(scene).unwrap()
 }
 

@@ -1,8 +1,8 @@
 //! Same seed, same bytes — whatever the thread count.
 
 use glam::Vec3;
-use spectral::spectrum::Colour;
 use spectral::SpectralMode;
+use spectral::spectrum::Colour;
 use tracer::camera::Camera;
 use tracer::material::{Material, Surface};
 use tracer::mesh::{quad, uv_sphere};
@@ -11,13 +11,26 @@ use tracer::{CpuBackend, RenderSettings, Scene};
 
 fn scene() -> PreparedScene {
     let mut s = Scene::default();
-    let red = Material { name: "red".into(), surface: Surface::Diffuse { albedo: Colour::reflectance_rgb([0.7, 0.1, 0.1]).unwrap() }, emission: None };
-    let glass = Material { name: "glass".into(), surface: Surface::Dielectric { ior: 1.5, tint: Colour::constant(1.0), fresnel: Default::default() }, emission: None };
-    let light = Material { name: "light".into(), surface: Surface::Diffuse { albedo: Colour::constant(0.5) }, emission: Some(Colour::illuminant_rgb([8.0, 7.0, 5.0]).unwrap()) };
+    let red = Material {
+        name: "red".into(),
+        surface: Surface::Diffuse { albedo: Colour::reflectance_rgb([0.7, 0.1, 0.1]).unwrap() },
+        emission: None,
+    };
+    let glass = Material {
+        name: "glass".into(),
+        surface: Surface::Dielectric { ior: 1.5, tint: Colour::constant(1.0), fresnel: Default::default() },
+        emission: None,
+    };
+    let light = Material {
+        name: "light".into(),
+        surface: Surface::Diffuse { albedo: Colour::constant(0.5) },
+        emission: Some(Colour::illuminant_rgb([8.0, 7.0, 5.0]).unwrap()),
+    };
     s.add(&quad(Vec3::ZERO, Vec3::Y, 2.0), red);
     s.add(&uv_sphere(Vec3::new(0.0, 0.6, 0.0), 0.5, 12, 24, false), glass);
     s.add(&quad(Vec3::new(0.0, 2.0, 0.0), -Vec3::Y, 0.5), light);
-    s.camera = Some(Camera { eye: Vec3::new(0.0, 1.0, 3.0), center: Vec3::new(0.0, 0.5, 0.0), up: Vec3::Y, fov_y_deg: 45.0 });
+    s.camera =
+        Some(Camera { eye: Vec3::new(0.0, 1.0, 3.0), center: Vec3::new(0.0, 0.5, 0.0), up: Vec3::Y, fov_y_deg: 45.0 });
     PreparedScene::new(s).unwrap()
 }
 
@@ -29,7 +42,8 @@ fn one_and_two_threads_give_identical_images() {
         let settings = RenderSettings { width: 37, height: 29, spp: 8, seed: 1234, mode, ..Default::default() };
         let (a, _) = tracer::render(&CpuBackend::new(1).unwrap(), &prepared, &settings, &|_| {}).unwrap();
         let (b, _) = tracer::render(&CpuBackend::new(2).unwrap(), &prepared, &settings, &|_| {}).unwrap();
-        let bits = |f: &tracer::Film| f.mean_rgb().iter().chain(&f.std_error_rgb()).map(|v| v.to_bits()).collect::<Vec<_>>();
+        let bits =
+            |f: &tracer::Film| f.mean_rgb().iter().chain(&f.std_error_rgb()).map(|v| v.to_bits()).collect::<Vec<_>>();
         assert_eq!(bits(&a), bits(&b), "{mode:?}");
         // A different seed must change the image (the test can fail).
         let other = RenderSettings { seed: 1235, ..settings };

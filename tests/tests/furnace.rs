@@ -6,8 +6,8 @@ mod common;
 
 use common::channel_mean_and_se;
 use glam::Vec3;
-use spectral::spectrum::Colour;
 use spectral::SpectralMode;
+use spectral::spectrum::Colour;
 use tracer::camera::Camera;
 use tracer::material::{Material, Surface};
 use tracer::mesh::{quad, uv_sphere};
@@ -15,7 +15,11 @@ use tracer::render::PreparedScene;
 use tracer::{CpuBackend, Environment, RenderSettings, Scene};
 
 fn furnace(albedo: f32) -> PreparedScene {
-    let white = || Material { name: "white".into(), surface: Surface::Diffuse { albedo: Colour::constant(albedo) }, emission: None };
+    let white = || Material {
+        name: "white".into(),
+        surface: Surface::Diffuse { albedo: Colour::constant(albedo) },
+        emission: None,
+    };
     let mut scene = Scene::default();
     scene.add(&uv_sphere(Vec3::new(0.0, 0.5, 0.0), 0.5, 16, 32, false), white());
     // An open box around it (no front wall): concave, so light bounces many times.
@@ -29,7 +33,8 @@ fn furnace(albedo: f32) -> PreparedScene {
         scene.add(&quad(c, n, 1.0), white());
     }
     scene.environment = Some(Environment { radiance: Colour::constant(1.0) });
-    scene.camera = Some(Camera { eye: Vec3::new(0.0, 1.0, 3.5), center: Vec3::new(0.0, 1.0, 0.0), up: Vec3::Y, fov_y_deg: 40.0 });
+    scene.camera =
+        Some(Camera { eye: Vec3::new(0.0, 1.0, 3.5), center: Vec3::new(0.0, 1.0, 0.0), up: Vec3::Y, fov_y_deg: 40.0 });
     PreparedScene::new(scene).unwrap()
 }
 

@@ -8,8 +8,8 @@
 //!
 //! This crate knows spectra and directions, nothing of rays or scenes.
 
-pub mod fresnel;
 pub mod frame;
+pub mod fresnel;
 pub mod models;
 pub mod sampling;
 

@@ -27,20 +27,12 @@ impl<const N: usize> Bsdf<N> for Lambert<N> {
 
     #[inline]
     fn eval(&self, wo: Vec3, wi: Vec3) -> SampledSpectrum<N> {
-        if same_hemisphere(wo, wi) {
-            self.reflectance * FRAC_1_PI
-        } else {
-            SampledSpectrum::zero()
-        }
+        if same_hemisphere(wo, wi) { self.reflectance * FRAC_1_PI } else { SampledSpectrum::zero() }
     }
 
     #[inline]
     fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
-        if same_hemisphere(wo, wi) {
-            cosine_hemisphere_pdf(wi.z.abs())
-        } else {
-            0.0
-        }
+        if same_hemisphere(wo, wi) { cosine_hemisphere_pdf(wi.z.abs()) } else { 0.0 }
     }
 
     #[inline]
@@ -81,12 +73,7 @@ impl<const N: usize> Bsdf<N> for Mirror<N> {
             return None;
         }
         let wi = reflect_local(wo);
-        Some(BsdfSample {
-            wi,
-            f: self.reflectance / wi.z.abs(),
-            pdf: 1.0,
-            flags: self.flags(),
-        })
+        Some(BsdfSample { wi, f: self.reflectance / wi.z.abs(), pdf: 1.0, flags: self.flags() })
     }
 }
 
@@ -199,10 +186,8 @@ mod tests {
         // (cos θ, φ), which is exact in solid angle.
         let mut expected = vec![0.0f64; THETA * PHI];
         for i in 0..THETA {
-            let (t0, t1) = (
-                i as f64 * std::f64::consts::PI / THETA as f64,
-                (i + 1) as f64 * std::f64::consts::PI / THETA as f64,
-            );
+            let (t0, t1) =
+                (i as f64 * std::f64::consts::PI / THETA as f64, (i + 1) as f64 * std::f64::consts::PI / THETA as f64);
             for j in 0..PHI {
                 let (p0, p1) = (
                     j as f64 * std::f64::consts::TAU / PHI as f64,
@@ -251,15 +236,16 @@ mod tests {
         // Numerical Recipes' Chebyshev fit, |error| < 1.2e-7.
         let z = x.abs();
         let t = 1.0 / (1.0 + 0.5 * z);
-        let r = t * (-z * z - 1.265_512_23
-            + t * (1.000_023_68
-                + t * (0.374_091_96
-                    + t * (0.096_784_18
-                        + t * (-0.186_288_06
-                            + t * (0.278_868_07
-                                + t * (-1.135_203_98
-                                    + t * (1.488_515_87 + t * (-0.822_152_23 + t * 0.170_872_77)))))))))
-            .exp();
+        let r = t
+            * (-z * z - 1.265_512_23
+                + t * (1.000_023_68
+                    + t * (0.374_091_96
+                        + t * (0.096_784_18
+                            + t * (-0.186_288_06
+                                + t * (0.278_868_07
+                                    + t * (-1.135_203_98
+                                        + t * (1.488_515_87 + t * (-0.822_152_23 + t * 0.170_872_77)))))))))
+                .exp();
         if x >= 0.0 { r } else { 2.0 - r }
     }
 

@@ -11,11 +11,8 @@ pub fn concentric_disk(u: Vec2) -> Vec2 {
     if o.x == 0.0 && o.y == 0.0 {
         return Vec2::ZERO;
     }
-    let (r, theta) = if o.x.abs() > o.y.abs() {
-        (o.x, FRAC_PI_4 * (o.y / o.x))
-    } else {
-        (o.y, FRAC_PI_2 - FRAC_PI_4 * (o.x / o.y))
-    };
+    let (r, theta) =
+        if o.x.abs() > o.y.abs() { (o.x, FRAC_PI_4 * (o.y / o.x)) } else { (o.y, FRAC_PI_2 - FRAC_PI_4 * (o.x / o.y)) };
     r * Vec2::new(theta.cos(), theta.sin())
 }
 
@@ -88,10 +85,7 @@ mod tests {
         let mut left = 0;
         for i in 0..n {
             for j in 0..n {
-                let (b0, b1) = uniform_triangle(Vec2::new(
-                    (i as f32 + 0.5) / n as f32,
-                    (j as f32 + 0.5) / n as f32,
-                ));
+                let (b0, b1) = uniform_triangle(Vec2::new((i as f32 + 0.5) / n as f32, (j as f32 + 0.5) / n as f32));
                 assert!(b0 >= 0.0 && b1 >= 0.0 && b0 + b1 <= 1.0 + 1e-6);
                 if b0 > 0.5 {
                     left += 1;

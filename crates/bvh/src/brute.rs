@@ -1,4 +1,4 @@
-use crate::{Accelerator, Aabb, BuildError, Hit, Ray, Triangle, intersect_triangle, validate};
+use crate::{Aabb, Accelerator, BuildError, Hit, Ray, Triangle, intersect_triangle, validate};
 use glam::Vec3;
 
 /// Tests every triangle: O(n) per ray, trivially correct — the oracle for the tests.

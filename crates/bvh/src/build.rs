@@ -1,7 +1,7 @@
 //! A binned-SAH BVH (Wald 2007, "On fast Construction of SAH-based Bounding Volume
 //! Hierarchies"), flattened depth-first, with ordered stack traversal.
 
-use crate::{Accelerator, Aabb, BuildError, Hit, Ray, Triangle, intersect_triangle, validate};
+use crate::{Aabb, Accelerator, BuildError, Hit, Ray, Triangle, intersect_triangle, validate};
 use glam::Vec3;
 
 /// One node of the flattened tree: 32 bytes, POD, the layout the GPU traverses too.

@@ -228,7 +228,7 @@ fn run_bench(args: BenchArgs) -> Result<()> {
             let (_, stats) = tracer::render(&backend, &prepared, &settings, &|_| {})?;
             runs.push(stats);
         }
-        runs.sort_by(|a, b| a.wall.cmp(&b.wall));
+        runs.sort_by_key(|r| r.wall);
         let m = runs[runs.len() / 2];
         let secs = m.wall.as_secs_f64();
         println!(

@@ -6,7 +6,10 @@
 //! ~1e-7. The thesis (eq. 4.3–4.12) instead normalises by X+Y+Z and uses other
 //! primaries with an equal-energy white, which turns D65 light blue; see [`crate::thesis`].
 
-use crate::tables::{CIE_SAMPLES, CIE_X, CIE_Y, CIE_Y_INTEGRAL, CIE_Z, CIE_LAMBDA_MIN};
+// Published constants are kept at the precision they were published with.
+#![allow(clippy::excessive_precision)]
+
+use crate::tables::{CIE_LAMBDA_MIN, CIE_SAMPLES, CIE_X, CIE_Y, CIE_Y_INTEGRAL, CIE_Z};
 
 /// Row-major 3×3 matrix taking CIE XYZ (Y = 1 for the white) to linear sRGB.
 pub const XYZ_TO_SRGB: [[f32; 3]; 3] = [
@@ -47,21 +50,13 @@ pub fn linear_srgb_to_xyz(rgb: [f32; 3]) -> [f32; 3] {
 /// The sRGB opto-electronic transfer function (IEC 61966-2-1), for 8-bit output.
 #[inline]
 pub fn srgb_encode(linear: f32) -> f32 {
-    if linear <= 0.003_130_8 {
-        12.92 * linear.max(0.0)
-    } else {
-        1.055 * linear.powf(1.0 / 2.4) - 0.055
-    }
+    if linear <= 0.003_130_8 { 12.92 * linear.max(0.0) } else { 1.055 * linear.powf(1.0 / 2.4) - 0.055 }
 }
 
 /// Inverse of [`srgb_encode`].
 #[inline]
 pub fn srgb_decode(encoded: f32) -> f32 {
-    if encoded <= 0.040_45 {
-        encoded / 12.92
-    } else {
-        ((encoded + 0.055) / 1.055).powf(2.4)
-    }
+    if encoded <= 0.040_45 { encoded / 12.92 } else { ((encoded + 0.055) / 1.055).powf(2.4) }
 }
 
 /// Linear value → 8-bit sRGB code value, clamped to [0, 255] and rounded.

@@ -79,13 +79,13 @@ impl<const N: usize> SampledSpectrum<N> {
 }
 
 macro_rules! elementwise {
-    ($tr:ident, $f:ident, $tra:ident, $fa:ident, $op:tt) => {
+    ($tr:ident, $f:ident, $tra:ident, $fa:ident, $op:tt, $opa:tt) => {
         impl<const N: usize> $tr for SampledSpectrum<N> {
             type Output = Self;
             #[inline]
             fn $f(mut self, rhs: Self) -> Self {
                 for (a, b) in self.0.iter_mut().zip(rhs.0) {
-                    *a = *a $op b;
+                    *a $opa b;
                 }
                 self
             }
@@ -95,7 +95,7 @@ macro_rules! elementwise {
             #[inline]
             fn $f(mut self, rhs: f32) -> Self {
                 for a in self.0.iter_mut() {
-                    *a = *a $op rhs;
+                    *a $opa rhs;
                 }
                 self
             }
@@ -114,9 +114,9 @@ macro_rules! elementwise {
         }
     };
 }
-elementwise!(Add, add, AddAssign, add_assign, +);
-elementwise!(Mul, mul, MulAssign, mul_assign, *);
-elementwise!(Div, div, DivAssign, div_assign, /);
+elementwise!(Add, add, AddAssign, add_assign, +, +=);
+elementwise!(Mul, mul, MulAssign, mul_assign, *, *=);
+elementwise!(Div, div, DivAssign, div_assign, /, /=);
 
 impl<const N: usize> Sub for SampledSpectrum<N> {
     type Output = Self;
@@ -217,10 +217,7 @@ const VIS_CENTRE: f32 = 538.0;
 
 #[inline]
 fn visible_tanh_bounds() -> (f32, f32) {
-    (
-        (VIS_K * (LAMBDA_MIN - VIS_CENTRE)).tanh(),
-        (VIS_K * (LAMBDA_MAX - VIS_CENTRE)).tanh(),
-    )
+    ((VIS_K * (LAMBDA_MIN - VIS_CENTRE)).tanh(), (VIS_K * (LAMBDA_MAX - VIS_CENTRE)).tanh())
 }
 
 /// The pdf (per nm) of [`sample_visible_wavelength`].
@@ -258,11 +255,7 @@ impl<const N: usize> SampledWavelengths<N> {
 
     /// Equally spaced wavelengths `first`, `first + step`, … with Riemann weights `step`.
     pub fn fixed_bins(first: f32, step: f32) -> Self {
-        Self {
-            lambda: std::array::from_fn(|i| first + step * i as f32),
-            weight: [step; N],
-            rgb: false,
-        }
+        Self { lambda: std::array::from_fn(|i| first + step * i as f32), weight: [step; N], rgb: false }
     }
 
     /// The three linear-sRGB channels (only meaningful for N = 3).
@@ -311,9 +304,8 @@ mod tests {
         // Midpoint rule at 0.01 nm over the support.
         let n = 47_000;
         let h = (LAMBDA_MAX - LAMBDA_MIN) as f64 / n as f64;
-        let integral: f64 = (0..n)
-            .map(|i| visible_wavelength_pdf(LAMBDA_MIN + ((i as f64 + 0.5) * h) as f32) as f64 * h)
-            .sum();
+        let integral: f64 =
+            (0..n).map(|i| visible_wavelength_pdf(LAMBDA_MIN + ((i as f64 + 0.5) * h) as f32) as f64 * h).sum();
         assert!((integral - 1.0).abs() < 1e-4, "∫pdf = {integral}");
     }
 
@@ -322,16 +314,14 @@ mod tests {
         // The fraction of samples below λ must equal ∫pdf up to λ (a Kolmogorov–Smirnov
         // style check on a deterministic, uniform grid of u).
         let n = 100_000;
-        let mut lambdas: Vec<f32> =
-            (0..n).map(|i| sample_visible_wavelength((i as f32 + 0.5) / n as f32)).collect();
+        let mut lambdas: Vec<f32> = (0..n).map(|i| sample_visible_wavelength((i as f32 + 0.5) / n as f32)).collect();
         lambdas.sort_by(f32::total_cmp);
         for probe in [400.0f32, 500.0, 538.0, 600.0, 700.0, 800.0] {
             let below = lambdas.partition_point(|&l| l < probe) as f64 / n as f64;
             let steps = 20_000;
             let h = (probe - LAMBDA_MIN) as f64 / steps as f64;
-            let cdf: f64 = (0..steps)
-                .map(|i| visible_wavelength_pdf(LAMBDA_MIN + ((i as f64 + 0.5) * h) as f32) as f64 * h)
-                .sum();
+            let cdf: f64 =
+                (0..steps).map(|i| visible_wavelength_pdf(LAMBDA_MIN + ((i as f64 + 0.5) * h) as f32) as f64 * h).sum();
             assert!((below - cdf).abs() < 1e-3, "λ={probe}: empirical {below}, cdf {cdf}");
         }
     }

@@ -1,10 +1,13 @@
 //! Continuous spectra: functions of wavelength (nm) that materials and lights are made of.
 
+// Published constants are kept at the precision they were published with.
+#![allow(clippy::excessive_precision)]
+
+use crate::SpectralError;
 use crate::colour::{spectrum_to_linear_srgb, spectrum_to_xyz, xyz_to_linear_srgb};
 use crate::sampled::{SampledSpectrum, SampledWavelengths};
 use crate::tables::{D65, D65_LAMBDA_MIN, D65_LAMBDA_STEP};
 use crate::uplift::{RgbAlbedoSpectrum, RgbIlluminantSpectrum, d65_normalised};
-use crate::SpectralError;
 
 /// A piecewise-linear spectrum through (λ, value) samples, held constant beyond its ends
 /// (so that a table given for 380–770 nm still covers the 360–830 nm the renderer samples).
@@ -24,7 +27,7 @@ impl TabulatedSpectrum {
                 value.len()
             )));
         }
-        if let Some(w) = lambda.windows(2).find(|w| !(w[0] < w[1])) {
+        if let Some(w) = lambda.windows(2).find(|w| w[0] >= w[1] || w[0].is_nan()) {
             return Err(SpectralError::BadTable(format!(
                 "wavelengths must increase strictly, found {} then {}",
                 w[0], w[1]

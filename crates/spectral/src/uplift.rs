@@ -146,11 +146,7 @@ impl SigmoidPolynomial {
         } else {
             inverse_sigmoid64(v as f64) as f32
         };
-        Self {
-            c0: 0.0,
-            c1: 0.0,
-            c2,
-        }
+        Self { c0: 0.0, c1: 0.0, c2 }
     }
 }
 
@@ -211,11 +207,7 @@ static FIT: LazyLock<FitTables> = LazyLock::new(|| {
         let lambda = FIT_LAMBDA_MIN + i as f64;
         t[i] = (lambda - FIT_LAMBDA_MIN) / (FIT_LAMBDA_MAX - FIT_LAMBDA_MIN);
         let d = d65_table(lambda);
-        w[i] = [
-            d * CIE_X[i] as f64,
-            d * CIE_Y[i] as f64,
-            d * CIE_Z[i] as f64,
-        ];
+        w[i] = [d * CIE_X[i] as f64, d * CIE_Y[i] as f64, d * CIE_Z[i] as f64];
         norm += w[i][1];
     }
     let mut white = [0.0; 3];
@@ -229,12 +221,7 @@ static FIT: LazyLock<FitTables> = LazyLock::new(|| {
     let to_rgb = XYZ_TO_SRGB.map(|row| row.map(f64::from));
     let white_rgb = to_rgb.map(|row| dot3(row, white));
     let rgb_to_target = to_xyz.map(|row| [0, 1, 2].map(|j| row[j] * white_rgb[j]));
-    FitTables {
-        t,
-        w,
-        white,
-        rgb_to_target,
-    }
+    FitTables { t, w, white, rgb_to_target }
 });
 
 fn dot3(a: [f64; 3], b: [f64; 3]) -> f64 {
@@ -273,11 +260,7 @@ fn lab_and_jacobian(c: [f64; 3], tables: &FitTables) -> ([f64; 3], [[f64; 3]; 3]
     for (&t, w) in tables.t.iter().zip(&tables.w) {
         let x = (c[0] * t + c[1]) * t + c[2];
         let q = 1.0 / (1.0 + x * x).sqrt();
-        let s = if x.abs() < 1e150 {
-            0.5 + 0.5 * x * q
-        } else {
-            sigmoid64(x)
-        };
+        let s = if x.abs() < 1e150 { 0.5 + 0.5 * x * q } else { sigmoid64(x) };
         let ds = 0.5 * q * q * q;
         let g = [ds * t * t, ds * t, ds];
         for k in 0..3 {
@@ -305,8 +288,7 @@ fn lab_and_jacobian(c: [f64; 3], tables: &FitTables) -> ([f64; 3], [[f64; 3]; 3]
 /// Solves the 3×3 system `a x = b` by Cramer's rule; `None` if singular.
 fn solve3(a: &[[f64; 3]; 3], b: [f64; 3]) -> Option<[f64; 3]> {
     let det3 = |m: &[[f64; 3]; 3]| {
-        m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
-            - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
+        m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
             + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0])
     };
     let det = det3(a);
@@ -340,11 +322,7 @@ fn newton(c: &mut [f64; 3], target: [f64; 3], tol: f64, tables: &FitTables) -> f
         let mut alpha = 1.0;
         let mut improved = false;
         for _ in 0..MAX_BACKTRACK {
-            let trial = [
-                c[0] + alpha * step[0],
-                c[1] + alpha * step[1],
-                c[2] + alpha * step[2],
-            ];
+            let trial = [c[0] + alpha * step[0], c[1] + alpha * step[1], c[2] + alpha * step[2]];
             let (lab_t, jac_t) = lab_and_jacobian(trial, tables);
             let r_t = sub3(lab_t, target);
             let err_t = dot3(r_t, r_t).sqrt();
@@ -380,12 +358,7 @@ fn fit_normalised(rgb: [f64; 3]) -> Result<[f64; 3], f64> {
         let xyz = [0, 1, 2].map(|k| xyz_start[k] + next * (xyz_target[k] - xyz_start[k]));
         let goal = lab(xyz, tables.white);
         let mut trial = c;
-        let err = newton(
-            &mut trial,
-            goal,
-            if last { TOL_FINAL } else { TOL_STEP },
-            tables,
-        );
+        let err = newton(&mut trial, goal, if last { TOL_FINAL } else { TOL_STEP }, tables);
         if last {
             best = best.min(err);
         }
@@ -435,10 +408,7 @@ pub fn fit_reflectance(rgb: [f32; 3]) -> Result<SigmoidPolynomial, SpectralError
     let target = rgb.map(|v| (v as f64).clamp(TARGET_EPS, 1.0 - TARGET_EPS));
     match fit_normalised(target) {
         Ok(c) => Ok(to_nanometres(c)),
-        Err(residual) => Err(SpectralError::UpliftDidNotConverge {
-            rgb,
-            residual: residual as f32,
-        }),
+        Err(residual) => Err(SpectralError::UpliftDidNotConverge { rgb, residual: residual as f32 }),
     }
 }
 
@@ -453,9 +423,7 @@ pub struct RgbAlbedoSpectrum {
 impl RgbAlbedoSpectrum {
     /// Uplifts `rgb` with [`fit_reflectance`] (same errors).
     pub fn new(rgb: [f32; 3]) -> Result<Self, SpectralError> {
-        Ok(Self {
-            poly: fit_reflectance(rgb)?,
-        })
+        Ok(Self { poly: fit_reflectance(rgb)? })
     }
 
     /// The reflectance at `lambda_nm`, in [0, 1].
@@ -486,24 +454,15 @@ impl RgbIlluminantSpectrum {
     /// [`SpectralError::UpliftDidNotConverge`].
     pub fn new(rgb: [f32; 3]) -> Result<Self, SpectralError> {
         if let Some(&value) = rgb.iter().find(|v| !(v.is_finite() && **v >= 0.0)) {
-            return Err(SpectralError::BadValue {
-                what: "RGB illuminant component",
-                value,
-            });
+            return Err(SpectralError::BadValue { what: "RGB illuminant component", value });
         }
         let m = rgb[0].max(rgb[1]).max(rgb[2]);
         if m == 0.0 {
-            return Ok(Self {
-                scale: 0.0,
-                poly: SigmoidPolynomial::grey(0.0),
-            });
+            return Ok(Self { scale: 0.0, poly: SigmoidPolynomial::grey(0.0) });
         }
         let scale = 2.0 * m;
         if !scale.is_finite() {
-            return Err(SpectralError::BadValue {
-                what: "RGB illuminant component",
-                value: m,
-            });
+            return Err(SpectralError::BadValue { what: "RGB illuminant component", value: m });
         }
         let poly = fit_reflectance(rgb.map(|v| v / scale))?;
         Ok(Self { scale, poly })
@@ -532,12 +491,7 @@ mod tests {
         mul3(&XYZ_TO_SRGB, spectrum_to_xyz(s))
     }
 
-    const CORNELL: [[f32; 3]; 4] = [
-        [0.725, 0.71, 0.68],
-        [0.63, 0.065, 0.05],
-        [0.14, 0.45, 0.091],
-        [0.78, 0.78, 0.78],
-    ];
+    const CORNELL: [[f32; 3]; 4] = [[0.725, 0.71, 0.68], [0.63, 0.065, 0.05], [0.14, 0.45, 0.091], [0.78, 0.78, 0.78]];
 
     /// The 9³ grid over [0, 1]³ plus the Cornell-box colours.
     fn test_colours() -> Vec<[f32; 3]> {
@@ -569,54 +523,31 @@ mod tests {
             assert!(sigmoid(x) <= sigmoid(x + x.abs() * 0.01 + 0.01));
         }
         // x(λ) = 1e-4 λ² − 0.1 λ + 25 = (λ/100 − 5)²: 0 at 500 nm, 1 at 600 nm and 400 nm.
-        let p = SigmoidPolynomial {
-            c0: 1e-4,
-            c1: -0.1,
-            c2: 25.0,
-        };
+        let p = SigmoidPolynomial { c0: 1e-4, c1: -0.1, c2: 25.0 };
         assert!((p.eval(500.0) - 0.5).abs() < 1e-5);
         assert!((p.eval(600.0) - 0.853_553_4).abs() < 1e-4);
         assert!((p.eval(400.0) - 0.853_553_4).abs() < 1e-4);
         // Its negation peaks at the vertex, 500 nm, with S(0) = ½.
-        let n = SigmoidPolynomial {
-            c0: -1e-4,
-            c1: 0.1,
-            c2: -25.0,
-        };
+        let n = SigmoidPolynomial { c0: -1e-4, c1: 0.1, c2: -25.0 };
         assert!((n.max_value() - 0.5).abs() < 1e-5);
         assert!((p.max_value() - p.eval(830.0)).abs() < 1e-7 && p.max_value() > 0.99);
         // Infinite constants give exact 0 / 1, not NaN.
-        let one = SigmoidPolynomial {
-            c0: 0.0,
-            c1: 0.0,
-            c2: f32::INFINITY,
-        };
-        let zero = SigmoidPolynomial {
-            c0: 0.0,
-            c1: 0.0,
-            c2: f32::NEG_INFINITY,
-        };
+        let one = SigmoidPolynomial { c0: 0.0, c1: 0.0, c2: f32::INFINITY };
+        let zero = SigmoidPolynomial { c0: 0.0, c1: 0.0, c2: f32::NEG_INFINITY };
         assert_eq!((one.eval(550.0), one.max_value()), (1.0, 1.0));
         assert_eq!((zero.eval(550.0), zero.max_value()), (0.0, 0.0));
     }
 
     #[test]
     fn nanometre_expansion_matches_normalised_polynomial() {
-        for c in [
-            [3.0, -2.0, 0.5],
-            [-150.0, 140.0, -30.0],
-            [1e3, -900.0, 200.0],
-        ] {
+        for c in [[3.0, -2.0, 0.5], [-150.0, 140.0, -30.0], [1e3, -900.0, 200.0]] {
             let p = to_nanometres(c);
             for lambda in [360.0f64, 412.0, 555.5, 700.0, 830.0] {
                 let t = (lambda - 360.0) / 470.0;
                 let want = sigmoid64((c[0] * t + c[1]) * t + c[2]);
                 let got = p.eval(lambda as f32) as f64;
                 // f32 rounding of the expanded coefficients; S' ≤ ½.
-                assert!(
-                    (got - want).abs() < 2e-4,
-                    "{c:?} at {lambda}: {got} vs {want}"
-                );
+                assert!((got - want).abs() < 2e-4, "{c:?} at {lambda}: {got} vs {want}");
             }
         }
     }
@@ -653,10 +584,7 @@ mod tests {
         let white = table_white_rgb();
         let _ = fit_reflectance([0.3, 0.2, 0.1]); // Build the tables outside the timing.
         let start = std::time::Instant::now();
-        let fits: Vec<_> = colours
-            .iter()
-            .map(|&c| fit_reflectance(c).unwrap())
-            .collect();
+        let fits: Vec<_> = colours.iter().map(|&c| fit_reflectance(c).unwrap()).collect();
         let per_colour = start.elapsed() / colours.len() as u32;
         // Raw: rgb → spectrum → D65-lit XYZ → XYZ_TO_SRGB. Relative: the same divided by
         // the table white's rgb (what the fit matches by construction).
@@ -665,9 +593,7 @@ mod tests {
         for (rgb, p) in colours.iter().zip(&fits) {
             let back = reflectance_rgb(|l| p.eval(l));
             let raw = (0..3).map(|k| (back[k] - rgb[k]).abs()).fold(0.0, f32::max);
-            let rel = (0..3)
-                .map(|k| (back[k] / white[k] - rgb[k]).abs())
-                .fold(0.0, f32::max);
+            let rel = (0..3).map(|k| (back[k] / white[k] - rgb[k]).abs()).fold(0.0, f32::max);
             sum_raw += raw as f64;
             sum_rel += rel as f64;
             if raw > max_raw {
@@ -703,10 +629,7 @@ mod tests {
             for k in 0..3 {
                 // Measured ≤ 2e-4 raw, ≤ 2e-6 relative to the table white.
                 assert!((back[k] - rgb[k]).abs() < 4e-4, "{rgb:?} → {back:?}");
-                assert!(
-                    (back[k] / white[k] - rgb[k]).abs() < 2e-5,
-                    "{rgb:?} → {back:?}"
-                );
+                assert!((back[k] / white[k] - rgb[k]).abs() < 2e-5, "{rgb:?} → {back:?}");
             }
         }
     }
@@ -743,9 +666,7 @@ mod tests {
         for rgb in colours {
             let p = fit_reflectance(rgb).unwrap_or_else(|e| panic!("{rgb:?}: {e}"));
             let back = reflectance_rgb(|l| p.eval(l));
-            let rel = (0..3)
-                .map(|k| (back[k] / white[k] - rgb[k]).abs())
-                .fold(0.0, f32::max);
+            let rel = (0..3).map(|k| (back[k] / white[k] - rgb[k]).abs()).fold(0.0, f32::max);
             max_rel = max_rel.max(rel);
             assert!(rel < 5e-5, "{rgb:?} → {back:?}");
         }
@@ -783,10 +704,7 @@ mod tests {
         let s = RgbIlluminantSpectrum::new(target).unwrap();
         let rgb = radiance_rgb(|l| s.eval(l));
         for k in 0..3 {
-            assert!(
-                (rgb[k] / target[k] - 1.0).abs() < 0.01,
-                "{target:?} → {rgb:?}"
-            );
+            assert!((rgb[k] / target[k] - 1.0).abs() < 0.01, "{target:?} → {rgb:?}");
         }
         let black = RgbIlluminantSpectrum::new([0.0; 3]).unwrap();
         assert!((360..=830).all(|l| black.eval(l as f32) == 0.0));
@@ -809,33 +727,12 @@ mod tests {
 
     #[test]
     fn out_of_range_inputs_are_errors() {
-        for rgb in [
-            [-0.1, 0.5, 0.5],
-            [0.5, 1.01, 0.5],
-            [0.5, 0.5, f32::NAN],
-            [f32::INFINITY, 0.0, 0.0],
-        ] {
-            assert!(
-                matches!(
-                    fit_reflectance(rgb),
-                    Err(SpectralError::ReflectanceOutOfRange { .. })
-                ),
-                "{rgb:?}"
-            );
+        for rgb in [[-0.1, 0.5, 0.5], [0.5, 1.01, 0.5], [0.5, 0.5, f32::NAN], [f32::INFINITY, 0.0, 0.0]] {
+            assert!(matches!(fit_reflectance(rgb), Err(SpectralError::ReflectanceOutOfRange { .. })), "{rgb:?}");
             assert!(RgbAlbedoSpectrum::new(rgb).is_err());
         }
-        for rgb in [
-            [-1.0, 2.0, 2.0],
-            [f32::NAN, 1.0, 1.0],
-            [1.0, f32::INFINITY, 1.0],
-        ] {
-            assert!(
-                matches!(
-                    RgbIlluminantSpectrum::new(rgb),
-                    Err(SpectralError::BadValue { .. })
-                ),
-                "{rgb:?}"
-            );
+        for rgb in [[-1.0, 2.0, 2.0], [f32::NAN, 1.0, 1.0], [1.0, f32::INFINITY, 1.0]] {
+            assert!(matches!(RgbIlluminantSpectrum::new(rgb), Err(SpectralError::BadValue { .. })), "{rgb:?}");
         }
         assert!(RgbIlluminantSpectrum::new([f32::MAX, 0.0, 0.0]).is_err());
         // Large but finite radiances are fine.

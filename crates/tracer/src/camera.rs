@@ -101,7 +101,8 @@ mod tests {
 
     #[test]
     fn centre_ray_looks_at_center_and_corners_span_the_fov() {
-        let cam = Camera { eye: Vec3::new(0.0, 1.0, 3.9), center: Vec3::new(0.0, 1.0, 0.0), up: Vec3::Y, fov_y_deg: 40.0 };
+        let cam =
+            Camera { eye: Vec3::new(0.0, 1.0, 3.9), center: Vec3::new(0.0, 1.0, 0.0), up: Vec3::Y, fov_y_deg: 40.0 };
         let g = cam.rays(200, 100);
         let mid = g.ray(Vec2::new(100.0, 50.0));
         assert!((mid.dir - -Vec3::Z).length() < 1e-6);

@@ -30,8 +30,11 @@ pub fn load_obj(path: &Path) -> Result<Scene> {
         return Err(Error::Parse { path: path.to_path_buf(), line: Some(line), message });
     }
     let options = tobj::LoadOptions { triangulate: true, single_index: true, ignore_points: true, ignore_lines: true };
-    let (models, materials) = tobj::load_obj(path, &options)
-        .map_err(|e| Error::Parse { path: path.to_path_buf(), line: None, message: e.to_string() })?;
+    let (models, materials) = tobj::load_obj(path, &options).map_err(|e| Error::Parse {
+        path: path.to_path_buf(),
+        line: None,
+        message: e.to_string(),
+    })?;
     let materials = match materials {
         Ok(m) => m,
         Err(e) => {
@@ -140,8 +143,12 @@ fn check_face(rest: &str, nv: i64, nt: i64, nn: i64) -> std::result::Result<(), 
         return Err(format!("face: needs at least 3 vertices, found {}", corners.len()));
     }
     for c in corners {
-        for (k, (part, count, what)) in
-            c.split('/').zip([nv, nt, nn]).zip(["vertex", "texture coordinate", "normal"]).map(|((p, n), w)| (p, n, w)).enumerate()
+        for (k, (part, count, what)) in c
+            .split('/')
+            .zip([nv, nt, nn])
+            .zip(["vertex", "texture coordinate", "normal"])
+            .map(|((p, n), w)| (p, n, w))
+            .enumerate()
         {
             if part.is_empty() && k > 0 {
                 continue;

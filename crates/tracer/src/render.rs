@@ -93,9 +93,10 @@ impl PreparedScene {
 
     /// The camera a render uses: the settings', else the scene's, else the default framing.
     pub fn camera(&self, settings: &RenderSettings) -> Camera {
-        settings.camera.or(self.scene.camera).unwrap_or_else(|| {
-            Camera::framing(&self.scene.bounds(), settings.width as f32 / settings.height as f32)
-        })
+        settings
+            .camera
+            .or(self.scene.camera)
+            .unwrap_or_else(|| Camera::framing(&self.scene.bounds(), settings.width as f32 / settings.height as f32))
     }
 }
 

@@ -37,7 +37,13 @@ pub struct Scene {
 
 impl Scene {
     /// Appends a mesh with one material; returns the material's index.
-    pub fn add_mesh(&mut self, positions: &[Vec3], normals: Option<&[Vec3]>, triangles: &[[u32; 3]], material: Material) -> u32 {
+    pub fn add_mesh(
+        &mut self,
+        positions: &[Vec3],
+        normals: Option<&[Vec3]>,
+        triangles: &[[u32; 3]],
+        material: Material,
+    ) -> u32 {
         let base = self.positions.len() as u32;
         let had_normals = !self.normals.is_empty() || self.positions.is_empty();
         self.positions.extend(positions.iter().map(|p| p.to_array()));

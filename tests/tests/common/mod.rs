@@ -81,7 +81,13 @@ pub fn z_test(a: &[f32], se_a: &[f32], b: &[f32], se_b: &[f32]) -> Comparison {
     for i in 0..a.len() {
         let se = ((se_a[i] as f64).powi(2) + (se_b[i] as f64).powi(2)).sqrt();
         let d = (a[i] - b[i]) as f64;
-        let z = if se > 0.0 { d.abs() / se } else if d.abs() < 1e-6 { 0.0 } else { f64::INFINITY };
+        let z = if se > 0.0 {
+            d.abs() / se
+        } else if d.abs() < 1e-6 {
+            0.0
+        } else {
+            f64::INFINITY
+        };
         worst = worst.max(z);
         if z <= z_max {
             pass += 1;

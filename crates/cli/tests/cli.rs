@@ -1,0 +1,167 @@
+//! The `spt` binary end to end: renders, and clear errors for bad input.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn spt(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_spt")).args(args).output().expect("spt runs")
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+fn temp_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("spt-cli-test-{name}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+const MTL: &str = "newmtl white\nKd 0.8 0.8 0.8\nnewmtl lamp\nKd 0.5 0.5 0.5\nKe 10 10 10\n";
+const OBJ: &str = "mtllib scene.mtl\n\
+v -1 0 -1\nv 1 0 -1\nv 1 0 1\nv -1 0 1\n\
+v -0.3 1 -0.3\nv -0.3 1 0.3\nv 0.3 1 0.3\nv 0.3 1 -0.3\n\
+usemtl white\nf 4 3 2 1\nusemtl lamp\nf 8 7 6 5\n";
+
+fn write_scene(dir: &Path, obj: &str) -> PathBuf {
+    std::fs::write(dir.join("scene.mtl"), MTL).unwrap();
+    let path = dir.join("scene.obj");
+    std::fs::write(&path, obj).unwrap();
+    path
+}
+
+#[test]
+fn renders_png_exr_and_standard_error() {
+    let dir = temp_dir("ok");
+    let scene = write_scene(&dir, OBJ);
+    let png = dir.join("out.png");
+    let exr = dir.join("out.exr");
+    let se = dir.join("se.exr");
+    for (out, mode) in [(&png, "hero"), (&exr, "rgb")] {
+        let o = spt(&[
+            "render",
+            scene.to_str().unwrap(),
+            "--width",
+            "24",
+            "--height",
+            "16",
+            "--spp",
+            "4",
+            "--spectral",
+            mode,
+            "--eye",
+            "0,0.5,3",
+            "--center",
+            "0,0.3,0",
+            "-o",
+            out.to_str().unwrap(),
+            "--stderr",
+            se.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        assert!(stderr(&o).contains("NaN/Inf samples dropped"), "{}", stderr(&o));
+    }
+    let img = image::open(&png).unwrap();
+    assert_eq!((img.width(), img.height()), (24, 16));
+    let lit = img.to_rgb8().pixels().filter(|p| p.0.iter().any(|&c| c > 0)).count();
+    assert!(lit > 40, "the lit floor should be visible: {lit} non-black pixels");
+    let exr_img = image::open(&exr).unwrap().into_rgb32f();
+    assert!(exr_img.pixels().any(|p| p.0[1] > 0.0));
+    assert!(image::open(&se).is_ok());
+}
+
+#[test]
+fn renders_the_shared_cornell_box_with_defaults_but_small() {
+    let scene =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/scenes/cornell-box/CornellBox-Original.obj");
+    if !scene.exists() {
+        eprintln!("SKIPPED: {} is absent", scene.display());
+        return;
+    }
+    let out = temp_dir("cornell").join("cornell.png");
+    let o = spt(&[
+        "render",
+        scene.to_str().unwrap(),
+        "--width",
+        "32",
+        "--height",
+        "32",
+        "--spp",
+        "2",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stderr(&o).contains("36 triangles, 2 emissive"), "{}", stderr(&o));
+    assert!(out.exists());
+}
+
+#[test]
+fn missing_file_is_a_clear_error() {
+    let o = spt(&["render", "/nonexistent/scene.obj", "-o", "/tmp/x.png"]);
+    assert!(!o.status.success());
+    let e = stderr(&o);
+    assert!(e.contains("/nonexistent/scene.obj") && e.to_lowercase().contains("no such file"), "{e}");
+}
+
+#[test]
+fn malformed_obj_names_file_and_line() {
+    let dir = temp_dir("bad");
+    let bad = OBJ.replace("v 1 0 1\n", "v 1 zero 1\n");
+    let scene = write_scene(&dir, &bad);
+    let o = spt(&["render", scene.to_str().unwrap(), "-o", dir.join("x.png").to_str().unwrap()]);
+    assert!(!o.status.success());
+    let e = stderr(&o);
+    assert!(e.contains("scene.obj:4:") && e.contains("'zero' is not a number"), "{e}");
+
+    let bad = OBJ.replace("f 8 7 6 5", "f 9 7 6 5");
+    let scene = write_scene(&dir, &bad);
+    let o = spt(&["render", scene.to_str().unwrap(), "-o", dir.join("x.png").to_str().unwrap()]);
+    let e = stderr(&o);
+    assert!(!o.status.success() && e.contains("scene.obj:13:") && e.contains("out of range"), "{e}");
+}
+
+#[test]
+fn malformed_mtl_names_file_and_line() {
+    let dir = temp_dir("badmtl");
+    let scene = write_scene(&dir, OBJ);
+    std::fs::write(dir.join("scene.mtl"), MTL.replace("Ke 10 10 10", "Ke 10 ten 10")).unwrap();
+    let o = spt(&["render", scene.to_str().unwrap(), "-o", dir.join("x.png").to_str().unwrap()]);
+    let e = stderr(&o);
+    assert!(!o.status.success() && e.contains("scene.mtl:5:"), "{e}");
+}
+
+#[test]
+fn out_of_range_colours_name_the_material() {
+    let dir = temp_dir("range");
+    let scene = write_scene(&dir, OBJ);
+    std::fs::write(dir.join("scene.mtl"), MTL.replace("Kd 0.8 0.8 0.8", "Kd 1.8 0.8 0.8")).unwrap();
+    let o = spt(&["render", scene.to_str().unwrap(), "-o", dir.join("x.png").to_str().unwrap()]);
+    let e = stderr(&o);
+    assert!(!o.status.success() && e.contains("material 'white'") && e.contains("[0, 1]"), "{e}");
+}
+
+#[test]
+fn absurd_settings_are_rejected() {
+    let dir = temp_dir("settings");
+    let scene = write_scene(&dir, OBJ);
+    let s = scene.to_str().unwrap();
+    let out = dir.join("x.png");
+    let o = out.to_str().unwrap();
+    for (args, needle) in [
+        (vec!["render", s, "--spp", "0", "-o", o], "samples per pixel"),
+        (vec!["render", s, "--width", "0", "-o", o], "image size"),
+        (vec!["render", s, "--width", "100000", "-o", o], "image size"),
+        (vec!["render", s, "--fov", "200", "-o", o], "field of view"),
+        (vec!["render", s, "--eye", "0,0,0", "--center", "0,0,0", "-o", o], "coincide"),
+        (vec!["render", s, "-o", dir.join("x.jpg").to_str().unwrap()], "unsupported image extension"),
+        (vec!["render", s, "--stderr", dir.join("se.png").to_str().unwrap(), "-o", o], "must be an .exr"),
+        (vec!["render", s, "--eye", "1,2", "-o", o], "expected x,y,z"),
+        (vec!["render", s, "--spectral", "cmyk", "-o", o], "unknown spectral mode"),
+        (vec!["render", dir.join("scene.fbx").to_str().unwrap(), "-o", o], "unsupported scene format"),
+    ] {
+        let r = spt(&args);
+        assert!(!r.status.success(), "{args:?} should fail");
+        assert!(stderr(&r).contains(needle), "{args:?}: {}", stderr(&r));
+    }
+}
