@@ -2,7 +2,7 @@
 //! Hierarchies"), flattened depth-first, with ordered stack traversal.
 
 use crate::{Aabb, Accelerator, BuildError, Hit, Ray, Triangle, intersect_triangle, validate};
-use glam::Vec3;
+use glam::{Vec3, Vec3A};
 
 /// One node of the flattened tree: 32 bytes, POD, the layout the GPU traverses too.
 ///
@@ -149,14 +149,18 @@ impl Bvh {
 
     #[inline]
     fn traverse(&self, ray: &Ray, any_hit: bool) -> Option<Hit> {
-        if self.nodes.is_empty() || self.nodes[0].aabb().hit(ray, ray.t_max).is_none() {
+        let Some(root) = self.nodes.first() else { return None };
+        let slab = SlabRay::new(ray);
+        let mut t_max = ray.t_max;
+        if slab.enter(root, t_max) == f32::INFINITY {
             return None;
         }
-        let mut stack = [0u32; STACK_DEPTH];
+        // The stack holds far children with their entry distance, so that a pop can be
+        // culled against the best hit without a second box test.
+        let mut stack = [(0u32, 0.0f32); STACK_DEPTH];
         let mut sp = 0usize;
         let mut node = 0usize;
         let mut best: Option<Hit> = None;
-        let mut t_max = ray.t_max;
         loop {
             let n = &self.nodes[node];
             if n.count > 0 {
@@ -174,25 +178,16 @@ impl Bvh {
                 // Visit the nearer child first, push the farther; skip children whose
                 // entry lies beyond the best hit so far.
                 let (l, r) = (node + 1, n.index as usize);
-                let tl = self.nodes[l].aabb().hit(ray, t_max);
-                let tr = self.nodes[r].aabb().hit(ray, t_max);
-                match (tl, tr) {
-                    (Some(a), Some(b)) => {
-                        let (near, far) = if a <= b { (l, r) } else { (r, l) };
-                        stack[sp] = far as u32;
+                let tl = slab.enter(&self.nodes[l], t_max);
+                let tr = slab.enter(&self.nodes[r], t_max);
+                let (near, t_near, far, t_far) = if tl <= tr { (l, tl, r, tr) } else { (r, tr, l, tl) };
+                if t_near != f32::INFINITY {
+                    if t_far != f32::INFINITY {
+                        stack[sp] = (far as u32, t_far);
                         sp += 1;
-                        node = near;
-                        continue;
                     }
-                    (Some(_), None) => {
-                        node = l;
-                        continue;
-                    }
-                    (None, Some(_)) => {
-                        node = r;
-                        continue;
-                    }
-                    (None, None) => {}
+                    node = near;
+                    continue;
                 }
             }
             // Pop until a node that may still hold a closer hit.
@@ -201,12 +196,42 @@ impl Bvh {
                     return best;
                 }
                 sp -= 1;
-                node = stack[sp] as usize;
-                if self.nodes[node].aabb().hit(ray, t_max).is_some() {
+                let (candidate, t_enter) = stack[sp];
+                if t_enter <= t_max {
+                    node = candidate as usize;
                     break;
                 }
             }
         }
+    }
+}
+
+/// A ray prepared for SIMD slab tests against [`BvhNode`] boxes.
+struct SlabRay {
+    origin: Vec3A,
+    inv_dir: Vec3A,
+    t_min: f32,
+}
+
+impl SlabRay {
+    #[inline]
+    fn new(ray: &Ray) -> Self {
+        Self { origin: ray.origin.into(), inv_dir: ray.inv_dir.into(), t_min: ray.t_min }
+    }
+
+    /// The entry distance into the node's box, or +∞ if the ray misses it within
+    /// (t_min, t_max] (a hit's entry distance is always finite). Same conventions as [`Aabb::hit`] (closed box; an origin on a slab
+    /// plane with a zero direction component counts as inside).
+    #[inline]
+    fn enter(&self, node: &BvhNode, t_max: f32) -> f32 {
+        let t0 = (Vec3A::from_array(node.min) - self.origin) * self.inv_dir;
+        let t1 = (Vec3A::from_array(node.max) - self.origin) * self.inv_dir;
+        let on_plane = t0.is_nan_mask() | t1.is_nan_mask();
+        let near = Vec3A::select(on_plane, Vec3A::NEG_INFINITY, t0.min(t1));
+        let far = Vec3A::select(on_plane, Vec3A::INFINITY, t0.max(t1));
+        let t_enter = near.max_element().max(self.t_min);
+        let t_exit = far.min_element().min(t_max);
+        if t_enter <= t_exit { t_enter } else { f32::INFINITY }
     }
 }
 

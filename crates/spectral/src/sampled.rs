@@ -215,29 +215,41 @@ pub struct SampledWavelengths<const N: usize> {
 const VIS_K: f32 = 0.0072;
 const VIS_CENTRE: f32 = 538.0;
 
-#[inline]
-fn visible_tanh_bounds() -> (f32, f32) {
-    ((VIS_K * (LAMBDA_MIN - VIS_CENTRE)).tanh(), (VIS_K * (LAMBDA_MAX - VIS_CENTRE)).tanh())
-}
+/// tanh(k·(360 − 538)) and tanh(k·(830 − 538)): the CDF's ends, precomputed (checked
+/// against the formula by a test) because `tanh` is not `const`.
+const VIS_TANH_LO: f32 = -0.856_910_6;
+const VIS_TANH_HI: f32 = 0.970_591_35;
 
-/// The pdf (per nm) of [`sample_visible_wavelength`].
+/// The pdf (per nm) of [`sample_visible_wavelength`]:
+/// p(λ) = k / ((tanh_hi − tanh_lo) · cosh²(k(λ − 538))).
 #[inline]
 pub fn visible_wavelength_pdf(lambda: f32) -> f32 {
     if !(LAMBDA_MIN..=LAMBDA_MAX).contains(&lambda) {
         return 0.0;
     }
-    let (lo, hi) = visible_tanh_bounds();
-    let c = (VIS_K * (lambda - VIS_CENTRE)).cosh();
-    VIS_K / ((hi - lo) * c * c)
+    let t = (VIS_K * (lambda - VIS_CENTRE)).tanh();
+    visible_pdf_from_tanh(t)
+}
+
+/// The same pdf from t = tanh(k(λ − 538)), using 1/cosh² = 1 − tanh².
+#[inline]
+fn visible_pdf_from_tanh(t: f32) -> f32 {
+    VIS_K * (1.0 - t * t) / (VIS_TANH_HI - VIS_TANH_LO)
 }
 
 /// Maps u ∈ [0, 1) to a wavelength distributed by [`visible_wavelength_pdf`]
 /// (inverse of its CDF, F(λ) = (tanh k(λ−538) − tanh k(360−538)) / (tanh k(830−538) − tanh k(360−538))).
 #[inline]
 pub fn sample_visible_wavelength(u: f32) -> f32 {
-    let (lo, hi) = visible_tanh_bounds();
-    let t = (lo + u * (hi - lo)).clamp(-0.999_999, 0.999_999);
-    (VIS_CENTRE + t.atanh() / VIS_K).clamp(LAMBDA_MIN, LAMBDA_MAX)
+    sample_visible(u).0
+}
+
+/// (λ, pdf(λ)) for u ∈ [0, 1).
+#[inline]
+fn sample_visible(u: f32) -> (f32, f32) {
+    let t = (VIS_TANH_LO + u * (VIS_TANH_HI - VIS_TANH_LO)).clamp(-0.999_999, 0.999_999);
+    let lambda = (VIS_CENTRE + t.atanh() / VIS_K).clamp(LAMBDA_MIN, LAMBDA_MAX);
+    (lambda, visible_pdf_from_tanh(t))
 }
 
 impl<const N: usize> SampledWavelengths<N> {
@@ -247,8 +259,9 @@ impl<const N: usize> SampledWavelengths<N> {
         let mut weight = [0.0; N];
         for i in 0..N {
             let ui = (u + i as f32 / N as f32).fract();
-            lambda[i] = sample_visible_wavelength(ui);
-            weight[i] = 1.0 / (N as f32 * visible_wavelength_pdf(lambda[i]));
+            let (l, pdf) = sample_visible(ui);
+            lambda[i] = l;
+            weight[i] = 1.0 / (N as f32 * pdf);
         }
         Self { lambda, weight, rgb: false }
     }
@@ -300,6 +313,17 @@ mod tests {
     use super::*;
 
     #[test]
+    fn precomputed_cdf_ends_match_the_formula() {
+        assert!((VIS_TANH_LO - (VIS_K * (LAMBDA_MIN - VIS_CENTRE)).tanh()).abs() < 1e-6);
+        assert!((VIS_TANH_HI - (VIS_K * (LAMBDA_MAX - VIS_CENTRE)).tanh()).abs() < 1e-6);
+        for l in [380.0f32, 500.0, 700.0] {
+            let u = ((VIS_K * (l - VIS_CENTRE)).tanh() - VIS_TANH_LO) / (VIS_TANH_HI - VIS_TANH_LO);
+            let (back, pdf) = sample_visible(u);
+            assert!((back - l).abs() < 0.05 && (pdf - visible_wavelength_pdf(l)).abs() < 1e-7, "{l}");
+        }
+    }
+
+    #[test]
     fn visible_pdf_integrates_to_one() {
         // Midpoint rule at 0.01 nm over the support.
         let n = 47_000;
@@ -342,7 +366,7 @@ mod tests {
             let strata: Vec<usize> = sorted
                 .iter()
                 .map(|&l| {
-                    let (lo, hi) = visible_tanh_bounds();
+                    let (lo, hi) = (VIS_TANH_LO, VIS_TANH_HI);
                     let u = ((VIS_K * (l - VIS_CENTRE)).tanh() - lo) / (hi - lo);
                     ((u * 4.0) as usize).min(3)
                 })

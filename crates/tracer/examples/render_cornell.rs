@@ -11,10 +11,8 @@ use tracer::render::PreparedScene;
 use tracer::{CpuBackend, RenderSettings, SpectralMode};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let path: PathBuf = std::env::args()
-        .nth(1)
-        .unwrap_or_else(|| "../shared/scenes/cornell-box/CornellBox-Original.obj".into())
-        .into();
+    let path: PathBuf =
+        std::env::args().nth(1).unwrap_or_else(|| "../shared/scenes/cornell-box/CornellBox-Original.obj".into()).into();
     let scene = tracer::obj::load_obj(&path)?;
     let prepared = PreparedScene::new(scene)?;
     let settings = RenderSettings { width: 256, height: 256, spp: 16, mode: SpectralMode::Hero, ..Default::default() };
