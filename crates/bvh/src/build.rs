@@ -149,7 +149,7 @@ impl Bvh {
 
     #[inline]
     fn traverse(&self, ray: &Ray, any_hit: bool) -> Option<Hit> {
-        let Some(root) = self.nodes.first() else { return None };
+        let root = self.nodes.first()?;
         let slab = SlabRay::new(ray);
         let mut t_max = ray.t_max;
         if slab.enter(root, t_max) == f32::INFINITY {
