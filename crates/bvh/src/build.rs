@@ -1,7 +1,8 @@
-//! A binned-SAH BVH (Wald 2007, "On fast Construction of SAH-based Bounding Volume
-//! Hierarchies"), flattened depth-first, with ordered stack traversal.
+//! The BVH: build settings, the flattened node array, statistics and ordered stack
+//! traversal. The builders themselves live in [`crate::builders`].
 
-use crate::{Aabb, Accelerator, BuildError, Hit, Ray, Triangle, intersect_triangle, validate};
+use crate::builders::{self, Output, Prim};
+use crate::{Aabb, Accelerator, BuildError, Hit, Ray, RayStats, Triangle, intersect_triangle, validate};
 use glam::{Vec3, Vec3A};
 
 /// One node of the flattened tree: 32 bytes, POD, the layout the GPU traverses too.
@@ -29,13 +30,53 @@ impl BvhNode {
     }
 }
 
+/// How a node's primitives are divided between its children.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum SplitMethod {
+    /// Full-sweep SAH: every primitive boundary on every axis (the thesis's Algorithm
+    /// 8.2), O(n log n) by presorting.
+    SweepSah,
+    /// Binned SAH with [`BuildConfig::bins`] bins per axis; parallel for large nodes.
+    BinnedSah,
+    /// Midpoint of the longest centroid axis.
+    Midpoint,
+    /// Midpoint above `threshold` primitives, full-sweep SAH below (the thesis's hybrid).
+    Hybrid {
+        /// Node size at and below which the SAH takes over.
+        threshold: usize,
+    },
+}
+
+impl SplitMethod {
+    /// Every method, with the thesis's hybrid threshold of 1000 faces.
+    pub const ALL: [SplitMethod; 4] =
+        [Self::SweepSah, Self::BinnedSah, Self::Midpoint, Self::Hybrid { threshold: 1000 }];
+
+    /// A short name for tables and benchmark ids.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Self::SweepSah => "sweep_sah",
+            Self::BinnedSah => "binned_sah",
+            Self::Midpoint => "midpoint",
+            Self::Hybrid { .. } => "hybrid",
+        }
+    }
+}
+
 /// Build settings.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct BuildConfig {
-    /// Number of SAH bins per axis.
+    /// How nodes are split.
+    pub method: SplitMethod,
+    /// Number of SAH bins per axis (binned SAH only).
     pub bins: usize,
-    /// Largest leaf the builder may make (a node above this is always split).
+    /// Largest leaf the builder may make (a larger node is always split, unless its
+    /// primitives cannot be separated or the depth limit is reached).
     pub max_leaf_size: usize,
+    /// If true, a node of at most `max_leaf_size` primitives becomes a leaf only when the
+    /// SAH says splitting does not pay; if false, nodes are split down to
+    /// `max_leaf_size` regardless (the thesis's "max faces per leaf").
+    pub leaf_by_sah: bool,
     /// SAH cost of visiting an interior node, relative to one triangle test.
     pub traversal_cost: f32,
     /// SAH cost of one ray–triangle test.
@@ -44,7 +85,14 @@ pub struct BuildConfig {
 
 impl Default for BuildConfig {
     fn default() -> Self {
-        Self { bins: 16, max_leaf_size: 8, traversal_cost: 1.0, intersection_cost: 1.0 }
+        Self {
+            method: SplitMethod::BinnedSah,
+            bins: 16,
+            max_leaf_size: 8,
+            leaf_by_sah: true,
+            traversal_cost: 1.0,
+            intersection_cost: 1.0,
+        }
     }
 }
 
@@ -57,7 +105,8 @@ pub struct BvhStats {
     pub leaves: usize,
     /// Longest root-to-leaf path (root = depth 1).
     pub depth: usize,
-    /// SAH cost of the tree with the build's cost constants, relative to the root's area.
+    /// Expected cost of a random ray hitting the root box, by the SAH with the build's
+    /// cost constants: Σ_interior C_t·A/A_root + Σ_leaves C_i·n·A/A_root.
     pub sah_cost: f32,
 }
 
@@ -68,12 +117,6 @@ pub struct Bvh {
     triangles: Vec<Triangle>,
     prim_ids: Vec<u32>,
     config: BuildConfig,
-}
-
-struct Item {
-    bounds: Aabb,
-    centre: Vec3,
-    id: u32,
 }
 
 const STACK_DEPTH: usize = 64;
@@ -88,22 +131,20 @@ impl Bvh {
             max_leaf_size: config.max_leaf_size.clamp(1, 255),
             ..config
         };
-        let mut items: Vec<Item> = triangles
+        let prims: Vec<Prim> = triangles
             .iter()
-            .enumerate()
-            .map(|(i, t)| {
+            .map(|t| {
                 let bounds = Triangle::bounds(t);
-                Item { bounds, centre: bounds.centre(), id: i as u32 }
+                Prim { bounds, centre: bounds.centre() }
             })
             .collect();
-        let mut nodes = Vec::with_capacity(2 * items.len().max(1));
-        if !items.is_empty() {
-            let mut builder = Builder { nodes: &mut nodes, config, depth_limit: STACK_DEPTH - 2 };
-            builder.build(&mut items, 0, 1);
+        let mut ids: Vec<u32> = (0..prims.len() as u32).collect();
+        let mut out = Output::default();
+        if !ids.is_empty() {
+            builders::build(&prims, &mut ids, &config, &mut out, 1);
         }
-        let prim_ids: Vec<u32> = items.iter().map(|it| it.id).collect();
-        let triangles = prim_ids.iter().map(|&i| Triangle::new(&triangles[i as usize])).collect();
-        Ok(Self { nodes, triangles, prim_ids, config })
+        let triangles = out.order.iter().map(|&i| Triangle::new(&triangles[i as usize])).collect();
+        Ok(Self { nodes: out.nodes, triangles, prim_ids: out.order, config })
     }
 
     /// The flattened nodes (root first).
@@ -121,19 +162,24 @@ impl Bvh {
         &self.prim_ids
     }
 
+    /// The settings the tree was built with.
+    pub fn config(&self) -> &BuildConfig {
+        &self.config
+    }
+
     /// Node count, leaf count, depth and SAH cost.
     pub fn stats(&self) -> BvhStats {
         let mut s = BvhStats { nodes: self.nodes.len(), ..Default::default() };
         let Some(root) = self.nodes.first() else {
             return s;
         };
-        let root_area = root.aabb().surface_area().max(f32::MIN_POSITIVE);
+        let root_area = root.aabb().surface_area().max(f32::MIN_POSITIVE) as f64;
         let mut stack = vec![(0usize, 1usize)];
         let mut cost = 0.0f64;
         while let Some((i, depth)) = stack.pop() {
             let n = &self.nodes[i];
             s.depth = s.depth.max(depth);
-            let area = (n.aabb().surface_area() / root_area) as f64;
+            let area = n.aabb().surface_area() as f64 / root_area;
             if n.count > 0 {
                 s.leaves += 1;
                 cost += area * n.count as f64 * self.config.intersection_cost as f64;
@@ -148,7 +194,10 @@ impl Bvh {
     }
 
     #[inline]
-    fn traverse(&self, ray: &Ray, any_hit: bool) -> Option<Hit> {
+    fn traverse<const COUNT: bool>(&self, ray: &Ray, any_hit: bool, stats: &mut RayStats) -> Option<Hit> {
+        if COUNT {
+            stats.rays += 1;
+        }
         let root = self.nodes.first()?;
         let slab = SlabRay::new(ray);
         let mut t_max = ray.t_max;
@@ -163,8 +212,14 @@ impl Bvh {
         let mut best: Option<Hit> = None;
         loop {
             let n = &self.nodes[node];
+            if COUNT {
+                stats.nodes_visited += 1;
+            }
             if n.count > 0 {
                 let first = n.index as usize;
+                if COUNT {
+                    stats.triangles_tested += n.count as u64;
+                }
                 for i in first..first + n.count as usize {
                     if let Some((t, u, v)) = intersect_triangle(&self.triangles[i], ray, t_max) {
                         t_max = t;
@@ -220,8 +275,9 @@ impl SlabRay {
     }
 
     /// The entry distance into the node's box, or +∞ if the ray misses it within
-    /// (t_min, t_max] (a hit's entry distance is always finite). Same conventions as [`Aabb::hit`] (closed box; an origin on a slab
-    /// plane with a zero direction component counts as inside).
+    /// (t_min, t_max] (a hit's entry distance is always finite). Same conventions as
+    /// [`Aabb::hit`]: a closed box; an origin on a slab plane with a zero direction
+    /// component counts as inside.
     #[inline]
     fn enter(&self, node: &BvhNode, t_max: f32) -> f32 {
         let t0 = (Vec3A::from_array(node.min) - self.origin) * self.inv_dir;
@@ -238,149 +294,27 @@ impl SlabRay {
 impl Accelerator for Bvh {
     #[inline]
     fn intersect(&self, ray: &Ray) -> Option<Hit> {
-        self.traverse(ray, false)
+        self.traverse::<false>(ray, false, &mut RayStats::default())
     }
 
     #[inline]
     fn occluded(&self, ray: &Ray) -> bool {
-        self.traverse(ray, true).is_some()
+        self.traverse::<false>(ray, true, &mut RayStats::default()).is_some()
     }
 
     fn bounds(&self) -> Aabb {
         self.nodes.first().map_or(Aabb::EMPTY, |n| n.aabb())
     }
-}
 
-struct Builder<'a> {
-    nodes: &'a mut Vec<BvhNode>,
-    config: BuildConfig,
-    depth_limit: usize,
-}
-
-#[derive(Clone, Copy)]
-struct Bin {
-    bounds: Aabb,
-    count: usize,
-}
-
-impl Builder<'_> {
-    /// Builds the subtree over `items` (whose triangles will sit at `offset..`) and
-    /// returns its node index.
-    fn build(&mut self, items: &mut [Item], offset: usize, depth: usize) -> usize {
-        let bounds = items.iter().fold(Aabb::EMPTY, |b, it| b.union(it.bounds));
-        let index = self.nodes.len();
-        self.nodes.push(BvhNode {
-            min: bounds.min.to_array(),
-            index: offset as u32,
-            max: bounds.max.to_array(),
-            count: items.len() as u32,
-        });
-        let n = items.len();
-        if n == 1 {
-            return index;
-        }
-        let split = self.find_split(items, &bounds);
-        let mid = match split {
-            Some((axis, pos, cost)) => {
-                let leaf_cost = self.config.intersection_cost * n as f32;
-                if cost >= leaf_cost && n <= self.config.max_leaf_size {
-                    return index;
-                }
-                let mid = partition(items, |it| it.centre[axis] < pos);
-                if mid == 0 || mid == n { n / 2 } else { mid }
-            }
-            None => {
-                // All centroids coincide: no spatial split separates them.
-                if n <= self.config.max_leaf_size {
-                    return index;
-                }
-                n / 2
-            }
-        };
-        if depth >= self.depth_limit {
-            // Keep the traversal stack bounded whatever the input (e.g. thousands of
-            // identical triangles): make an oversized leaf instead of a deeper tree.
-            return index;
-        }
-        self.build_children(items, offset, depth, index, mid)
+    fn intersect_counted(&self, ray: &Ray, stats: &mut RayStats) -> Option<Hit> {
+        self.traverse::<true>(ray, false, stats)
     }
-
-    fn build_children(&mut self, items: &mut [Item], offset: usize, depth: usize, index: usize, mid: usize) -> usize {
-        let (left, right) = items.split_at_mut(mid);
-        self.build(left, offset, depth + 1);
-        let right_index = self.build(right, offset + mid, depth + 1);
-        self.nodes[index].index = right_index as u32;
-        self.nodes[index].count = 0;
-        index
-    }
-
-    /// The best binned-SAH split: (axis, centroid threshold, cost), or `None` when the
-    /// centroids span no extent.
-    fn find_split(&self, items: &[Item], bounds: &Aabb) -> Option<(usize, f32, f32)> {
-        let cb = items.iter().fold(Aabb::EMPTY, |b, it| b.grow(it.centre));
-        let extent = cb.extent();
-        let parent_area = bounds.surface_area().max(f32::MIN_POSITIVE);
-        let nb = self.config.bins;
-        let mut best: Option<(usize, f32, f32)> = None;
-        let mut bins = vec![Bin { bounds: Aabb::EMPTY, count: 0 }; nb];
-        let mut right_area = vec![0.0f32; nb];
-        let mut right_count = vec![0usize; nb];
-        for axis in 0..3 {
-            if extent[axis] <= 0.0 {
-                continue;
-            }
-            bins.fill(Bin { bounds: Aabb::EMPTY, count: 0 });
-            let scale = nb as f32 / extent[axis];
-            for it in items {
-                let b = (((it.centre[axis] - cb.min[axis]) * scale) as usize).min(nb - 1);
-                bins[b].bounds = bins[b].bounds.union(it.bounds);
-                bins[b].count += 1;
-            }
-            // Sweep from the right, then from the left, evaluating the n−1 planes.
-            let (mut acc, mut cnt) = (Aabb::EMPTY, 0);
-            for i in (1..nb).rev() {
-                acc = acc.union(bins[i].bounds);
-                cnt += bins[i].count;
-                right_area[i] = acc.surface_area();
-                right_count[i] = cnt;
-            }
-            let (mut acc, mut cnt) = (Aabb::EMPTY, 0);
-            for i in 0..nb - 1 {
-                acc = acc.union(bins[i].bounds);
-                cnt += bins[i].count;
-                if cnt == 0 || right_count[i + 1] == 0 {
-                    continue;
-                }
-                let cost = self.config.traversal_cost
-                    + self.config.intersection_cost
-                        * (acc.surface_area() * cnt as f32 + right_area[i + 1] * right_count[i + 1] as f32)
-                        / parent_area;
-                if best.is_none_or(|(_, _, c)| cost < c) {
-                    let pos = cb.min[axis] + (i + 1) as f32 / scale;
-                    best = Some((axis, pos, cost));
-                }
-            }
-        }
-        best
-    }
-}
-
-/// In-place partition; returns the number of items for which `pred` holds.
-fn partition(items: &mut [Item], pred: impl Fn(&Item) -> bool) -> usize {
-    let mut i = 0;
-    for j in 0..items.len() {
-        if pred(&items[j]) {
-            items.swap(i, j);
-            i += 1;
-        }
-    }
-    i
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::BruteForce;
+    use crate::{BruteForce, RayStats};
     use proptest::prelude::*;
 
     fn soup(seed: u64, n: usize, spread: f32, size: f32) -> Vec<[Vec3; 3]> {
@@ -429,13 +363,95 @@ mod tests {
             .collect()
     }
 
-    #[test]
-    fn matches_brute_force_for_every_leaf_size() {
-        let tris = soup(1, 2000, 10.0, 1.0);
-        let rs = rays(2, 2000, 10.0);
-        for max_leaf_size in [1, 2, 3, 4, 8] {
-            agree(&tris, BuildConfig { max_leaf_size, ..Default::default() }, &rs);
+    fn every_config() -> Vec<BuildConfig> {
+        let mut v = Vec::new();
+        for method in SplitMethod::ALL.into_iter().chain([SplitMethod::Hybrid { threshold: 64 }]) {
+            for leaf_by_sah in [true, false] {
+                for max_leaf_size in [1, 2, 3, 4, 8] {
+                    v.push(BuildConfig { method, leaf_by_sah, max_leaf_size, ..Default::default() });
+                }
+            }
         }
+        v
+    }
+
+    #[test]
+    fn matches_brute_force_for_every_builder_and_leaf_size() {
+        let tris = soup(1, 2000, 10.0, 1.0);
+        let rs = rays(2, 1000, 10.0);
+        for config in every_config() {
+            agree(&tris, config, &rs);
+        }
+    }
+
+    #[test]
+    fn parallel_binned_build_matches_brute_force_and_is_deterministic() {
+        // Above the parallel threshold, subtrees are built by rayon and merged.
+        let tris = soup(21, 20_000, 50.0, 1.0);
+        let a = Bvh::build(&tris, BuildConfig::default()).unwrap();
+        let b = Bvh::build(&tris, BuildConfig::default()).unwrap();
+        assert_eq!(a.nodes(), b.nodes());
+        agree(&tris, BuildConfig::default(), &rays(22, 500, 50.0));
+    }
+
+    #[test]
+    fn sah_builders_beat_midpoint_and_binned_is_close_to_sweep() {
+        // Small triangles among a few huge ones: the midpoint splits by centroid alone and
+        // drags the huge triangles' bounds into both children; the SAH isolates them.
+        let mut tris = soup(31, 3000, 10.0, 0.1);
+        tris.extend(soup(32, 40, 10.0, 12.0));
+        let cost = |method| {
+            Bvh::build(&tris, BuildConfig { method, max_leaf_size: 4, ..Default::default() }).unwrap().stats().sah_cost
+        };
+        let (sweep, binned, mid) =
+            (cost(SplitMethod::SweepSah), cost(SplitMethod::BinnedSah), cost(SplitMethod::Midpoint));
+        assert!(sweep <= binned * 1.001, "sweep {sweep} binned {binned}");
+        assert!(binned <= sweep * 1.10, "binned {binned} should be within 10 % of sweep {sweep}");
+        eprintln!("SAH cost: sweep {sweep}, binned {binned}, midpoint {mid}");
+        assert!(mid > sweep * 1.05, "midpoint {mid} should be worse than sweep {sweep}");
+        // The hybrid is the sweep below its threshold.
+        let hybrid = Bvh::build(
+            &tris,
+            BuildConfig {
+                method: SplitMethod::Hybrid { threshold: 1_000_000 },
+                max_leaf_size: 4,
+                ..Default::default()
+            },
+        )
+        .unwrap();
+        let sweep_bvh =
+            Bvh::build(&tris, BuildConfig { method: SplitMethod::SweepSah, max_leaf_size: 4, ..Default::default() })
+                .unwrap();
+        assert_eq!(hybrid.nodes(), sweep_bvh.nodes());
+    }
+
+    #[test]
+    fn max_leaf_size_is_respected_when_leaves_are_not_chosen_by_sah() {
+        let tris = soup(41, 1000, 10.0, 1.0);
+        for method in SplitMethod::ALL {
+            for max_leaf_size in [1, 3, 8] {
+                let bvh =
+                    Bvh::build(&tris, BuildConfig { method, max_leaf_size, leaf_by_sah: false, ..Default::default() })
+                        .unwrap();
+                let largest = bvh.nodes().iter().map(|n| n.count).max().unwrap();
+                assert!(largest as usize <= max_leaf_size, "{method:?}: leaf of {largest} > {max_leaf_size}");
+            }
+        }
+    }
+
+    #[test]
+    fn counted_traversal_reports_work() {
+        let tris = soup(51, 2000, 10.0, 1.0);
+        let bvh = Bvh::build(&tris, BuildConfig::default()).unwrap();
+        let mut stats = RayStats::default();
+        let rs = rays(52, 300, 10.0);
+        for r in &rs {
+            assert_eq!(bvh.intersect_counted(r, &mut stats), bvh.intersect(r));
+        }
+        assert_eq!(stats.rays, 300);
+        assert!(stats.nodes_visited > stats.rays && stats.triangles_tested > 0);
+        // Far fewer tests than brute force.
+        assert!(stats.triangles_tested < 300 * 2000 / 20, "{stats:?}");
     }
 
     #[test]
@@ -445,9 +461,12 @@ mod tests {
         agree(&soup(4, 1, 2.0, 1.0), BuildConfig::default(), &rs);
         // 1000 copies of one triangle: all centroids coincide.
         let same = vec![soup(5, 1, 2.0, 1.0)[0]; 1000];
-        let bvh = Bvh::build(&same, BuildConfig::default()).unwrap();
-        assert!(bvh.stats().depth < STACK_DEPTH);
+        for config in every_config() {
+            let bvh = Bvh::build(&same, config).unwrap();
+            assert!(bvh.stats().depth < STACK_DEPTH);
+        }
         agree(&same, BuildConfig::default(), &rs);
+        agree(&same, BuildConfig { method: SplitMethod::SweepSah, ..Default::default() }, &rs);
         // Zero-area triangles mixed in.
         let mut mixed = soup(6, 300, 2.0, 0.5);
         mixed.extend((0..50).map(|i| [Vec3::splat(i as f32 * 0.01); 3]));
@@ -484,9 +503,12 @@ mod tests {
     proptest! {
         #![proptest_config(ProptestConfig::with_cases(48))]
         #[test]
-        fn random_soups_agree_with_brute_force(seed in any::<u64>(), n in 1usize..300, leaf in 1usize..9, bins in 2usize..33) {
+        fn random_soups_agree_with_brute_force(
+            seed in any::<u64>(), n in 1usize..300, leaf in 1usize..9, bins in 2usize..33, m in 0usize..4, by_sah in any::<bool>()
+        ) {
             let tris = soup(seed, n, 5.0, 1.5);
-            agree(&tris, BuildConfig { max_leaf_size: leaf, bins, ..Default::default() }, &rays(seed ^ 1, 200, 5.0));
+            let config = BuildConfig { method: SplitMethod::ALL[m], max_leaf_size: leaf, bins, leaf_by_sah: by_sah, ..Default::default() };
+            agree(&tris, config, &rays(seed ^ 1, 200, 5.0));
         }
     }
 }

@@ -1,8 +1,9 @@
 //! Ray accelerators over triangle soups.
 //!
 //! * [`Accelerator`]: the trait the integrator calls — closest hit and any-hit occlusion;
-//! * [`Bvh`]: a binned-SAH bounding volume hierarchy, flattened depth-first into small
-//!   POD nodes ([`BvhNode`]) that a GPU can traverse unchanged;
+//! * [`Bvh`]: a bounding volume hierarchy built by full-sweep SAH, binned SAH, midpoint
+//!   or the thesis's hybrid ([`SplitMethod`]), flattened depth-first into small POD
+//!   nodes ([`BvhNode`]) that a GPU can traverse unchanged;
 //! * [`BruteForce`]: tests every triangle; the oracle the tests compare against.
 //!
 //! This crate knows boxes, rays and triangles, nothing of materials.
@@ -10,12 +11,13 @@
 mod aabb;
 mod brute;
 mod build;
+mod builders;
 mod ray;
 mod triangle;
 
 pub use aabb::Aabb;
 pub use brute::BruteForce;
-pub use build::{BuildConfig, Bvh, BvhNode, BvhStats};
+pub use build::{BuildConfig, Bvh, BvhNode, BvhStats, SplitMethod};
 pub use ray::{Hit, Ray};
 pub use triangle::{Triangle, intersect_triangle};
 
@@ -46,6 +48,23 @@ pub trait Accelerator: Send + Sync {
     fn occluded(&self, ray: &Ray) -> bool;
     /// The bounds of everything in the structure.
     fn bounds(&self) -> Aabb;
+    /// Closest hit, counting nodes visited and triangles tested into `stats`; structures
+    /// that do not count just call [`Accelerator::intersect`].
+    fn intersect_counted(&self, ray: &Ray, stats: &mut RayStats) -> Option<Hit> {
+        let _ = stats;
+        self.intersect(ray)
+    }
+}
+
+/// Per-ray traversal work, summed over rays.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct RayStats {
+    /// Rays traced.
+    pub rays: u64,
+    /// Nodes visited (interior and leaf).
+    pub nodes_visited: u64,
+    /// Ray–triangle tests.
+    pub triangles_tested: u64,
 }
 
 /// Checks every vertex for NaN/∞ and the count for u32 indexing.

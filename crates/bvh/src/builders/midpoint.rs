@@ -1,0 +1,34 @@
+//! The midpoint split: halve the longest axis of the centroid bounds — the thesis's
+//! fast fallback for large objects (its chapter 8.3). Cheap (O(n) per level, no area
+//! evaluations) but blind to where the primitives are.
+
+use super::{Prim, bounds_of, centroid_bounds, partition, split_cost};
+use crate::Aabb;
+use crate::build::BuildConfig;
+
+/// Partitions `ids` at the centroid-bounds midpoint of the longest axis; returns (left
+/// count, SAH cost of the split), or `None` when the centroids span no extent.
+pub(crate) fn split(prims: &[Prim], ids: &mut [u32], bounds: &Aabb, config: &BuildConfig) -> Option<(usize, f32)> {
+    let cb = centroid_bounds(prims, ids);
+    let e = cb.extent();
+    let axis = if e.x >= e.y && e.x >= e.z {
+        0
+    } else if e.y >= e.z {
+        1
+    } else {
+        2
+    };
+    if e[axis] <= 0.0 {
+        return None;
+    }
+    let pos = cb.min[axis] + 0.5 * e[axis];
+    let mid = partition(ids, |i| prims[i as usize].centre[axis] < pos);
+    let (left, right) = ids.split_at(mid);
+    let cost = split_cost(
+        config,
+        bounds.surface_area(),
+        (bounds_of(prims, left).surface_area(), left.len()),
+        (bounds_of(prims, right).surface_area(), right.len()),
+    );
+    Some((mid, cost))
+}

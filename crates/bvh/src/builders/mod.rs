@@ -1,0 +1,161 @@
+//! BVH builders. Each produces the same depth-first node layout through [`Output`]:
+//! an interior node's left child follows it, its right child is at `index`; a leaf's
+//! primitives are appended to `order` as the leaf is made.
+//!
+//! * [`binned`]: binned SAH (Wald 2007), subtrees built in parallel with rayon;
+//! * [`sweep`]: full-sweep SAH (the thesis's Algorithm 8.2) made O(n log n) by sorting
+//!   once per axis and partitioning the sorted lists stably (Wald & Havran 2006);
+//! * [`midpoint`]: the midpoint of the longest centroid axis (the thesis's fast fallback);
+//!
+//! the hybrid (midpoint above a face count, sweep SAH below) combines the last two.
+
+pub(crate) mod binned;
+pub(crate) mod midpoint;
+pub(crate) mod sweep;
+
+use crate::Aabb;
+use crate::build::{BuildConfig, BvhNode, SplitMethod};
+use glam::Vec3;
+
+/// Deepest tree the builders make: traversal uses a fixed 64-entry stack.
+pub(crate) const MAX_DEPTH: usize = 62;
+
+/// Subtrees above this many primitives are built in parallel.
+const PARALLEL_THRESHOLD: usize = 4096;
+
+/// A primitive as the builders see it.
+pub(crate) struct Prim {
+    pub bounds: Aabb,
+    pub centre: Vec3,
+}
+
+/// Nodes and the leaf order of primitives, appended depth-first.
+#[derive(Default)]
+pub(crate) struct Output {
+    pub nodes: Vec<BvhNode>,
+    pub order: Vec<u32>,
+}
+
+impl Output {
+    /// Appends a leaf over `ids`; returns its node index.
+    pub fn leaf(&mut self, bounds: &Aabb, ids: impl ExactSizeIterator<Item = u32>) -> usize {
+        let index = self.nodes.len();
+        self.nodes.push(BvhNode {
+            min: bounds.min.to_array(),
+            index: self.order.len() as u32,
+            max: bounds.max.to_array(),
+            count: ids.len() as u32,
+        });
+        self.order.extend(ids);
+        index
+    }
+
+    /// Appends an interior node whose right child is still unknown.
+    pub fn interior(&mut self, bounds: &Aabb) -> usize {
+        let index = self.nodes.len();
+        self.nodes.push(BvhNode { min: bounds.min.to_array(), index: 0, max: bounds.max.to_array(), count: 0 });
+        index
+    }
+
+    /// Appends another output's nodes and order, fixing up its indices.
+    fn append(&mut self, other: Output) {
+        let (node_offset, order_offset) = (self.nodes.len() as u32, self.order.len() as u32);
+        self.nodes.extend(other.nodes.into_iter().map(|mut n| {
+            n.index += if n.count > 0 { order_offset } else { node_offset };
+            n
+        }));
+        self.order.extend(other.order);
+    }
+}
+
+/// The bounds of a set of primitives.
+pub(crate) fn bounds_of(prims: &[Prim], ids: &[u32]) -> Aabb {
+    ids.iter().fold(Aabb::EMPTY, |b, &i| b.union(prims[i as usize].bounds))
+}
+
+/// The bounds of a set of primitive centroids.
+pub(crate) fn centroid_bounds(prims: &[Prim], ids: &[u32]) -> Aabb {
+    ids.iter().fold(Aabb::EMPTY, |b, &i| b.grow(prims[i as usize].centre))
+}
+
+/// SAH cost of splitting a node of area `parent_area` into the given children
+/// (MacDonald & Booth 1990): C_t + C_i·(A_l·n_l + A_r·n_r)/A.
+#[inline]
+pub(crate) fn split_cost(config: &BuildConfig, parent_area: f32, left: (f32, usize), right: (f32, usize)) -> f32 {
+    config.traversal_cost
+        + config.intersection_cost * (left.0 * left.1 as f32 + right.0 * right.1 as f32)
+            / parent_area.max(f32::MIN_POSITIVE)
+}
+
+/// Whether a node of `n` primitives must, may or must not become a leaf before any split
+/// is considered.
+pub(crate) fn forced_leaf(config: &BuildConfig, n: usize, depth: usize) -> bool {
+    n <= 1 || depth >= MAX_DEPTH || (!config.leaf_by_sah && n <= config.max_leaf_size)
+}
+
+/// After the best split was found: leaf if it does not pay (only when allowed).
+pub(crate) fn sah_prefers_leaf(config: &BuildConfig, n: usize, split_cost: f32) -> bool {
+    config.leaf_by_sah && n <= config.max_leaf_size && split_cost >= config.intersection_cost * n as f32
+}
+
+/// In-place partition; returns the number of ids for which `pred` holds.
+pub(crate) fn partition(ids: &mut [u32], pred: impl Fn(u32) -> bool) -> usize {
+    let mut i = 0;
+    for j in 0..ids.len() {
+        if pred(ids[j]) {
+            ids.swap(i, j);
+            i += 1;
+        }
+    }
+    i
+}
+
+/// Builds the subtree over `ids` with the configured method.
+pub(crate) fn build(prims: &[Prim], ids: &mut [u32], config: &BuildConfig, out: &mut Output, depth: usize) -> usize {
+    let n = ids.len();
+    match config.method {
+        SplitMethod::SweepSah => return sweep::build(prims, ids, config, out, depth),
+        SplitMethod::Hybrid { threshold } if n <= threshold => return sweep::build(prims, ids, config, out, depth),
+        _ => {}
+    }
+    let bounds = bounds_of(prims, ids);
+    if forced_leaf(config, n, depth) {
+        return out.leaf(&bounds, ids.iter().copied());
+    }
+    let split = match config.method {
+        SplitMethod::BinnedSah => binned::split(prims, ids, &bounds, config),
+        _ => midpoint::split(prims, ids, &bounds, config),
+    };
+    let mid = match split {
+        Some((mid, cost)) if !sah_prefers_leaf(config, n, cost) => mid,
+        Some(_) => return out.leaf(&bounds, ids.iter().copied()),
+        // No split separates the centroids: halve by position to bound leaf sizes.
+        None if n > config.max_leaf_size => n / 2,
+        None => return out.leaf(&bounds, ids.iter().copied()),
+    };
+    let index = out.interior(&bounds);
+    let (left, right) = ids.split_at_mut(mid);
+    if n > PARALLEL_THRESHOLD {
+        let (l, r) = rayon::join(
+            || {
+                let mut o = Output::default();
+                build(prims, left, config, &mut o, depth + 1);
+                o
+            },
+            || {
+                let mut o = Output::default();
+                build(prims, right, config, &mut o, depth + 1);
+                o
+            },
+        );
+        out.append(l);
+        let right_index = out.nodes.len();
+        out.append(r);
+        out.nodes[index].index = right_index as u32;
+    } else {
+        build(prims, left, config, out, depth + 1);
+        let right_index = build(prims, right, config, out, depth + 1);
+        out.nodes[index].index = right_index as u32;
+    }
+    index
+}
