@@ -1,7 +1,7 @@
 //! The film: per-pixel running mean and variance of linear-sRGB samples.
 //!
 //! Each pixel keeps the thesis's progressive running mean g_i = g_{i−1} + (f_i − g_{i−1})/i
-//! (eq. 8.x, written in the numerically stable order) together with Welford's sum of
+//! (eq. 7.2, written in the numerically stable order) together with Welford's sum of
 //! squared deviations, so the standard error of the mean comes with every image.
 
 /// One pixel's accumulator.
