@@ -11,7 +11,9 @@
 pub mod frame;
 pub mod fresnel;
 pub mod models;
+pub mod params;
 pub mod sampling;
+pub mod validation;
 
 pub use frame::Frame;
 pub use models::{Dielectric, Lambert, Mirror};

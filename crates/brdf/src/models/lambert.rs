@@ -1,0 +1,72 @@
+//! Lambertian (perfectly diffuse) reflection.
+
+use crate::params::{ModelDef, ParamDef, ParamKind, ResolvedParams};
+use crate::sampling::{cosine_hemisphere, cosine_hemisphere_pdf};
+use crate::{Bsdf, BsdfSample, ScatterFlags};
+use glam::{Vec2, Vec3};
+use spectral::{SampledSpectrum, SampledWavelengths};
+use std::f32::consts::FRAC_1_PI;
+
+/// Lambert's declaration.
+pub const DEF: ModelDef = ModelDef {
+    name: "lambert",
+    doc: "Lambertian reflection f = R/π (Lambert 1760), two-sided.",
+    params: &[ParamDef {
+        name: "reflectance",
+        kind: ParamKind::Spectrum,
+        min: 0.0,
+        max: 1.0,
+        default: 0.5,
+        mtl_key: Some("Kd"),
+        doc: "diffuse albedo R",
+    }],
+};
+
+#[inline]
+pub(crate) fn same_hemisphere(a: Vec3, b: Vec3) -> bool {
+    a.z * b.z > 0.0
+}
+
+/// Lambertian reflection f = R/π, sampled by cosine-weighted hemisphere sampling. It
+/// reflects on the side ωo is on, so it is two-sided.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Lambert<const N: usize> {
+    /// Albedo R per wavelength, in [0, 1].
+    pub reflectance: SampledSpectrum<N>,
+}
+
+impl<const N: usize> Bsdf<N> for Lambert<N> {
+    fn flags(&self) -> ScatterFlags {
+        ScatterFlags::REFLECTION | ScatterFlags::DIFFUSE
+    }
+
+    #[inline]
+    fn eval(&self, wo: Vec3, wi: Vec3) -> SampledSpectrum<N> {
+        if same_hemisphere(wo, wi) { self.reflectance * FRAC_1_PI } else { SampledSpectrum::zero() }
+    }
+
+    #[inline]
+    fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
+        if same_hemisphere(wo, wi) { cosine_hemisphere_pdf(wi.z.abs()) } else { 0.0 }
+    }
+
+    #[inline]
+    fn sample(&self, wo: Vec3, _uc: f32, u: Vec2) -> Option<BsdfSample<N>> {
+        let mut wi = cosine_hemisphere(u);
+        if wo.z < 0.0 {
+            wi.z = -wi.z;
+        }
+        let pdf = cosine_hemisphere_pdf(wi.z.abs());
+        if pdf <= 0.0 || wo.z == 0.0 {
+            return None;
+        }
+        Some(BsdfSample { wi, f: self.reflectance * FRAC_1_PI, pdf, flags: self.flags() })
+    }
+}
+
+impl<const N: usize> Lambert<N> {
+    /// From parameters resolved against [`DEF`], at the path's wavelengths.
+    pub fn from_params(p: &ResolvedParams, wl: &SampledWavelengths<N>) -> Self {
+        Self { reflectance: p.colour(0).sample(wl) }
+    }
+}
