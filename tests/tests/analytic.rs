@@ -11,18 +11,14 @@ use spectral::spectrum::Colour;
 use spectral::{SampledSpectrum, SampledWavelengths, SpectralMode};
 use tracer::camera::Camera;
 use tracer::integrator::PathSettings;
-use tracer::material::{Material, Surface};
+use tracer::material::Material;
 use tracer::mesh::uv_sphere;
 use tracer::render::PreparedScene;
 use tracer::{CpuBackend, RenderSettings, Scene};
 
 fn glowing_room(albedo: f32, le: f32) -> PreparedScene {
     let mut scene = Scene::default();
-    let material = Material {
-        name: "wall".into(),
-        surface: Surface::Diffuse { albedo: Colour::constant(albedo) },
-        emission: Some(Colour::constant(le)),
-    };
+    let material = Material::diffuse("wall", Colour::constant(albedo)).with_emission(Colour::constant(le));
     // Flat-shaded: the analytic answer holds for the faceted room with its true normals.
     // (Interpolated shading normals do not conserve energy exactly; see the notes.)
     let mut room = uv_sphere(Vec3::ZERO, 1.0, 24, 48, true);

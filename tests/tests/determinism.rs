@@ -4,28 +4,17 @@ use glam::Vec3;
 use spectral::SpectralMode;
 use spectral::spectrum::Colour;
 use tracer::camera::Camera;
-use tracer::material::{Material, Surface};
+use tracer::material::Material;
 use tracer::mesh::{quad, uv_sphere};
 use tracer::render::PreparedScene;
 use tracer::{CpuBackend, RenderSettings, Scene};
 
 fn scene() -> PreparedScene {
     let mut s = Scene::default();
-    let red = Material {
-        name: "red".into(),
-        surface: Surface::Diffuse { albedo: Colour::reflectance_rgb([0.7, 0.1, 0.1]).unwrap() },
-        emission: None,
-    };
-    let glass = Material {
-        name: "glass".into(),
-        surface: Surface::Dielectric { ior: 1.5, tint: Colour::constant(1.0), fresnel: Default::default() },
-        emission: None,
-    };
-    let light = Material {
-        name: "light".into(),
-        surface: Surface::Diffuse { albedo: Colour::constant(0.5) },
-        emission: Some(Colour::illuminant_rgb([8.0, 7.0, 5.0]).unwrap()),
-    };
+    let red = Material::diffuse("red", Colour::reflectance_rgb([0.7, 0.1, 0.1]).unwrap());
+    let glass = Material::dielectric("glass", 1.5).unwrap();
+    let light = Material::diffuse("light", Colour::constant(0.5))
+        .with_emission(Colour::illuminant_rgb([8.0, 7.0, 5.0]).unwrap());
     s.add(&quad(Vec3::ZERO, Vec3::Y, 2.0), red);
     s.add(&uv_sphere(Vec3::new(0.0, 0.6, 0.0), 0.5, 12, 24, false), glass);
     s.add(&quad(Vec3::new(0.0, 2.0, 0.0), -Vec3::Y, 0.5), light);

@@ -9,17 +9,13 @@ use glam::Vec3;
 use spectral::SpectralMode;
 use spectral::spectrum::Colour;
 use tracer::camera::Camera;
-use tracer::material::{Material, Surface};
+use tracer::material::Material;
 use tracer::mesh::{quad, uv_sphere};
 use tracer::render::PreparedScene;
 use tracer::{CpuBackend, Environment, RenderSettings, Scene};
 
 fn furnace(albedo: f32) -> PreparedScene {
-    let white = || Material {
-        name: "white".into(),
-        surface: Surface::Diffuse { albedo: Colour::constant(albedo) },
-        emission: None,
-    };
+    let white = || Material::diffuse("white", Colour::constant(albedo));
     let mut scene = Scene::default();
     scene.add(&uv_sphere(Vec3::new(0.0, 0.5, 0.0), 0.5, 16, 32, false), white());
     // An open box around it (no front wall): concave, so light bounces many times.

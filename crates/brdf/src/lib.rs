@@ -94,3 +94,58 @@ pub trait Bsdf<const N: usize> {
     /// Samples ωi given ωo: `uc` picks a lobe, `u` the direction within it.
     fn sample(&self, wo: Vec3, uc: f32, u: Vec2) -> Option<BsdfSample<N>>;
 }
+
+/// Builds a BSDF at a hit for any number of sampled wavelengths: the one generic method a
+/// model from outside the workspace implements to plug into the renderer (see
+/// `examples/custom_brdf.rs` in the tracer crate).
+pub trait BsdfBuilder: Send + Sync + 'static {
+    /// The BSDF for the path's wavelengths (or RGB channels).
+    fn build<const N: usize>(&self, wl: &spectral::SampledWavelengths<N>) -> impl Bsdf<N> + 'static;
+}
+
+/// The object-safe form of [`BsdfBuilder`] for the lane counts the renderer uses (3 for
+/// RGB, 4 for hero wavelengths, 40 for the thesis's bins); implemented for every
+/// `BsdfBuilder`.
+pub trait DynBsdfBuilder: Send + Sync {
+    /// Hero-wavelength BSDF.
+    fn build_4(&self, wl: &spectral::SampledWavelengths<4>) -> Box<dyn Bsdf<4>>;
+    /// RGB BSDF.
+    fn build_3(&self, wl: &spectral::SampledWavelengths<3>) -> Box<dyn Bsdf<3>>;
+    /// 40-bin BSDF.
+    fn build_40(&self, wl: &spectral::SampledWavelengths<40>) -> Box<dyn Bsdf<40>>;
+}
+
+impl<T: BsdfBuilder> DynBsdfBuilder for T {
+    fn build_4(&self, wl: &spectral::SampledWavelengths<4>) -> Box<dyn Bsdf<4>> {
+        Box::new(self.build(wl))
+    }
+    fn build_3(&self, wl: &spectral::SampledWavelengths<3>) -> Box<dyn Bsdf<3>> {
+        Box::new(self.build(wl))
+    }
+    fn build_40(&self, wl: &spectral::SampledWavelengths<40>) -> Box<dyn Bsdf<40>> {
+        Box::new(self.build(wl))
+    }
+}
+
+/// Calls the [`DynBsdfBuilder`] method matching N from generic code (N ∈ {3, 4, 40});
+/// panics for other lane counts, which the renderer never uses.
+pub fn instantiate<const N: usize>(
+    builder: &dyn DynBsdfBuilder,
+    wl: &spectral::SampledWavelengths<N>,
+) -> Box<dyn Bsdf<N>> {
+    use std::any::Any;
+    fn cast<const M: usize, const N: usize>(b: Box<dyn Bsdf<M>>) -> Box<dyn Bsdf<N>> {
+        let any: Box<dyn Any> = Box::new(b);
+        *any.downcast::<Box<dyn Bsdf<N>>>().expect("M == N checked by the caller")
+    }
+    let any: &dyn Any = wl;
+    if let Some(w) = any.downcast_ref::<spectral::SampledWavelengths<4>>() {
+        cast::<4, N>(builder.build_4(w))
+    } else if let Some(w) = any.downcast_ref::<spectral::SampledWavelengths<3>>() {
+        cast::<3, N>(builder.build_3(w))
+    } else if let Some(w) = any.downcast_ref::<spectral::SampledWavelengths<40>>() {
+        cast::<40, N>(builder.build_40(w))
+    } else {
+        panic!("no custom BSDF instantiation for {N} lanes")
+    }
+}

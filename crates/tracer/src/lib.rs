@@ -57,6 +57,9 @@ pub enum Error {
         /// Why.
         source: spectral::SpectralError,
     },
+    /// A material parameter is unknown or out of range.
+    #[error(transparent)]
+    Param(#[from] brdf::params::ParamError),
     /// The geometry cannot be put in an accelerator.
     #[error("geometry: {0}")]
     Geometry(#[from] bvh::BuildError),

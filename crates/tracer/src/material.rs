@@ -1,37 +1,86 @@
-//! Surface materials: which BSDF a triangle has, with its colours, and what it emits.
+//! Surface materials: which BSDF model a triangle has, with its resolved parameters, and
+//! what it emits.
+//!
+//! Built-in models are named by [`BuiltinModel`] and parameterised by the model's own
+//! declaration ([`brdf::params::ModelDef`]); models written outside our crates plug in
+//! through [`brdf::DynBsdfBuilder`] without any change to the tracer.
 
-use brdf::models::FresnelModel;
-use brdf::{Bsdf, BsdfSample, Dielectric, Lambert, Mirror, ScatterFlags};
+use brdf::models::{self, Dielectric, Lambert, Mirror};
+use brdf::params::{ModelDef, ParamError, ParamValue, ResolvedParams};
+use brdf::{Bsdf, BsdfSample, DynBsdfBuilder, ScatterFlags};
 use glam::{Vec2, Vec3};
 use spectral::spectrum::Colour;
 use spectral::{SampledSpectrum, SampledWavelengths};
+use std::sync::Arc;
+
+/// The built-in BSDF models, dispatched by `match` on the hot path.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum BuiltinModel {
+    /// [`brdf::models::Lambert`].
+    Lambert,
+    /// [`brdf::models::Mirror`].
+    Mirror,
+    /// [`brdf::models::Dielectric`].
+    Dielectric,
+}
+
+impl BuiltinModel {
+    /// Every built-in model.
+    pub const ALL: [BuiltinModel; 3] = [Self::Lambert, Self::Mirror, Self::Dielectric];
+
+    /// The model's parameter declaration.
+    pub fn def(self) -> &'static ModelDef {
+        match self {
+            Self::Lambert => &models::lambert::DEF,
+            Self::Mirror => &models::mirror::DEF,
+            Self::Dielectric => &models::dielectric::DEF,
+        }
+    }
+
+    /// The model called `name` (case-insensitive).
+    pub fn by_name(name: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|m| m.def().name.eq_ignore_ascii_case(name))
+    }
+
+    /// True if light can pass through the surface: the BSDF then sees both sides as
+    /// they are (no two-sided flipping), and the geometric normal marks the outside.
+    pub fn is_transmissive(self) -> bool {
+        matches!(self, Self::Dielectric)
+    }
+}
 
 /// How a surface scatters light.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone)]
 pub enum Surface {
-    /// Lambertian, two-sided.
-    Diffuse {
-        /// Albedo.
-        albedo: Colour,
+    /// A built-in model with parameters resolved against its declaration.
+    Builtin {
+        /// Which model.
+        model: BuiltinModel,
+        /// Its parameters, in declaration order.
+        params: ResolvedParams,
     },
-    /// Perfect mirror, two-sided.
-    Mirror {
-        /// Reflectance.
-        reflectance: Colour,
-    },
-    /// Smooth dielectric; the geometric normal points outside.
-    Dielectric {
-        /// Index of refraction inside (outside is vacuum/air = 1).
-        ior: f32,
-        /// Colour filter (1 for clear).
-        tint: Colour,
-        /// Fresnel formula.
-        fresnel: FresnelModel,
+    /// A model from outside the workspace.
+    Custom {
+        /// Builds the BSDF at a hit.
+        builder: Arc<dyn DynBsdfBuilder>,
+        /// Whether it transmits (see [`BuiltinModel::is_transmissive`]).
+        transmissive: bool,
     },
 }
 
+impl std::fmt::Debug for Surface {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Self::Builtin { model, params } => {
+                f.debug_struct("Builtin").field("model", model).field("params", params).finish()
+            }
+            Self::Custom { transmissive, .. } => f.debug_struct("Custom").field("transmissive", transmissive).finish(),
+        }
+    }
+}
+
 /// A named material: a surface and, for area lights, an emitted radiance.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug)]
 pub struct Material {
     /// The name from the scene file (used in messages).
     pub name: String,
@@ -42,77 +91,99 @@ pub struct Material {
 }
 
 impl Material {
-    /// A grey Lambertian material that emits nothing.
+    /// A built-in model with parameters given by name; values are range-checked against
+    /// the model's declaration and errors name the material and the parameter.
+    pub fn builtin(name: &str, model: BuiltinModel, params: &[(&str, ParamValue)]) -> Result<Self, ParamError> {
+        Ok(Self {
+            name: name.into(),
+            surface: Surface::Builtin { model, params: model.def().resolve(name, params)? },
+            emission: None,
+        })
+    }
+
+    /// A Lambertian material.
     pub fn diffuse(name: &str, albedo: Colour) -> Self {
-        Self { name: name.into(), surface: Surface::Diffuse { albedo }, emission: None }
+        Self::builtin(name, BuiltinModel::Lambert, &[("reflectance", ParamValue::Colour(albedo))])
+            .expect("albedo validated by the caller")
     }
 
-    /// True if the surface is a pure Dirac delta (light sampling cannot reach it).
-    pub fn is_specular(&self) -> bool {
-        !matches!(self.surface, Surface::Diffuse { .. })
+    /// A clear smooth dielectric of index `ior`.
+    pub fn dielectric(name: &str, ior: f32) -> Result<Self, ParamError> {
+        Self::builtin(name, BuiltinModel::Dielectric, &[("ior", ParamValue::Scalar(ior))])
     }
 
-    /// True if the BSDF acts on both faces the same way (everything but dielectrics).
+    /// A material whose BSDF comes from outside the workspace.
+    pub fn custom(name: &str, builder: Arc<dyn DynBsdfBuilder>, transmissive: bool) -> Self {
+        Self { name: name.into(), surface: Surface::Custom { builder, transmissive }, emission: None }
+    }
+
+    /// This material, emitting `radiance` from its front faces.
+    pub fn with_emission(mut self, radiance: Colour) -> Self {
+        self.emission = Some(radiance);
+        self
+    }
+
+    /// True if the BSDF acts on both faces the same way (everything that does not
+    /// transmit).
     pub fn is_two_sided(&self) -> bool {
-        !matches!(self.surface, Surface::Dielectric { .. })
+        match &self.surface {
+            Surface::Builtin { model, .. } => !model.is_transmissive(),
+            Surface::Custom { transmissive, .. } => !transmissive,
+        }
     }
 
     /// The BSDF at the path's wavelengths.
     #[inline]
-    pub fn bsdf<const N: usize>(&self, wl: &SampledWavelengths<N>) -> MaterialBsdf<N> {
+    pub fn bsdf<const N: usize>(&self, wl: &SampledWavelengths<N>) -> MaterialBsdf<'_, N> {
         match &self.surface {
-            Surface::Diffuse { albedo } => MaterialBsdf::Lambert(Lambert { reflectance: albedo.sample(wl) }),
-            Surface::Mirror { reflectance } => MaterialBsdf::Mirror(Mirror { reflectance: reflectance.sample(wl) }),
-            Surface::Dielectric { ior, tint, fresnel } => {
-                MaterialBsdf::Dielectric(Dielectric { eta: *ior, fresnel: *fresnel, tint: tint.sample(wl) })
-            }
+            Surface::Builtin { model, params } => match model {
+                BuiltinModel::Lambert => MaterialBsdf::Lambert(Lambert::from_params(params, wl)),
+                BuiltinModel::Mirror => MaterialBsdf::Mirror(Mirror::from_params(params, wl)),
+                BuiltinModel::Dielectric => MaterialBsdf::Dielectric(Dielectric::from_params(params, wl)),
+            },
+            Surface::Custom { builder, .. } => MaterialBsdf::Custom(brdf::instantiate(builder.as_ref(), wl)),
         }
     }
 }
 
-/// The closed set of built-in BSDFs, dispatched by `match` (no dynamic dispatch on the
-/// hot path).
-#[derive(Clone, Copy, Debug)]
-pub enum MaterialBsdf<const N: usize> {
+/// The BSDF of one hit: a built-in model by value, or a boxed custom one.
+pub enum MaterialBsdf<'a, const N: usize> {
     /// Lambert.
     Lambert(Lambert<N>),
     /// Perfect mirror.
     Mirror(Mirror<N>),
     /// Smooth dielectric.
     Dielectric(Dielectric<N>),
+    /// A model from outside the workspace.
+    Custom(Box<dyn Bsdf<N> + 'a>),
 }
 
-impl<const N: usize> Bsdf<N> for MaterialBsdf<N> {
+macro_rules! dispatch {
+    ($self:ident, $b:ident => $e:expr) => {
+        match $self {
+            Self::Lambert($b) => $e,
+            Self::Mirror($b) => $e,
+            Self::Dielectric($b) => $e,
+            Self::Custom($b) => $e,
+        }
+    };
+}
+
+impl<const N: usize> Bsdf<N> for MaterialBsdf<'_, N> {
     #[inline]
     fn flags(&self) -> ScatterFlags {
-        match self {
-            Self::Lambert(b) => b.flags(),
-            Self::Mirror(b) => b.flags(),
-            Self::Dielectric(b) => b.flags(),
-        }
+        dispatch!(self, b => b.flags())
     }
     #[inline]
     fn eval(&self, wo: Vec3, wi: Vec3) -> SampledSpectrum<N> {
-        match self {
-            Self::Lambert(b) => b.eval(wo, wi),
-            Self::Mirror(b) => b.eval(wo, wi),
-            Self::Dielectric(b) => b.eval(wo, wi),
-        }
+        dispatch!(self, b => b.eval(wo, wi))
     }
     #[inline]
     fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
-        match self {
-            Self::Lambert(b) => b.pdf(wo, wi),
-            Self::Mirror(b) => b.pdf(wo, wi),
-            Self::Dielectric(b) => b.pdf(wo, wi),
-        }
+        dispatch!(self, b => b.pdf(wo, wi))
     }
     #[inline]
     fn sample(&self, wo: Vec3, uc: f32, u: Vec2) -> Option<BsdfSample<N>> {
-        match self {
-            Self::Lambert(b) => b.sample(wo, uc, u),
-            Self::Mirror(b) => b.sample(wo, uc, u),
-            Self::Dielectric(b) => b.sample(wo, uc, u),
-        }
+        dispatch!(self, b => b.sample(wo, uc, u))
     }
 }

@@ -1,20 +1,25 @@
 //! Wavefront OBJ/MTL scenes, parsed by `tobj`.
 //!
-//! Material mapping (the thesis's MTL extensions come with the loaders issue):
+//! Material mapping (the thesis's other MTL extensions come with the loaders issue):
 //! * `Ke` > 0 → a one-sided area light of radiance `Ke` (front = counter-clockwise);
-//! * `illum` 4, 6, 7, or `d` < 1 → smooth dielectric with index `Ni` (default 1.5) and
-//!   tint `Tf`-less white;
-//! * `illum` 3 or 5 → perfect mirror with reflectance `Ks`;
-//! * otherwise → Lambertian with albedo `Kd` (default 0.5 grey, Mitsuba's default).
+//! * `bsdf NAME` (our extension) picks any built-in model by name;
+//! * else `illum` 4, 6, 7, or `d` < 1 → smooth dielectric;
+//! * `illum` 3 or 5 → perfect mirror;
+//! * otherwise → Lambertian.
+//!
+//! Each model's parameters are read from the MTL statements its declaration names
+//! (`mtl_key`: e.g. `Kd` for Lambert's reflectance, `Ks` for the mirror's, `Ni` and `Tf`
+//! for the dielectric), range-checked, and defaulted where absent (Lambert 0.5 grey,
+//! Mitsuba's default).
 //!
 //! Faces are fan-triangulated. Before `tobj` parses, a line-by-line check finds the
 //! first malformed or non-finite `v`/`vn`/`vt`/`f` line and reports its line number,
 //! which `tobj`'s errors do not carry.
 
-use crate::material::{Material, Surface};
+use crate::material::{BuiltinModel, Material};
 use crate::scene::Scene;
 use crate::{Error, Result};
-use brdf::models::FresnelModel;
+use brdf::params::ParamValue;
 use glam::Vec3;
 use spectral::spectrum::Colour;
 use std::path::Path;
@@ -74,25 +79,77 @@ pub fn load_obj(path: &Path) -> Result<Scene> {
 }
 
 fn convert_material(m: &tobj::Material) -> Result<Material> {
-    let wrap = |source| Error::Material { material: m.name.clone(), source };
     let emission = match m.emissive {
-        Some(ke) if ke.iter().any(|&v| v != 0.0) => Some(Colour::illuminant_rgb(ke).map_err(wrap)?),
+        Some(ke) if ke.iter().any(|&v| v != 0.0) => {
+            Some(Colour::illuminant_rgb(ke).map_err(|source| Error::Material { material: m.name.clone(), source })?)
+        }
         _ => None,
     };
-    let illum = m.illumination_model.unwrap_or(2);
-    let dissolve = m.dissolve.unwrap_or(1.0);
-    let surface = if matches!(illum, 4 | 6 | 7) || dissolve < 1.0 {
-        let ior = m.optical_density.unwrap_or(1.5);
-        if !(ior.is_finite() && ior > 0.0) {
-            return Err(Error::Setting(format!("material '{}': Ni = {ior} must be a positive number", m.name)));
+    let model = choose_model(m)?;
+    let mut params = Vec::new();
+    for p in model.def().params {
+        if let Some(key) = p.mtl_key
+            && let Some(value) = mtl_value(m, key)?
+        {
+            params.push((p.name, value));
         }
-        Surface::Dielectric { ior, tint: Colour::constant(1.0), fresnel: FresnelModel::Exact }
+    }
+    let mut material = Material::builtin(&m.name, model, &params)?;
+    material.emission = emission;
+    Ok(material)
+}
+
+/// The model an MTL material asks for: an explicit `bsdf NAME` statement (our extension),
+/// else by `illum` and `d` as documented at the top of this module.
+fn choose_model(m: &tobj::Material) -> Result<BuiltinModel> {
+    if let Some(name) = m.unknown_param.get("bsdf") {
+        let name = name.trim();
+        return BuiltinModel::by_name(name).ok_or_else(|| {
+            let known: Vec<&str> = BuiltinModel::ALL.iter().map(|b| b.def().name).collect();
+            Error::Setting(format!("material '{}': unknown bsdf '{name}' (known: {})", m.name, known.join(", ")))
+        });
+    }
+    let illum = m.illumination_model.unwrap_or(2);
+    Ok(if matches!(illum, 4 | 6 | 7) || m.dissolve.unwrap_or(1.0) < 1.0 {
+        BuiltinModel::Dielectric
     } else if matches!(illum, 3 | 5) {
-        Surface::Mirror { reflectance: Colour::reflectance_rgb(m.specular.unwrap_or([1.0; 3])).map_err(wrap)? }
+        BuiltinModel::Mirror
     } else {
-        Surface::Diffuse { albedo: Colour::reflectance_rgb(m.diffuse.unwrap_or([DEFAULT_ALBEDO; 3])).map_err(wrap)? }
-    };
-    Ok(Material { name: m.name.clone(), surface, emission })
+        BuiltinModel::Lambert
+    })
+}
+
+/// The value of MTL statement `key`, if the material has it.
+fn mtl_value(m: &tobj::Material, key: &str) -> Result<Option<ParamValue>> {
+    let rgb = |v: Option<[f32; 3]>| v.map(ParamValue::Rgb);
+    Ok(match key {
+        "Kd" => rgb(m.diffuse),
+        "Ks" => rgb(m.specular),
+        "Ka" => rgb(m.ambient),
+        "Ni" => m.optical_density.map(ParamValue::Scalar),
+        "d" => m.dissolve.map(ParamValue::Scalar),
+        "Ns" => m.shininess.map(ParamValue::Scalar),
+        _ => match m.unknown_param.get(key) {
+            None => None,
+            Some(text) => {
+                let nums: Vec<f32> =
+                    text.split_whitespace().map(str::parse).collect::<Result<_, _>>().map_err(|_| {
+                        Error::Setting(format!("material '{}': {key} '{text}' is not a list of numbers", m.name))
+                    })?;
+                match nums.as_slice() {
+                    [v] => Some(ParamValue::Scalar(*v)),
+                    [r, g, b] => Some(ParamValue::Rgb([*r, *g, *b])),
+                    _ => {
+                        return Err(Error::Setting(format!(
+                            "material '{}': {key} needs 1 or 3 numbers, got {}",
+                            m.name,
+                            nums.len()
+                        )));
+                    }
+                }
+            }
+        },
+    })
 }
 
 fn find_mtllib(text: &str) -> Option<String> {
