@@ -50,7 +50,7 @@ fn check_room(albedo: f32, mode: SpectralMode, spp: u32) {
         spp,
         seed: 11,
         mode,
-        path: PathSettings { max_depth: 0, rr_depth: 3 },
+        path: PathSettings { max_depth: 0, rr_depth: 3, ..Default::default() },
         camera: None,
     };
     let backend = CpuBackend::new(2).unwrap();
@@ -109,7 +109,7 @@ fn a_depth_limit_cuts_the_series() {
             spp: 64,
             seed: 5,
             mode: SpectralMode::Rgb,
-            path: PathSettings { max_depth: k, rr_depth: 100 },
+            path: PathSettings { max_depth: k, rr_depth: 100, ..Default::default() },
             camera: None,
         };
         let backend = CpuBackend::new(2).unwrap();

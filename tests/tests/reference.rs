@@ -64,7 +64,7 @@ fn compare(variant: &str, mode: SpectralMode, spp: u32) {
         seed: 2024,
         mode,
         // Unbounded depth, as the reference (Russian roulette is unbiased).
-        path: PathSettings { max_depth: 0, rr_depth: 5 },
+        path: PathSettings { max_depth: 0, rr_depth: 5, ..Default::default() },
         camera: Some(reference.camera),
     };
     let (film, stats) = tracer::render(&CpuBackend::new(0).unwrap(), &prepared, &settings, &|_| {}).unwrap();

@@ -10,8 +10,12 @@ use spectral::spectrum::Colour;
 pub enum ParamKind {
     /// One number.
     Scalar,
-    /// A colour or spectrum (a reflectance or similar, sampled at the path's wavelengths).
+    /// A colour or spectrum in [0, 1] (a reflectance or similar, sampled at the path's
+    /// wavelengths; RGB is uplifted by Jakob & Hanika 2019).
     Spectrum,
+    /// A non-negative, unbounded spectrum such as an absorption coefficient (RGB is
+    /// uplifted as max(rgb) × the reflectance spectrum of rgb / max(rgb)).
+    Coefficient,
 }
 
 /// One declared parameter of a BSDF model.
@@ -176,7 +180,7 @@ impl ModelDef {
             .map(|(v, def)| {
                 v.unwrap_or_else(|| match def.kind {
                     ParamKind::Scalar => Resolved::Scalar(def.default),
-                    ParamKind::Spectrum => Resolved::Colour(Colour::constant(def.default)),
+                    ParamKind::Spectrum | ParamKind::Coefficient => Resolved::Colour(Colour::constant(def.default)),
                 })
             })
             .collect();
@@ -204,22 +208,23 @@ fn resolve_one(material: &str, def: &ParamDef, value: &ParamValue) -> Result<Res
             Ok(Resolved::Scalar(*v))
         }
         (ParamKind::Scalar, _) => Err(ParamError::NotScalar { material: material.into(), param: def.name }),
-        (ParamKind::Spectrum, ParamValue::Scalar(v)) => {
+        (_, ParamValue::Scalar(v)) => {
             check_range(material, def, *v)?;
             Ok(Resolved::Colour(Colour::constant(*v)))
         }
-        (ParamKind::Spectrum, ParamValue::Rgb(rgb)) => {
+        (kind, ParamValue::Rgb(rgb)) => {
             for &c in rgb {
                 check_range(material, def, c)?;
             }
-            let colour = if def.max <= 1.0 { Colour::reflectance_rgb(*rgb) } else { Colour::illuminant_rgb(*rgb) };
+            let colour =
+                if kind == ParamKind::Coefficient { Colour::unbounded_rgb(*rgb) } else { Colour::reflectance_rgb(*rgb) };
             colour.map(Resolved::Colour).map_err(|source| ParamError::Spectrum {
                 material: material.into(),
                 param: def.name,
                 source,
             })
         }
-        (ParamKind::Spectrum, ParamValue::Colour(c)) => {
+        (_, ParamValue::Colour(c)) => {
             for &v in &c.rgb {
                 check_range(material, def, v)?;
             }

@@ -50,6 +50,10 @@ struct SceneArgs {
     /// Bounces before Russian roulette starts.
     #[arg(long, default_value_t = 3)]
     rr_depth: u32,
+    /// Extra bounces allowed beyond --max-depth through purely specular surfaces
+    /// (mirrors, glass): the thesis's path extension.
+    #[arg(long, default_value_t = 0)]
+    extension: u32,
     /// Camera position x,y,z (default: frame the scene's bounding box).
     #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true)]
     eye: Option<Vec3>,
@@ -141,7 +145,7 @@ fn settings(args: &SceneArgs, spp: u32, mode: SpectralMode, scene: &Scene) -> Re
         spp,
         seed: args.seed,
         mode,
-        path: PathSettings { max_depth: args.max_depth, rr_depth: args.rr_depth },
+        path: PathSettings { max_depth: args.max_depth, rr_depth: args.rr_depth, specular_extension: args.extension },
         camera,
     };
     s.validate()?;

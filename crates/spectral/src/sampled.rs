@@ -276,6 +276,25 @@ impl<const N: usize> SampledWavelengths<N> {
         Self { lambda: [0.0; N], weight: [1.0; N], rgb: true }
     }
 
+    /// Keeps only lane `k` (moved to lane 0) for the rest of the path, as a
+    /// single-wavelength estimate: needed once a path's direction depends on wavelength
+    /// (dispersion). Its weight grows N-fold and the others drop to zero, which keeps the
+    /// estimate unbiased (pbrt-v4's `TerminateSecondary`, generalised to any kept lane).
+    /// The caller must swap lanes 0 and `k` of its own per-lane values too.
+    pub fn collapse_to(&mut self, k: usize) {
+        self.lambda.swap(0, k);
+        self.weight.swap(0, k);
+        self.weight[0] *= N as f32;
+        for w in &mut self.weight[1..] {
+            *w = 0.0;
+        }
+    }
+
+    /// True once [`SampledWavelengths::collapse_to`] has left a single lane.
+    pub fn is_collapsed(&self) -> bool {
+        N > 1 && self.weight[1..].iter().all(|&w| w == 0.0)
+    }
+
     /// True in RGB mode: entries are colour channels, not wavelengths.
     #[inline]
     pub fn is_rgb(&self) -> bool {
@@ -389,6 +408,31 @@ mod tests {
         }
         let y = y / n as f64;
         assert!((y - 1.0).abs() < 2e-3, "Y = {y}");
+    }
+
+    #[test]
+    fn collapsing_keeps_the_estimate_unbiased() {
+        // A spectrum that is 1 at every wavelength: collapsing to any lane must leave
+        // the expected colour unchanged.
+        let n = 20_000;
+        let mut full = [0.0f64; 3];
+        let mut collapsed = [0.0f64; 3];
+        for i in 0..n {
+            let u = (i as f32 + 0.5) / n as f32;
+            let wl = SampledWavelengths::<4>::sample_hero(u);
+            let mut c = wl;
+            c.collapse_to(i % 4);
+            assert!(c.is_collapsed() && !wl.is_collapsed());
+            let a = wl.to_linear_srgb(&SampledSpectrum::one());
+            let b = c.to_linear_srgb(&SampledSpectrum::one());
+            for k in 0..3 {
+                full[k] += a[k] as f64 / n as f64;
+                collapsed[k] += b[k] as f64 / n as f64;
+            }
+        }
+        for k in 0..3 {
+            assert!((full[k] - collapsed[k]).abs() < 5e-3, "{full:?} vs {collapsed:?}");
+        }
     }
 
     #[test]

@@ -106,6 +106,14 @@ pub enum Spectrum {
     RgbAlbedo(RgbAlbedoSpectrum),
     /// An emission spectrum uplifted from RGB.
     RgbIlluminant(RgbIlluminantSpectrum),
+    /// An unbounded non-negative coefficient (e.g. an absorption coefficient) uplifted
+    /// from RGB as `scale` × a reflectance-shaped spectrum.
+    RgbUnbounded {
+        /// The largest RGB component.
+        scale: f32,
+        /// The shape, uplifted from RGB / scale.
+        shape: RgbAlbedoSpectrum,
+    },
 }
 
 impl Spectrum {
@@ -123,6 +131,7 @@ impl Spectrum {
             }
             Self::RgbAlbedo(s) => s.eval(lambda),
             Self::RgbIlluminant(s) => s.eval(lambda),
+            Self::RgbUnbounded { scale, shape } => scale * shape.eval(lambda),
         }
     }
 }
@@ -162,6 +171,21 @@ impl Colour {
     /// white stays white); RGB mode uses `rgb` itself.
     pub fn illuminant_rgb(rgb: [f32; 3]) -> Result<Self, SpectralError> {
         Ok(Self { spectrum: Spectrum::RgbIlluminant(RgbIlluminantSpectrum::new(rgb)?), rgb })
+    }
+
+    /// An unbounded non-negative coefficient from RGB (an absorption coefficient, say):
+    /// max(rgb) × the reflectance spectrum of rgb / max(rgb). Not multiplied by any
+    /// illuminant, unlike [`Colour::illuminant_rgb`].
+    pub fn unbounded_rgb(rgb: [f32; 3]) -> Result<Self, SpectralError> {
+        if let Some(&v) = rgb.iter().find(|v| !(v.is_finite() && **v >= 0.0)) {
+            return Err(SpectralError::BadValue { what: "coefficient", value: v });
+        }
+        let scale = rgb.iter().copied().fold(0.0, f32::max);
+        if scale == 0.0 {
+            return Ok(Self::constant(0.0));
+        }
+        let shape = RgbAlbedoSpectrum::new(rgb.map(|v| v / scale))?;
+        Ok(Self { spectrum: Spectrum::RgbUnbounded { scale, shape }, rgb })
     }
 
     /// A colour given as a spectrum; its RGB-mode value is the spectrum's sRGB colour:

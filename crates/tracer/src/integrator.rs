@@ -18,11 +18,15 @@ pub struct PathSettings {
     pub max_depth: u32,
     /// Russian roulette starts after this many bounces.
     pub rr_depth: u32,
+    /// Path extension (thesis ch. 8.2): up to this many extra bounces beyond
+    /// `max_depth` while the path keeps hitting purely specular surfaces (mirrors,
+    /// glass), so that a depth limit does not blacken what is seen through glass.
+    pub specular_extension: u32,
 }
 
 impl Default for PathSettings {
     fn default() -> Self {
-        Self { max_depth: 0, rr_depth: 3 }
+        Self { max_depth: 0, rr_depth: 3, specular_extension: 0 }
     }
 }
 
@@ -113,11 +117,13 @@ fn power_heuristic(a: f32, b: f32) -> f32 {
     if a2 + b2 == 0.0 { 0.0 } else { a2 / (a2 + b2) }
 }
 
-/// Estimates the radiance arriving along `ray` at the sampled wavelengths.
+/// Estimates the radiance arriving along `ray` at the sampled wavelengths. A dispersive
+/// surface collapses `wl` to a single wavelength ([`SampledWavelengths::collapse_to`]);
+/// the caller must convert the result with the `wl` it gets back.
 pub fn radiance<const N: usize>(
     view: &SceneView,
     mut ray: Ray,
-    wl: &SampledWavelengths<N>,
+    wl: &mut SampledWavelengths<N>,
     settings: &PathSettings,
     rng: &mut Pcg32,
     counters: &mut PathCounters,
@@ -131,6 +137,7 @@ pub fn radiance<const N: usize>(
     let mut prev_specular = true;
     let mut prev_p = ray.origin;
     let mut bounce = 0u32;
+    let mut extension_left = settings.specular_extension;
     loop {
         counters.rays += 1;
         let Some(hit) = view.accel.intersect(&ray) else {
@@ -145,6 +152,16 @@ pub fn radiance<const N: usize>(
         let material = view.material(hit.prim);
         let wo_world = -ray.dir;
         let front = wo_world.dot(it.ng) > 0.0;
+
+        // Beer–Lambert: a ray reaching the back of a transmissive surface travelled
+        // inside it (rays are unit length, so t is the distance).
+        if !front
+            && !material.is_two_sided()
+            && let Some(alpha) = material.absorption()
+        {
+            let a = alpha.sample(wl);
+            beta *= a.map(|a| (-a * hit.t).exp());
+        }
 
         // Emission seen by this path (one-sided: front face only).
         if let Some(e) = &material.emission
@@ -163,7 +180,25 @@ pub fn radiance<const N: usize>(
         }
 
         if settings.max_depth > 0 && bounce >= settings.max_depth {
-            break;
+            // Past the limit, continue only through purely specular surfaces, while the
+            // extension lasts.
+            let flags = material.bsdf(wl).flags();
+            if extension_left == 0 || !flags.is_specular() || flags.is_non_specular() {
+                break;
+            }
+            extension_left -= 1;
+        }
+
+        // Dispersion: from here on the path follows one wavelength (a random lane, moved
+        // to lane 0, so that the BSDF refracts it with its own index).
+        if material.is_dispersive() && !wl.is_rgb() && !wl.is_collapsed() {
+            let k = ((rng.next_f32() * N as f32) as usize).min(N - 1);
+            wl.collapse_to(k);
+            beta.0.swap(0, k);
+            l.0.swap(0, k);
+            for b in &mut beta.0[1..] {
+                *b = 0.0;
+            }
         }
 
         // The shading frame: two-sided BSDFs see the side the path arrived on as front.

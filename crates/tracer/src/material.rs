@@ -132,6 +132,23 @@ impl Material {
         }
     }
 
+    /// True if the index of refraction varies with wavelength: paths through it must
+    /// follow a single wavelength.
+    pub fn is_dispersive(&self) -> bool {
+        match &self.surface {
+            Surface::Builtin { model: BuiltinModel::Dielectric, params } => Dielectric::<1>::is_dispersive(params),
+            _ => false,
+        }
+    }
+
+    /// The Beer–Lambert absorption coefficient inside a transmissive material, if any.
+    pub fn absorption(&self) -> Option<Colour> {
+        match &self.surface {
+            Surface::Builtin { model: BuiltinModel::Dielectric, params } => Dielectric::<1>::absorption(params),
+            _ => None,
+        }
+    }
+
     /// The BSDF at the path's wavelengths.
     #[inline]
     pub fn bsdf<const N: usize>(&self, wl: &SampledWavelengths<N>) -> MaterialBsdf<'_, N> {

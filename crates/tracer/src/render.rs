@@ -222,10 +222,10 @@ fn render_tiles<const N: usize>(
                     let pixel_index = y * width + x;
                     for s in first_sample..first_sample + spp {
                         let mut rng = Pcg32::for_sample(settings.seed, pixel_index, s);
-                        let wl = wavelengths(&mut rng);
+                        let mut wl = wavelengths(&mut rng);
                         let jitter = rng.next_2d();
                         let ray = camera.ray(Vec2::new(x as f32, y as f32) + jitter);
-                        let l = radiance(&view, ray, &wl, &settings.path, &mut rng, &mut counters);
+                        let l = radiance(&view, ray, &mut wl, &settings.path, &mut rng, &mut counters);
                         let rgb = wl.to_linear_srgb(&l);
                         if rgb.iter().all(|v| v.is_finite()) {
                             stats.add(rgb);

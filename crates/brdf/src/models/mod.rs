@@ -4,7 +4,7 @@ pub mod dielectric;
 pub mod lambert;
 pub mod mirror;
 
-pub use dielectric::{Dielectric, FresnelModel};
+pub use dielectric::{Dielectric, Dispersion, FresnelModel};
 pub use lambert::Lambert;
 pub use mirror::Mirror;
 
@@ -78,7 +78,7 @@ mod tests {
 
     #[test]
     fn dielectric_conserves_energy_and_reaches_both_sides() {
-        let glass = Dielectric { eta: 1.5, fresnel: FresnelModel::Exact, tint: SampledSpectrum([1.0]) };
+        let glass = Dielectric { eta: 1.5, dispersive: false, fresnel: FresnelModel::Exact, tint: SampledSpectrum([1.0]) };
         for &z in &[1.0f32, 0.7, 0.2, 0.05, -0.05, -0.5, -0.9, -1.0] {
             let wo = Vec3::new((1.0 - z * z).sqrt(), 0.0, z);
             let (mut sum_weight, mut reflected, mut n) = (0.0f64, 0.0f64, 0);
