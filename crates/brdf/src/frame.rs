@@ -28,6 +28,20 @@ impl Frame {
         }
     }
 
+    /// A frame around unit normal `n` whose x axis follows `tangent` projected into the
+    /// tangent plane (Gram–Schmidt), so that anisotropic BSDFs are oriented by the
+    /// surface; falls back to [`Frame::from_normal`] for a zero or normal-parallel tangent.
+    #[inline]
+    pub fn from_normal_tangent(n: Vec3, tangent: Vec3) -> Self {
+        let s = tangent - n * n.dot(tangent);
+        let len2 = s.length_squared();
+        if !(len2 > 1e-8 * tangent.length_squared()) {
+            return Self::from_normal(n);
+        }
+        let s = s / len2.sqrt();
+        Self { s, t: n.cross(s), n }
+    }
+
     /// World direction → local coordinates.
     #[inline]
     pub fn to_local(&self, v: Vec3) -> Vec3 {
@@ -66,6 +80,10 @@ mod tests {
             assert!(f.s.cross(f.t).dot(f.n) > 0.99, "right-handed for {n}");
             let w = Vec3::new(0.2, -0.5, 0.7);
             assert!((f.to_world(f.to_local(w)) - w).length() < 1e-5);
+            let g = Frame::from_normal_tangent(n, Vec3::new(0.3, 0.9, -0.2));
+            assert!(g.s.dot(n).abs() < 1e-5 && g.t.dot(n).abs() < 1e-5 && (g.s.length() - 1.0).abs() < 1e-5);
+            assert!(g.s.cross(g.t).dot(g.n) > 0.99, "right-handed for {n}");
+            assert_eq!(Frame::from_normal_tangent(n, n), Frame::from_normal(n));
         }
     }
 }

@@ -61,6 +61,8 @@ struct Interaction {
     ng: Vec3,
     /// Unit shading normal on the same side as `ng`.
     ns: Vec3,
+    /// Interpolated tangent (zero where the mesh has none).
+    tangent: Vec3,
     /// Triangle area (for light pdfs).
     area: f32,
 }
@@ -84,7 +86,13 @@ impl SceneView<'_> {
                 ns = if n.dot(ng) < 0.0 { -n } else { n };
             }
         }
-        Interaction { p, ng, ns, area }
+        let tangent = if scene.tangents.is_empty() {
+            Vec3::ZERO
+        } else {
+            let [t0, t1, t2] = tri.map(|i| Vec3::from_array(scene.tangents[i as usize]));
+            b0 * t0 + hit.u * t1 + hit.v * t2
+        };
+        Interaction { p, ng, ns, tangent, area }
     }
 
     #[inline]
@@ -204,7 +212,7 @@ pub fn radiance<const N: usize>(
         // The shading frame: two-sided BSDFs see the side the path arrived on as front.
         let flip = material.is_two_sided() && !front;
         let (ng, ns) = if flip { (-it.ng, -it.ns) } else { (it.ng, it.ns) };
-        let frame = Frame::from_normal(ns);
+        let frame = Frame::from_normal_tangent(ns, it.tangent);
         let wo = frame.to_local(wo_world);
         let bsdf = material.bsdf(wl);
         let flags = bsdf.flags();

@@ -8,8 +8,10 @@ use std::f32::consts::{PI, TAU};
 pub struct Mesh {
     /// Vertex positions.
     pub positions: Vec<Vec3>,
-    /// Unit per-vertex normals (pointing to the front side).
+    /// Unit per-vertex normals (pointing to the front side), or empty for flat shading.
     pub normals: Vec<Vec3>,
+    /// Unit per-vertex tangents (orienting anisotropic BSDFs), or empty.
+    pub tangents: Vec<Vec3>,
     /// Triangles, counter-clockwise seen from the front.
     pub triangles: Vec<[u32; 3]>,
 }
@@ -26,6 +28,8 @@ pub fn uv_sphere(centre: Vec3, radius: f32, rings: u32, segments: u32, inward: b
             let n = Vec3::new(theta.sin() * phi.cos(), theta.cos(), theta.sin() * phi.sin());
             m.positions.push(centre + radius * n);
             m.normals.push(if inward { -n } else { n });
+            // ∂p/∂φ: along the parallels, like the grooves of a turned object.
+            m.tangents.push(Vec3::new(-phi.sin(), 0.0, phi.cos()));
         }
     }
     let idx = |r: u32, s: u32| r * segments + s % segments;
@@ -60,6 +64,7 @@ pub fn quad(centre: Vec3, normal: Vec3, half: f32) -> Mesh {
     Mesh {
         positions: vec![centre - u - v, centre + u - v, centre + u + v, centre - u + v],
         normals: vec![n; 4],
+        tangents: vec![u.normalize(); 4],
         triangles: vec![[0, 1, 2], [0, 2, 3]],
     }
 }

@@ -17,6 +17,7 @@
 //! which `tobj`'s errors do not carry.
 
 use crate::material::{BuiltinModel, Material};
+use crate::mesh::Mesh;
 use crate::scene::Scene;
 use crate::{Error, Result};
 use brdf::params::ParamValue;
@@ -65,15 +66,19 @@ pub fn load_obj(path: &Path) -> Result<Scene> {
     let default = Material::diffuse("(default)", Colour::constant(DEFAULT_ALBEDO));
     for model in &models {
         let mesh = &model.mesh;
-        let positions: Vec<Vec3> = mesh.positions.chunks_exact(3).map(|p| Vec3::new(p[0], p[1], p[2])).collect();
-        let normals: Option<Vec<Vec3>> = (mesh.normals.len() == mesh.positions.len() && !mesh.normals.is_empty())
-            .then(|| mesh.normals.chunks_exact(3).map(|n| Vec3::new(n[0], n[1], n[2])).collect());
-        let tris: Vec<[u32; 3]> = mesh.indices.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect();
-        if tris.is_empty() {
+        let vec3s = |v: &[f32]| -> Vec<Vec3> { v.chunks_exact(3).map(|p| Vec3::new(p[0], p[1], p[2])).collect() };
+        let normals = if mesh.normals.len() == mesh.positions.len() { vec3s(&mesh.normals) } else { Vec::new() };
+        let m = Mesh {
+            positions: vec3s(&mesh.positions),
+            normals,
+            tangents: Vec::new(),
+            triangles: mesh.indices.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect(),
+        };
+        if m.triangles.is_empty() {
             continue;
         }
         let material = mesh.material_id.and_then(|i| converted.get(i)).cloned().unwrap_or_else(|| default.clone());
-        scene.add_mesh(&positions, normals.as_deref(), &tris, material);
+        scene.add(&m, material);
     }
     Ok(scene)
 }

@@ -2,6 +2,7 @@
 
 use crate::camera::Camera;
 use crate::material::Material;
+use crate::mesh::Mesh;
 use crate::{Error, Result};
 use bvh::Aabb;
 use glam::Vec3;
@@ -21,8 +22,12 @@ pub struct Environment {
 pub struct Scene {
     /// Vertex positions.
     pub positions: Vec<[f32; 3]>,
-    /// Per-vertex shading normals (same length as `positions`), or empty for flat shading.
+    /// Per-vertex shading normals (same length as `positions`), or empty for flat
+    /// shading; a zero normal means "use the geometric normal" for that vertex.
     pub normals: Vec<[f32; 3]>,
+    /// Per-vertex tangents that orient anisotropic BSDFs (same length as `positions`), or
+    /// empty; a zero tangent means "any tangent" for that vertex.
+    pub tangents: Vec<[f32; 3]>,
     /// Triangles as vertex indices; counter-clockwise seen from the front.
     pub triangles: Vec<[u32; 3]>,
     /// Material index of each triangle.
@@ -36,41 +41,19 @@ pub struct Scene {
 }
 
 impl Scene {
-    /// Appends a mesh with one material; returns the material's index.
-    pub fn add_mesh(
-        &mut self,
-        positions: &[Vec3],
-        normals: Option<&[Vec3]>,
-        triangles: &[[u32; 3]],
-        material: Material,
-    ) -> u32 {
-        let base = self.positions.len() as u32;
-        let had_normals = !self.normals.is_empty() || self.positions.is_empty();
-        self.positions.extend(positions.iter().map(|p| p.to_array()));
-        match normals {
-            Some(ns) => {
-                if !had_normals {
-                    // Earlier meshes were flat: give them their geometric normals' role
-                    // by marking with zero (zero normal = use the geometric normal).
-                    self.normals.resize(base as usize, [0.0; 3]);
-                }
-                self.normals.extend(ns.iter().map(|n| n.to_array()));
-            }
-            None if !self.normals.is_empty() => self.normals.resize(self.positions.len(), [0.0; 3]),
-            None => {}
-        }
+    /// Appends a mesh with one material (flat-shaded if its normals are empty; tangents
+    /// derived from the normal if its tangents are empty); returns the material's index.
+    pub fn add(&mut self, mesh: &Mesh, material: Material) -> u32 {
+        let base = self.positions.len();
+        let count = mesh.positions.len();
+        self.positions.extend(mesh.positions.iter().map(|p| p.to_array()));
+        extend_attribute(&mut self.normals, base, &mesh.normals, count);
+        extend_attribute(&mut self.tangents, base, &mesh.tangents, count);
         let id = self.materials.len() as u32;
         self.materials.push(material);
-        self.triangles.extend(triangles.iter().map(|t| t.map(|i| i + base)));
-        self.material_ids.extend(std::iter::repeat_n(id, triangles.len()));
+        self.triangles.extend(mesh.triangles.iter().map(|t| t.map(|i| i + base as u32)));
+        self.material_ids.extend(std::iter::repeat_n(id, mesh.triangles.len()));
         id
-    }
-
-    /// Appends a procedural [`crate::mesh::Mesh`] with one material (flat-shaded if its
-    /// normals are empty); returns the material's index.
-    pub fn add(&mut self, mesh: &crate::mesh::Mesh, material: Material) -> u32 {
-        let normals = (!mesh.normals.is_empty()).then_some(mesh.normals.as_slice());
-        self.add_mesh(&mesh.positions, normals, &mesh.triangles, material)
     }
 
     /// The three vertices of triangle `i`.
@@ -99,6 +82,12 @@ impl Scene {
         if !self.normals.is_empty() && self.normals.len() != self.positions.len() {
             return bad(format!("{} normals for {} vertices", self.normals.len(), self.positions.len()));
         }
+        if !self.tangents.is_empty() && self.tangents.len() != self.positions.len() {
+            return bad(format!("{} tangents for {} vertices", self.tangents.len(), self.positions.len()));
+        }
+        if let Some(i) = self.normals.iter().chain(&self.tangents).position(|n| n.iter().any(|c| !c.is_finite())) {
+            return bad(format!("normal or tangent {i} is not finite"));
+        }
         let nv = self.positions.len() as u32;
         if let Some((i, t)) = self.triangles.iter().enumerate().find(|(_, t)| t.iter().any(|&v| v >= nv)) {
             return bad(format!("triangle {i} indexes vertex {t:?}, but there are {nv} vertices"));
@@ -114,5 +103,17 @@ impl Scene {
             camera.validate().map_err(Error::Setting)?;
         }
         Ok(())
+    }
+}
+
+/// Appends a per-vertex attribute for `count` new vertices starting at `base`, keeping
+/// the array either empty (no mesh has the attribute) or as long as the positions, with
+/// zeros where a mesh lacks it.
+fn extend_attribute(attr: &mut Vec<[f32; 3]>, base: usize, values: &[Vec3], count: usize) {
+    if !values.is_empty() {
+        attr.resize(base, [0.0; 3]);
+        attr.extend(values.iter().map(|v| v.to_array()));
+    } else if !attr.is_empty() {
+        attr.resize(base + count, [0.0; 3]);
     }
 }
