@@ -1,5 +1,7 @@
 //! `spt`: the spectral path tracer's command-line tool.
 
+mod sheet;
+
 use anyhow::{Context, Result, bail};
 use clap::{Args, Parser, Subcommand};
 use glam::Vec3;
@@ -26,6 +28,67 @@ enum Command {
     Render(RenderArgs),
     /// Time whole renders of a scene in each spectral mode and print samples/s.
     Bench(BenchArgs),
+    /// Render a labelled contact sheet of a BSDF parameter sweep on the material sphere.
+    Sheet(SheetArgs),
+}
+
+#[derive(Args)]
+struct SheetArgs {
+    /// A sweep from the thesis's figures: schlick-r, schlick-p, sa-n, sa-aniso.
+    #[arg(long, conflicts_with_all = ["model", "param", "values"])]
+    preset: Option<String>,
+    /// BSDF model to sweep (when not using --preset).
+    #[arg(long, requires_all = ["param", "values"])]
+    model: Option<String>,
+    /// Parameter to sweep.
+    #[arg(long)]
+    param: Option<String>,
+    /// Values of the swept parameter, comma-separated.
+    #[arg(long, value_delimiter = ',')]
+    values: Vec<f32>,
+    /// Fixed parameters, name=value (repeatable).
+    #[arg(long = "set", value_parser = parse_assignment)]
+    fixed: Vec<(String, f32)>,
+    /// Cell size in pixels.
+    #[arg(long, default_value_t = 160)]
+    cell: u32,
+    /// Samples per pixel per cell.
+    #[arg(long, default_value_t = 64)]
+    spp: u32,
+    /// Spectral sampling mode.
+    #[arg(long, default_value = "hero")]
+    spectral: SpectralMode,
+    /// Worker threads (0 = one per core).
+    #[arg(long, default_value_t = 0)]
+    threads: usize,
+    /// Output PNG.
+    #[arg(short, long, default_value = "sheet.png")]
+    output: PathBuf,
+}
+
+fn parse_assignment(s: &str) -> Result<(String, f32), String> {
+    let (k, v) = s.split_once('=').ok_or_else(|| format!("expected name=value, got '{s}'"))?;
+    let v: f32 = v.trim().parse().map_err(|_| format!("'{v}' is not a number"))?;
+    Ok((k.trim().to_string(), v))
+}
+
+fn run_sheet(args: SheetArgs) -> Result<()> {
+    let mut sweep = match (&args.preset, &args.model, &args.param) {
+        (Some(p), _, _) => sheet::preset(p)?,
+        (None, Some(m), Some(param)) => sheet::Sweep {
+            model: tracer::material::BuiltinModel::by_name(m).ok_or_else(|| {
+                let known: Vec<&str> = tracer::material::BuiltinModel::ALL.iter().map(|b| b.def().name).collect();
+                anyhow::anyhow!("unknown model '{m}' (known: {})", known.join(", "))
+            })?,
+            fixed: vec![],
+            cells: args.values.iter().map(|&v| vec![(param.clone(), v)]).collect(),
+        },
+        _ => bail!("give --preset, or --model with --param and --values"),
+    };
+    sweep.fixed.extend(args.fixed.iter().cloned());
+    sheet::render_sheet(&sweep, args.cell, args.spp, args.spectral, args.threads, &args.output)?;
+    eprintln!("wrote {}", args.output.display());
+    Ok(())
 }
 
 #[derive(Args, Clone)]
@@ -252,6 +315,7 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Render(a) => run_render(a).context("render failed"),
         Command::Bench(a) => run_bench(a).context("bench failed"),
+        Command::Sheet(a) => run_sheet(a).context("sheet failed"),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

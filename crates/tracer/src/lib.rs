@@ -18,6 +18,7 @@ pub mod output;
 pub mod render;
 pub mod sampler;
 pub mod scene;
+pub mod scenes;
 
 pub use camera::Camera;
 pub use film::Film;
