@@ -60,7 +60,8 @@ fn furnace_with(object: Material) -> PreparedScene {
         scene.add(&quad(c, n, 1.0), white());
     }
     scene.environment = Some(Environment { radiance: Colour::constant(1.0) });
-    scene.camera = Some(Camera { eye: Vec3::new(0.0, 0.8, 3.0), center: Vec3::new(0.0, 0.6, 0.0), up: Vec3::Y, fov_y_deg: 30.0 });
+    scene.camera =
+        Some(Camera { eye: Vec3::new(0.0, 0.8, 3.0), center: Vec3::new(0.0, 0.6, 0.0), up: Vec3::Y, fov_y_deg: 30.0 });
     PreparedScene::new(scene).unwrap()
 }
 

@@ -35,7 +35,7 @@ impl Frame {
     pub fn from_normal_tangent(n: Vec3, tangent: Vec3) -> Self {
         let s = tangent - n * n.dot(tangent);
         let len2 = s.length_squared();
-        if !(len2 > 1e-8 * tangent.length_squared()) {
+        if len2.is_nan() || len2 <= 1e-8 * tangent.length_squared() {
             return Self::from_normal(n);
         }
         let s = s / len2.sqrt();

@@ -4,7 +4,10 @@
 //! * [`Bvh`]: a bounding volume hierarchy built by full-sweep SAH, binned SAH, midpoint
 //!   or the thesis's hybrid ([`SplitMethod`]), flattened depth-first into small POD
 //!   nodes ([`BvhNode`]) that a GPU can traverse unchanged;
-//! * [`BruteForce`]: tests every triangle; the oracle the tests compare against.
+//! * [`BruteForce`]: tests every triangle; the oracle the tests compare against;
+//! * [`ObvhsBvh2`], [`ObvhsCwBvh`]: the obvhs crate's BVH2 and compressed wide BVH8
+//!   behind the same trait, so that benchmarks compare them with ours in the same run;
+//! * [`make_ray_sets`]: primary, diffuse-bounce and shadow ray sets for benchmarks.
 //!
 //! This crate knows boxes, rays and triangles, nothing of materials.
 
@@ -12,13 +15,17 @@ mod aabb;
 mod brute;
 mod build;
 mod builders;
+mod obvhs_adapter;
 mod ray;
+mod raysets;
 mod triangle;
 
 pub use aabb::Aabb;
 pub use brute::BruteForce;
 pub use build::{BuildConfig, Bvh, BvhNode, BvhStats, SplitMethod};
+pub use obvhs_adapter::{ObvhsBvh2, ObvhsCwBvh, ObvhsQuality};
 pub use ray::{Hit, Ray};
+pub use raysets::{RaySets, make_ray_sets};
 pub use triangle::{Triangle, intersect_triangle};
 
 use glam::Vec3;

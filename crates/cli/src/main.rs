@@ -1,5 +1,6 @@
 //! `spt`: the spectral path tracer's command-line tool.
 
+mod bvh_table;
 mod sheet;
 
 use anyhow::{Context, Result, bail};
@@ -30,6 +31,37 @@ enum Command {
     Bench(BenchArgs),
     /// Render a labelled contact sheet of a BSDF parameter sweep on the material sphere.
     Sheet(SheetArgs),
+    /// Compare BVH builders (the thesis's table 9.6 and more): build time, tree
+    /// statistics, traversal work and rays/s, against obvhs in the same run.
+    Bvh(BvhArgs),
+}
+
+#[derive(Args)]
+struct BvhArgs {
+    /// The scene file (.obj with its .mtl).
+    scene: PathBuf,
+    /// Image width for the primary rays.
+    #[arg(long, default_value_t = 256)]
+    width: u32,
+    /// Image height for the primary rays.
+    #[arg(long, default_value_t = 256)]
+    height: u32,
+    /// Builders, comma-separated (default: all): sweep_sah, binned_sah, midpoint, hybrid.
+    #[arg(long, value_delimiter = ',')]
+    builders: Vec<String>,
+    /// Maximum leaf sizes, comma-separated (default: 1,2,3,4,8).
+    #[arg(long, value_delimiter = ',')]
+    leaf_sizes: Vec<usize>,
+}
+
+fn run_bvh(args: BvhArgs) -> Result<()> {
+    let scene = load_scene(&args.scene)?;
+    if scene.triangles.is_empty() {
+        bail!("{}: the scene has no triangles", args.scene.display());
+    }
+    let name = args.scene.file_stem().map_or("scene".into(), |s| s.to_string_lossy().into_owned());
+    let builders: Vec<&str> = args.builders.iter().map(String::as_str).collect();
+    bvh_table::run(&scene.triangle_soup(), &name, args.width, args.height, &builders, &args.leaf_sizes)
 }
 
 #[derive(Args)]
@@ -316,6 +348,7 @@ fn main() -> ExitCode {
         Command::Render(a) => run_render(a).context("render failed"),
         Command::Bench(a) => run_bench(a).context("bench failed"),
         Command::Sheet(a) => run_sheet(a).context("sheet failed"),
+        Command::Bvh(a) => run_bvh(a).context("bvh failed"),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
