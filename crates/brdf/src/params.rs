@@ -216,8 +216,11 @@ fn resolve_one(material: &str, def: &ParamDef, value: &ParamValue) -> Result<Res
             for &c in rgb {
                 check_range(material, def, c)?;
             }
-            let colour =
-                if kind == ParamKind::Coefficient { Colour::unbounded_rgb(*rgb) } else { Colour::reflectance_rgb(*rgb) };
+            let colour = if kind == ParamKind::Coefficient {
+                Colour::unbounded_rgb(*rgb)
+            } else {
+                Colour::reflectance_rgb(*rgb)
+            };
             colour.map(Resolved::Colour).map_err(|source| ParamError::Spectrum {
                 material: material.into(),
                 param: def.name,
