@@ -5,7 +5,7 @@
 //! declaration ([`brdf::params::ModelDef`]); models written outside our crates plug in
 //! through [`brdf::DynBsdfBuilder`] without any change to the tracer.
 
-use brdf::models::{self, Dielectric, Lambert, Mirror};
+use brdf::models::{self, Dielectric, Lambert, Mirror, OrenNayar, RoughConductor, RoughDielectric, SmoothConductor};
 use brdf::params::{ModelDef, ParamError, ParamValue, ResolvedParams};
 use brdf::{Bsdf, BsdfSample, DynBsdfBuilder, ScatterFlags};
 use glam::{Vec2, Vec3};
@@ -22,11 +22,27 @@ pub enum BuiltinModel {
     Mirror,
     /// [`brdf::models::Dielectric`].
     Dielectric,
+    /// [`brdf::models::SmoothConductor`].
+    Conductor,
+    /// [`brdf::models::RoughConductor`] (GGX).
+    RoughConductor,
+    /// [`brdf::models::RoughDielectric`] (GGX).
+    RoughDielectric,
+    /// [`brdf::models::OrenNayar`].
+    OrenNayar,
 }
 
 impl BuiltinModel {
     /// Every built-in model.
-    pub const ALL: [BuiltinModel; 3] = [Self::Lambert, Self::Mirror, Self::Dielectric];
+    pub const ALL: [BuiltinModel; 7] = [
+        Self::Lambert,
+        Self::Mirror,
+        Self::Dielectric,
+        Self::Conductor,
+        Self::RoughConductor,
+        Self::RoughDielectric,
+        Self::OrenNayar,
+    ];
 
     /// The model's parameter declaration.
     pub fn def(self) -> &'static ModelDef {
@@ -34,6 +50,10 @@ impl BuiltinModel {
             Self::Lambert => &models::lambert::DEF,
             Self::Mirror => &models::mirror::DEF,
             Self::Dielectric => &models::dielectric::DEF,
+            Self::Conductor => &models::conductor::DEF,
+            Self::RoughConductor => &models::microfacet::ROUGH_CONDUCTOR_DEF,
+            Self::RoughDielectric => &models::microfacet::ROUGH_DIELECTRIC_DEF,
+            Self::OrenNayar => &models::oren_nayar::DEF,
         }
     }
 
@@ -45,7 +65,7 @@ impl BuiltinModel {
     /// True if light can pass through the surface: the BSDF then sees both sides as
     /// they are (no two-sided flipping), and the geometric normal marks the outside.
     pub fn is_transmissive(self) -> bool {
-        matches!(self, Self::Dielectric)
+        matches!(self, Self::Dielectric | Self::RoughDielectric)
     }
 }
 
@@ -157,6 +177,12 @@ impl Material {
                 BuiltinModel::Lambert => MaterialBsdf::Lambert(Lambert::from_params(params, wl)),
                 BuiltinModel::Mirror => MaterialBsdf::Mirror(Mirror::from_params(params, wl)),
                 BuiltinModel::Dielectric => MaterialBsdf::Dielectric(Dielectric::from_params(params, wl)),
+                BuiltinModel::Conductor => MaterialBsdf::Conductor(SmoothConductor::from_params(params, wl)),
+                BuiltinModel::RoughConductor => MaterialBsdf::RoughConductor(RoughConductor::from_params(params, wl)),
+                BuiltinModel::RoughDielectric => {
+                    MaterialBsdf::RoughDielectric(RoughDielectric::from_params(params, wl))
+                }
+                BuiltinModel::OrenNayar => MaterialBsdf::OrenNayar(OrenNayar::from_params(params, wl)),
             },
             Surface::Custom { builder, .. } => MaterialBsdf::Custom(brdf::instantiate(builder.as_ref(), wl)),
         }
@@ -171,6 +197,14 @@ pub enum MaterialBsdf<'a, const N: usize> {
     Mirror(Mirror<N>),
     /// Smooth dielectric.
     Dielectric(Dielectric<N>),
+    /// Smooth conductor.
+    Conductor(SmoothConductor<N>),
+    /// GGX conductor.
+    RoughConductor(RoughConductor<N>),
+    /// GGX dielectric.
+    RoughDielectric(RoughDielectric<N>),
+    /// Oren–Nayar.
+    OrenNayar(OrenNayar<N>),
     /// A model from outside the workspace.
     Custom(Box<dyn Bsdf<N> + 'a>),
 }
@@ -181,6 +215,10 @@ macro_rules! dispatch {
             Self::Lambert($b) => $e,
             Self::Mirror($b) => $e,
             Self::Dielectric($b) => $e,
+            Self::Conductor($b) => $e,
+            Self::RoughConductor($b) => $e,
+            Self::RoughDielectric($b) => $e,
+            Self::OrenNayar($b) => $e,
             Self::Custom($b) => $e,
         }
     };

@@ -1,17 +1,31 @@
 //! The BSDF models, one file each, each with its parameter declaration (`DEF`).
 
+pub mod conductor;
 pub mod dielectric;
 pub mod lambert;
+pub mod microfacet;
 pub mod mirror;
+pub mod oren_nayar;
 
+pub use conductor::{Metal, SmoothConductor, fresnel_conductor};
 pub use dielectric::{Dielectric, Dispersion, FresnelModel};
 pub use lambert::Lambert;
+pub use microfacet::{Ggx, RoughConductor, RoughDielectric};
 pub use mirror::Mirror;
+pub use oren_nayar::OrenNayar;
 
 use crate::params::ModelDef;
 
 /// Every built-in model's declaration, for loaders, validation and code generation.
-pub const ALL: &[&ModelDef] = &[&lambert::DEF, &mirror::DEF, &dielectric::DEF];
+pub const ALL: &[&ModelDef] = &[
+    &lambert::DEF,
+    &mirror::DEF,
+    &dielectric::DEF,
+    &conductor::DEF,
+    &microfacet::ROUGH_CONDUCTOR_DEF,
+    &microfacet::ROUGH_DIELECTRIC_DEF,
+    &oren_nayar::DEF,
+];
 
 /// The declaration of the model called `name`.
 pub fn by_name(name: &str) -> Option<&'static ModelDef> {
@@ -78,7 +92,8 @@ mod tests {
 
     #[test]
     fn dielectric_conserves_energy_and_reaches_both_sides() {
-        let glass = Dielectric { eta: 1.5, dispersive: false, fresnel: FresnelModel::Exact, tint: SampledSpectrum([1.0]) };
+        let glass =
+            Dielectric { eta: 1.5, dispersive: false, fresnel: FresnelModel::Exact, tint: SampledSpectrum([1.0]) };
         for &z in &[1.0f32, 0.7, 0.2, 0.05, -0.05, -0.5, -0.9, -1.0] {
             let wo = Vec3::new((1.0 - z * z).sqrt(), 0.0, z);
             let (mut sum_weight, mut reflected, mut n) = (0.0f64, 0.0f64, 0);
