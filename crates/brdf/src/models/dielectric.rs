@@ -79,7 +79,7 @@ pub struct Sellmeier {
 
 /// Schott N-BK7 (Schott optical glass data sheet): n_d = 1.5168.
 pub const BK7: Sellmeier =
-    Sellmeier { b: [1.039_612_1, 0.231_792_34, 1.010_469_5], c: [0.006_000_699, 0.020_017_914, 103.560_65] };
+    Sellmeier { b: [1.039_612, 0.231_792_34, 1.010_469_5], c: [0.006_000_699, 0.020_017_914, 103.560_65] };
 
 /// Fused silica (Malitson 1965, JOSA 55(10)): n_d = 1.4585.
 pub const FUSED_SILICA: Sellmeier =
