@@ -4,6 +4,8 @@
 //! * [`Bvh`]: a bounding volume hierarchy built by full-sweep SAH, binned SAH, midpoint
 //!   or the thesis's hybrid ([`SplitMethod`]), flattened depth-first into small POD
 //!   nodes ([`BvhNode`]) that a GPU can traverse unchanged;
+//! * [`TwoLevel`]: the thesis's two-level structure — a top-level BVH over instances
+//!   (with transforms) of per-object accelerators;
 //! * [`BruteForce`]: tests every triangle; the oracle the tests compare against;
 //! * [`ObvhsBvh2`], [`ObvhsCwBvh`]: the obvhs crate's BVH2 and compressed wide BVH8
 //!   behind the same trait, so that benchmarks compare them with ours in the same run;
@@ -15,6 +17,7 @@ mod aabb;
 mod brute;
 mod build;
 mod builders;
+mod instance;
 mod obvhs_adapter;
 mod ray;
 mod raysets;
@@ -23,6 +26,7 @@ mod triangle;
 pub use aabb::Aabb;
 pub use brute::BruteForce;
 pub use build::{BuildConfig, Bvh, BvhNode, BvhStats, SplitMethod};
+pub use instance::{Instance, TwoLevel};
 pub use obvhs_adapter::{ObvhsBvh2, ObvhsCwBvh, ObvhsQuality};
 pub use ray::{Hit, Ray};
 pub use raysets::{RaySets, make_ray_sets};
@@ -40,6 +44,14 @@ pub enum BuildError {
         index: usize,
         /// The offending vertex.
         vertex: [f32; 3],
+    },
+    /// An instance of a two-level structure is unusable.
+    #[error("instance {index}: {reason}")]
+    BadInstance {
+        /// Index of the instance.
+        index: usize,
+        /// What is wrong.
+        reason: String,
     },
     /// More triangles than a 32-bit index can address.
     #[error("{0} triangles exceed the 2^32 − 1 an accelerator can index")]

@@ -5,7 +5,10 @@
 //! declaration ([`brdf::params::ModelDef`]); models written outside our crates plug in
 //! through [`brdf::DynBsdfBuilder`] without any change to the tracer.
 
-use brdf::models::{self, Dielectric, Lambert, Mirror, OrenNayar, RoughConductor, RoughDielectric, SmoothConductor};
+use brdf::models::{
+    self, AshikhminShirley, Dielectric, Lambert, Mirror, OrenNayar, RoughConductor, RoughDielectric, Schlick,
+    SmoothConductor,
+};
 use brdf::params::{ModelDef, ParamError, ParamValue, ResolvedParams};
 use brdf::{Bsdf, BsdfSample, DynBsdfBuilder, ScatterFlags};
 use glam::{Vec2, Vec3};
@@ -30,11 +33,15 @@ pub enum BuiltinModel {
     RoughDielectric,
     /// [`brdf::models::OrenNayar`].
     OrenNayar,
+    /// [`brdf::models::Schlick`] (Schlick 1994).
+    Schlick,
+    /// [`brdf::models::AshikhminShirley`] (Shirley & Ashikhmin 2000).
+    ShirleyAshikhmin,
 }
 
 impl BuiltinModel {
     /// Every built-in model.
-    pub const ALL: [BuiltinModel; 7] = [
+    pub const ALL: [BuiltinModel; 9] = [
         Self::Lambert,
         Self::Mirror,
         Self::Dielectric,
@@ -42,6 +49,8 @@ impl BuiltinModel {
         Self::RoughConductor,
         Self::RoughDielectric,
         Self::OrenNayar,
+        Self::Schlick,
+        Self::ShirleyAshikhmin,
     ];
 
     /// The model's parameter declaration.
@@ -54,6 +63,8 @@ impl BuiltinModel {
             Self::RoughConductor => &models::microfacet::ROUGH_CONDUCTOR_DEF,
             Self::RoughDielectric => &models::microfacet::ROUGH_DIELECTRIC_DEF,
             Self::OrenNayar => &models::oren_nayar::DEF,
+            Self::Schlick => &models::schlick::DEF,
+            Self::ShirleyAshikhmin => &models::ashikhmin::DEF,
         }
     }
 
@@ -183,6 +194,10 @@ impl Material {
                     MaterialBsdf::RoughDielectric(RoughDielectric::from_params(params, wl))
                 }
                 BuiltinModel::OrenNayar => MaterialBsdf::OrenNayar(OrenNayar::from_params(params, wl)),
+                BuiltinModel::Schlick => MaterialBsdf::Schlick(Schlick::from_params(params, wl)),
+                BuiltinModel::ShirleyAshikhmin => {
+                    MaterialBsdf::ShirleyAshikhmin(AshikhminShirley::from_params(params, wl))
+                }
             },
             Surface::Custom { builder, .. } => MaterialBsdf::Custom(brdf::instantiate(builder.as_ref(), wl)),
         }
@@ -205,6 +220,10 @@ pub enum MaterialBsdf<'a, const N: usize> {
     RoughDielectric(RoughDielectric<N>),
     /// Oren–Nayar.
     OrenNayar(OrenNayar<N>),
+    /// Schlick 1994.
+    Schlick(Schlick<N>),
+    /// Shirley–Ashikhmin 2000.
+    ShirleyAshikhmin(AshikhminShirley<N>),
     /// A model from outside the workspace.
     Custom(Box<dyn Bsdf<N> + 'a>),
 }
@@ -219,6 +238,8 @@ macro_rules! dispatch {
             Self::RoughConductor($b) => $e,
             Self::RoughDielectric($b) => $e,
             Self::OrenNayar($b) => $e,
+            Self::Schlick($b) => $e,
+            Self::ShirleyAshikhmin($b) => $e,
             Self::Custom($b) => $e,
         }
     };

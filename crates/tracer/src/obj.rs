@@ -3,6 +3,8 @@
 //! Material mapping (the thesis's other MTL extensions come with the loaders issue):
 //! * `Ke` > 0 → a one-sided area light of radiance `Ke` (front = counter-clockwise);
 //! * `bsdf NAME` (our extension) picks any built-in model by name;
+//! * the thesis's extensions: `rough`/`p` → Schlick 1994, `nu`/`nv`/`Rs`/`Rd` →
+//!   Shirley–Ashikhmin 2000;
 //! * else `illum` 4, 6, 7, or `d` < 1 → smooth dielectric;
 //! * `illum` 3 or 5 → perfect mirror;
 //! * otherwise → Lambertian.
@@ -113,6 +115,14 @@ fn choose_model(m: &tobj::Material) -> Result<BuiltinModel> {
             let known: Vec<&str> = BuiltinModel::ALL.iter().map(|b| b.def().name).collect();
             Error::Setting(format!("material '{}': unknown bsdf '{name}' (known: {})", m.name, known.join(", ")))
         });
+    }
+    // The thesis's MTL extensions name their model by its parameters.
+    let has = |keys: &[&str]| keys.iter().any(|k| m.unknown_param.contains_key(*k));
+    if has(&["nu", "nv", "Rs", "Rd"]) {
+        return Ok(BuiltinModel::ShirleyAshikhmin);
+    }
+    if has(&["rough", "p"]) {
+        return Ok(BuiltinModel::Schlick);
     }
     let illum = m.illumination_model.unwrap_or(2);
     Ok(if matches!(illum, 4 | 6 | 7) || m.dissolve.unwrap_or(1.0) < 1.0 {
@@ -266,5 +276,53 @@ mod tests {
         assert_eq!(check_obj_text("f 1 2\n").map(|(l, _)| l), Some(1));
         assert_eq!(check_mtl_text("newmtl a\nKd 0.5 0.5 zz\n").map(|(l, _)| l), Some(2));
         assert_eq!(check_mtl_text("newmtl a\nKd 0.5 0.5 0.5\nillum 2\n"), None);
+    }
+}
+
+#[cfg(test)]
+mod mtl_tests {
+    use super::*;
+    use crate::material::Surface;
+
+    fn load(mtl: &str) -> Result<Scene> {
+        let dir = std::env::temp_dir().join(format!("spt-obj-test-{}-{}", std::process::id(), mtl.len()));
+        std::fs::create_dir_all(&dir).unwrap();
+        std::fs::write(dir.join("m.mtl"), mtl).unwrap();
+        let obj = "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl a\nf 1 2 3\n";
+        std::fs::write(dir.join("s.obj"), obj).unwrap();
+        load_obj(&dir.join("s.obj"))
+    }
+
+    fn model(scene: &Scene) -> BuiltinModel {
+        match &scene.materials[0].surface {
+            Surface::Builtin { model, .. } => *model,
+            Surface::Custom { .. } => panic!("custom"),
+        }
+    }
+
+    #[test]
+    fn thesis_extensions_choose_their_models_and_read_parameters() {
+        let s = load("newmtl a\nKd 0.5 0.2 0.1\nrough 0.2\np 0.5\n").unwrap();
+        assert_eq!(model(&s), BuiltinModel::Schlick);
+        let Surface::Builtin { params, .. } = &s.materials[0].surface else { unreachable!() };
+        let def = BuiltinModel::Schlick.def();
+        assert_eq!(params.scalar(def.param("roughness").unwrap().0), 0.2);
+        assert_eq!(params.scalar(def.param("isotropy").unwrap().0), 0.5);
+        let s = load("newmtl a\nnu 1000\nnv 10\nRs 0.1 0.1 0.1\nRd 0.4 0.4 0.4\n").unwrap();
+        assert_eq!(model(&s), BuiltinModel::ShirleyAshikhmin);
+        let s = load("newmtl a\nbsdf orennayar\nKd 0.5 0.5 0.5\nsigma 0.3\n").unwrap();
+        assert_eq!(model(&s), BuiltinModel::OrenNayar);
+        let s = load("newmtl a\nillum 7\nNi 1.33\n").unwrap();
+        assert_eq!(model(&s), BuiltinModel::Dielectric);
+    }
+
+    #[test]
+    fn bad_parameters_name_the_material() {
+        let e = load("newmtl a\nrough 1.5\n").unwrap_err().to_string();
+        assert!(e.contains("material 'a'") && e.contains("roughness = 1.5"), "{e}");
+        let e = load("newmtl a\nbsdf velvet\n").unwrap_err().to_string();
+        assert!(e.contains("unknown bsdf 'velvet'") && e.contains("schlick"), "{e}");
+        let e = load("newmtl a\nnu 1 2\n").unwrap_err().to_string();
+        assert!(e.contains("nu needs 1 or 3 numbers"), "{e}");
     }
 }

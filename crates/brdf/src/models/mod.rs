@@ -1,18 +1,22 @@
 //! The BSDF models, one file each, each with its parameter declaration (`DEF`).
 
+pub mod ashikhmin;
 pub mod conductor;
 pub mod dielectric;
 pub mod lambert;
 pub mod microfacet;
 pub mod mirror;
 pub mod oren_nayar;
+pub mod schlick;
 
+pub use ashikhmin::AshikhminShirley;
 pub use conductor::{Metal, SmoothConductor, fresnel_conductor};
 pub use dielectric::{Dielectric, Dispersion, FresnelModel};
 pub use lambert::Lambert;
 pub use microfacet::{Ggx, RoughConductor, RoughDielectric};
 pub use mirror::Mirror;
 pub use oren_nayar::OrenNayar;
+pub use schlick::{Schlick, SchlickGeometry};
 
 use crate::params::ModelDef;
 
@@ -25,6 +29,8 @@ pub const ALL: &[&ModelDef] = &[
     &microfacet::ROUGH_CONDUCTOR_DEF,
     &microfacet::ROUGH_DIELECTRIC_DEF,
     &oren_nayar::DEF,
+    &schlick::DEF,
+    &ashikhmin::DEF,
 ];
 
 /// The declaration of the model called `name`.

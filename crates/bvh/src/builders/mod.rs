@@ -159,3 +159,15 @@ pub(crate) fn build(prims: &[Prim], ids: &mut [u32], config: &BuildConfig, out: 
     }
     index
 }
+
+/// Builds a tree over arbitrary boxes (e.g. object instances for a top-level BVH) with
+/// the configured method; the result's `order` maps leaf slots to box indices.
+pub(crate) fn build_over_boxes(boxes: &[Aabb], config: &BuildConfig) -> Output {
+    let prims: Vec<Prim> = boxes.iter().map(|b| Prim { bounds: *b, centre: b.centre() }).collect();
+    let mut ids: Vec<u32> = (0..prims.len() as u32).collect();
+    let mut out = Output::default();
+    if !ids.is_empty() {
+        build(&prims, &mut ids, config, &mut out, 1);
+    }
+    out
+}
