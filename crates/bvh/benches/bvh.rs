@@ -6,7 +6,8 @@
 //!   rays/s), single-threaded; `shadow` rays use `occluded`, the others `intersect`.
 //!
 //! Builders: ours (`sweep_sah`, `binned_sah`, `midpoint`, `hybrid` with the thesis's
-//! threshold of 1000 faces; leaves of at most 4 triangles chosen by the SAH) and obvhs's
+//! threshold of 1000 faces; leaves of at most 4 triangles chosen by the SAH), the binned and
+//! sweep SAH trees collapsed to our 4-wide BVH (`bvh4_binned_sah`, `bvh4_sweep_sah`) and obvhs's
 //! BVH2 and CWBVH (`obvhs_bvh2`, `obvhs_cwbvh`, medium-quality preset). Scenes: the
 //! Cornell box, the Stanford bunny and Crytek Sponza from `../shared/scenes`; absent ones
 //! are skipped. `BVH_BENCH_SCENES=cornell,bunny` restricts the scenes loaded, e.g.
@@ -15,7 +16,7 @@
 //! BVH_BENCH_SCENES=cornell,bunny cargo bench -p bvh --bench bvh -- --quick bvh_traverse
 //! ```
 
-use bvh::{Accelerator, BuildConfig, Bvh, ObvhsBvh2, ObvhsCwBvh, ObvhsQuality, Ray, SplitMethod, make_ray_sets};
+use bvh::{Accelerator, BuildConfig, Bvh, Bvh4, ObvhsBvh2, ObvhsCwBvh, ObvhsQuality, Ray, SplitMethod, make_ray_sets};
 use criterion::{BenchmarkId, Criterion, Throughput};
 use glam::Vec3;
 use std::hint::black_box;
@@ -37,18 +38,28 @@ const SEED: u64 = 1;
 #[derive(Clone, Copy)]
 enum Builder {
     Ours(SplitMethod),
+    /// Our binary tree collapsed to 4-wide nodes.
+    Wide(SplitMethod),
     ObvhsBvh2,
     ObvhsCwBvh,
 }
 
 impl Builder {
     fn all() -> Vec<Builder> {
-        SplitMethod::ALL.into_iter().map(Builder::Ours).chain([Builder::ObvhsBvh2, Builder::ObvhsCwBvh]).collect()
+        let wide = [SplitMethod::BinnedSah, SplitMethod::SweepSah].map(Builder::Wide);
+        SplitMethod::ALL
+            .into_iter()
+            .map(Builder::Ours)
+            .chain(wide)
+            .chain([Builder::ObvhsBvh2, Builder::ObvhsCwBvh])
+            .collect()
     }
 
     fn name(&self) -> &'static str {
         match self {
             Builder::Ours(m) => m.name(),
+            Builder::Wide(SplitMethod::SweepSah) => "bvh4_sweep_sah",
+            Builder::Wide(_) => "bvh4_binned_sah",
             Builder::ObvhsBvh2 => "obvhs_bvh2",
             Builder::ObvhsCwBvh => "obvhs_cwbvh",
         }
@@ -59,6 +70,10 @@ impl Builder {
             Builder::Ours(method) => {
                 let config = BuildConfig { method, max_leaf_size: 4, leaf_by_sah: true, ..Default::default() };
                 Box::new(Bvh::build(tris, config).expect("finite scene"))
+            }
+            Builder::Wide(method) => {
+                let config = BuildConfig { method, max_leaf_size: 4, leaf_by_sah: true, ..Default::default() };
+                Box::new(Bvh4::build(tris, config).expect("finite scene"))
             }
             Builder::ObvhsBvh2 => Box::new(ObvhsBvh2::build(tris, ObvhsQuality::Medium).expect("finite scene")),
             Builder::ObvhsCwBvh => Box::new(ObvhsCwBvh::build(tris, ObvhsQuality::Medium).expect("finite scene")),

@@ -4,6 +4,8 @@
 //! * [`Bvh`]: a bounding volume hierarchy built by full-sweep SAH, binned SAH, midpoint
 //!   or the thesis's hybrid ([`SplitMethod`]), flattened depth-first into small POD
 //!   nodes ([`BvhNode`]) that a GPU can traverse unchanged;
+//! * [`Bvh4`]: a 4-wide BVH collapsed from a [`Bvh`], its four child boxes per node
+//!   tested at once with SIMD ([`Bvh4Node`]);
 //! * [`TwoLevel`]: the thesis's two-level structure — a top-level BVH over instances
 //!   (with transforms) of per-object accelerators;
 //! * [`BruteForce`]: tests every triangle; the oracle the tests compare against;
@@ -22,6 +24,7 @@ mod obvhs_adapter;
 mod ray;
 mod raysets;
 mod triangle;
+mod wide;
 
 pub use aabb::Aabb;
 pub use brute::BruteForce;
@@ -31,6 +34,7 @@ pub use obvhs_adapter::{ObvhsBvh2, ObvhsCwBvh, ObvhsQuality};
 pub use ray::{Hit, Ray};
 pub use raysets::{RaySets, make_ray_sets};
 pub use triangle::{Triangle, intersect_triangle};
+pub use wide::{Bvh4, Bvh4Node, Bvh4Stats};
 
 use glam::Vec3;
 

@@ -1,11 +1,12 @@
 //! `spt bvh SCENE`: the thesis's table 9.6 — BVH builders against the maximum number of
 //! faces per leaf — extended with tree statistics, traversal work per ray, throughput for
-//! primary, diffuse and shadow rays, and obvhs's BVH2 and CWBVH as a yardstick.
+//! primary, diffuse and shadow rays, each tree also collapsed to our 4-wide [`Bvh4`]
+//! (`<builder>+bvh4` rows), and obvhs's BVH2 and CWBVH as a yardstick.
 
 use anyhow::{Result, bail, ensure};
 use bvh::{
-    Accelerator, BuildConfig, Bvh, BvhStats, ObvhsBvh2, ObvhsCwBvh, ObvhsQuality, Ray, RaySets, RayStats, SplitMethod,
-    make_ray_sets,
+    Accelerator, BuildConfig, Bvh, Bvh4, BvhStats, ObvhsBvh2, ObvhsCwBvh, ObvhsQuality, Ray, RaySets, RayStats,
+    SplitMethod, make_ray_sets,
 };
 use glam::Vec3;
 use std::io::Write;
@@ -130,12 +131,14 @@ fn row_cells(row: &Row, cw_diffuse: f64) -> Vec<String> {
     ]
 }
 
-/// Prints, for the scene's triangles, one row per builder × maximum leaf size and two rows
-/// for obvhs (BVH2 and CWBVH, medium-quality preset): build time, depth, nodes, leaves,
-/// SAH cost, mean nodes visited and triangles tested per primary ray, and single-threaded
-/// throughput (best of 3) for the primary, diffuse and shadow rays of
-/// [`bvh::make_ray_sets`] at `width` × `height`; "vs obvhs" is a row's diffuse throughput
-/// over obvhs's CWBVH's.
+/// Prints, for the scene's triangles, two rows per builder × maximum leaf size (the binary
+/// tree, then the same tree collapsed to a [`Bvh4`]: `<builder>+bvh4`, whose build time
+/// includes the binary build, nodes count 4-wide nodes and depth the leaf level, as for
+/// obvhs's CWBVH) and two rows for obvhs (BVH2 and CWBVH, medium-quality preset): build
+/// time, depth, nodes, leaves, SAH cost, mean nodes visited and triangles tested per
+/// primary ray, and single-threaded throughput (best of 3) for the primary, diffuse and
+/// shadow rays of [`bvh::make_ray_sets`] at `width` × `height`; "vs obvhs" is a row's
+/// diffuse throughput over obvhs's CWBVH's.
 ///
 /// Our trees split down to `leaf_sizes` faces regardless of the SAH (the thesis's "max
 /// faces per leaf", `leaf_by_sah: false`). `builders` are names from [`BUILDERS`]; an
@@ -191,8 +194,8 @@ fn write_table(
         out,
         "SAH cost = Σ_interior C_t·A/A_root + Σ_leaves C_i·n·A/A_root with C_t = {}, C_i = {}; build: wall \
          clock (binned SAH builds subtrees in parallel, obvhs single-threaded); nodes/tris per primary ray \
-         (obvhs CWBVH: 8-wide nodes); Mrays/s: one thread, best of {PASSES} passes of ≥ {} ms; vs obvhs: diffuse Mrays/s \
-         ÷ obvhs CWBVH's",
+         (+bvh4: 4-wide nodes; obvhs CWBVH: 8-wide nodes); Mrays/s: one thread, best of {PASSES} passes of ≥ {} \
+         ms; vs obvhs: diffuse Mrays/s ÷ obvhs CWBVH's",
         costs.traversal_cost,
         costs.intersection_cost,
         min_pass.as_millis()
@@ -237,6 +240,16 @@ fn write_table(
             let (work, mrays) = measure(&bvh, &sets, min_pass);
             let row = Row { builder: name.to_string(), leaf: leaf.to_string(), build, stats: bvh.stats(), work, mrays };
             print_row(out, &row_cells(&row, cw_diffuse))?;
+            // The same tree collapsed to 4-wide nodes; its build time includes the binary build.
+            let start = Instant::now();
+            let wide = Bvh4::from_bvh(&bvh);
+            let build = build + start.elapsed();
+            drop(bvh);
+            let (work, mrays) = measure(&wide, &sets, min_pass);
+            let s = wide.stats();
+            let stats = BvhStats { nodes: s.nodes, leaves: s.leaves, depth: s.depth, sah_cost: s.sah_cost };
+            let row = Row { builder: format!("{name}+bvh4"), leaf: leaf.to_string(), build, stats, work, mrays };
+            print_row(out, &row_cells(&row, cw_diffuse))?;
             out.flush()?;
         }
     }
@@ -268,12 +281,13 @@ mod tests {
     }
 
     #[test]
-    fn prints_one_row_per_builder_and_leaf_size_plus_obvhs() {
+    fn prints_two_rows_per_builder_and_leaf_size_plus_obvhs() {
         let mut out = Vec::new();
         write_table(&mut out, &scene(), "test", 24, 16, &["sweep_sah", "hybrid"], &[1, 4], Duration::ZERO).unwrap();
         let text = String::from_utf8(out).unwrap();
         let rows: Vec<&str> = text.lines().filter(|l| l.starts_with('|')).collect();
-        assert_eq!(rows.len(), 2 + 2 * 2 + 2, "{text}");
+        assert_eq!(rows.len(), 2 + 2 * 2 * 2 + 2, "{text}");
+        assert!(rows.iter().any(|r| r.contains("sweep_sah+bvh4")), "{text}");
         assert!(rows[0].contains("vs obvhs") && rows.iter().any(|r| r.contains("obvhs_cwbvh")), "{text}");
         assert!(text.contains("384 primary"), "{text}");
         assert!(!text.contains("NaN") && !text.contains("inf"), "{text}");
@@ -294,6 +308,6 @@ mod tests {
         write_table(&mut out, &scene(), "test", 8, 8, &[], &[], Duration::ZERO).unwrap();
         let text = String::from_utf8(out).unwrap();
         let rows = text.lines().filter(|l| l.starts_with('|')).count();
-        assert_eq!(rows, 2 + BUILDERS.len() * LEAF_SIZES.len() + 2, "{text}");
+        assert_eq!(rows, 2 + 2 * BUILDERS.len() * LEAF_SIZES.len() + 2, "{text}");
     }
 }
