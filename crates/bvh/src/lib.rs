@@ -32,7 +32,7 @@ pub use build::{BuildConfig, Bvh, BvhNode, BvhStats, SplitMethod};
 pub use instance::{Instance, TwoLevel};
 pub use obvhs_adapter::{ObvhsBvh2, ObvhsCwBvh, ObvhsQuality};
 pub use ray::{Hit, Ray};
-pub use raysets::{RaySets, make_ray_sets};
+pub use raysets::{RaySets, make_ray_sets, make_ray_sets_from};
 pub use triangle::{Triangle, intersect_triangle};
 pub use wide::{Bvh4, Bvh4Node, Bvh4Stats};
 

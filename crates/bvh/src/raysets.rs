@@ -96,19 +96,24 @@ fn cosine_direction(n: Vec3, u1: f32, u2: f32) -> Vec3 {
 }
 
 /// The pinhole camera's primary rays over `bounds`, one per pixel centre.
-fn primary_rays(bounds: &Aabb, width: u32, height: u32) -> Vec<Ray> {
+fn primary_rays(bounds: &Aabb, camera: Option<(Vec3, Vec3)>, width: u32, height: u32) -> Vec<Ray> {
     let centre = bounds.centre();
     let extent = bounds.extent().max(Vec3::splat(1e-6));
     let tan_y = (0.5 * RaySets::FOV_Y_DEG.to_radians()).tan();
     let tan_x = tan_y * width as f32 / height as f32;
-    let dist = (0.5 * extent.y / tan_y).max(0.5 * extent.x / tan_x) * 1.025 + 0.5 * extent.z;
-    let eye = centre + Vec3::Z * dist;
+    let (eye, look_at) = camera.unwrap_or_else(|| {
+        let dist = (0.5 * extent.y / tan_y).max(0.5 * extent.x / tan_x) * 1.025 + 0.5 * extent.z;
+        (centre + Vec3::Z * dist, centre)
+    });
+    let forward = (look_at - eye).normalize_or(-Vec3::Z);
+    let right = forward.cross(Vec3::Y).normalize_or(Vec3::X);
+    let up = right.cross(forward);
     let mut rays = Vec::with_capacity(width as usize * height as usize);
     for y in 0..height {
         let sy = (1.0 - 2.0 * (y as f32 + 0.5) / height as f32) * tan_y;
         for x in 0..width {
             let sx = (2.0 * (x as f32 + 0.5) / width as f32 - 1.0) * tan_x;
-            rays.push(Ray::new(eye, Vec3::new(sx, sy, -1.0).normalize()));
+            rays.push(Ray::new(eye, (forward + sx * right + sy * up).normalize()));
         }
     }
     rays
@@ -118,11 +123,25 @@ fn primary_rays(bounds: &Aabb, width: u32, height: u32) -> Vec<Ray> {
 /// are found with `accel` (any accelerator built over the same triangles, in the same
 /// order). Deterministic for a `seed`. An empty scene gives empty sets.
 pub fn make_ray_sets(triangles: &[[Vec3; 3]], accel: &dyn Accelerator, width: u32, height: u32, seed: u64) -> RaySets {
+    make_ray_sets_from(triangles, accel, None, width, height, seed)
+}
+
+/// [`make_ray_sets`] with the primary rays from `camera` = (eye, look-at point, +y up)
+/// instead of the default framing — for scenes seen from inside, such as Sponza, whose
+/// diffuse bounces would otherwise all leave the scene.
+pub fn make_ray_sets_from(
+    triangles: &[[Vec3; 3]],
+    accel: &dyn Accelerator,
+    camera: Option<(Vec3, Vec3)>,
+    width: u32,
+    height: u32,
+    seed: u64,
+) -> RaySets {
     let bounds = triangles.iter().fold(Aabb::EMPTY, |b, t| b.union(Triangle::bounds(t)));
     if bounds.is_empty() || width == 0 || height == 0 {
         return RaySets::default();
     }
-    let primary = primary_rays(&bounds, width, height);
+    let primary = primary_rays(&bounds, camera, width, height);
     let offset = RaySets::OFFSET_SCALE * bounds.extent().max_element();
     let (upper_min, upper_max) = (Vec3::new(bounds.min.x, bounds.centre().y, bounds.min.z), bounds.max);
     let mut rng = Pcg32::new(seed, 0x005E_ED0F_BA45);

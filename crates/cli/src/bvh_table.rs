@@ -6,7 +6,7 @@
 use anyhow::{Result, bail, ensure};
 use bvh::{
     Accelerator, BuildConfig, Bvh, Bvh4, BvhStats, ObvhsBvh2, ObvhsCwBvh, ObvhsQuality, Ray, RaySets, RayStats,
-    SplitMethod, make_ray_sets,
+    SplitMethod, make_ray_sets_from,
 };
 use glam::Vec3;
 use std::io::Write;
@@ -150,9 +150,10 @@ pub fn run(
     height: u32,
     builders: &[&str],
     leaf_sizes: &[usize],
+    camera: Option<(Vec3, Vec3)>,
 ) -> Result<()> {
     let stdout = std::io::stdout();
-    write_table(&mut stdout.lock(), tris, scene_name, width, height, builders, leaf_sizes, MIN_PASS)
+    write_table(&mut stdout.lock(), tris, scene_name, width, height, builders, leaf_sizes, camera, MIN_PASS)
 }
 
 /// [`run`] into `out`, with passes of at least `min_pass` (tests use zero).
@@ -165,6 +166,7 @@ fn write_table(
     height: u32,
     builders: &[&str],
     leaf_sizes: &[usize],
+    camera: Option<(Vec3, Vec3)>,
     min_pass: Duration,
 ) -> Result<()> {
     ensure!(!tris.is_empty(), "{scene_name} has no triangles");
@@ -177,7 +179,7 @@ fn write_table(
     }
 
     let finder = Bvh::build(tris, BuildConfig::default())?;
-    let sets = make_ray_sets(tris, &finder, width, height, SEED);
+    let sets = make_ray_sets_from(tris, &finder, camera, width, height, SEED);
     drop(finder);
     let costs = BuildConfig::default();
     writeln!(
@@ -283,7 +285,8 @@ mod tests {
     #[test]
     fn prints_two_rows_per_builder_and_leaf_size_plus_obvhs() {
         let mut out = Vec::new();
-        write_table(&mut out, &scene(), "test", 24, 16, &["sweep_sah", "hybrid"], &[1, 4], Duration::ZERO).unwrap();
+        write_table(&mut out, &scene(), "test", 24, 16, &["sweep_sah", "hybrid"], &[1, 4], None, Duration::ZERO)
+            .unwrap();
         let text = String::from_utf8(out).unwrap();
         let rows: Vec<&str> = text.lines().filter(|l| l.starts_with('|')).collect();
         assert_eq!(rows.len(), 2 + 2 * 2 * 2 + 2, "{text}");
@@ -297,15 +300,15 @@ mod tests {
     fn rejects_unknown_builders_bad_leaf_sizes_and_empty_scenes() {
         let tris = scene();
         let mut out = Vec::new();
-        assert!(write_table(&mut out, &tris, "t", 8, 8, &["octree"], &[4], Duration::ZERO).is_err());
-        assert!(write_table(&mut out, &tris, "t", 8, 8, &["midpoint"], &[0], Duration::ZERO).is_err());
-        assert!(write_table(&mut out, &[], "t", 8, 8, &["midpoint"], &[4], Duration::ZERO).is_err());
+        assert!(write_table(&mut out, &tris, "t", 8, 8, &["octree"], &[4], None, Duration::ZERO).is_err());
+        assert!(write_table(&mut out, &tris, "t", 8, 8, &["midpoint"], &[0], None, Duration::ZERO).is_err());
+        assert!(write_table(&mut out, &[], "t", 8, 8, &["midpoint"], &[4], None, Duration::ZERO).is_err());
     }
 
     #[test]
     fn empty_lists_mean_every_builder_and_the_thesis_leaf_sizes() {
         let mut out = Vec::new();
-        write_table(&mut out, &scene(), "test", 8, 8, &[], &[], Duration::ZERO).unwrap();
+        write_table(&mut out, &scene(), "test", 8, 8, &[], &[], None, Duration::ZERO).unwrap();
         let text = String::from_utf8(out).unwrap();
         let rows = text.lines().filter(|l| l.starts_with('|')).count();
         assert_eq!(rows, 2 + 2 * BUILDERS.len() * LEAF_SIZES.len() + 2, "{text}");

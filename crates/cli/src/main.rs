@@ -52,6 +52,12 @@ struct BvhArgs {
     /// Maximum leaf sizes, comma-separated (default: 1,2,3,4,8).
     #[arg(long, value_delimiter = ',')]
     leaf_sizes: Vec<usize>,
+    /// Camera position x,y,z for the primary rays (default: frame the bounding box from +z).
+    #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true, requires = "center")]
+    eye: Option<Vec3>,
+    /// Point the camera looks at, x,y,z.
+    #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true, requires = "eye")]
+    center: Option<Vec3>,
 }
 
 fn run_bvh(args: BvhArgs) -> Result<()> {
@@ -61,7 +67,8 @@ fn run_bvh(args: BvhArgs) -> Result<()> {
     }
     let name = args.scene.file_stem().map_or("scene".into(), |s| s.to_string_lossy().into_owned());
     let builders: Vec<&str> = args.builders.iter().map(String::as_str).collect();
-    bvh_table::run(&scene.triangle_soup(), &name, args.width, args.height, &builders, &args.leaf_sizes)
+    let camera = args.eye.zip(args.center);
+    bvh_table::run(&scene.triangle_soup(), &name, args.width, args.height, &builders, &args.leaf_sizes, camera)
 }
 
 #[derive(Args)]
