@@ -136,6 +136,36 @@ mod tests {
         }
     }
 
+    /// The thesis's printed R∥ (eq. 5.14): numerator and denominator swapped.
+    fn thesis_r_parallel(cos_i: f32, eta: f32) -> f32 {
+        let cos_t = (1.0 - (1.0 - cos_i * cos_i) / (eta * eta)).sqrt();
+        ((eta * cos_i + cos_t) / (eta * cos_i - cos_t)).powi(2)
+    }
+
+    /// The lecture slides' ρ⊥: the denominator pairs the indices the wrong way round.
+    fn slides_rho_perp(cos_i: f32, eta: f32) -> f32 {
+        let cos_t = (1.0 - (1.0 - cos_i * cos_i) / (eta * eta)).sqrt();
+        (cos_i - eta * cos_t) / (eta * cos_i + cos_t)
+    }
+
+    #[test]
+    fn the_seeds_fresnel_formulas_fail_the_pins() {
+        let eta = 1.5f32;
+        // Thesis R∥: 25 instead of 4 % at normal incidence, and a pole instead of a zero
+        // at Brewster's angle.
+        assert!((thesis_r_parallel(1.0, eta) - 0.04).abs() > 1.0);
+        let brewster = eta.atan().cos();
+        assert!(thesis_r_parallel(brewster, eta) > 1e3 || !thesis_r_parallel(brewster, eta).is_finite());
+        let (ours, _) = dielectric_amplitudes(brewster, eta).unwrap();
+        assert!(ours.abs() < 1e-6);
+        // Slides ρ⊥: right at normal incidence (their worked 4 % example), wrong beyond.
+        let (_, perp) = dielectric_amplitudes(1.0, eta).unwrap();
+        assert!((slides_rho_perp(1.0, eta) - perp).abs() < 1e-6);
+        let c60 = 60f32.to_radians().cos();
+        let (_, perp60) = dielectric_amplitudes(c60, eta).unwrap();
+        assert!((slides_rho_perp(c60, eta) - perp60).abs() > 0.05, "{} vs {perp60}", slides_rho_perp(c60, eta));
+    }
+
     #[test]
     fn schlick_error_against_exact_is_bounded() {
         // Max |Schlick − exact| over incidence angles from outside for n = 1.5:

@@ -127,7 +127,15 @@ pub(crate) fn build(prims: &[Prim], ids: &mut [u32], config: &BuildConfig, out: 
         _ => midpoint::split(prims, ids, &bounds, config),
     };
     let mid = match split {
-        Some((mid, cost)) if !sah_prefers_leaf(config, n, cost) => mid,
+        // A plane that leaves one side empty (centroids closer together than the float
+        // spacing at the midpoint) would recurse on the same set: halve by position.
+        Some((mid, cost)) if !sah_prefers_leaf(config, n, cost) => {
+            if mid == 0 || mid == n {
+                n / 2
+            } else {
+                mid
+            }
+        }
         Some(_) => return out.leaf(&bounds, ids.iter().copied()),
         // No split separates the centroids: halve by position to bound leaf sizes.
         None if n > config.max_leaf_size => n / 2,
@@ -170,4 +178,31 @@ pub(crate) fn build_over_boxes(boxes: &[Aabb], config: &BuildConfig) -> Output {
         build(&prims, &mut ids, config, &mut out, 1);
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::SplitMethod;
+
+    #[test]
+    fn nearly_coincident_centroids_still_split_into_small_leaves() {
+        // Centroids 1 ulp apart at 1e4: the midpoint plane equals the minimum, so a
+        // naive partition puts everything on one side at every level.
+        let base = 1.0e4f32;
+        let prims: Vec<Prim> = (0..4000)
+            .map(|i| {
+                let c = Vec3::new(if i % 2 == 0 { base } else { f32::from_bits(base.to_bits() + 1) }, 0.0, 0.0);
+                Prim { bounds: Aabb { min: c - 1.0, max: c + 1.0 }, centre: c }
+            })
+            .collect();
+        let config =
+            BuildConfig { method: SplitMethod::Midpoint, max_leaf_size: 1, leaf_by_sah: false, ..Default::default() };
+        let mut ids: Vec<u32> = (0..prims.len() as u32).collect();
+        let mut out = Output::default();
+        build(&prims, &mut ids, &config, &mut out, 1);
+        let largest = out.nodes.iter().map(|n| n.count).max().unwrap();
+        assert!(largest <= 1, "a leaf of {largest} primitives");
+        assert!(out.nodes.iter().all(|n| n.count > 0 || n.index as usize > 0), "no empty subtrees");
+    }
 }
