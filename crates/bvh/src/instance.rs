@@ -162,24 +162,12 @@ impl<A: Accelerator> Accelerator for TwoLevel<A> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::{BruteForce, Bvh};
-    use glam::Quat;
 
     fn soup(seed: u64, n: usize) -> Vec<[Vec3; 3]> {
-        let mut s = seed.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut next = move || {
-            s ^= s << 13;
-            s ^= s >> 7;
-            s ^= s << 17;
-            (s >> 40) as f32 / (1u64 << 24) as f32
-        };
-        (0..n)
-            .map(|_| {
-                let c = Vec3::new(next(), next(), next()) * 2.0;
-                std::array::from_fn(|_| c + (Vec3::new(next(), next(), next()) - 0.5) * 0.6)
-            })
-            .collect()
+        crate::test_util::soup(seed, n, 2.0, 0.6)
     }
+    use crate::{BruteForce, Bvh};
+    use glam::Quat;
 
     #[test]
     fn instances_agree_with_brute_force_on_the_transformed_soup() {

@@ -23,6 +23,8 @@ mod instance;
 mod obvhs_adapter;
 mod ray;
 mod raysets;
+#[cfg(test)]
+mod test_util;
 mod triangle;
 mod wide;
 

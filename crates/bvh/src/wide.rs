@@ -704,35 +704,9 @@ impl Accelerator for Bvh4 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::test_util::{rays, soup};
     use crate::{BruteForce, SplitMethod};
     use proptest::prelude::*;
-
-    fn soup(seed: u64, n: usize, spread: f32, size: f32) -> Vec<[Vec3; 3]> {
-        let mut s = seed.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut next = move || {
-            s ^= s << 13;
-            s ^= s >> 7;
-            s ^= s << 17;
-            (s >> 40) as f32 / (1u64 << 24) as f32
-        };
-        (0..n)
-            .map(|_| {
-                let c = Vec3::new(next(), next(), next()) * spread;
-                std::array::from_fn(|_| c + (Vec3::new(next(), next(), next()) - 0.5) * size)
-            })
-            .collect()
-    }
-
-    fn rays(seed: u64, n: usize, spread: f32) -> Vec<Ray> {
-        let pts = soup(seed ^ 0xABCD, n, spread * 1.4, spread);
-        pts.iter()
-            .map(|p| {
-                let o = p[0] - Vec3::splat(0.2 * spread);
-                let d = (p[1] - p[2]).normalize_or(Vec3::X);
-                Ray::segment(o, d, 0.0, if p[0].x > 0.5 * spread { f32::INFINITY } else { spread })
-            })
-            .collect()
-    }
 
     /// The scalar box test, so that the portable path is exercised on x86_64 too.
     fn intersect_scalar(bvh: &Bvh4, ray: &Ray) -> Option<Hit> {
