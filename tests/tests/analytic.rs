@@ -18,7 +18,7 @@ use tracer::{CpuBackend, RenderSettings, Scene};
 
 fn glowing_room(albedo: f32, le: f32) -> PreparedScene {
     let mut scene = Scene::default();
-    let material = Material::diffuse("wall", Colour::constant(albedo)).with_emission(Colour::constant(le));
+    let material = Material::diffuse("wall", Colour::constant(albedo)).unwrap().with_emission(Colour::constant(le));
     // Flat-shaded: the analytic answer holds for the faceted room with its true normals.
     // (Interpolated shading normals do not conserve energy exactly; see the notes.)
     let mut room = uv_sphere(Vec3::ZERO, 1.0, 24, 48, true);

@@ -11,9 +11,10 @@ use tracer::{CpuBackend, RenderSettings, Scene};
 
 fn scene() -> PreparedScene {
     let mut s = Scene::default();
-    let red = Material::diffuse("red", Colour::reflectance_rgb([0.7, 0.1, 0.1]).unwrap());
+    let red = Material::diffuse("red", Colour::reflectance_rgb([0.7, 0.1, 0.1]).unwrap()).unwrap();
     let glass = Material::dielectric("glass", 1.5).unwrap();
     let light = Material::diffuse("light", Colour::constant(0.5))
+        .unwrap()
         .with_emission(Colour::illuminant_rgb([8.0, 7.0, 5.0]).unwrap());
     s.add(&quad(Vec3::ZERO, Vec3::Y, 2.0), red);
     s.add(&uv_sphere(Vec3::new(0.0, 0.6, 0.0), 0.5, 12, 24, false), glass);

@@ -15,7 +15,7 @@ use tracer::render::PreparedScene;
 use tracer::{CpuBackend, Environment, RenderSettings, Scene};
 
 fn furnace(albedo: f32) -> PreparedScene {
-    let white = || Material::diffuse("white", Colour::constant(albedo));
+    let white = || Material::diffuse("white", Colour::constant(albedo)).unwrap();
     let mut scene = Scene::default();
     scene.add(&uv_sphere(Vec3::new(0.0, 0.5, 0.0), 0.5, 16, 32, false), white());
     // An open box around it (no front wall): concave, so light bounces many times.

@@ -54,7 +54,7 @@ fn beer_lambert_matches_exp_minus_alpha_s() {
 
 fn furnace_with(object: Material) -> PreparedScene {
     let mut scene = Scene::default();
-    let white = || Material::diffuse("white", Colour::constant(1.0));
+    let white = || Material::diffuse("white", Colour::constant(1.0)).unwrap();
     scene.add(&uv_sphere(Vec3::new(0.0, 0.6, 0.0), 0.5, 16, 32, false), object);
     for (c, n) in [(Vec3::new(0.0, 0.0, 0.0), Vec3::Y), (Vec3::new(0.0, 1.0, -1.0), Vec3::Z)] {
         scene.add(&quad(c, n, 1.0), white());
@@ -93,7 +93,7 @@ fn path_extension_sees_through_glass_beyond_the_depth_limit() {
     // Camera → glass front (bounce 0) → glass back (bounce 1) → emitting wall (bounce 2).
     let mut scene = Scene::default();
     scene.add(&uv_sphere(Vec3::ZERO, 0.5, 16, 32, false), glass(&[]));
-    let lamp = Material::diffuse("lamp", Colour::constant(0.0)).with_emission(Colour::constant(1.0));
+    let lamp = Material::diffuse("lamp", Colour::constant(0.0)).unwrap().with_emission(Colour::constant(1.0));
     scene.add(&quad(Vec3::new(0.0, 0.0, -2.0), Vec3::Z, 4.0), lamp);
     scene.camera = Some(Camera { eye: Vec3::new(0.0, 0.0, 3.0), center: Vec3::ZERO, up: Vec3::Y, fov_y_deg: 1.0 });
     let prepared = PreparedScene::new(scene).unwrap();

@@ -59,6 +59,14 @@ pub enum BuildError {
         /// What is wrong.
         reason: String,
     },
+    /// The structure would be deeper than its traversal supports.
+    #[error("the tree would be {} deep, more than the {limit} its traversal supports", depth.map_or("too".to_string(), |d| d.to_string()))]
+    TooDeep {
+        /// The depth, where known.
+        depth: Option<usize>,
+        /// The supported depth.
+        limit: usize,
+    },
     /// More triangles than a 32-bit index can address.
     #[error("{0} triangles exceed the 2^32 − 1 an accelerator can index")]
     TooManyTriangles(usize),

@@ -333,11 +333,10 @@ impl ObvhsCwBvh {
     /// parameters (at most 3 triangles per leaf, obvhs's clamp); rejects non-finite
     /// coordinates. An empty input gives a structure nothing hits.
     ///
-    /// # Panics
-    ///
-    /// If the tree is deeper than obvhs's fixed 32-entry traversal stack allows (obvhs's
-    /// own debug validation panics first), which happens for pathological inputs such as
-    /// hundreds of coincident triangles: traversing it would silently lose hits.
+    /// A tree deeper than obvhs's fixed 32-entry traversal stack allows — pathological
+    /// inputs such as hundreds of coincident triangles, which traversal would silently
+    /// get wrong — is rejected with [`BuildError::TooDeep`] (obvhs's own debug-build
+    /// validation panics on it; that panic is caught and reported the same way).
     pub fn build(triangles: &[[Vec3; 3]], quality: ObvhsQuality) -> Result<Self, BuildError> {
         // What our own builders reject: NaN/∞ (obvhs has crashed on infinite boxes).
         validate(triangles)?;
@@ -346,18 +345,20 @@ impl ObvhsCwBvh {
         let bvh = if triangles.is_empty() {
             CwBvh::default()
         } else {
-            obvhs::cwbvh::builder::build_cwbvh_from_tris(
-                &obvhs_triangles(triangles),
-                quality.params(),
-                &mut core_build_time,
-            )
+            let obvhs_tris = obvhs_triangles(triangles);
+            std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                obvhs::cwbvh::builder::build_cwbvh_from_tris(&obvhs_tris, quality.params(), &mut core_build_time)
+            }))
+            .map_err(|_| BuildError::TooDeep { depth: None, limit: CWBVH_MAX_DEPTH })?
         };
         let leaves = LeafTriangles::new(triangles, &bvh.primitive_indices);
         let build_time = start.elapsed();
         let cw = Self { bvh, leaves, bounds: bounds_of(triangles), build_time, core_build_time };
         // obvhs's traversal stack silently overwrites its top entry when full.
         let depth = cw.stats().depth;
-        assert!(depth <= CWBVH_MAX_DEPTH, "obvhs CWBVH of depth {depth} overflows obvhs's traversal stack");
+        if depth > CWBVH_MAX_DEPTH {
+            return Err(BuildError::TooDeep { depth: Some(depth), limit: CWBVH_MAX_DEPTH });
+        }
         Ok(cw)
     }
 
@@ -653,12 +654,12 @@ mod tests {
     }
 
     #[test]
-    #[should_panic]
-    fn coincident_triangles_too_deep_for_the_cwbvh_panic() {
+    fn coincident_triangles_too_deep_for_the_cwbvh_are_an_error() {
         // ... but PLOC chains them into a CWBVH deeper than obvhs's 32-entry traversal
-        // stack: obvhs's debug validation panics, and so does our check in release.
+        // stack: an error, not a panic and not silently lost hits.
         let same = vec![soup(14, 1, 2.0, 1.0)[0]; 1000];
-        let _ = ObvhsCwBvh::build(&same, ObvhsQuality::Medium);
+        let r = ObvhsCwBvh::build(&same, ObvhsQuality::Medium);
+        assert!(matches!(r, Err(BuildError::TooDeep { .. })), "{:?}", r.err());
     }
 
     #[test]

@@ -132,10 +132,9 @@ impl Material {
         })
     }
 
-    /// A Lambertian material.
-    pub fn diffuse(name: &str, albedo: Colour) -> Self {
+    /// A Lambertian material; the albedo must lie in [0, 1].
+    pub fn diffuse(name: &str, albedo: Colour) -> Result<Self, ParamError> {
         Self::builtin(name, BuiltinModel::Lambert, &[("reflectance", ParamValue::Colour(albedo))])
-            .expect("albedo validated by the caller")
     }
 
     /// A clear smooth dielectric of index `ior`.

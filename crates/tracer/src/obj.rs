@@ -65,7 +65,7 @@ pub fn load_obj(path: &Path) -> Result<Scene> {
     };
     let converted: Vec<Material> = materials.iter().map(convert_material).collect::<Result<_>>()?;
     let mut scene = Scene::default();
-    let default = Material::diffuse("(default)", Colour::constant(DEFAULT_ALBEDO));
+    let default = Material::diffuse("(default)", Colour::constant(DEFAULT_ALBEDO))?;
     for model in &models {
         let mesh = &model.mesh;
         let vec3s = |v: &[f32]| -> Vec<Vec3> { v.chunks_exact(3).map(|p| Vec3::new(p[0], p[1], p[2])).collect() };

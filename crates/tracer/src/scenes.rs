@@ -13,8 +13,12 @@ use spectral::spectrum::Colour;
 pub fn material_sphere(material: Material) -> Scene {
     let mut scene = Scene::default();
     scene.add(&uv_sphere(Vec3::new(0.0, 1.0, 0.0), 1.0, 48, 96, false), material);
-    scene.add(&quad(Vec3::ZERO, Vec3::Y, 6.0), Material::diffuse("floor", Colour::constant(0.4)));
+    scene.add(
+        &quad(Vec3::ZERO, Vec3::Y, 6.0),
+        Material::diffuse("floor", Colour::constant(0.4)).expect("albedo in [0, 1]"),
+    );
     let lamp = Material::diffuse("lamp", Colour::constant(0.0))
+        .expect("albedo in [0, 1]")
         .with_emission(Colour::illuminant_rgb([12.0, 11.0, 9.0]).expect("valid radiance"));
     let mut light = quad(Vec3::new(-2.0, 4.5, 2.0), -Vec3::Y, 0.8);
     light.normals.clear();
