@@ -68,14 +68,25 @@ impl Output {
     }
 }
 
+/// Folds `f` over `ids`, in parallel chunks for large sets.
+fn fold_boxes(ids: &[u32], f: impl Fn(Aabb, u32) -> Aabb + Sync) -> Aabb {
+    const CHUNK: usize = 16 * 1024;
+    if ids.len() > 2 * CHUNK {
+        use rayon::prelude::*;
+        ids.par_chunks(CHUNK).map(|c| c.iter().fold(Aabb::EMPTY, |b, &i| f(b, i))).reduce(|| Aabb::EMPTY, Aabb::union)
+    } else {
+        ids.iter().fold(Aabb::EMPTY, |b, &i| f(b, i))
+    }
+}
+
 /// The bounds of a set of primitives.
 pub(crate) fn bounds_of(prims: &[Prim], ids: &[u32]) -> Aabb {
-    ids.iter().fold(Aabb::EMPTY, |b, &i| b.union(prims[i as usize].bounds))
+    fold_boxes(ids, |b, i| b.union(prims[i as usize].bounds))
 }
 
 /// The bounds of a set of primitive centroids.
 pub(crate) fn centroid_bounds(prims: &[Prim], ids: &[u32]) -> Aabb {
-    ids.iter().fold(Aabb::EMPTY, |b, &i| b.grow(prims[i as usize].centre))
+    fold_boxes(ids, |b, i| b.grow(prims[i as usize].centre))
 }
 
 /// SAH cost of splitting a node of area `parent_area` into the given children
