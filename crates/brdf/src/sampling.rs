@@ -30,6 +30,27 @@ pub fn cosine_hemisphere_pdf(cos_theta: f32) -> f32 {
     cos_theta.max(0.0) * FRAC_1_PI
 }
 
+/// Cosine-weighted sampling on ωo's side of the surface (two-sided diffuse models):
+/// (ωi, pdf), or `None` for ωo on the horizon.
+#[inline]
+pub fn cosine_hemisphere_two_sided(wo: Vec3, u: Vec2) -> Option<(Vec3, f32)> {
+    if wo.z == 0.0 {
+        return None;
+    }
+    let mut wi = cosine_hemisphere(u);
+    if wo.z < 0.0 {
+        wi.z = -wi.z;
+    }
+    let pdf = cosine_hemisphere_pdf(wi.z.abs());
+    (pdf > 0.0).then_some((wi, pdf))
+}
+
+/// The pdf of [`cosine_hemisphere_two_sided`]: cos θi / π on ωo's side, else 0.
+#[inline]
+pub fn cosine_hemisphere_two_sided_pdf(wo: Vec3, wi: Vec3) -> f32 {
+    if wo.z * wi.z > 0.0 { cosine_hemisphere_pdf(wi.z.abs()) } else { 0.0 }
+}
+
 /// Uniform direction on the unit sphere.
 #[inline]
 pub fn uniform_sphere(u: Vec2) -> Vec3 {

@@ -140,6 +140,24 @@ pub fn chi2_test(bsdf: &impl Bsdf<1>, wo: Vec3, config: &Chi2Config, seed: u64) 
     Chi2Result { statistic: stat, dof, p_value: chi2_survival(stat, dof as f64), inconsistent }
 }
 
+/// Checks that `sample` returns exactly what `eval` and `pdf` give for its direction
+/// (relative tolerance `tol`), over `samples` non-delta samples; the first mismatch, if any.
+pub fn sample_consistency(bsdf: &impl Bsdf<1>, wo: Vec3, samples: usize, seed: u64, tol: f32) -> Option<String> {
+    let mut rng = TestRng::new(seed);
+    for _ in 0..samples {
+        let (uc, u) = (rng.next_f32(), Vec2::new(rng.next_f32(), rng.next_f32()));
+        let Some(s) = bsdf.sample(wo, uc, u) else { continue };
+        if s.flags.is_specular() {
+            continue;
+        }
+        let (f, p) = (bsdf.eval(wo, s.wi)[0], bsdf.pdf(wo, s.wi));
+        if (s.f[0] - f).abs() > tol * f || (s.pdf - p).abs() > tol * p {
+            return Some(format!("sample {s:?} but eval {f}, pdf {p}"));
+        }
+    }
+    None
+}
+
 /// P(χ²_k ≥ x): the regularised upper incomplete gamma function Q(k/2, x/2), by its
 /// series or continued fraction (Numerical Recipes §6.2).
 pub fn chi2_survival(x: f64, k: f64) -> f64 {

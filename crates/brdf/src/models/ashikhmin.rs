@@ -423,12 +423,8 @@ mod tests {
     #[test]
     fn sample_agrees_with_eval_and_pdf() {
         for (k, case) in cases().iter().enumerate() {
-            let mut rng = TestRng::new(k as u64);
-            for _ in 0..20_000 {
-                let (uc, u) = (rng.next_f32(), Vec2::new(rng.next_f32(), rng.next_f32()));
-                let Some(s) = case.bsdf.sample(case.wo, uc, u) else { continue };
-                let (f, p) = (case.bsdf.eval(case.wo, s.wi)[0], case.bsdf.pdf(case.wo, s.wi));
-                assert!((s.f[0] - f).abs() <= 1e-5 * f && (s.pdf - p).abs() <= 1e-5 * p, "{}: {s:?}", case.name);
+            if let Some(e) = crate::validation::sample_consistency(&case.bsdf, case.wo, 20_000, k as u64, 1e-5) {
+                panic!("{}: {e}", case.name);
             }
         }
     }

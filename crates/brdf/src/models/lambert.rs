@@ -1,7 +1,7 @@
 //! Lambertian (perfectly diffuse) reflection.
 
 use crate::params::{ModelDef, ParamDef, ParamKind, ResolvedParams};
-use crate::sampling::{cosine_hemisphere, cosine_hemisphere_pdf};
+use crate::sampling::{cosine_hemisphere_two_sided, cosine_hemisphere_two_sided_pdf};
 use crate::{Bsdf, BsdfSample, ScatterFlags};
 use glam::{Vec2, Vec3};
 use spectral::{SampledSpectrum, SampledWavelengths};
@@ -47,19 +47,12 @@ impl<const N: usize> Bsdf<N> for Lambert<N> {
 
     #[inline]
     fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
-        if same_hemisphere(wo, wi) { cosine_hemisphere_pdf(wi.z.abs()) } else { 0.0 }
+        cosine_hemisphere_two_sided_pdf(wo, wi)
     }
 
     #[inline]
     fn sample(&self, wo: Vec3, _uc: f32, u: Vec2) -> Option<BsdfSample<N>> {
-        let mut wi = cosine_hemisphere(u);
-        if wo.z < 0.0 {
-            wi.z = -wi.z;
-        }
-        let pdf = cosine_hemisphere_pdf(wi.z.abs());
-        if pdf <= 0.0 || wo.z == 0.0 {
-            return None;
-        }
+        let (wi, pdf) = cosine_hemisphere_two_sided(wo, u)?;
         Some(BsdfSample { wi, f: self.reflectance * FRAC_1_PI, pdf, flags: self.flags() })
     }
 }

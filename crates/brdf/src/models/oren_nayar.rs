@@ -2,7 +2,7 @@
 
 use crate::models::lambert::same_hemisphere;
 use crate::params::{ModelDef, ParamDef, ParamKind, ResolvedParams};
-use crate::sampling::{cosine_hemisphere, cosine_hemisphere_pdf};
+use crate::sampling::{cosine_hemisphere_two_sided, cosine_hemisphere_two_sided_pdf};
 use crate::{Bsdf, BsdfSample, ScatterFlags};
 use glam::{Vec2, Vec3};
 use spectral::{SampledSpectrum, SampledWavelengths};
@@ -95,19 +95,12 @@ impl<const N: usize> Bsdf<N> for OrenNayar<N> {
 
     #[inline]
     fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
-        if same_hemisphere(wo, wi) { cosine_hemisphere_pdf(wi.z.abs()) } else { 0.0 }
+        cosine_hemisphere_two_sided_pdf(wo, wi)
     }
 
     #[inline]
     fn sample(&self, wo: Vec3, _uc: f32, u: Vec2) -> Option<BsdfSample<N>> {
-        let mut wi = cosine_hemisphere(u);
-        if wo.z < 0.0 {
-            wi.z = -wi.z;
-        }
-        let pdf = cosine_hemisphere_pdf(wi.z.abs());
-        if pdf <= 0.0 || wo.z == 0.0 {
-            return None;
-        }
+        let (wi, pdf) = cosine_hemisphere_two_sided(wo, u)?;
         Some(BsdfSample { wi, f: self.reflectance * FRAC_1_PI * self.factor(wo, wi), pdf, flags: self.flags() })
     }
 }
@@ -116,7 +109,7 @@ impl<const N: usize> Bsdf<N> for OrenNayar<N> {
 mod tests {
     use super::*;
     use crate::Lambert;
-    use crate::sampling::uniform_sphere;
+    use crate::sampling::{cosine_hemisphere_pdf, uniform_sphere};
     use crate::validation::{
         Chi2Config, TestRng, chi2_test, directional_albedo, pdf_integral, reciprocity_error, sidak,
     };
