@@ -172,7 +172,7 @@ impl Material {
     }
 
     /// The Beer–Lambert absorption coefficient inside a transmissive material, if any.
-    pub fn absorption(&self) -> Option<Colour> {
+    pub fn absorption(&self) -> Option<&Colour> {
         match &self.surface {
             Surface::Builtin { model: BuiltinModel::Dielectric, params } => Dielectric::<1>::absorption(params),
             _ => None,

@@ -233,9 +233,12 @@ impl<const N: usize> Dielectric<N> {
     }
 
     /// The Beer–Lambert absorption coefficient inside, if any (index 5 of [`DEF`]).
-    pub fn absorption(p: &ResolvedParams) -> Option<spectral::spectrum::Colour> {
-        let a = p.colour(5);
-        (!a.is_black()).then_some(a)
+    pub fn absorption(p: &ResolvedParams) -> Option<&spectral::spectrum::Colour> {
+        // Borrowed, not cloned: the integrator asks at every hit inside glass.
+        match &p.values()[5] {
+            crate::params::Resolved::Colour(a) if !a.is_black() => Some(a),
+            _ => None,
+        }
     }
 
     /// True if the parameters ask for wavelength-dependent refraction.
