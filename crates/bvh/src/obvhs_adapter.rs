@@ -94,6 +94,19 @@ struct LeafTriangles {
 }
 
 impl LeafTriangles {
+    /// obvhs's primitive callback for closest-hit traversal: tests leaf slot `i`, keeps
+    /// a closer hit in `best`, and returns its t (∞ for none) for obvhs to shrink t_max.
+    #[inline]
+    fn record(&self, i: usize, ray: &Ray, t_max: f32, best: &mut Option<Hit>) -> f32 {
+        match self.hit(i, ray, t_max) {
+            Some(h) => {
+                *best = Some(h);
+                h.t
+            }
+            None => f32::INFINITY,
+        }
+    }
+
     fn new(input: &[[Vec3; 3]], primitive_indices: &[u32]) -> Self {
         Self {
             triangles: primitive_indices.iter().map(|&i| Triangle::new(&input[i as usize])).collect(),
@@ -282,13 +295,7 @@ impl Accelerator for ObvhsBvh2 {
         }
         let mut best = None;
         self.bvh.ray_traverse(obvhs_ray(ray), &mut RayHit::none(), |oray, i| {
-            match self.leaves.hit(i, ray, oray.tmax) {
-                Some(h) => {
-                    best = Some(h);
-                    h.t
-                }
-                None => f32::INFINITY,
-            }
+            self.leaves.record(i, ray, oray.tmax, &mut best)
         });
         best
     }
@@ -429,13 +436,7 @@ impl Accelerator for ObvhsCwBvh {
         }
         let mut best = None;
         self.bvh.ray_traverse(obvhs_ray(ray), &mut RayHit::none(), |oray, i| {
-            match self.leaves.hit(i, ray, oray.tmax) {
-                Some(h) => {
-                    best = Some(h);
-                    h.t
-                }
-                None => f32::INFINITY,
-            }
+            self.leaves.record(i, ray, oray.tmax, &mut best)
         });
         best
     }

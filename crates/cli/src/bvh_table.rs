@@ -42,6 +42,22 @@ struct Row {
 
 /// Traces each set single-threaded, best of [`PASSES`] passes of at least [`MIN_PASS`],
 /// and counts the primary rays' work.
+impl Row {
+    /// A row for `accel`, timing its traversal of `sets`.
+    fn measured(
+        builder: String,
+        leaf: String,
+        build: Duration,
+        stats: BvhStats,
+        accel: &dyn Accelerator,
+        sets: &RaySets,
+        min_pass: Duration,
+    ) -> Self {
+        let (work, mrays) = measure(accel, sets, min_pass);
+        Self { builder, leaf, build, stats, work, mrays }
+    }
+}
+
 fn measure(accel: &dyn Accelerator, sets: &RaySets, min_pass: Duration) -> ((f64, f64), [f64; 3]) {
     let mut stats = RayStats::default();
     for r in &sets.primary {
@@ -208,26 +224,26 @@ fn write_table(
     let quality = ObvhsQuality::Medium;
     let params = quality.params();
     let bvh2 = ObvhsBvh2::build(tris, quality)?;
-    let (work, mrays) = measure(&bvh2, &sets, min_pass);
-    let bvh2_row = Row {
-        builder: format!("obvhs_bvh2 ({})", quality.name()),
-        leaf: params.max_prims_per_leaf.clamp(1, 255).to_string(),
-        build: bvh2.build_time(),
-        stats: bvh2.stats_with_costs(costs.traversal_cost, costs.intersection_cost),
-        work,
-        mrays,
-    };
+    let bvh2_row = Row::measured(
+        format!("obvhs_bvh2 ({})", quality.name()),
+        params.max_prims_per_leaf.clamp(1, 255).to_string(),
+        bvh2.build_time(),
+        bvh2.stats_with_costs(costs.traversal_cost, costs.intersection_cost),
+        &bvh2,
+        &sets,
+        min_pass,
+    );
     drop(bvh2);
     let cw = ObvhsCwBvh::build(tris, quality)?;
-    let (work, mrays) = measure(&cw, &sets, min_pass);
-    let cw_row = Row {
-        builder: format!("obvhs_cwbvh ({})", quality.name()),
-        leaf: params.max_prims_per_leaf.clamp(1, 3).to_string(),
-        build: cw.build_time(),
-        stats: cw.stats_with_costs(costs.traversal_cost, costs.intersection_cost),
-        work,
-        mrays,
-    };
+    let cw_row = Row::measured(
+        format!("obvhs_cwbvh ({})", quality.name()),
+        params.max_prims_per_leaf.clamp(1, 3).to_string(),
+        cw.build_time(),
+        cw.stats_with_costs(costs.traversal_cost, costs.intersection_cost),
+        &cw,
+        &sets,
+        min_pass,
+    );
     drop(cw);
     let cw_diffuse = cw_row.mrays[1];
 
@@ -239,18 +255,16 @@ fn write_table(
             let start = Instant::now();
             let bvh = Bvh::build(tris, config)?;
             let build = start.elapsed();
-            let (work, mrays) = measure(&bvh, &sets, min_pass);
-            let row = Row { builder: name.to_string(), leaf: leaf.to_string(), build, stats: bvh.stats(), work, mrays };
+            let row = Row::measured(name.to_string(), leaf.to_string(), build, bvh.stats(), &bvh, &sets, min_pass);
             print_row(out, &row_cells(&row, cw_diffuse))?;
             // The same tree collapsed to 4-wide nodes; its build time includes the binary build.
             let start = Instant::now();
             let wide = Bvh4::from_bvh(&bvh);
             let build = build + start.elapsed();
             drop(bvh);
-            let (work, mrays) = measure(&wide, &sets, min_pass);
             let s = wide.stats();
             let stats = BvhStats { nodes: s.nodes, leaves: s.leaves, depth: s.depth, sah_cost: s.sah_cost };
-            let row = Row { builder: format!("{name}+bvh4"), leaf: leaf.to_string(), build, stats, work, mrays };
+            let row = Row::measured(format!("{name}+bvh4"), leaf.to_string(), build, stats, &wide, &sets, min_pass);
             print_row(out, &row_cells(&row, cw_diffuse))?;
             out.flush()?;
         }
