@@ -34,8 +34,9 @@ fn beer_lambert_matches_exp_minus_alpha_s() {
     scene.camera = Some(Camera { eye, center: Vec3::ZERO, up: Vec3::Y, fov_y_deg: 0.05 });
     let prepared = PreparedScene::new(scene).unwrap();
     // The chord through the faceted sphere, measured on the geometry itself.
-    let enter = prepared.bvh.intersect(&Ray::new(eye, -Vec3::Z)).unwrap().t;
-    let exit = prepared.bvh.intersect(&Ray::segment(eye, -Vec3::Z, enter + 1e-4, f32::INFINITY)).unwrap().t;
+    let enter = prepared.geometry.triangles.intersect(&Ray::new(eye, -Vec3::Z)).unwrap().t;
+    let exit =
+        prepared.geometry.triangles.intersect(&Ray::segment(eye, -Vec3::Z, enter + 1e-4, f32::INFINITY)).unwrap().t;
     let chord = exit - enter;
     assert!((chord - 1.0).abs() < 0.01, "chord {chord}");
     let settings = RenderSettings { width: 1, height: 1, spp: 16, mode: SpectralMode::Rgb, ..Default::default() };
@@ -103,7 +104,7 @@ fn path_extension_sees_through_glass_beyond_the_depth_limit() {
             height: 1,
             spp: 256,
             mode: SpectralMode::Rgb,
-            path: PathSettings { max_depth, rr_depth: 100, specular_extension },
+            path: PathSettings { max_depth, rr_depth: 100, specular_extension, ..Default::default() },
             ..Default::default()
         };
         let (film, _) = tracer::render(&CpuBackend::new(1).unwrap(), &prepared, &settings, &|_| {}).unwrap();

@@ -16,7 +16,10 @@
 //! BVH_BENCH_SCENES=cornell,bunny cargo bench -p bvh --bench bvh -- --quick bvh_traverse
 //! ```
 
-use bvh::{Accelerator, BuildConfig, Bvh, Bvh4, ObvhsBvh2, ObvhsCwBvh, ObvhsQuality, Ray, SplitMethod, make_ray_sets};
+use bvh::{
+    Accelerator, BuildConfig, Bvh, Bvh4, ObvhsBvh2, ObvhsCwBvh, ObvhsQuality, Ray, SplitMethod, TriangleTest,
+    make_ray_sets,
+};
 use criterion::{BenchmarkId, Criterion, Throughput};
 use glam::Vec3;
 use std::hint::black_box;
@@ -38,8 +41,10 @@ const SEED: u64 = 1;
 #[derive(Clone, Copy)]
 enum Builder {
     Ours(SplitMethod),
-    /// Our binary tree collapsed to 4-wide nodes.
+    /// Our binary tree collapsed to 4-wide nodes (watertight triangle test).
     Wide(SplitMethod),
+    /// The same with the Möller–Trumbore triangle test: the price of watertightness.
+    WideMollerTrumbore,
     ObvhsBvh2,
     ObvhsCwBvh,
 }
@@ -51,7 +56,7 @@ impl Builder {
             .into_iter()
             .map(Builder::Ours)
             .chain(wide)
-            .chain([Builder::ObvhsBvh2, Builder::ObvhsCwBvh])
+            .chain([Builder::WideMollerTrumbore, Builder::ObvhsBvh2, Builder::ObvhsCwBvh])
             .collect()
     }
 
@@ -60,6 +65,7 @@ impl Builder {
             Builder::Ours(m) => m.name(),
             Builder::Wide(SplitMethod::SweepSah) => "bvh4_sweep_sah",
             Builder::Wide(_) => "bvh4_binned_sah",
+            Builder::WideMollerTrumbore => "bvh4_binned_sah_mt",
             Builder::ObvhsBvh2 => "obvhs_bvh2",
             Builder::ObvhsCwBvh => "obvhs_cwbvh",
         }
@@ -74,6 +80,12 @@ impl Builder {
             Builder::Wide(method) => {
                 let config = BuildConfig { method, max_leaf_size: 4, leaf_by_sah: true, ..Default::default() };
                 Box::new(Bvh4::build(tris, config).expect("finite scene"))
+            }
+            Builder::WideMollerTrumbore => {
+                let config = BuildConfig { max_leaf_size: 4, leaf_by_sah: true, ..Default::default() };
+                Box::new(
+                    Bvh4::build(tris, config).expect("finite scene").with_triangle_test(TriangleTest::MollerTrumbore),
+                )
             }
             Builder::ObvhsBvh2 => Box::new(ObvhsBvh2::build(tris, ObvhsQuality::Medium).expect("finite scene")),
             Builder::ObvhsCwBvh => Box::new(ObvhsCwBvh::build(tris, ObvhsQuality::Medium).expect("finite scene")),

@@ -8,6 +8,8 @@
 //!   tested at once with SIMD ([`Bvh4Node`]);
 //! * [`TwoLevel`]: the thesis's two-level structure — a top-level BVH over instances
 //!   (with transforms) of per-object accelerators;
+//! * [`BoxBvh`]: a BVH over the boxes of primitives the crate does not know (analytic
+//!   shapes), intersected through a callback;
 //! * [`BruteForce`]: tests every triangle; the oracle the tests compare against;
 //! * [`ObvhsBvh2`], [`ObvhsCwBvh`]: the obvhs crate's BVH2 and compressed wide BVH8
 //!   behind the same trait, so that benchmarks compare them with ours in the same run;
@@ -16,6 +18,7 @@
 //! This crate knows boxes, rays and triangles, nothing of materials.
 
 mod aabb;
+mod boxes;
 mod brute;
 mod build;
 mod builders;
@@ -29,13 +32,14 @@ mod triangle;
 mod wide;
 
 pub use aabb::Aabb;
+pub use boxes::BoxBvh;
 pub use brute::BruteForce;
 pub use build::{BuildConfig, Bvh, BvhNode, BvhStats, SplitMethod};
 pub use instance::{Instance, TwoLevel};
 pub use obvhs_adapter::{ObvhsBvh2, ObvhsCwBvh, ObvhsQuality};
 pub use ray::{Hit, Ray};
 pub use raysets::{RaySets, make_ray_sets, make_ray_sets_from};
-pub use triangle::{Triangle, intersect_triangle};
+pub use triangle::{Triangle, TriangleTest, WatertightRay, intersect_triangle, intersect_triangle_watertight};
 pub use wide::{Bvh4, Bvh4Node, Bvh4Stats};
 
 use glam::Vec3;

@@ -15,7 +15,8 @@
 //!   hit so far.
 
 use crate::{
-    Aabb, Accelerator, BuildConfig, BuildError, Bvh, BvhNode, Hit, Ray, RayStats, Triangle, intersect_triangle,
+    Aabb, Accelerator, BuildConfig, BuildError, Bvh, BvhNode, Hit, Ray, RayStats, Triangle, TriangleTest,
+    WatertightRay, intersect_triangle, intersect_triangle_watertight,
 };
 use glam::Vec3;
 use std::mem::MaybeUninit;
@@ -115,18 +116,32 @@ pub struct Bvh4Stats {
 pub struct Bvh4 {
     nodes: Vec<Bvh4Node>,
     /// The triangles leaf by leaf in structure of arrays: a leaf of n triangles starting
-    /// at triangle `first` holds v0.x × n, v0.y × n, …, e2.z × n from float 9·first; three
-    /// floats of padding at the end let 4-wide loads run past the last leaf.
+    /// at triangle `first` holds v0.x × n, v0.y × n, …, v2.z × n from float 9·first; three
+    /// floats of padding at the end let 4-wide loads run past the last leaf. Vertices,
+    /// not edges, so that the watertight test sees each shared vertex bit for bit.
     soa: Vec<f32>,
     prim_ids: Vec<u32>,
     costs: (f32, f32),
+    test: TriangleTest,
 }
 
 impl Bvh4 {
     /// Builds a binary [`Bvh`] with `config` and collapses it; rejects non-finite
     /// coordinates. An empty input gives a tree that nothing hits.
     pub fn build(triangles: &[[Vec3; 3]], config: BuildConfig) -> Result<Self, BuildError> {
-        Ok(Self::from_bvh(&Bvh::build(triangles, config)?))
+        let bvh = Bvh::build(triangles, config)?;
+        Ok(Self::collapse(&bvh, |i| triangles[bvh.prim_ids()[i] as usize]))
+    }
+
+    /// The triangle test this tree runs ([`TriangleTest::Watertight`] by default).
+    pub fn triangle_test(&self) -> TriangleTest {
+        self.test
+    }
+
+    /// Selects the triangle test.
+    pub fn with_triangle_test(mut self, test: TriangleTest) -> Self {
+        self.test = test;
+        self
     }
 
     /// Collapses a binary tree into a 4-wide one (greedy by surface area), copying its
@@ -140,7 +155,21 @@ impl Bvh4 {
     ///
     /// If the tree is deeper than the traversal stack allows, which our builders never
     /// produce (they stop at 62 levels).
+    ///
+    /// The binary tree keeps vertex 0 and two edges; the vertices are rebuilt as v0 + e,
+    /// which may differ from the mesh's in the last bit, so that the watertight guarantee
+    /// holds only for trees made by [`Bvh4::build`].
     pub fn from_bvh(bvh: &Bvh) -> Self {
+        Self::collapse(bvh, |i| {
+            let t = &bvh.triangles()[i];
+            let v0 = Vec3::from_array(t.v0);
+            [v0, v0 + Vec3::from_array(t.e1), v0 + Vec3::from_array(t.e2)]
+        })
+    }
+
+    /// Collapses `bvh`, taking the vertices of its `i`-th leaf-ordered triangle from
+    /// `vertices(i)`.
+    fn collapse(bvh: &Bvh, vertices: impl Fn(usize) -> [Vec3; 3]) -> Self {
         let mut collapse = Collapse::new(bvh.nodes());
         if !bvh.nodes().is_empty() {
             collapse.node(0);
@@ -151,9 +180,9 @@ impl Bvh4 {
         for n in &nodes {
             for (&first, &count) in n.child.iter().zip(&n.count).filter(|(_, c)| **c > 0) {
                 let (first, count) = (first as usize, count as usize);
-                for (i, t) in bvh.triangles()[first..first + count].iter().enumerate() {
-                    for (k, x) in t.v0.iter().chain(&t.e1).chain(&t.e2).enumerate() {
-                        soa[9 * first + k * count + i] = *x;
+                for i in 0..count {
+                    for (k, x) in vertices(first + i).iter().flat_map(|v| v.to_array()).enumerate() {
+                        soa[9 * first + k * count + i] = x;
                     }
                 }
             }
@@ -163,6 +192,7 @@ impl Bvh4 {
             soa,
             prim_ids: bvh.prim_ids().to_vec(),
             costs: (config.traversal_cost, config.intersection_cost),
+            test: TriangleTest::default(),
         };
         let depth = wide.stats().depth;
         assert!(
@@ -229,6 +259,7 @@ impl Bvh4 {
             return None;
         }
         let kernel = K::new(ray);
+        let watertight = (self.test == TriangleTest::Watertight).then(|| WatertightRay::new(ray));
         let mut t_max = ray.t_max;
         let mut best: Option<Hit> = None;
         // Uninitialised: zeroing 2 KiB would cost more than a short traversal.
@@ -273,7 +304,11 @@ impl Bvh4 {
                     stats.triangles_tested += count as u64;
                 }
                 let leaf = Leaf { soa: &self.soa[9 * first..], ids: &self.prim_ids[first..first + count] };
-                if kernel.triangles::<ANY_HIT>(ray, leaf, &mut t_max, &mut best) {
+                let done = match &watertight {
+                    Some(w) => kernel.watertight::<ANY_HIT>(w, leaf, &mut t_max, &mut best),
+                    None => kernel.triangles::<ANY_HIT>(ray, leaf, &mut t_max, &mut best),
+                };
+                if done {
                     return best;
                 }
             }
@@ -472,7 +507,7 @@ trait RayKernel {
         for (i, &prim) in leaf.ids.iter().enumerate() {
             let row =
                 |k: usize| [leaf.soa[3 * k * n + i], leaf.soa[(3 * k + 1) * n + i], leaf.soa[(3 * k + 2) * n + i]];
-            let tri = Triangle { v0: row(0), e1: row(1), e2: row(2) };
+            let tri = Triangle::new(&[0, 1, 2].map(|k| Vec3::from_array(row(k))));
             if let Some((t, u, v)) = intersect_triangle(&tri, ray, *t_max) {
                 *t_max = t;
                 *best = Some(Hit { prim, t, u, v });
@@ -482,6 +517,37 @@ trait RayKernel {
             }
         }
         false
+    }
+
+    /// As [`RayKernel::triangles`] with the watertight test.
+    #[inline(always)]
+    fn watertight<const ANY_HIT: bool>(
+        &self,
+        ray: &WatertightRay,
+        leaf: Leaf,
+        t_max: &mut f32,
+        best: &mut Option<Hit>,
+    ) -> bool {
+        for (i, &prim) in leaf.ids.iter().enumerate() {
+            if let Some((t, u, v)) = intersect_triangle_watertight(&leaf.vertices(i), ray, *t_max) {
+                *t_max = t;
+                *best = Some(Hit { prim, t, u, v });
+                if ANY_HIT {
+                    return true;
+                }
+            }
+        }
+        false
+    }
+}
+
+impl Leaf<'_> {
+    /// The vertices of the leaf's `i`-th triangle.
+    #[inline(always)]
+    fn vertices(&self, i: usize) -> [Vec3; 3] {
+        let n = self.ids.len();
+        let c = |row: usize| self.soa[row * n + i];
+        [0, 1, 2].map(|k| Vec3::new(c(3 * k), c(3 * k + 1), c(3 * k + 2)))
     }
 }
 
@@ -545,7 +611,7 @@ impl RayKernel for ScalarKernel {
 #[cfg(target_arch = "x86_64")]
 mod sse {
     use super::{Bvh4Node, Leaf, RayKernel, plane_rows};
-    use crate::{Hit, Ray};
+    use crate::{Hit, Ray, WatertightRay, intersect_triangle_watertight};
     use std::arch::x86_64::*;
 
     /// The SSE [`RayKernel`] (SSE2 is part of the x86_64 baseline).
@@ -624,9 +690,11 @@ mod sse {
                     let ld = |k: usize| _mm_loadu_ps(leaf.soa.as_ptr().add(k * n + j));
                     let [dx, dy, dz] = self.dir;
                     let [ox, oy, oz] = self.origin;
-                    let (e1x, e1y, e1z) = (ld(3), ld(4), ld(5));
-                    let (e2x, e2y, e2z) = (ld(6), ld(7), ld(8));
                     let (add, sub, mul) = (_mm_add_ps, _mm_sub_ps, _mm_mul_ps);
+                    // The edges as `Triangle::new` computes them.
+                    let (v0x, v0y, v0z) = (ld(0), ld(1), ld(2));
+                    let (e1x, e1y, e1z) = (sub(ld(3), v0x), sub(ld(4), v0y), sub(ld(5), v0z));
+                    let (e2x, e2y, e2z) = (sub(ld(6), v0x), sub(ld(7), v0y), sub(ld(8), v0z));
                     let dot = |ax, ay, az, bx, by, bz| add(add(mul(ax, bx), mul(ay, by)), mul(az, bz));
                     // p = dir × e2, det = e1 · p.
                     let px = sub(mul(dy, e2z), mul(e2y, dz));
@@ -634,7 +702,7 @@ mod sse {
                     let pz = sub(mul(dx, e2y), mul(e2x, dy));
                     let det = dot(e1x, e1y, e1z, px, py, pz);
                     let inv_det = _mm_div_ps(_mm_set1_ps(1.0), det);
-                    let (sx, sy, sz) = (sub(ox, ld(0)), sub(oy, ld(1)), sub(oz, ld(2)));
+                    let (sx, sy, sz) = (sub(ox, v0x), sub(oy, v0y), sub(oz, v0z));
                     let uu = mul(dot(sx, sy, sz, px, py, pz), inv_det);
                     // q = s × e1.
                     let qx = sub(mul(sy, e1z), mul(e1y, sz));
@@ -664,6 +732,92 @@ mod sse {
                     if t[i] < *t_max {
                         *t_max = t[i];
                         *best = Some(Hit { prim: leaf.ids[j + i], t: t[i], u: u[i], v: v[i] });
+                        if ANY_HIT {
+                            return true;
+                        }
+                    }
+                }
+            }
+            false
+        }
+
+        #[inline(always)]
+        fn watertight<const ANY_HIT: bool>(
+            &self,
+            ray: &WatertightRay,
+            leaf: Leaf,
+            t_max: &mut f32,
+            best: &mut Option<Hit>,
+        ) -> bool {
+            let n = leaf.ids.len();
+            let [kx, ky, kz] = ray.k;
+            let o = ray.origin.to_array();
+            // Four triangles at a time, lane by lane the operations of
+            // `intersect_triangle_watertight` (bit-identical: no fused multiply-adds); a lane
+            // with an edge function of exactly zero is redone by the scalar test, which
+            // falls back to double precision.
+            for j in (0..n).step_by(4) {
+                let lanes = 0b1111u32 >> 4usize.saturating_sub(n - j);
+                let mut t = [0.0f32; 4];
+                let mut u = [0.0f32; 4];
+                let mut v = [0.0f32; 4];
+                // SAFETY: intrinsics as in `new`; loads as in `triangles`.
+                let (mask, zero_lanes) = unsafe {
+                    debug_assert!(leaf.soa.len() >= 9 * n + 3);
+                    let ld = |k: usize| _mm_loadu_ps(leaf.soa.as_ptr().add(k * n + j));
+                    let (add, sub, mul) = (_mm_add_ps, _mm_sub_ps, _mm_mul_ps);
+                    let (sx, sy, sz) =
+                        (_mm_set1_ps(ray.shear[0]), _mm_set1_ps(ray.shear[1]), _mm_set1_ps(ray.shear[2]));
+                    let (ox, oy, oz) = (_mm_set1_ps(o[kx]), _mm_set1_ps(o[ky]), _mm_set1_ps(o[kz]));
+                    // Vertex `v` relative to the origin, permuted and sheared.
+                    let rel = |v: usize| {
+                        let px = sub(ld(3 * v + kx), ox);
+                        let py = sub(ld(3 * v + ky), oy);
+                        let pz = sub(ld(3 * v + kz), oz);
+                        (sub(px, mul(sx, pz)), sub(py, mul(sy, pz)), mul(sz, pz))
+                    };
+                    let (ax, ay, az) = rel(0);
+                    let (bx, by, bz) = rel(1);
+                    let (cx, cy, cz) = rel(2);
+                    let e0 = sub(mul(cx, by), mul(cy, bx));
+                    let e1 = sub(mul(ax, cy), mul(ay, cx));
+                    let e2 = sub(mul(bx, ay), mul(by, ax));
+                    let zero = _mm_setzero_ps();
+                    let any_zero =
+                        _mm_or_ps(_mm_or_ps(_mm_cmpeq_ps(e0, zero), _mm_cmpeq_ps(e1, zero)), _mm_cmpeq_ps(e2, zero));
+                    let neg =
+                        _mm_or_ps(_mm_or_ps(_mm_cmplt_ps(e0, zero), _mm_cmplt_ps(e1, zero)), _mm_cmplt_ps(e2, zero));
+                    let pos =
+                        _mm_or_ps(_mm_or_ps(_mm_cmpgt_ps(e0, zero), _mm_cmpgt_ps(e1, zero)), _mm_cmpgt_ps(e2, zero));
+                    let det = add(add(e0, e1), e2);
+                    let inv_det = _mm_div_ps(_mm_set1_ps(1.0), det);
+                    let tt = mul(add(add(mul(e0, az), mul(e1, bz)), mul(e2, cz)), inv_det);
+                    let uu = mul(e1, inv_det);
+                    let vv = mul(e2, inv_det);
+                    let abs_t = _mm_andnot_ps(_mm_set1_ps(-0.0), tt);
+                    let ok = _mm_andnot_ps(_mm_and_ps(neg, pos), _mm_cmpneq_ps(det, zero));
+                    let ok = _mm_and_ps(ok, _mm_cmplt_ps(abs_t, _mm_set1_ps(f32::INFINITY)));
+                    let ok = _mm_and_ps(
+                        ok,
+                        _mm_and_ps(_mm_cmpgt_ps(tt, _mm_set1_ps(ray.t_min)), _mm_cmplt_ps(tt, _mm_set1_ps(*t_max))),
+                    );
+                    _mm_storeu_ps(t.as_mut_ptr(), tt);
+                    _mm_storeu_ps(u.as_mut_ptr(), uu);
+                    _mm_storeu_ps(v.as_mut_ptr(), vv);
+                    (_mm_movemask_ps(ok) as u32 & lanes, _mm_movemask_ps(any_zero) as u32 & lanes)
+                };
+                let mut m = mask | zero_lanes;
+                while m != 0 {
+                    let i = m.trailing_zeros() as usize;
+                    m &= m - 1;
+                    let hit = if zero_lanes & (1 << i) != 0 {
+                        intersect_triangle_watertight(&leaf.vertices(j + i), ray, *t_max)
+                    } else {
+                        (t[i] < *t_max).then_some((t[i], u[i], v[i]))
+                    };
+                    if let Some((t, u, v)) = hit {
+                        *t_max = t;
+                        *best = Some(Hit { prim: leaf.ids[j + i], t, u, v });
                         if ANY_HIT {
                             return true;
                         }
@@ -936,9 +1090,8 @@ mod tests {
                 tris[2] = [tris[0][0], tris[0][2], tris[0][0] + Vec3::Y];
             }
             let tri: Vec<Triangle> = tris.iter().map(Triangle::new).collect();
-            let mut soa: Vec<f32> = (0..9)
-                .flat_map(|k| tri.iter().map(move |t| [t.v0, t.e1, t.e2][k / 3][k % 3]).collect::<Vec<_>>())
-                .collect();
+            let mut soa: Vec<f32> =
+                (0..9).flat_map(|k| tris.iter().map(move |t| t[k / 3][k % 3]).collect::<Vec<_>>()).collect();
             soa.extend([f32::NAN; 3]);
             let ids: Vec<u32> = (0..n as u32).map(|i| 100 + i).collect();
             let mut rs = rays(n as u64 ^ 5, 400, 1.0);
@@ -968,6 +1121,61 @@ mod tests {
                             Kernel::new(r).triangles::<true>(r, leaf, &mut got_t_max, &mut got)
                         } else {
                             Kernel::new(r).triangles::<false>(r, leaf, &mut got_t_max, &mut got)
+                        };
+                        assert_eq!(got, expected, "{n} triangles, {r:?}");
+                        assert_eq!(found, any_hit && expected.is_some());
+                        assert_eq!(got_t_max, limit);
+                        hits += found as usize;
+                    }
+                }
+            }
+        }
+        assert!(hits > 200, "{hits} any-hit hits");
+    }
+
+    #[test]
+    fn watertight_leaf_kernel_is_bit_identical_to_the_scalar_test() {
+        let mut hits = 0;
+        for n in 1..=9usize {
+            let mut tris = soup(n as u64 + 40, n, 1.0, 1.5);
+            if n > 2 {
+                tris[1] = [Vec3::ZERO, Vec3::X, Vec3::X * 2.0];
+                tris[2] = [tris[0][0], tris[0][2], tris[0][0] + Vec3::Y];
+            }
+            let mut soa: Vec<f32> =
+                (0..9).flat_map(|k| tris.iter().map(move |t| t[k / 3][k % 3]).collect::<Vec<_>>()).collect();
+            soa.extend([f32::NAN; 3]);
+            let ids: Vec<u32> = (0..n as u32).map(|i| 100 + i).collect();
+            let mut rs = rays(n as u64 ^ 9, 400, 1.0);
+            // Rays exactly through vertices and edge points, axis-aligned ones included
+            // (edge functions of exactly zero take the double-precision path).
+            for t in &tris {
+                for p in [t[0], t[1], 0.5 * (t[0] + t[2])] {
+                    rs.push(Ray::new(p + Vec3::new(0.1, 0.2, 1.0), -Vec3::new(0.1, 0.2, 1.0)));
+                    rs.push(Ray::new(p + Vec3::Z, -Vec3::Z));
+                }
+            }
+            for r in &rs {
+                let w = WatertightRay::new(r);
+                for t_max in [r.t_max, 0.7] {
+                    for any_hit in [false, true] {
+                        let mut expected = None;
+                        let mut limit = t_max;
+                        for (i, t) in tris.iter().enumerate() {
+                            if let Some((t, u, v)) = intersect_triangle_watertight(t, &w, limit) {
+                                limit = t;
+                                expected = Some(Hit { prim: 100 + i as u32, t, u, v });
+                                if any_hit {
+                                    break;
+                                }
+                            }
+                        }
+                        let (mut got, mut got_t_max) = (None, t_max);
+                        let leaf = Leaf { soa: &soa, ids: &ids };
+                        let found = if any_hit {
+                            Kernel::new(r).watertight::<true>(&w, leaf, &mut got_t_max, &mut got)
+                        } else {
+                            Kernel::new(r).watertight::<false>(&w, leaf, &mut got_t_max, &mut got)
                         };
                         assert_eq!(got, expected, "{n} triangles, {r:?}");
                         assert_eq!(found, any_hit && expected.is_some());

@@ -4,6 +4,7 @@ mod bvh_table;
 mod sheet;
 
 use anyhow::{Context, Result, bail};
+use bvh::TriangleTest;
 use clap::{Args, Parser, Subcommand};
 use glam::Vec3;
 use indicatif::{ProgressBar, ProgressStyle};
@@ -11,7 +12,7 @@ use spectral::SpectralMode;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use tracer::camera::Camera;
-use tracer::integrator::PathSettings;
+use tracer::integrator::{PathSettings, ShadingNormals};
 use tracer::output::write_image;
 use tracer::render::PreparedScene;
 use tracer::{CpuBackend, RenderSettings, Scene};
@@ -132,7 +133,8 @@ fn run_sheet(args: SheetArgs) -> Result<()> {
 
 #[derive(Args, Clone)]
 struct SceneArgs {
-    /// The scene file (.obj with its .mtl).
+    /// The scene: an .obj file (with its .mtl), or a built-in scene `builtin:NAME`
+    /// (sphereflake[:LEVEL], glass-torus, glass-torus-closed-form, glass-bunny[:OBJ]).
     scene: PathBuf,
     /// Image width in pixels.
     #[arg(long, default_value_t = 512)]
@@ -168,6 +170,27 @@ struct SceneArgs {
     /// Vertical field of view in degrees.
     #[arg(long, default_value_t = tracer::camera::DEFAULT_FOV_Y_DEG)]
     fov: f32,
+    /// Ray–triangle test: watertight (Woop et al. 2013) or moller-trumbore (the thesis's).
+    #[arg(long, default_value = "watertight", value_parser = parse_triangle_test)]
+    triangle_test: TriangleTest,
+    /// Shading normals: adapted (bent where they disagree with the geometry),
+    /// face-forward (the thesis's workaround) or geometric (flat shading).
+    #[arg(long, default_value = "adapted", value_parser = parse_shading_normals)]
+    shading_normals: ShadingNormals,
+}
+
+fn parse_triangle_test(s: &str) -> Result<TriangleTest, String> {
+    [TriangleTest::Watertight, TriangleTest::MollerTrumbore]
+        .into_iter()
+        .find(|t| t.name() == s)
+        .ok_or_else(|| format!("unknown triangle test '{s}' (known: watertight, moller-trumbore)"))
+}
+
+fn parse_shading_normals(s: &str) -> Result<ShadingNormals, String> {
+    [ShadingNormals::Adapted, ShadingNormals::FaceForward, ShadingNormals::Geometric]
+        .into_iter()
+        .find(|t| t.name() == s)
+        .ok_or_else(|| format!("unknown shading-normal mode '{s}' (known: adapted, face-forward, geometric)"))
 }
 
 #[derive(Args)]
@@ -220,9 +243,16 @@ fn parse_vec3(s: &str) -> Result<Vec3, String> {
 }
 
 fn load_scene(path: &Path) -> Result<Scene> {
+    if let Some(name) = path.to_str().and_then(|p| p.strip_prefix("builtin:")) {
+        return Ok(tracer::scenes::builtin(name)?);
+    }
     match path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref() {
         Some("obj") => Ok(tracer::obj::load_obj(path)?),
-        _ => bail!("{}: unsupported scene format (supported: .obj)", path.display()),
+        _ => bail!(
+            "{}: unsupported scene format (supported: .obj, or builtin:NAME with NAME one of {})",
+            path.display(),
+            tracer::scenes::BUILTIN_SCENES.join(", ")
+        ),
     }
 }
 
@@ -247,7 +277,12 @@ fn settings(args: &SceneArgs, spp: u32, mode: SpectralMode, scene: &Scene) -> Re
         spp,
         seed: args.seed,
         mode,
-        path: PathSettings { max_depth: args.max_depth, rr_depth: args.rr_depth, specular_extension: args.extension },
+        path: PathSettings {
+            max_depth: args.max_depth,
+            rr_depth: args.rr_depth,
+            specular_extension: args.extension,
+            shading_normals: args.shading_normals,
+        },
         camera,
     };
     s.validate()?;
@@ -256,10 +291,10 @@ fn settings(args: &SceneArgs, spp: u32, mode: SpectralMode, scene: &Scene) -> Re
 
 fn prepare(args: &SceneArgs) -> Result<PreparedScene> {
     let scene = load_scene(&args.scene)?;
-    if scene.triangles.is_empty() {
-        bail!("{}: the scene has no triangles", args.scene.display());
+    if scene.triangles.is_empty() && scene.shapes.is_empty() {
+        bail!("{}: the scene has no geometry", args.scene.display());
     }
-    Ok(PreparedScene::new(scene)?)
+    Ok(PreparedScene::with_triangle_test(scene, args.triangle_test)?)
 }
 
 fn run_render(args: RenderArgs) -> Result<()> {
@@ -274,10 +309,11 @@ fn run_render(args: RenderArgs) -> Result<()> {
     let backend = CpuBackend::new(args.scene.threads)?;
     let s = &prepared.scene;
     eprintln!(
-        "{}: {} triangles, {} emissive, BVH built in {:.1} ms; {}×{} at {} spp, {} mode, {} threads",
+        "{}: {} triangles, {} shapes, {} emissive, BVH built in {:.1} ms; {}×{} at {} spp, {} mode, {} threads",
         args.scene.scene.display(),
         s.triangles.len(),
-        prepared.lights.triangle_count(),
+        s.shapes.len(),
+        prepared.lights.emitter_count(),
         prepared.build_time.as_secs_f64() * 1e3,
         settings.width,
         settings.height,

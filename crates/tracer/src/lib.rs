@@ -9,6 +9,7 @@
 
 pub mod camera;
 pub mod film;
+pub mod geometry;
 pub mod integrator;
 pub mod lights;
 pub mod material;
@@ -22,6 +23,7 @@ pub mod scenes;
 
 pub use camera::Camera;
 pub use film::Film;
+pub use geometry::{Geometry, SceneShape, ShapeKind};
 pub use material::Material;
 pub use render::{Backend, CpuBackend, RenderSettings, RenderStats, render};
 pub use scene::{Environment, Scene};

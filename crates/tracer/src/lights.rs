@@ -1,5 +1,5 @@
-//! Light sources for next-event estimation: emissive triangles chosen in proportion to
-//! their power, plus the uniform environment.
+//! Light sources for next-event estimation: emissive triangles and analytic shapes
+//! chosen in proportion to their power, plus the uniform environment.
 
 use crate::scene::Scene;
 use brdf::sampling::{UNIFORM_SPHERE_PDF, uniform_sphere, uniform_triangle};
@@ -13,41 +13,53 @@ pub struct LightSample {
     pub point: Vec3,
     /// The light's front-face normal at the point (zero for the environment).
     pub normal: Vec3,
-    /// Probability density: per unit area for triangles (including the choice of the
-    /// triangle), per solid angle for the environment.
+    /// Probability density: per unit area for triangles and shapes (including the choice
+    /// of the primitive), per solid angle for the environment.
     pub pdf: f32,
-    /// The emitting triangle, or `None` for the environment.
-    pub triangle: Option<u32>,
+    /// The emitting primitive (triangle or shape id), or `None` for the environment.
+    pub prim: Option<u32>,
 }
 
 /// The scene's emitters and the discrete distribution that picks among them.
 #[derive(Clone, Debug, Default)]
 pub struct Lights {
-    triangles: Vec<u32>,
+    /// Emissive primitives (triangles, then shapes).
+    prims: Vec<u32>,
     cdf: Vec<f32>,
-    /// Probability of choosing each scene triangle (0 for non-emitters), for MIS when a
+    /// Probability of choosing each primitive (0 for non-emitters), for MIS when a
     /// BSDF-sampled ray hits an emitter.
-    triangle_pmf: Vec<f32>,
+    prim_pmf: Vec<f32>,
     environment_pmf: f32,
 }
 
 impl Lights {
-    /// Collects emitters and weights them by power: π·A·Y(Le) for a one-sided triangle,
-    /// 4π²·r²·Y(Le) for the environment seen by a scene of bounding radius r (pbrt-v4's
-    /// uniform infinite light).
+    /// Collects emitters and weights them by power: π·A·Y(Le) for a one-sided triangle
+    /// or shape (emitting from its front or outside), 4π²·r²·Y(Le) for the environment
+    /// seen by a scene of bounding radius r (pbrt-v4's uniform infinite light). Shapes
+    /// that cannot be sampled by area (implicit surfaces, self-intersecting polygons)
+    /// still glow when a path hits them, but are never sampled: their MIS weight is 1.
     pub fn new(scene: &Scene) -> Self {
-        let mut triangles = Vec::new();
+        let triangles = scene.triangles.len();
+        let mut prims = Vec::new();
         let mut power = Vec::new();
-        let mut triangle_pmf = vec![0.0; scene.triangles.len()];
-        for (i, &m) in scene.material_ids.iter().enumerate() {
-            if let Some(e) = &scene.materials[m as usize].emission {
-                let v = scene.triangle_vertices(i);
-                let area = 0.5 * (v[1] - v[0]).cross(v[2] - v[0]).length();
+        let mut prim_pmf = vec![0.0; triangles + scene.shapes.len()];
+        let mut push = |prim: usize, area: f32, material: u32| {
+            if let Some(e) = &scene.materials[material as usize].emission {
                 let p = PI * area * e.luminance().max(0.0);
                 if p > 0.0 && p.is_finite() {
-                    triangles.push(i as u32);
+                    prims.push(prim as u32);
                     power.push(p as f64);
                 }
+            }
+        };
+        for (i, &m) in scene.material_ids.iter().enumerate() {
+            let v = scene.triangle_vertices(i);
+            push(i, 0.5 * (v[1] - v[0]).cross(v[2] - v[0]).length(), m);
+        }
+        for (k, s) in scene.shapes.iter().enumerate() {
+            let shape = s.shape.shape();
+            if shape.sample_area(Vec2::splat(0.5)).is_some() {
+                push(triangles + k, shape.area(), s.material);
             }
         }
         let env_power = scene.environment.as_ref().map_or(0.0, |env| {
@@ -56,9 +68,9 @@ impl Lights {
         });
         let total: f64 = power.iter().sum::<f64>() + env_power;
         if total <= 0.0 {
-            return Self { triangle_pmf, ..Default::default() };
+            return Self { prim_pmf, ..Default::default() };
         }
-        // The environment owns [0, pmf_env) of the unit interval, triangles the rest.
+        // The environment owns [0, pmf_env) of the unit interval, primitives the rest.
         let mut acc = env_power;
         let cdf = power
             .iter()
@@ -67,26 +79,26 @@ impl Lights {
                 (acc / total) as f32
             })
             .collect();
-        for (&t, p) in triangles.iter().zip(&power) {
-            triangle_pmf[t as usize] = (p / total) as f32;
+        for (&t, p) in prims.iter().zip(&power) {
+            prim_pmf[t as usize] = (p / total) as f32;
         }
-        Self { triangles, cdf, triangle_pmf, environment_pmf: (env_power / total) as f32 }
+        Self { prims, cdf, prim_pmf, environment_pmf: (env_power / total) as f32 }
     }
 
     /// True if there is nothing to sample.
     pub fn is_empty(&self) -> bool {
-        self.triangles.is_empty() && self.environment_pmf == 0.0
+        self.prims.is_empty() && self.environment_pmf == 0.0
     }
 
-    /// Number of emissive triangles.
-    pub fn triangle_count(&self) -> usize {
-        self.triangles.len()
+    /// Number of emissive primitives that are sampled.
+    pub fn emitter_count(&self) -> usize {
+        self.prims.len()
     }
 
-    /// The probability that [`Lights::sample`] picks scene triangle `t`.
+    /// The probability that [`Lights::sample`] picks primitive `prim`.
     #[inline]
-    pub fn triangle_pmf(&self, t: u32) -> f32 {
-        self.triangle_pmf.get(t as usize).copied().unwrap_or(0.0)
+    pub fn prim_pmf(&self, prim: u32) -> f32 {
+        self.prim_pmf.get(prim as usize).copied().unwrap_or(0.0)
     }
 
     /// The probability that [`Lights::sample`] picks the environment.
@@ -107,27 +119,28 @@ impl Lights {
         if self.is_empty() {
             return None;
         }
-        if u_light < self.environment_pmf || self.triangles.is_empty() {
+        if u_light < self.environment_pmf || self.prims.is_empty() {
             return Some(LightSample {
                 point: uniform_sphere(u),
                 normal: Vec3::ZERO,
                 pdf: self.environment_pdf(),
-                triangle: None,
+                prim: None,
             });
         }
-        let target = u_light;
-        let k = self.cdf.partition_point(|&c| c <= target).min(self.triangles.len() - 1);
-        let t = self.triangles[k];
-        let v = scene.triangle_vertices(t as usize);
-        let (b0, b1) = uniform_triangle(u);
-        let point = b0 * v[0] + b1 * v[1] + (1.0 - b0 - b1) * v[2];
-        let cross = (v[1] - v[0]).cross(v[2] - v[0]);
-        let area = 0.5 * cross.length();
-        Some(LightSample {
-            point,
-            normal: cross.normalize(),
-            pdf: self.triangle_pmf[t as usize] / area,
-            triangle: Some(t),
-        })
+        let k = self.cdf.partition_point(|&c| c <= u_light).min(self.prims.len() - 1);
+        let prim = self.prims[k];
+        let pmf = self.prim_pmf[prim as usize];
+        let triangles = scene.triangles.len();
+        if (prim as usize) < triangles {
+            let v = scene.triangle_vertices(prim as usize);
+            let (b0, b1) = uniform_triangle(u);
+            let point = b0 * v[0] + b1 * v[1] + (1.0 - b0 - b1) * v[2];
+            let cross = (v[1] - v[0]).cross(v[2] - v[0]);
+            let area = 0.5 * cross.length();
+            return Some(LightSample { point, normal: cross.normalize(), pdf: pmf / area, prim: Some(prim) });
+        }
+        let shape = scene.shapes[prim as usize - triangles].shape.shape();
+        let (point, normal) = shape.sample_area(u)?;
+        Some(LightSample { point, normal, pdf: pmf / shape.area(), prim: Some(prim) })
     }
 }

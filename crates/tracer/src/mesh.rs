@@ -69,6 +69,21 @@ pub fn quad(centre: Vec3, normal: Vec3, half: f32) -> Mesh {
     }
 }
 
+/// Area-weighted vertex normals (each triangle adds its unnormalised cross product to its
+/// vertices), for meshes that come without normals: smooth shading of scanned models.
+/// Vertices of only degenerate triangles get a zero normal (= use the geometric one).
+pub fn smooth_normals(positions: &[Vec3], triangles: &[[u32; 3]]) -> Vec<Vec3> {
+    let mut normals = vec![Vec3::ZERO; positions.len()];
+    for t in triangles {
+        let [a, b, c] = t.map(|i| positions[i as usize]);
+        let n = (b - a).cross(c - a);
+        for &i in t {
+            normals[i as usize] += n;
+        }
+    }
+    normals.iter().map(|n| n.try_normalize().unwrap_or(Vec3::ZERO)).collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -100,5 +115,17 @@ mod tests {
                 assert!(face_normal(&m, t).normalize().dot(n) > 0.999, "{n}");
             }
         }
+    }
+
+    #[test]
+    fn smooth_normals_of_a_sphere_point_outwards() {
+        let sphere = uv_sphere(Vec3::new(1.0, 2.0, 3.0), 2.0, 16, 32, false);
+        let normals = smooth_normals(&sphere.positions, &sphere.triangles);
+        for (p, n) in sphere.positions.iter().zip(&normals) {
+            let radial = (*p - Vec3::new(1.0, 2.0, 3.0)).normalize();
+            assert!(n.dot(radial) > 0.99, "{p:?}: {n:?}");
+        }
+        let degenerate = smooth_normals(&[Vec3::ZERO, Vec3::X, Vec3::X * 2.0], &[[0, 1, 2]]);
+        assert!(degenerate.iter().all(|n| *n == Vec3::ZERO));
     }
 }

@@ -2,12 +2,13 @@
 
 use crate::camera::Camera;
 use crate::film::{Film, PixelStats};
+use crate::geometry::Geometry;
 use crate::integrator::{PathCounters, PathSettings, SceneView, radiance};
 use crate::lights::Lights;
 use crate::sampler::Pcg32;
 use crate::scene::Scene;
 use crate::{Error, Result};
-use bvh::{BuildConfig, Bvh4};
+use bvh::TriangleTest;
 use glam::Vec2;
 use rayon::prelude::*;
 use spectral::{SampledWavelengths, SpectralMode};
@@ -72,9 +73,8 @@ impl RenderSettings {
 pub struct PreparedScene {
     /// The scene.
     pub scene: Scene,
-    /// Its accelerator: a binned-SAH BVH collapsed to 4-wide SIMD nodes (the fastest
-    /// of the `bvh` crate's structures on every scene measured; see `spt bvh`).
-    pub bvh: Bvh4,
+    /// Its accelerators.
+    pub geometry: Geometry,
     /// Its emitters.
     pub lights: Lights,
     /// Time spent building the BVH.
@@ -82,15 +82,20 @@ pub struct PreparedScene {
 }
 
 impl PreparedScene {
-    /// Validates the scene and builds its accelerator and light distribution.
+    /// Validates the scene and builds its accelerators (watertight triangle test) and
+    /// light distribution.
     pub fn new(scene: Scene) -> Result<Self> {
+        Self::with_triangle_test(scene, TriangleTest::default())
+    }
+
+    /// As [`PreparedScene::new`], with the given ray–triangle test.
+    pub fn with_triangle_test(scene: Scene, test: TriangleTest) -> Result<Self> {
         scene.validate()?;
         let start = Instant::now();
-        let config = BuildConfig { max_leaf_size: 4, ..BuildConfig::default() };
-        let bvh = Bvh4::build(&scene.triangle_soup(), config)?;
+        let geometry = Geometry::build(&scene, test)?;
         let build_time = start.elapsed();
         let lights = Lights::new(&scene);
-        Ok(Self { scene, bvh, lights, build_time })
+        Ok(Self { scene, geometry, lights, build_time })
     }
 
     /// The camera a render uses: the settings', else the scene's, else the default framing.
@@ -206,7 +211,7 @@ fn render_tiles<const N: usize>(
 ) -> PathCounters {
     let (width, height) = (film.width(), film.height());
     let camera = scene.camera(settings).rays(width, height);
-    let view = SceneView { scene: &scene.scene, accel: &scene.bvh, lights: &scene.lights };
+    let view = SceneView { scene: &scene.scene, geometry: &scene.geometry, lights: &scene.lights };
     let tiles_x = width.div_ceil(TILE);
     let tiles: Vec<(u32, u32)> =
         (0..height.div_ceil(TILE)).flat_map(|ty| (0..tiles_x).map(move |tx| (tx * TILE, ty * TILE))).collect();

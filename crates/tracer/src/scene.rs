@@ -1,6 +1,7 @@
 //! The scene: flat arrays of geometry plus materials, lights, camera and environment.
 
 use crate::camera::Camera;
+use crate::geometry::{SceneShape, ShapeKind};
 use crate::material::Material;
 use crate::mesh::Mesh;
 use crate::{Error, Result};
@@ -32,6 +33,9 @@ pub struct Scene {
     pub triangles: Vec<[u32; 3]>,
     /// Material index of each triangle.
     pub material_ids: Vec<u32>,
+    /// Analytic shapes (spheres, boxes, polygons, implicit surfaces); their primitive
+    /// ids follow the triangles'.
+    pub shapes: Vec<SceneShape>,
     /// Materials.
     pub materials: Vec<Material>,
     /// The camera, if the scene file gave one.
@@ -56,6 +60,28 @@ impl Scene {
         id
     }
 
+    /// Appends an analytic shape with its own material; returns the material's index.
+    pub fn add_shape(&mut self, shape: ShapeKind, material: Material) -> u32 {
+        let id = self.materials.len() as u32;
+        self.materials.push(material);
+        self.shapes.push(SceneShape { shape, material: id });
+        id
+    }
+
+    /// Appends an analytic shape with an existing material.
+    pub fn add_shape_with_material(&mut self, shape: ShapeKind, material: u32) {
+        self.shapes.push(SceneShape { shape, material });
+    }
+
+    /// The material index of primitive `prim` (triangles first, then shapes).
+    #[inline]
+    pub fn material_id(&self, prim: u32) -> u32 {
+        match self.material_ids.get(prim as usize) {
+            Some(&m) => m,
+            None => self.shapes[prim as usize - self.triangles.len()].material,
+        }
+    }
+
     /// The three vertices of triangle `i`.
     #[inline]
     pub fn triangle_vertices(&self, i: usize) -> [Vec3; 3] {
@@ -69,7 +95,8 @@ impl Scene {
 
     /// The bounds of all geometry.
     pub fn bounds(&self) -> Aabb {
-        self.positions.iter().fold(Aabb::EMPTY, |b, p| b.grow(Vec3::from_array(*p)))
+        let meshes = self.positions.iter().fold(Aabb::EMPTY, |b, p| b.grow(Vec3::from_array(*p)));
+        self.shapes.iter().fold(meshes, |b, s| b.union(s.shape.shape().bounds()))
     }
 
     /// Checks internal consistency: indices in range, one material id per triangle,
@@ -98,6 +125,9 @@ impl Scene {
         }
         if let Some(i) = self.positions.iter().position(|p| p.iter().any(|c| !c.is_finite())) {
             return bad(format!("vertex {i} has a non-finite coordinate {:?}", self.positions[i]));
+        }
+        if let Some((i, s)) = self.shapes.iter().enumerate().find(|(_, s)| s.material >= nm) {
+            return bad(format!("{} {i} has material {} of {nm}", s.shape.name(), s.material));
         }
         if let Some(camera) = &self.camera {
             camera.validate().map_err(Error::Setting)?;

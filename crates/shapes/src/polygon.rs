@@ -1,0 +1,757 @@
+//! Planar polygons, convex or concave (lecture slides "Schnitt Strahl—Polygon"): the ray
+//! is intersected with the polygon's plane, then the hit point and the polygon are
+//! projected onto the coordinate plane that drops the normal's dominant axis ("einfach
+//! eine der 3 Koord fallenlassen") and a 2D point-in-polygon test decides, by crossing
+//! number or by winding number.
+//!
+//! References: E. Haines, "Point in Polygon Strategies", *Graphics Gems IV* (1994);
+//! D. Sunday, "Inclusion of a point in a polygon" (2001, geomalgorithms.com), also
+//! Hormann & Agathos, "The point in polygon problem for arbitrary polygons", CGTA 20
+//! (2001); M. Newell's normal (Sutherland, Sproull & Schumacker 1974; Tampieri,
+//! "Newell's Method for Computing the Plane Equation of a Polygon", *Graphics Gems III*);
+//! ear clipping (Meisters, "Polygons have ears", 1975; Eberly, "Triangulation by Ear
+//! Clipping", Geometric Tools 2002).
+
+use crate::{Aabb, Ray, Shape, ShapeError, SurfaceHit};
+use glam::{DVec3, Vec2, Vec3};
+
+/// The 2D point-in-polygon rule a [`Polygon`] uses.
+///
+/// The two differ only for self-intersecting polygons: the crossing number is the
+/// even–odd rule (a point is inside if a half-line from it crosses the boundary an odd
+/// number of times), the winding number the non-zero rule (inside if the boundary winds
+/// around it at all). In a pentagram's centre the boundary winds twice: even–odd says
+/// outside, non-zero inside. With the same half-open conventions (below) they count the
+/// very same edges, so for simple polygons they agree exactly, boundary points included.
+///
+/// The default is [`InsideTest::WindingNumber`]: a self-intersecting polygon is then
+/// filled wherever it is drawn around (SVG's and PostScript's default "nonzero" fill
+/// rule), and the test costs no more than the crossing number (Sunday 2001).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum InsideTest {
+    /// Even–odd rule ([`inside_crossing`]).
+    CrossingNumber,
+    /// Non-zero rule ([`inside_winding`]).
+    #[default]
+    WindingNumber,
+}
+
+/// A planar polygon (both faces hit), with its projection and, if simple, its
+/// triangulation for area sampling.
+///
+/// The front face is the one from which the vertices turn counter-clockwise; the normal
+/// points to it (right-hand rule, as for triangles).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Polygon {
+    vertices: Vec<Vec3>,
+    test: InsideTest,
+    /// Unit plane normal (Newell).
+    normal: Vec3,
+    /// A point on the plane (the vertex centroid): plane n·(p − anchor) = 0, and the 2D
+    /// coordinates are taken relative to it, which keeps them small.
+    anchor: Vec3,
+    /// Dropped axis k (largest |normal| component); the 2D coordinates are the axes
+    /// (k+1, k+2) mod 3, a cyclic pair, so a polygon counter-clockwise seen from the
+    /// front is counter-clockwise in 2D iff normal[k] > 0.
+    axis: usize,
+    poly2d: Vec<Vec2>,
+    area: f32,
+    simple: bool,
+    triangles: Vec<[Vec3; 3]>,
+    /// Cumulative triangle areas, for picking one ∝ area.
+    cdf: Vec<f32>,
+}
+
+/// (b − a) × (c − a) in f64: positive if a, b, c turn counter-clockwise. The inputs are
+/// f32, so differences are exact in f64 for all but extreme exponent ranges and the
+/// products nearly so: the sign is reliable far beyond what an f32 evaluation gives.
+#[inline]
+fn orient(a: Vec2, b: Vec2, c: Vec2) -> f64 {
+    let (ax, ay) = (a.x as f64, a.y as f64);
+    (b.x as f64 - ax) * (c.y as f64 - ay) - (b.y as f64 - ay) * (c.x as f64 - ax)
+}
+
+/// Crossing-number (even–odd) test (Haines 1994; Franklin's PNPOLY), division-free.
+///
+/// A horizontal half-line from `p` towards +x is crossed by edge (a, b) iff exactly one
+/// endpoint lies strictly above p (`(a.y > p.y) != (b.y > p.y)`) and p is strictly left
+/// of the edge. The first condition is the **half-open rule**: a vertex at exactly p's
+/// height counts as below, so a half-line through a vertex is counted once where the
+/// boundary passes through it and zero or two times where it only touches it (a local
+/// extremum) — the parity is right either way — and horizontal edges are never counted.
+/// "Left of the edge" is the sign of an orientation determinant of the edge taken from
+/// its lower to its upper endpoint, so an edge gives the identical result whichever
+/// direction it is traversed in (two polygons sharing it agree bit for bit), and a point
+/// exactly on a non-horizontal edge counts as right of it.
+///
+/// Consequence for boundary points: they are classified as if moved infinitesimally up
+/// and to the right (for an axis-parallel rectangle, the bottom and left edges belong to
+/// it, the top and right edges do not). Polygons that tile the plane along shared edges
+/// therefore claim every point exactly once when the arithmetic is exact.
+pub fn inside_crossing(poly2d: &[Vec2], p: Vec2) -> bool {
+    let n = poly2d.len();
+    let mut inside = false;
+    for i in 0..n {
+        let (a, b) = (poly2d[i], poly2d[(i + 1) % n]);
+        if (a.y > p.y) != (b.y > p.y) {
+            let (lo, hi) = if a.y < b.y { (a, b) } else { (b, a) };
+            if orient(lo, hi, p) > 0.0 {
+                inside = !inside;
+            }
+        }
+    }
+    inside
+}
+
+/// Winding-number (non-zero) test of Sunday (2001): no angles, no trigonometry, just the
+/// signed count of edges crossing the +x half-line from `p`: +1 for an upward edge with
+/// p strictly left of it, −1 for a downward edge with p strictly right of it.
+///
+/// "Upward" means a.y ≤ p.y < b.y and "downward" b.y ≤ p.y < a.y: the same half-open
+/// rule as [`inside_crossing`], and the same orientation determinant (taken from the
+/// lower endpoint), so both tests count exactly the same edges; the winding number is
+/// the signed sum, the crossing number its parity. Boundary points are classified the
+/// same way as there.
+pub fn inside_winding(poly2d: &[Vec2], p: Vec2) -> bool {
+    let n = poly2d.len();
+    let mut winding = 0i32;
+    for i in 0..n {
+        let (a, b) = (poly2d[i], poly2d[(i + 1) % n]);
+        if a.y <= p.y {
+            if b.y > p.y && orient(a, b, p) > 0.0 {
+                winding += 1;
+            }
+        } else if b.y <= p.y && orient(b, a, p) > 0.0 {
+            winding -= 1;
+        }
+    }
+    winding != 0
+}
+
+/// True if the closed segments [a, b] and [c, d] share a point.
+fn segments_touch(a: Vec2, b: Vec2, c: Vec2, d: Vec2) -> bool {
+    let (o1, o2) = (orient(a, b, c), orient(a, b, d));
+    let (o3, o4) = (orient(c, d, a), orient(c, d, b));
+    let on = |p: Vec2, q: Vec2, r: Vec2| {
+        r.x >= p.x.min(q.x) && r.x <= p.x.max(q.x) && r.y >= p.y.min(q.y) && r.y <= p.y.max(q.y)
+    };
+    if ((o1 > 0.0 && o2 < 0.0) || (o1 < 0.0 && o2 > 0.0)) && ((o3 > 0.0 && o4 < 0.0) || (o3 < 0.0 && o4 > 0.0)) {
+        return true;
+    }
+    (o1 == 0.0 && on(a, b, c)) || (o2 == 0.0 && on(a, b, d)) || (o3 == 0.0 && on(c, d, a)) || (o4 == 0.0 && on(c, d, b))
+}
+
+/// Simplicity in O(n²): no two non-adjacent edges touch, and no two adjacent edges fold
+/// back onto each other (collinear with overlap).
+fn is_simple_2d(p: &[Vec2]) -> bool {
+    let n = p.len();
+    for i in 0..n {
+        let (a, b) = (p[i], p[(i + 1) % n]);
+        // Adjacent edge (b, c): collinear and pointing back along (b, a) overlaps.
+        let c = p[(i + 2) % n];
+        if orient(a, b, c) == 0.0 && (a - b).dot(c - b) > 0.0 {
+            return false;
+        }
+        for j in i + 2..n {
+            if i == 0 && j == n - 1 {
+                continue; // Adjacent through vertex 0.
+            }
+            if segments_touch(a, b, p[j], p[(j + 1) % n]) {
+                return false;
+            }
+        }
+    }
+    true
+}
+
+/// Ear clipping (Meisters 1975; Eberly 2002) of a simple polygon, O(n³) worst case,
+/// which is fine for the few-vertex polygons of a scene. Returns index triples turning
+/// counter-clockwise in 2D, or `None` if no ear can be found (only for polygons that are
+/// not simple, or that rounding has made so).
+fn ear_clip(p: &[Vec2]) -> Option<Vec<[usize; 3]>> {
+    let n = p.len();
+    let signed: f64 = (0..n).map(|i| orient(Vec2::ZERO, p[i], p[(i + 1) % n])).sum();
+    let mut idx: Vec<usize> = (0..n).collect();
+    if signed < 0.0 {
+        idx.reverse();
+    }
+    let mut tris = Vec::with_capacity(n - 2);
+    // An ear (a, b, c): convex at b and no other remaining vertex in the closed triangle
+    // (strict = false) or in its open interior (strict = true, the fallback for vertices
+    // exactly on a diagonal).
+    let is_ear = |idx: &[usize], m: usize, strict: bool| {
+        let k = idx.len();
+        let (ia, ib, ic) = (idx[(m + k - 1) % k], idx[m], idx[(m + 1) % k]);
+        let (a, b, c) = (p[ia], p[ib], p[ic]);
+        if orient(a, b, c) <= 0.0 {
+            return false;
+        }
+        !idx.iter().any(|&j| {
+            if j == ia || j == ib || j == ic {
+                return false;
+            }
+            let q = p[j];
+            let (o1, o2, o3) = (orient(a, b, q), orient(b, c, q), orient(c, a, q));
+            if strict { o1 > 0.0 && o2 > 0.0 && o3 > 0.0 } else { o1 >= 0.0 && o2 >= 0.0 && o3 >= 0.0 }
+        })
+    };
+    while idx.len() > 3 {
+        let k = idx.len();
+        let ear = (0..k).find(|&m| is_ear(&idx, m, false)).or_else(|| (0..k).find(|&m| is_ear(&idx, m, true)));
+        if let Some(m) = ear {
+            tris.push([idx[(m + k - 1) % k], idx[m], idx[(m + 1) % k]]);
+            idx.remove(m);
+            continue;
+        }
+        // A vertex between collinear neighbours cuts off nothing: drop it.
+        let flat = (0..k).find(|&m| orient(p[idx[(m + k - 1) % k]], p[idx[m]], p[idx[(m + 1) % k]]) == 0.0)?;
+        idx.remove(flat);
+    }
+    if orient(p[idx[0]], p[idx[1]], p[idx[2]]) > 0.0 {
+        tris.push([idx[0], idx[1], idx[2]]);
+    }
+    Some(tris)
+}
+
+impl Polygon {
+    /// A polygon from its vertices in order (front: counter-clockwise), validated:
+    ///
+    /// * at least 3 vertices, all finite, no two consecutive ones equal;
+    /// * non-zero area: the Newell normal (the polygon's vector area, exact for planar
+    ///   polygons of any shape, convex or not, and a least-squares-like fit for slightly
+    ///   non-planar ones; Tampieri 1992) must be longer than 10⁻⁶·size², size being the
+    ///   bounding-box diagonal — so collinear vertex lists and figure-eights whose lobes
+    ///   cancel are rejected, as their plane is undefined;
+    /// * planar: every vertex within 10⁻⁴·size of the plane (the error names the vertex).
+    ///
+    /// Precomputes the dominant axis and the projected 2D vertices, checks simplicity
+    /// (O(n²) segment tests) and, for simple polygons, ear-clips them for sampling.
+    pub fn new(vertices: Vec<Vec3>, test: InsideTest) -> Result<Self, ShapeError> {
+        let n = vertices.len();
+        if n < 3 {
+            return Err(ShapeError::Invalid(format!("a polygon needs at least 3 vertices, got {n}")));
+        }
+        if let Some(i) = vertices.iter().position(|v| !v.is_finite()) {
+            return Err(ShapeError::Invalid(format!("polygon vertex {i} ({}) is not finite", vertices[i])));
+        }
+        if let Some(i) = (0..n).find(|&i| vertices[i] == vertices[(i + 1) % n]) {
+            return Err(ShapeError::Invalid(format!(
+                "polygon vertices {i} and {} coincide ({})",
+                (i + 1) % n,
+                vertices[i]
+            )));
+        }
+        let centroid = vertices.iter().map(|v| v.as_dvec3()).sum::<DVec3>() / n as f64;
+        let bounds = Aabb::from_points(&vertices);
+        let size = (bounds.max - bounds.min).as_dvec3().length();
+        // Newell's method, relative to the centroid for accuracy.
+        let mut newell = DVec3::ZERO;
+        for i in 0..n {
+            let a = vertices[i].as_dvec3() - centroid;
+            let b = vertices[(i + 1) % n].as_dvec3() - centroid;
+            newell += DVec3::new((a.y - b.y) * (a.z + b.z), (a.z - b.z) * (a.x + b.x), (a.x - b.x) * (a.y + b.y));
+        }
+        let twice_area = newell.length();
+        if twice_area.is_nan() || twice_area <= 1e-6 * size * size {
+            return Err(ShapeError::Invalid(format!(
+                "polygon has (near) zero area ({}, size {size}): collinear or self-cancelling vertices",
+                0.5 * twice_area
+            )));
+        }
+        let nd = newell / twice_area;
+        for (i, v) in vertices.iter().enumerate() {
+            let dist = nd.dot(v.as_dvec3() - centroid).abs();
+            if dist > 1e-4 * size {
+                return Err(ShapeError::Invalid(format!(
+                    "polygon is not planar: vertex {i} ({v}) is {dist:e} from the plane (tolerance {:e})",
+                    1e-4 * size
+                )));
+            }
+        }
+        let normal = nd.as_vec3();
+        let anchor = centroid.as_vec3();
+        let an = normal.abs();
+        let axis = if an.x >= an.y && an.x >= an.z {
+            0
+        } else if an.y >= an.z {
+            1
+        } else {
+            2
+        };
+        let (i, j) = ((axis + 1) % 3, (axis + 2) % 3);
+        let poly2d: Vec<Vec2> = vertices
+            .iter()
+            .map(|v| {
+                let r = *v - anchor;
+                Vec2::new(r[i], r[j])
+            })
+            .collect();
+        let mut simple = is_simple_2d(&poly2d);
+        let mut triangles = Vec::new();
+        let mut cdf = Vec::new();
+        if simple {
+            match ear_clip(&poly2d) {
+                Some(tris) => {
+                    let mut acc = 0.0f64;
+                    for [a, b, c] in tris {
+                        // 2D counter-clockwise ⇔ 3D normal along +axis k: flip if the
+                        // polygon's normal points along −k.
+                        let t = if normal[axis] > 0.0 {
+                            [vertices[a], vertices[b], vertices[c]]
+                        } else {
+                            [vertices[a], vertices[c], vertices[b]]
+                        };
+                        acc += 0.5 * (t[1] - t[0]).as_dvec3().cross((t[2] - t[0]).as_dvec3()).length();
+                        triangles.push(t);
+                        cdf.push(acc as f32);
+                    }
+                }
+                None => simple = false,
+            }
+        }
+        Ok(Self {
+            vertices,
+            test,
+            normal,
+            anchor,
+            axis,
+            poly2d,
+            area: (0.5 * twice_area) as f32,
+            simple,
+            triangles,
+            cdf,
+        })
+    }
+
+    /// The vertices as given.
+    pub fn vertices(&self) -> &[Vec3] {
+        &self.vertices
+    }
+
+    /// Unit normal by Newell's method, towards the front (vertices counter-clockwise).
+    pub fn normal(&self) -> Vec3 {
+        self.normal
+    }
+
+    /// The inside test in use.
+    pub fn inside_test(&self) -> InsideTest {
+        self.test
+    }
+
+    /// True if no two edges meet except adjacent ones at their shared vertex. Only simple
+    /// polygons have a triangulation, hence area sampling: a self-intersecting polygon
+    /// can be rendered but not be a light.
+    pub fn is_simple(&self) -> bool {
+        self.simple
+    }
+
+    /// The ear-clipping triangulation (each triangle's normal along [`Polygon::normal`]);
+    /// empty if the polygon is not simple.
+    pub fn triangles(&self) -> &[[Vec3; 3]] {
+        &self.triangles
+    }
+
+    /// The projection of `p` (assumed on the plane) to the polygon's 2D frame.
+    #[inline]
+    fn project(&self, p: Vec3) -> Vec2 {
+        let r = p - self.anchor;
+        Vec2::new(r[(self.axis + 1) % 3], r[(self.axis + 2) % 3])
+    }
+
+    /// The 2D inside test for a point on the plane.
+    fn contains(&self, p: Vec3) -> bool {
+        let q = self.project(p);
+        match self.test {
+            InsideTest::CrossingNumber => inside_crossing(&self.poly2d, q),
+            InsideTest::WindingNumber => inside_winding(&self.poly2d, q),
+        }
+    }
+}
+
+impl Shape for Polygon {
+    /// Plane hit t = n·(anchor − o)/(n·d), then the inside test on the projected point.
+    ///
+    /// Rays parallel to the plane miss: n·d = 0 (which includes rays lying in the plane —
+    /// the slides' "shit happens" case: t would be 0/0 or x/0) and also |n·d| ≤ ε·|d|
+    /// (f32 ε, a grazing angle below ~10⁻⁷ rad), where the computed n·d is mostly
+    /// rounding error and the hit point would be arbitrary. Both faces are hit; the
+    /// normal is always the front normal. The point is o + t·d moved onto the plane.
+    fn intersect(&self, ray: &Ray) -> Option<SurfaceHit> {
+        let n = self.normal;
+        let denom = n.dot(ray.dir);
+        if denom.is_nan() || denom.abs() <= f32::EPSILON * ray.dir.length() {
+            return None;
+        }
+        let t = n.dot(self.anchor - ray.origin) / denom;
+        if !(t > ray.t_min && t < ray.t_max) {
+            return None;
+        }
+        let p0 = ray.at(t);
+        let p = p0 - n * n.dot(p0 - self.anchor);
+        self.contains(p).then_some(SurfaceHit { t, p, n })
+    }
+
+    fn bounds(&self) -> Aabb {
+        Aabb::from_points(&self.vertices)
+    }
+
+    /// Half the length of the Newell vector: the shoelace area in the plane. For a
+    /// self-intersecting polygon this is the magnitude of the *signed* area (regions
+    /// weighted by their winding number: a pentagram's centre counts twice), not the area
+    /// covered by either fill rule; such polygons cannot be sampled anyway.
+    fn area(&self) -> f32 {
+        self.area
+    }
+
+    /// Uniform by area over the ear-clipping triangles: `u.x` picks a triangle ∝ its area
+    /// and is rescaled to [0, 1), then the square-root parametrisation
+    /// (1 − √u₀, √u₀(1 − u₁), √u₀·u₁) gives a uniform point in it (Turk, *Graphics Gems*
+    /// 1990; pbrt-v4 §6.5.4). `None` for non-simple polygons.
+    fn sample_area(&self, u: Vec2) -> Option<(Vec3, Vec3)> {
+        let total = *self.cdf.last()?;
+        let x = u.x.clamp(0.0, 1.0) * total;
+        let k = self.cdf.partition_point(|&c| c <= x).min(self.cdf.len() - 1);
+        let before = if k == 0 { 0.0 } else { self.cdf[k - 1] };
+        let width = self.cdf[k] - before;
+        let u0 = if width > 0.0 { ((x - before) / width).clamp(0.0, 1.0) } else { 0.5 };
+        let s = u0.sqrt();
+        let (b1, b2) = (s * (1.0 - u.y), s * u.y);
+        let [a, b, c] = self.triangles[k];
+        let p = a + b1 * (b - a) + b2 * (c - a);
+        Some((p, self.normal))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::Quat;
+
+    /// xorshift64* (Vigna 2016), fixed seed, no `rand`.
+    struct Rng(u64);
+    impl Rng {
+        fn next_u64(&mut self) -> u64 {
+            self.0 ^= self.0 >> 12;
+            self.0 ^= self.0 << 25;
+            self.0 ^= self.0 >> 27;
+            self.0.wrapping_mul(0x2545_F491_4F6C_DD1D)
+        }
+        fn f32(&mut self) -> f32 {
+            (self.next_u64() >> 40) as f32 / (1u64 << 24) as f32
+        }
+    }
+
+    fn v2(pts: &[(f32, f32)]) -> Vec<Vec2> {
+        pts.iter().map(|&(x, y)| Vec2::new(x, y)).collect()
+    }
+
+    fn xy(pts: &[Vec2]) -> Vec<Vec3> {
+        pts.iter().map(|p| p.extend(0.0)).collect()
+    }
+
+    fn square() -> Vec<Vec2> {
+        v2(&[(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)])
+    }
+
+    fn l_shape() -> Vec<Vec2> {
+        v2(&[(0.0, 0.0), (2.0, 0.0), (2.0, 1.0), (1.0, 1.0), (1.0, 2.0), (0.0, 2.0)])
+    }
+
+    /// The regular star polygon {5/2}, circumradius 1.
+    fn pentagram() -> Vec<Vec2> {
+        (0..5)
+            .map(|k| {
+                let a = (90.0f32 + 144.0 * k as f32).to_radians();
+                Vec2::new(a.cos(), a.sin())
+            })
+            .collect()
+    }
+
+    /// A simple (non-self-intersecting) 10-vertex star: five reflex vertices.
+    fn simple_star() -> Vec<Vec2> {
+        (0..10)
+            .map(|k| {
+                let a = (90.0f32 + 36.0 * k as f32).to_radians();
+                let r = if k % 2 == 0 { 1.0 } else { 0.4 };
+                Vec2::new(r * a.cos(), r * a.sin())
+            })
+            .collect()
+    }
+
+    fn both(poly: &[Vec2], p: Vec2) -> (bool, bool) {
+        (inside_crossing(poly, p), inside_winding(poly, p))
+    }
+
+    #[test]
+    fn inside_tests_on_square_l_shape_and_star() {
+        let sq = square();
+        assert_eq!(both(&sq, Vec2::new(0.5, 0.5)), (true, true));
+        assert_eq!(both(&sq, Vec2::new(1.5, 0.5)), (false, false));
+        assert_eq!(both(&sq, Vec2::new(-0.5, 0.5)), (false, false));
+        assert_eq!(both(&sq, Vec2::new(0.5, 2.0)), (false, false));
+        let l = l_shape();
+        for (p, expect) in
+            [((0.5, 0.5), true), ((1.5, 0.5), true), ((0.5, 1.5), true), ((1.5, 1.5), false), ((2.5, 0.5), false)]
+        {
+            assert_eq!(both(&l, Vec2::new(p.0, p.1)), (expect, expect), "{p:?}");
+        }
+        let star = simple_star();
+        assert_eq!(both(&star, Vec2::ZERO), (true, true));
+        assert_eq!(both(&star, Vec2::new(0.0, 0.9)), (true, true)); // In the top point.
+        assert_eq!(both(&star, Vec2::new(0.5, 0.6)), (false, false)); // Between points.
+        // Orientation does not matter.
+        let rev: Vec<Vec2> = l.iter().rev().copied().collect();
+        assert_eq!(both(&rev, Vec2::new(1.5, 0.5)), (true, true));
+        assert_eq!(both(&rev, Vec2::new(1.5, 1.5)), (false, false));
+    }
+
+    #[test]
+    fn crossing_and_winding_differ_only_in_the_pentagrams_centre() {
+        let star = pentagram();
+        assert_eq!(both(&star, Vec2::ZERO), (false, true), "winding number 2: even–odd out, non-zero in");
+        // Inner pentagon: circumradius cos 72°/cos 36° ≈ 0.382, inradius cos 72° ≈ 0.309.
+        let (r_out, r_in) = (0.382f32 + 1e-3, 0.309 - 1e-3);
+        let (mut differ, mut agree_inside) = (0, 0);
+        let m = 121;
+        for a in 0..m {
+            for b in 0..m {
+                let p = Vec2::new(-1.2 + 2.4 * a as f32 / (m - 1) as f32, -1.2 + 2.4 * b as f32 / (m - 1) as f32);
+                let (c, w) = both(&star, p);
+                if c != w {
+                    differ += 1;
+                    assert!(p.length() < r_out, "differ outside the inner pentagon at {p}");
+                    assert!(!c && w);
+                } else if c {
+                    agree_inside += 1;
+                }
+                if p.length() < r_in {
+                    assert!(c != w, "inner pentagon point {p} should differ");
+                }
+            }
+        }
+        assert!(differ > 100 && agree_inside > 100, "{differ} {agree_inside}");
+        // For simple polygons the two agree everywhere on the grid, boundary included.
+        for poly in [square(), l_shape(), simple_star()] {
+            for a in 0..41 {
+                for b in 0..41 {
+                    let p = Vec2::new(-0.5 + a as f32 * 0.0625, -0.5 + b as f32 * 0.0625);
+                    let (c, w) = both(&poly, p);
+                    assert_eq!(c, w, "{p}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn half_line_through_vertices_and_along_edges() {
+        // Diamond: the +x half-line from the centre passes through vertex (1, 0), where the
+        // boundary passes through: counted once, inside. From (−2, 0) it passes two
+        // vertices: counted twice, outside.
+        let diamond = v2(&[(0.0, -1.0), (1.0, 0.0), (0.0, 1.0), (-1.0, 0.0)]);
+        assert_eq!(both(&diamond, Vec2::ZERO), (true, true));
+        assert_eq!(both(&diamond, Vec2::new(-2.0, 0.0)), (false, false));
+        assert_eq!(both(&diamond, Vec2::new(2.0, 0.0)), (false, false));
+        // V notch: the half-line from (0.5, 1) touches the notch's bottom vertex (1, 1), a
+        // local minimum of the boundary: counted twice (parity unchanged), inside.
+        let notch = v2(&[(0.0, 0.0), (2.0, 0.0), (2.0, 2.0), (1.0, 1.0), (0.0, 2.0)]);
+        assert_eq!(both(&notch, Vec2::new(0.5, 1.0)), (true, true));
+        assert_eq!(both(&notch, Vec2::new(0.5, 2.0)), (false, false));
+        assert_eq!(both(&notch, Vec2::new(1.0, 1.5)), (false, false));
+        // Along an edge: the half-line from (−1, 0) runs along the bottom edge: outside.
+        let sq = square();
+        assert_eq!(both(&sq, Vec2::new(-1.0, 0.0)), (false, false));
+        assert_eq!(both(&sq, Vec2::new(-1.0, 1.0)), (false, false));
+        // Boundary points: bottom and left edges in, top and right out.
+        assert_eq!(both(&sq, Vec2::new(0.5, 0.0)), (true, true));
+        assert_eq!(both(&sq, Vec2::new(0.0, 0.5)), (true, true));
+        assert_eq!(both(&sq, Vec2::new(0.5, 1.0)), (false, false));
+        assert_eq!(both(&sq, Vec2::new(1.0, 0.5)), (false, false));
+        assert_eq!(both(&sq, Vec2::new(0.0, 0.0)), (true, true));
+        assert_eq!(both(&sq, Vec2::new(1.0, 1.0)), (false, false));
+    }
+
+    #[test]
+    fn polygons_sharing_an_edge_claim_it_exactly_once() {
+        // 2D: two triangles sharing the diagonal of the unit square, in both traversal
+        // directions; points exactly on the diagonal (k/16, k/16) are in exactly one.
+        let lower = v2(&[(0.0, 0.0), (1.0, 0.0), (1.0, 1.0)]);
+        let upper = v2(&[(0.0, 0.0), (1.0, 1.0), (0.0, 1.0)]);
+        for k in 1..16 {
+            let p = Vec2::splat(k as f32 / 16.0);
+            for f in [inside_crossing, inside_winding] {
+                assert_eq!(u8::from(f(&lower, p)) + u8::from(f(&upper, p)), 1, "{p}");
+            }
+        }
+        // 3D: four unit squares in z = 0 around the origin; rays down through a shared
+        // edge or the shared corner hit exactly one of them (half-open rule).
+        let quads: Vec<Polygon> = [(-1.0, -1.0), (0.0, -1.0), (0.0, 0.0), (-1.0, 0.0)]
+            .iter()
+            .flat_map(|&(x, y)| {
+                let q = [(x, y), (x + 1.0, y), (x + 1.0, y + 1.0), (x, y + 1.0)];
+                [InsideTest::CrossingNumber, InsideTest::WindingNumber].map(|t| Polygon::new(xy(&v2(&q)), t).unwrap())
+            })
+            .collect();
+        for (x, y) in [(0.0, 0.0), (0.0, 0.5), (0.0, -0.5), (0.5, 0.0), (-0.5, 0.0), (0.0, 0.25)] {
+            for d in [Vec3::new(0.0, 0.0, -1.0), Vec3::new(0.0, 0.0, 2.0)] {
+                let ray = Ray::new(Vec3::new(x, y, 0.0) - d, d);
+                for test in 0..2 {
+                    let hits = quads.iter().skip(test).step_by(2).filter(|q| q.intersect(&ray).is_some()).count();
+                    assert_eq!(hits, 1, "ray through ({x}, {y}), dir {d}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn rays_hit_a_tilted_concave_polygon_from_both_sides() {
+        let rot = Quat::from_euler(glam::EulerRot::XYZ, 0.4, -0.3, 0.9);
+        let offset = Vec3::new(3.0, -2.0, 1.0);
+        let to3 = |p: Vec2| rot * p.extend(0.0) + offset;
+        let l = l_shape();
+        for test in [InsideTest::CrossingNumber, InsideTest::WindingNumber] {
+            let poly = Polygon::new(l.iter().map(|&p| to3(p)).collect(), test).unwrap();
+            let n = rot * Vec3::Z;
+            assert!((poly.normal() - n).length() < 1e-6, "counter-clockwise ⇒ normal along +z before rotation");
+            assert!((poly.area() - 3.0).abs() < 1e-5);
+            for (p, expect) in [((0.5, 0.5), true), ((1.5, 0.5), true), ((0.5, 1.5), true), ((1.5, 1.5), false)] {
+                let target = to3(Vec2::new(p.0, p.1));
+                for side in [1.0f32, -1.0] {
+                    let o = target + side * 3.0 * (n + 0.2 * (rot * Vec3::X));
+                    let ray = Ray::new(o, (target - o) * 0.5);
+                    let hit = poly.intersect(&ray);
+                    assert_eq!(hit.is_some(), expect, "{p:?} side {side}");
+                    if let Some(h) = hit {
+                        assert!((h.t - 2.0).abs() < 1e-5, "{}", h.t);
+                        assert!((h.p - target).length() < 1e-5);
+                        assert_eq!(h.n, poly.normal(), "front normal from both sides");
+                    }
+                }
+            }
+            // Segment limits.
+            let target = to3(Vec2::new(0.5, 0.5));
+            let ray = Ray::segment(target + n, -n, 0.0, 0.99);
+            assert!(poly.intersect(&ray).is_none());
+        }
+    }
+
+    #[test]
+    fn parallel_rays_miss() {
+        let poly = Polygon::new(xy(&square()), InsideTest::default()).unwrap();
+        // In the plane, through the polygon: n·d = 0.
+        assert!(poly.intersect(&Ray::new(Vec3::new(-1.0, 0.5, 0.0), Vec3::X)).is_none());
+        assert!(poly.intersect(&Ray::new(Vec3::new(0.5, 0.5, 0.0), Vec3::new(1.0, 1.0, 0.0))).is_none());
+        // Above the plane, parallel.
+        assert!(poly.intersect(&Ray::new(Vec3::new(-1.0, 0.5, 1.0), Vec3::X)).is_none());
+        // Grazing below the threshold (|n·d| ≤ ε|d|).
+        assert!(poly.intersect(&Ray::new(Vec3::new(-1.0, 0.5, 1e-8), Vec3::new(1.0, 0.0, -1e-8))).is_none());
+        // A shallow but resolvable angle still hits.
+        let h = poly.intersect(&Ray::new(Vec3::new(-1.0, 0.5, 1e-3), Vec3::new(1.0, 0.0, -1e-3))).unwrap();
+        assert!((h.t - 1.0).abs() < 1e-4 && h.p.z == 0.0);
+    }
+
+    #[test]
+    fn invalid_polygons_are_rejected() {
+        let nonplanar = vec![Vec3::ZERO, Vec3::X, Vec3::new(1.0, 1.0, 0.1), Vec3::Y];
+        match Polygon::new(nonplanar, InsideTest::default()) {
+            Err(ShapeError::Invalid(msg)) => assert!(msg.contains("not planar") && msg.contains("vertex"), "{msg}"),
+            Ok(_) => panic!("non-planar polygon accepted"),
+        }
+        // A lifted fifth vertex is named.
+        let lifted =
+            vec![Vec3::ZERO, Vec3::X, Vec3::new(2.0, 1.0, 0.0), Vec3::new(1.0, 2.0, 0.0), Vec3::new(0.0, 1.0, 0.5)];
+        let Err(ShapeError::Invalid(msg)) = Polygon::new(lifted, InsideTest::default()) else { panic!() };
+        assert!(msg.contains("vertex"), "{msg}");
+        // Within tolerance: accepted.
+        let almost = vec![Vec3::ZERO, Vec3::X, Vec3::new(1.0, 1.0, 1e-6), Vec3::Y];
+        assert!(Polygon::new(almost, InsideTest::default()).is_ok());
+        let collinear = vec![Vec3::ZERO, Vec3::X, Vec3::new(2.0, 0.0, 0.0), Vec3::new(3.0, 0.0, 0.0)];
+        assert!(
+            matches!(Polygon::new(collinear, InsideTest::default()), Err(ShapeError::Invalid(m)) if m.contains("zero area"))
+        );
+        assert!(Polygon::new(vec![Vec3::ZERO, Vec3::X], InsideTest::default()).is_err());
+        assert!(Polygon::new(vec![Vec3::ZERO, Vec3::X, Vec3::new(f32::NAN, 0.0, 0.0)], InsideTest::default()).is_err());
+        assert!(Polygon::new(vec![Vec3::ZERO, Vec3::X, Vec3::X, Vec3::Y], InsideTest::default()).is_err());
+        // A figure-eight with cancelling lobes has no defined plane.
+        let bowtie = xy(&v2(&[(0.0, 0.0), (1.0, 1.0), (1.0, 0.0), (0.0, 1.0)]));
+        assert!(Polygon::new(bowtie, InsideTest::default()).is_err());
+    }
+
+    #[test]
+    fn ear_clipping_sums_to_the_shoelace_area() {
+        let rot = Quat::from_euler(glam::EulerRot::XYZ, -1.1, 0.2, 0.7);
+        for (pts, area) in [(l_shape(), 3.0f32), (square(), 1.0), (simple_star(), 0.0)] {
+            for reversed in [false, true] {
+                let mut v: Vec<Vec3> = pts.iter().map(|p| rot * p.extend(0.0) + Vec3::new(1.0, 2.0, 3.0)).collect();
+                if reversed {
+                    v.reverse();
+                }
+                let poly = Polygon::new(v, InsideTest::CrossingNumber).unwrap();
+                assert!(poly.is_simple());
+                assert_eq!(poly.triangles().len(), pts.len() - 2);
+                let mut sum = 0.0;
+                for t in poly.triangles() {
+                    let c = (t[1] - t[0]).cross(t[2] - t[0]);
+                    assert!(c.dot(poly.normal()) > 0.0, "triangle orientation follows the normal");
+                    sum += 0.5 * c.length();
+                }
+                assert!((sum - poly.area()).abs() < 1e-5 * poly.area(), "{sum} vs {}", poly.area());
+                if area > 0.0 {
+                    assert!((poly.area() - area).abs() < 1e-5);
+                }
+            }
+        }
+        // The simple star's area: 10 triangles centre–outer–inner, each ½·1·0.4·sin 36°.
+        let star = Polygon::new(xy(&simple_star()), InsideTest::default()).unwrap();
+        assert!((star.area() - 10.0 * 0.5 * 0.4 * 36f32.to_radians().sin()).abs() < 1e-5);
+    }
+
+    #[test]
+    fn self_intersecting_polygons_render_but_cannot_be_sampled() {
+        let star = Polygon::new(xy(&pentagram()), InsideTest::WindingNumber).unwrap();
+        assert!(!star.is_simple());
+        assert!(star.triangles().is_empty());
+        assert!(star.sample_area(Vec2::splat(0.5)).is_none());
+        // Signed area: the 5 tips once plus the inner pentagon twice, which the shoelace
+        // formula gives as ½·Σ sin 144° = 2.5·sin 144° ≈ 1.47 (the star covers ≈ 1.12).
+        let pent = |r: f32| 2.5 * r * r * 72f32.to_radians().sin();
+        let r_inner = 72f32.to_radians().cos() / 36f32.to_radians().cos();
+        let signed = 2.5 * 144f32.to_radians().sin();
+        assert!((star.area() - signed).abs() < 1e-5, "{}", star.area());
+        assert!(star.area() > pent(r_inner) * 2.0 && star.area() < pent(1.0));
+        let down = Ray::new(Vec3::new(0.0, 0.0, 1.0), -Vec3::Z);
+        assert!(star.intersect(&down).is_some());
+        let even_odd = Polygon::new(xy(&pentagram()), InsideTest::CrossingNumber).unwrap();
+        assert!(even_odd.intersect(&down).is_none());
+    }
+
+    #[test]
+    fn sample_area_points_are_inside_with_the_right_normal() {
+        let rot = Quat::from_euler(glam::EulerRot::XYZ, 0.3, 1.2, -0.5);
+        let mut rng = Rng(2024);
+        for pts in [l_shape(), simple_star()] {
+            for reversed in [false, true] {
+                let mut v: Vec<Vec3> = pts.iter().map(|p| rot * p.extend(0.0) + Vec3::new(-4.0, 0.5, 2.0)).collect();
+                if reversed {
+                    v.reverse();
+                }
+                let cross = Polygon::new(v.clone(), InsideTest::CrossingNumber).unwrap();
+                let wind = Polygon::new(v, InsideTest::WindingNumber).unwrap();
+                let n = 20_000;
+                let mut mean = DVec3::ZERO;
+                for _ in 0..n {
+                    let (p, nrm) = cross.sample_area(Vec2::new(rng.f32(), rng.f32())).unwrap();
+                    assert_eq!(nrm, cross.normal());
+                    assert!((p - cross.anchor).dot(nrm).abs() < 1e-5, "on the plane");
+                    assert!(cross.contains(p) && wind.contains(p), "sample {p} outside");
+                    mean += p.as_dvec3();
+                }
+                // The sample mean approaches the area centroid; for the star (5-fold
+                // symmetric) that is its centre.
+                if pts.len() == 10 {
+                    let c = (rot * Vec3::ZERO + Vec3::new(-4.0, 0.5, 2.0)).as_dvec3();
+                    assert!((mean / n as f64 - c).length() < 0.02, "{}", (mean / n as f64 - c).length());
+                }
+            }
+        }
+    }
+}
