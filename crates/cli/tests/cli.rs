@@ -92,7 +92,7 @@ fn renders_the_shared_cornell_box_with_defaults_but_small() {
         out.to_str().unwrap(),
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
-    assert!(stderr(&o).contains("36 triangles, 2 emissive"), "{}", stderr(&o));
+    assert!(stderr(&o).contains("36 triangles, 0 shapes, 2 emissive"), "{}", stderr(&o));
     assert!(out.exists());
 }
 
@@ -164,4 +164,36 @@ fn absurd_settings_are_rejected() {
         assert!(!r.status.success(), "{args:?} should fail");
         assert!(stderr(&r).contains(needle), "{args:?}: {}", stderr(&r));
     }
+}
+
+#[test]
+fn renders_built_in_shape_scenes_and_rejects_unknown_ones() {
+    let out = temp_dir("flake").join("flake.png");
+    let o = spt(&[
+        "render",
+        "builtin:sphereflake:2",
+        "--width",
+        "24",
+        "--height",
+        "16",
+        "--spp",
+        "2",
+        "--triangle-test",
+        "moller-trumbore",
+        "--shading-normals",
+        "face-forward",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stderr(&o).contains("0 triangles, 93 shapes, 1 emissive"), "{}", stderr(&o));
+    assert!(stderr(&o).contains(" 0 NaN/Inf"), "{}", stderr(&o));
+    assert_eq!(image::open(&out).unwrap().width(), 24);
+    let o = spt(&["render", "builtin:teapot", "-o", out.to_str().unwrap()]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("unknown built-in scene 'teapot'"), "{}", stderr(&o));
+    let o = spt(&["render", "builtin:sphereflake:x", "-o", out.to_str().unwrap()]);
+    assert!(!o.status.success() && stderr(&o).contains("not a whole number"), "{}", stderr(&o));
+    let o = spt(&["render", "builtin:sphereflake:1", "--triangle-test", "fast", "-o", out.to_str().unwrap()]);
+    assert!(!o.status.success() && stderr(&o).contains("unknown triangle test 'fast'"), "{}", stderr(&o));
 }
