@@ -187,7 +187,7 @@ fn smooth_shaded_diffuse_sphere_has_no_black_silhouette() {
 
 #[test]
 fn built_in_scenes_render_without_nan() {
-    for name in ["sphereflake:1", "glass-torus", "glass-torus-closed-form"] {
+    for name in ["sphereflake:1", "glass-torus", "glass-torus-laguerre"] {
         let scene = tracer::scenes::builtin(name).unwrap();
         let (_, film) = render(scene, 24, 8, PathSettings::default());
         let means = film.channel_means();
@@ -203,7 +203,7 @@ fn built_in_scenes_render_without_nan() {
 #[test]
 fn glass_torus_by_laguerre_and_closed_form_agree() {
     let render_torus = |name: &str| render(tracer::scenes::builtin(name).unwrap(), 32, 32, PathSettings::default()).1;
-    let (a, b) = (render_torus("glass-torus"), render_torus("glass-torus-closed-form"));
+    let (a, b) = (render_torus("glass-torus"), render_torus("glass-torus-laguerre"));
     let cmp = common::z_test(&a.mean_rgb(), &a.std_error_rgb(), &b.mean_rgb(), &b.std_error_rgb());
     println!(
         "torus: Laguerre vs closed form: {:.2} % of pixel-channels pass, max |z| {:.2}",

@@ -2,6 +2,7 @@
 
 mod bvh_table;
 mod sheet;
+mod stability;
 
 use anyhow::{Context, Result, bail};
 use bvh::TriangleTest;
@@ -35,6 +36,9 @@ enum Command {
     /// Compare BVH builders (the thesis's table 9.6 and more): build time, tree
     /// statistics, traversal work and rays/s, against obvhs in the same run.
     Bvh(BvhArgs),
+    /// Measure every intersection routine on adversarial cases: failure rate against f64
+    /// references and ns per test, as a table, a CSV and one PNG chart per family.
+    Stability(stability::StabilityArgs),
 }
 
 #[derive(Args)]
@@ -134,7 +138,7 @@ fn run_sheet(args: SheetArgs) -> Result<()> {
 #[derive(Args, Clone)]
 struct SceneArgs {
     /// The scene: an .obj file (with its .mtl), or a built-in scene `builtin:NAME`
-    /// (sphereflake[:LEVEL], glass-torus, glass-torus-closed-form, glass-bunny[:OBJ]).
+    /// (sphereflake[:LEVEL], glass-torus, glass-torus-laguerre, glass-bunny[:OBJ]).
     scene: PathBuf,
     /// Image width in pixels.
     #[arg(long, default_value_t = 512)]
@@ -392,6 +396,7 @@ fn main() -> ExitCode {
         Command::Bench(a) => run_bench(a).context("bench failed"),
         Command::Sheet(a) => run_sheet(a).context("sheet failed"),
         Command::Bvh(a) => run_bvh(a).context("bvh failed"),
+        Command::Stability(a) => stability::run(a).context("stability failed"),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
