@@ -1078,29 +1078,39 @@ mod tests {
         assert_eq!(a.map(|h| h.t), Some(1.0));
     }
 
+    /// A leaf of `n` triangles (from the third on, with a degenerate one and one sharing
+    /// an edge), its SoA floats and ids, and random rays plus rays exactly through
+    /// vertices and edge points, oblique and axis-aligned (the latter give edge functions
+    /// of exactly zero: the watertight test's double-precision path).
+    #[allow(clippy::type_complexity)]
+    fn leaf_fixture(n: usize, seed: u64, ray_seed: u64) -> (Vec<[Vec3; 3]>, Vec<f32>, Vec<u32>, Vec<Ray>) {
+        let mut tris = soup(seed, n, 1.0, 1.5);
+        if n > 2 {
+            tris[1] = [Vec3::ZERO, Vec3::X, Vec3::X * 2.0];
+            tris[2] = [tris[0][0], tris[0][2], tris[0][0] + Vec3::Y];
+        }
+        let mut soa: Vec<f32> =
+            (0..9).flat_map(|k| tris.iter().map(move |t| t[k / 3][k % 3]).collect::<Vec<_>>()).collect();
+        soa.extend([f32::NAN; 3]);
+        let ids: Vec<u32> = (0..n as u32).map(|i| 100 + i).collect();
+        let mut rs = rays(ray_seed, 400, 1.0);
+        for t in &tris {
+            for p in [t[0], t[1], 0.5 * (t[0] + t[2])] {
+                rs.push(Ray::new(p + Vec3::new(0.1, 0.2, 1.0), -Vec3::new(0.1, 0.2, 1.0)));
+                rs.push(Ray::new(p + Vec3::Z, -Vec3::Z));
+            }
+        }
+        (tris, soa, ids, rs)
+    }
+
     #[test]
     fn leaf_kernel_is_bit_identical_to_intersect_triangle() {
         // Leaves of 1 to 9 triangles (1 to 3 groups of four, partial groups included), with
         // degenerate and edge-sharing triangles, against sequential `intersect_triangle`.
         let mut hits = 0;
         for n in 1..=9usize {
-            let mut tris = soup(n as u64, n, 1.0, 1.5);
-            if n > 2 {
-                tris[1] = [Vec3::ZERO, Vec3::X, Vec3::X * 2.0];
-                tris[2] = [tris[0][0], tris[0][2], tris[0][0] + Vec3::Y];
-            }
+            let (tris, soa, ids, rs) = leaf_fixture(n, n as u64, n as u64 ^ 5);
             let tri: Vec<Triangle> = tris.iter().map(Triangle::new).collect();
-            let mut soa: Vec<f32> =
-                (0..9).flat_map(|k| tris.iter().map(move |t| t[k / 3][k % 3]).collect::<Vec<_>>()).collect();
-            soa.extend([f32::NAN; 3]);
-            let ids: Vec<u32> = (0..n as u32).map(|i| 100 + i).collect();
-            let mut rs = rays(n as u64 ^ 5, 400, 1.0);
-            // Rays through vertices and edge midpoints.
-            for t in &tris {
-                for p in [t[0], t[1], 0.5 * (t[0] + t[2])] {
-                    rs.push(Ray::new(p + Vec3::new(0.1, 0.2, 1.0), -Vec3::new(0.1, 0.2, 1.0)));
-                }
-            }
             for r in &rs {
                 for t_max in [r.t_max, 0.7] {
                     for any_hit in [false, true] {
@@ -1137,24 +1147,7 @@ mod tests {
     fn watertight_leaf_kernel_is_bit_identical_to_the_scalar_test() {
         let mut hits = 0;
         for n in 1..=9usize {
-            let mut tris = soup(n as u64 + 40, n, 1.0, 1.5);
-            if n > 2 {
-                tris[1] = [Vec3::ZERO, Vec3::X, Vec3::X * 2.0];
-                tris[2] = [tris[0][0], tris[0][2], tris[0][0] + Vec3::Y];
-            }
-            let mut soa: Vec<f32> =
-                (0..9).flat_map(|k| tris.iter().map(move |t| t[k / 3][k % 3]).collect::<Vec<_>>()).collect();
-            soa.extend([f32::NAN; 3]);
-            let ids: Vec<u32> = (0..n as u32).map(|i| 100 + i).collect();
-            let mut rs = rays(n as u64 ^ 9, 400, 1.0);
-            // Rays exactly through vertices and edge points, axis-aligned ones included
-            // (edge functions of exactly zero take the double-precision path).
-            for t in &tris {
-                for p in [t[0], t[1], 0.5 * (t[0] + t[2])] {
-                    rs.push(Ray::new(p + Vec3::new(0.1, 0.2, 1.0), -Vec3::new(0.1, 0.2, 1.0)));
-                    rs.push(Ray::new(p + Vec3::Z, -Vec3::Z));
-                }
-            }
+            let (tris, soa, ids, rs) = leaf_fixture(n, n as u64 + 40, n as u64 ^ 9);
             for r in &rs {
                 let w = WatertightRay::new(r);
                 for t_max in [r.t_max, 0.7] {

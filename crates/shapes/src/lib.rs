@@ -22,6 +22,7 @@ pub mod boxes;
 pub mod implicit;
 pub mod offset;
 pub mod polygon;
+mod rng;
 pub mod roots;
 pub mod sphere;
 pub mod stability;

@@ -427,19 +427,7 @@ mod tests {
     use super::*;
     use glam::Quat;
 
-    /// xorshift64* (Vigna 2016), fixed seed, no `rand`.
-    struct Rng(u64);
-    impl Rng {
-        fn next_u64(&mut self) -> u64 {
-            self.0 ^= self.0 >> 12;
-            self.0 ^= self.0 << 25;
-            self.0 ^= self.0 >> 27;
-            self.0.wrapping_mul(0x2545_F491_4F6C_DD1D)
-        }
-        fn f32(&mut self) -> f32 {
-            (self.next_u64() >> 40) as f32 / (1u64 << 24) as f32
-        }
-    }
+    use crate::rng::Rng;
 
     fn v2(pts: &[(f32, f32)]) -> Vec<Vec2> {
         pts.iter().map(|&(x, y)| Vec2::new(x, y)).collect()

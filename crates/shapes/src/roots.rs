@@ -750,31 +750,7 @@ pub(crate) mod tests {
     use super::*;
     use proptest::prelude::*;
 
-    /// xorshift64* (Vigna 2016): fixed seeds, no rand crate.
-    pub(crate) struct Rng(u64);
-
-    impl Rng {
-        pub(crate) fn new(seed: u64) -> Self {
-            Self(seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1)
-        }
-
-        pub(crate) fn next_u64(&mut self) -> u64 {
-            self.0 ^= self.0 >> 12;
-            self.0 ^= self.0 << 25;
-            self.0 ^= self.0 >> 27;
-            self.0.wrapping_mul(0x2545_F491_4F6C_DD1D)
-        }
-
-        /// Uniform in [0, 1).
-        pub(crate) fn f64(&mut self) -> f64 {
-            (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64
-        }
-
-        /// Uniform in [lo, hi).
-        pub(crate) fn range(&mut self, lo: f64, hi: f64) -> f64 {
-            lo + (hi - lo) * self.f64()
-        }
-    }
+    pub(crate) use crate::rng::Rng;
 
     /// Ascending coefficients of lead·Π(t − rᵢ).
     pub(crate) fn poly_from_roots(roots: &[f64], lead: f64) -> Vec<f64> {

@@ -317,32 +317,7 @@ impl Shape for Sphere {
 mod tests {
     use super::*;
 
-    /// xorshift64* (Vigna 2016): a fixed-seed generator for the tests, no `rand`.
-    struct Rng(u64);
-    impl Rng {
-        fn next_u64(&mut self) -> u64 {
-            self.0 ^= self.0 >> 12;
-            self.0 ^= self.0 << 25;
-            self.0 ^= self.0 >> 27;
-            self.0.wrapping_mul(0x2545_F491_4F6C_DD1D)
-        }
-        /// Uniform in [0, 1).
-        fn f32(&mut self) -> f32 {
-            (self.next_u64() >> 40) as f32 / (1u64 << 24) as f32
-        }
-        fn range(&mut self, lo: f32, hi: f32) -> f32 {
-            lo + (hi - lo) * self.f32()
-        }
-        fn unit(&mut self) -> Vec3 {
-            loop {
-                let v = Vec3::new(self.range(-1.0, 1.0), self.range(-1.0, 1.0), self.range(-1.0, 1.0));
-                let l2 = v.length_squared();
-                if l2 > 1e-4 && l2 <= 1.0 {
-                    return v / l2.sqrt();
-                }
-            }
-        }
-    }
+    use crate::rng::Rng;
 
     fn sphere(c: Vec3, r: f32) -> Sphere {
         Sphere::new(c, r, SphereMethod::Geometric).unwrap()
@@ -464,14 +439,14 @@ mod tests {
         let n = 10_000;
         let (mut disagree, mut hits, mut unexplained) = (0, 0, 0);
         for _ in 0..n {
-            let o = Vec3::new(rng.range(-4.0, 4.0), rng.range(-4.0, 4.0), rng.range(-4.0, 4.0));
+            let o = Vec3::new(rng.range_f32(-4.0, 4.0), rng.range_f32(-4.0, 4.0), rng.range_f32(-4.0, 4.0));
             // Half the rays aimed at a point within 1.5 r of the centre (so many hit, some
             // graze), half in uniformly random directions.
-            let len = rng.range(0.1, 10.0);
+            let len = rng.range_f32(0.1, 10.0);
             let d = if rng.f32() < 0.5 {
-                (s.centre + 1.5 * s.radius * rng.f32() * rng.unit() - o).normalize() * len
+                (s.centre + 1.5 * s.radius * rng.f32() * rng.unit().as_vec3() - o).normalize() * len
             } else {
-                rng.unit() * len
+                rng.unit().as_vec3() * len
             };
             let ray = Ray::new(o, d);
             let ts = all_methods(&s, &ray);
@@ -505,8 +480,8 @@ mod tests {
             for i in 0..m {
                 // The line through q = c + k·r·side with a direction perpendicular to side
                 // passes the centre at distance k·r.
-                let d = rng.unit();
-                let side = d.cross(rng.unit()).normalize();
+                let d = rng.unit().as_vec3();
+                let side = d.cross(rng.unit().as_vec3()).normalize();
                 let k = if i % 2 == 0 { 1.0 - delta } else { 1.0 + delta };
                 let o = s.centre + k * s.radius * side - 5.0 * d;
                 let hit = all_methods(&s, &Ray::new(o, d)).map(|t| t.is_some());
@@ -545,9 +520,9 @@ mod tests {
         let mut max_dist_r = [0f64; 5];
         let n = 2000;
         for i in 0..n {
-            let o = c + 1e4 * rng.unit();
+            let o = c + 1e4 * rng.unit().as_vec3();
             // Aim within 0.7 r of the centre: a sure hit even after rounding o and d.
-            let target = c + 0.7 * r * rng.f32().sqrt() * rng.unit();
+            let target = c + 0.7 * r * rng.f32().sqrt() * rng.unit().as_vec3();
             let mut d = target - o;
             if i % 2 == 0 {
                 d = d.normalize();

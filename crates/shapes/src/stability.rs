@@ -29,6 +29,7 @@ use crate::boxes::slab;
 use crate::implicit::{Implicit, Poly3};
 use crate::offset::{offset_fixed_epsilon, offset_ray_origin};
 use crate::polygon::{InsideTest, Polygon};
+use crate::rng::Rng;
 use crate::roots::{RootSolver, real_roots_in};
 use crate::sphere::{Sphere, SphereMethod, reference_roots_f64};
 use crate::triangle::{Triangle, WatertightRay, icosphere, intersect_triangle, intersect_triangle_watertight};
@@ -120,53 +121,6 @@ pub fn run_all(scale: Scale) -> Vec<Row> {
 // ---------------------------------------------------------------------------------------
 // Helpers
 // ---------------------------------------------------------------------------------------
-
-/// SplitMix64 (Steele, Lea & Flood 2014): tiny, fixed-seed, statistically fine for test
-/// case generation.
-struct Rng(u64);
-
-impl Rng {
-    fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-
-    /// Uniform in [0, 1).
-    fn f64(&mut self) -> f64 {
-        (self.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
-    }
-
-    fn range(&mut self, lo: f64, hi: f64) -> f64 {
-        lo + (hi - lo) * self.f64()
-    }
-
-    /// Uniform in 0..n (n > 0).
-    fn below(&mut self, n: u64) -> u64 {
-        self.next_u64() % n
-    }
-
-    fn coin(&mut self) -> bool {
-        self.next_u64() >> 63 == 1
-    }
-
-    fn log_uniform(&mut self, lo: f64, hi: f64) -> f64 {
-        (lo.ln() + self.f64() * (hi.ln() - lo.ln())).exp()
-    }
-
-    /// Uniform on the unit sphere.
-    fn unit(&mut self) -> DVec3 {
-        loop {
-            let v = DVec3::new(self.range(-1.0, 1.0), self.range(-1.0, 1.0), self.range(-1.0, 1.0));
-            let l2 = v.length_squared();
-            if l2 > 1e-4 && l2 <= 1.0 {
-                return v / l2.sqrt();
-            }
-        }
-    }
-}
 
 /// Runs `f` on every input (passed through [`black_box`]) `scale.passes()` times and
 /// returns the results of the last pass and the best time per input in nanoseconds.
@@ -895,55 +849,37 @@ pub fn slabs(scale: Scale) -> Vec<Row> {
         };
         let close = |t: f32, tr: f64| (t as f64 - tr).abs() <= SLAB_ULPS * ulp32(tr);
 
+        // (tests, failures) of entry distances `got` against the references, where
+        // `expect` turns a reference (entry, exit) into the entry the method should report.
+        let score = |got: &[Option<f32>], expect: &dyn Fn((f64, f64)) -> Option<f64>| {
+            let (mut tests, mut failures) = (0, 0);
+            for (got, r) in got.iter().zip(&refs) {
+                if ambiguous(r) {
+                    continue;
+                }
+                tests += 1;
+                let ok = match (got, r.and_then(expect)) {
+                    (None, None) => true,
+                    (Some(t), Some(tr)) => close(*t, tr),
+                    _ => false,
+                };
+                failures += u64::from(!ok);
+            }
+            (tests, failures)
+        };
+        // `slab` reports the unclamped entry of a box the ray meets ahead; the others
+        // the entry clamped to t_min = 0.
+        let unclamped = |(a, b): (f64, f64)| (b > 0.0 && a < f64::INFINITY).then_some(a);
+        let clamped = |(a, b): (f64, f64)| (a.max(0.0) <= b).then_some(a.max(0.0));
+
         let (res, ns) = timed(scale, rays, |r| slab(r.origin, r.dir, half, r.t_min, r.t_max).map(|h| h.0));
-        let (mut tests, mut failures) = (0, 0);
-        for (got, r) in res.iter().zip(&refs) {
-            if ambiguous(r) {
-                continue;
-            }
-            tests += 1;
-            let expect = r.filter(|&(a, b)| b > 0.0 && a < f64::INFINITY).map(|(a, _)| a);
-            let ok = match (got, expect) {
-                (None, None) => true,
-                (Some(t), Some(tr)) => close(*t, tr),
-                _ => false,
-            };
-            failures += u64::from(!ok);
-        }
+        let (tests, failures) = score(&res, &unclamped);
         rows.push(row("slabs", "boxes::slab", case, tests, failures, 0, ns));
-
         let (res, ns) = timed(scale, rays, |r| aabb.hit(r, f32::INFINITY));
-        let (mut tests, mut failures) = (0, 0);
-        for (got, r) in res.iter().zip(&refs) {
-            if ambiguous(r) {
-                continue;
-            }
-            tests += 1;
-            let expect = r.map(|(a, b)| (a.max(0.0), b)).filter(|&(a, b)| a <= b).map(|(a, _)| a);
-            let ok = match (got, expect) {
-                (None, None) => true,
-                (Some(t), Some(tr)) => close(*t, tr),
-                _ => false,
-            };
-            failures += u64::from(!ok);
-        }
+        let (tests, failures) = score(&res, &clamped);
         rows.push(row("slabs", "Aabb::hit", case, tests, failures, 0, ns));
-
         let (res, ns) = timed(scale, rays, |r| textbook_slab(r, half));
-        let (mut tests, mut failures) = (0, 0);
-        for (got, r) in res.iter().zip(&refs) {
-            if ambiguous(r) {
-                continue;
-            }
-            tests += 1;
-            let expect = r.map(|(a, b)| (a.max(0.0), b)).filter(|&(a, b)| a <= b).map(|(a, _)| a);
-            let ok = match (got, expect) {
-                (None, None) => true,
-                (Some(t), Some(tr)) => close(*t, tr),
-                _ => false,
-            };
-            failures += u64::from(!ok);
-        }
+        let (tests, failures) = score(&res, &clamped);
         rows.push(row("slabs", "textbook (divide, no NaN guard)", case, tests, failures, 0, ns));
     }
     rows
