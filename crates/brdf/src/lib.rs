@@ -40,6 +40,13 @@ impl ScatterFlags {
     /// follow one wavelength only from here on.
     pub const WAVELENGTH_DEPENDENT: Self = Self(32);
 
+    /// The raw bits (the values of the constants above), for code generators: the GPU
+    /// crate's WGSL uses the same bit values.
+    #[inline]
+    pub const fn bits(self) -> u8 {
+        self.0
+    }
+
     /// True if every flag of `other` is set.
     #[inline]
     pub fn contains(self, other: Self) -> bool {

@@ -16,7 +16,7 @@ use tracer::camera::Camera;
 use tracer::integrator::{PathSettings, ShadingNormals};
 use tracer::output::write_image;
 use tracer::render::PreparedScene;
-use tracer::{CpuBackend, RenderSettings, Scene};
+use tracer::{Backend, CpuBackend, RenderSettings, Scene};
 
 #[derive(Parser)]
 #[command(name = "spt", version, about = "A spectral, physically based path tracer")]
@@ -39,6 +39,53 @@ enum Command {
     /// Measure every intersection routine on adversarial cases: failure rate against f64
     /// references and ns per test, as a table, a CSV and one PNG chart per family.
     Stability(stability::StabilityArgs),
+    /// Open a window showing the scene refined frame by frame (running mean); drag to
+    /// orbit (left) or pan (right), wheel to dolly, WASD/QE to fly, arrows to turn, R to
+    /// reset, P/X to save PNG/EXR, Escape to quit. Any camera change restarts the mean.
+    View(ViewArgs),
+}
+
+#[derive(Args)]
+struct ViewArgs {
+    #[command(flatten)]
+    scene: SceneArgs,
+    /// Samples per pixel added each frame.
+    #[arg(long, default_value_t = 1)]
+    spp_per_frame: u32,
+    /// Stop refining at this many samples per pixel (until the camera moves).
+    #[arg(long)]
+    max_spp: Option<u32>,
+    /// Quit after this many frames (for scripted runs).
+    #[arg(long)]
+    frames: Option<u32>,
+    /// Save the image here when the viewer quits (.png or .exr).
+    #[arg(long)]
+    save: Option<PathBuf>,
+    /// Spectral sampling mode.
+    #[arg(long, default_value = "hero")]
+    spectral: SpectralMode,
+}
+
+fn run_view(args: ViewArgs) -> Result<()> {
+    if let Some(p) = &args.save {
+        tracer::output::ImageFormat::from_path(p)?;
+    }
+    let prepared = prepare(&args.scene)?;
+    let settings = settings(&args.scene, args.spp_per_frame.max(1), args.spectral, &prepared.scene)?;
+    let backend = make_backend(&args.scene)?;
+    let options = viewer::ViewerOptions {
+        width: args.scene.width,
+        height: args.scene.height,
+        spp_per_frame: args.spp_per_frame,
+        max_spp: args.max_spp,
+        exit_after_frames: args.frames,
+        save_on_exit: args.save.clone(),
+        title: args.scene.scene.display().to_string(),
+    };
+    options.validate()?;
+    let stats = viewer::run(prepared, settings, backend, options)?;
+    eprintln!("{} frames, {} spp, {:.3} M samples/s", stats.frames, stats.spp, stats.samples_per_second / 1e6);
+    Ok(())
 }
 
 #[derive(Args)]
@@ -177,6 +224,10 @@ struct SceneArgs {
     /// Ray–triangle test: watertight (Woop et al. 2013) or moller-trumbore (the thesis's).
     #[arg(long, default_value = "watertight", value_parser = parse_triangle_test)]
     triangle_test: TriangleTest,
+    /// Where to trace: cpu (rayon, every feature) or gpu (wgpu compute; hero mode, triangle
+    /// meshes, built-in BSDFs).
+    #[arg(long, default_value = "cpu", value_parser = ["cpu", "gpu"])]
+    backend: String,
     /// Shading normals: adapted (bent where they disagree with the geometry),
     /// face-forward (the thesis's workaround) or geometric (flat shading).
     #[arg(long, default_value = "adapted", value_parser = parse_shading_normals)]
@@ -301,6 +352,19 @@ fn prepare(args: &SceneArgs) -> Result<PreparedScene> {
     Ok(PreparedScene::with_triangle_test(scene, args.triangle_test)?)
 }
 
+/// The backend `args` asks for; a GPU that cannot be opened is an error that says so.
+fn make_backend(args: &SceneArgs) -> Result<Box<dyn Backend>> {
+    Ok(match args.backend.as_str() {
+        "gpu" => {
+            let gpu = gpu::GpuBackend::new()?;
+            let info = &gpu.context().info;
+            eprintln!("GPU: {} ({:?}, driver {})", info.name, info.backend, info.driver);
+            Box::new(gpu)
+        }
+        _ => Box::new(CpuBackend::new(args.threads)?),
+    })
+}
+
 fn run_render(args: RenderArgs) -> Result<()> {
     tracer::output::ImageFormat::from_path(&args.output)?;
     if let Some(p) = &args.stderr
@@ -310,10 +374,10 @@ fn run_render(args: RenderArgs) -> Result<()> {
     }
     let prepared = prepare(&args.scene)?;
     let settings = settings(&args.scene, args.spp, args.spectral, &prepared.scene)?;
-    let backend = CpuBackend::new(args.scene.threads)?;
+    let backend = make_backend(&args.scene)?;
     let s = &prepared.scene;
     eprintln!(
-        "{}: {} triangles, {} shapes, {} emissive, BVH built in {:.1} ms; {}×{} at {} spp, {} mode, {} threads",
+        "{}: {} triangles, {} shapes, {} emissive, BVH built in {:.1} ms; {}×{} at {} spp, {} mode, {} backend",
         args.scene.scene.display(),
         s.triangles.len(),
         s.shapes.len(),
@@ -323,7 +387,7 @@ fn run_render(args: RenderArgs) -> Result<()> {
         settings.height,
         settings.spp,
         settings.mode.name(),
-        backend.threads()
+        backend.name()
     );
     if prepared.lights.is_empty() {
         eprintln!("warning: the scene has no light (no Ke > 0 and no environment): the image will be black");
@@ -333,7 +397,7 @@ fn run_render(args: RenderArgs) -> Result<()> {
         ProgressStyle::with_template("{bar:40} {percent:>3}% {human_pos}/{human_len} samples, ETA {eta}")
             .expect("static template"),
     );
-    let (film, stats) = tracer::render(&backend, &prepared, &settings, &|n| bar.inc(n))?;
+    let (film, stats) = tracer::render(backend.as_ref(), &prepared, &settings, &|n| bar.inc(n))?;
     bar.finish_and_clear();
     write_image(&args.output, film.width(), film.height(), &film.mean_rgb())?;
     if let Some(p) = &args.stderr {
@@ -356,14 +420,14 @@ fn run_bench(args: BenchArgs) -> Result<()> {
         bail!("--repeats must be at least 1");
     }
     let prepared = prepare(&args.scene)?;
-    let backend = CpuBackend::new(args.scene.threads)?;
+    let backend = make_backend(&args.scene)?;
     println!(
-        "# {} {}x{} {} spp, {} threads, median of {}",
+        "# {} {}x{} {} spp, {} backend, median of {}",
         args.scene.scene.display(),
         args.scene.width,
         args.scene.height,
         args.spp,
-        backend.threads(),
+        backend.name(),
         args.repeats
     );
     println!("{:<8} {:>12} {:>12} {:>10} {:>10}", "mode", "Msamples/s", "Mrays/s", "wall_s", "nan");
@@ -371,7 +435,7 @@ fn run_bench(args: BenchArgs) -> Result<()> {
         let settings = settings(&args.scene, args.spp, *mode, &prepared.scene)?;
         let mut runs = Vec::new();
         for _ in 0..args.repeats {
-            let (_, stats) = tracer::render(&backend, &prepared, &settings, &|_| {})?;
+            let (_, stats) = tracer::render(backend.as_ref(), &prepared, &settings, &|_| {})?;
             runs.push(stats);
         }
         runs.sort_by_key(|r| r.wall);
@@ -397,6 +461,7 @@ fn main() -> ExitCode {
         Command::Sheet(a) => run_sheet(a).context("sheet failed"),
         Command::Bvh(a) => run_bvh(a).context("bvh failed"),
         Command::Stability(a) => stability::run(a).context("stability failed"),
+        Command::View(a) => run_view(a).context("view failed"),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

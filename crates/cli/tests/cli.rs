@@ -197,3 +197,27 @@ fn renders_built_in_shape_scenes_and_rejects_unknown_ones() {
     let o = spt(&["render", "builtin:sphereflake:1", "--triangle-test", "fast", "-o", out.to_str().unwrap()]);
     assert!(!o.status.success() && stderr(&o).contains("unknown triangle test 'fast'"), "{}", stderr(&o));
 }
+
+#[test]
+fn gpu_backend_renders_through_the_same_command_or_explains_itself() {
+    let scene =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/scenes/cornell-box/CornellBox-Original.obj");
+    if !scene.exists() {
+        eprintln!("skipping: {} not found", scene.display());
+        return;
+    }
+    let out = temp_dir("gpu").join("cornell.png");
+    let args = ["render", scene.to_str().unwrap(), "--backend", "gpu", "--width", "16", "--height", "16"];
+    let o = spt(&[&args[..], &["--spp", "2", "-o", out.to_str().unwrap()]].concat());
+    if gpu::require_gpu().is_none() {
+        assert!(!o.status.success());
+        assert!(stderr(&o).contains("--backend cpu"), "{}", stderr(&o));
+        return;
+    }
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stderr(&o).contains("gpu backend") && stderr(&o).contains(" 0 NaN/Inf"), "{}", stderr(&o));
+    assert_eq!(image::open(&out).unwrap().width(), 16);
+    // What the GPU cannot do is an error that names the way out.
+    let o = spt(&[&args[..], &["--spectral", "rgb", "-o", out.to_str().unwrap()]].concat());
+    assert!(!o.status.success() && stderr(&o).contains("use --spectral hero, or --backend cpu"), "{}", stderr(&o));
+}

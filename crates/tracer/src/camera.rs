@@ -85,6 +85,14 @@ pub struct RayGenerator {
 }
 
 impl RayGenerator {
+    /// The generator's parts, for backends that make the rays elsewhere (the GPU):
+    /// `(eye, forward, right, up)` with `right` and `up` scaled by the tangents of the
+    /// half fields of view; the ray through film position (x, y) leaves `eye` along
+    /// normalize(forward + ndc_x·right + ndc_y·up), ndc = (2x/width − 1, 1 − 2y/height).
+    pub fn basis(&self) -> (Vec3, Vec3, Vec3, Vec3) {
+        (self.eye, self.forward, self.right, self.up)
+    }
+
     /// The ray through film position (x, y) in pixels from the top-left corner; a pixel
     /// spans [x, x+1) × [y, y+1), so jittering within it is a box filter.
     #[inline]

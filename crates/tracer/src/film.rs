@@ -29,6 +29,28 @@ impl PixelStats {
         }
     }
 
+    /// Merges another accumulator of independent samples into this one (Chan, Golub &
+    /// LeVeque's pairwise update of count, mean and M2), as if its samples had been
+    /// [`PixelStats::add`]ed here; backends that accumulate a pass elsewhere (the GPU)
+    /// merge it with this.
+    pub fn merge(&mut self, other: &PixelStats) {
+        if other.count == 0 {
+            return;
+        }
+        if self.count == 0 {
+            *self = *other;
+            return;
+        }
+        let (na, nb) = (self.count as f64, other.count as f64);
+        let n = na + nb;
+        for c in 0..3 {
+            let delta = other.mean[c] - self.mean[c];
+            self.mean[c] += delta * nb / n;
+            self.m2[c] += other.m2[c] + delta * delta * na * nb / n;
+        }
+        self.count += other.count;
+    }
+
     /// The standard error of the mean per channel (0 below two samples).
     pub fn std_error(&self) -> [f64; 3] {
         if self.count < 2 {

@@ -69,6 +69,10 @@ pub enum Error {
     /// A render setting is out of range.
     #[error("invalid setting: {0}")]
     Setting(String),
+    /// A render backend (the GPU, say) failed or cannot render this scene; the message
+    /// says why and what to do.
+    #[error("{0}")]
+    Backend(String),
     /// An image could not be encoded.
     #[error("{path}: {message}")]
     Image {

@@ -95,6 +95,26 @@ impl Lights {
         self.prims.len()
     }
 
+    /// The sampled emissive primitives (triangles first, then shapes), in the order of
+    /// [`Lights::cdf`]; for backends that rebuild the distribution elsewhere (the GPU).
+    pub fn prims(&self) -> &[u32] {
+        &self.prims
+    }
+
+    /// The cumulative distribution over [`Lights::prims`]: entry k is the probability of
+    /// picking the environment or one of primitives 0..=k (the environment owns
+    /// [0, [`Lights::environment_pmf`])). [`Lights::sample`] picks the first k with
+    /// `cdf[k] > u` (clamped to the last).
+    pub fn cdf(&self) -> &[f32] {
+        &self.cdf
+    }
+
+    /// The probability of picking each primitive, indexed by primitive id (0 for
+    /// primitives that are not sampled); [`Lights::prim_pmf`] for all of them at once.
+    pub fn prim_pmfs(&self) -> &[f32] {
+        &self.prim_pmf
+    }
+
     /// The probability that [`Lights::sample`] picks primitive `prim`.
     #[inline]
     pub fn prim_pmf(&self, prim: u32) -> f32 {

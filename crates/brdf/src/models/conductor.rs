@@ -251,7 +251,9 @@ impl Metal {
         }
     }
 
-    fn table(self) -> &'static [[f32; 3]] {
+    /// The measured rows (λ nm, n, k), increasing in λ, that [`Metal::eta_k`]
+    /// interpolates: for code generators (the GPU crate uploads them as they are).
+    pub fn table(self) -> &'static [[f32; 3]] {
         match self {
             Self::Gold => &AU,
             Self::Silver => &AG,

@@ -1,0 +1,593 @@
+//! WGSL generated from the BSDF parameter definitions.
+//!
+//! [`generate`] turns a scene's materials into a [`MaterialKernel`]: WGSL source for the
+//! path kernel to concatenate with its own, and the two storage buffers it reads. What
+//! is generated, and from what:
+//!
+//! * per compiled model, from its [`ModelDef`]: a struct `<Model>Params` with one field per
+//!   declared parameter, in declaration order and under the declared name (a scalar is an
+//!   `f32`; a spectrum or coefficient is a `u32` offset into `spectra`), and
+//!   `load_<model>(base: u32) -> <Model>Params`, which unpacks it from `material_data`;
+//!   the Rust side packs each material's [`ResolvedParams`] by walking the same
+//!   declarations (`pack_params`), so field order and packing cannot drift apart;
+//! * the dispatch `bsdf_eval`/`bsdf_pdf`/`bsdf_sample` (a `switch` over the compiled
+//!   models), the material accessors, the scatter-flag constants (from
+//!   [`ScatterFlags::bits`]) and the numeric constants the model code shares with the CPU
+//!   (GGX's α floor, Schlick's clamps, the Sellmeier coefficients, …);
+//! * the measured metal tables ([`Metal::table`]) of the presets the scene uses, copied
+//!   into `spectra` as they are.
+//!
+//! The per-model mathematics is hand-written WGSL, one file per model under
+//! `src/wgsl/bsdf/` (`lambert.wgsl`, …, named after [`ModelDef::name`]), each a line-by-line
+//! transcription of its `crates/brdf` model taking the generated params struct:
+//! `fn <model>_eval(p: <Model>Params, wo: vec3f, wi: vec3f, lambda: vec4f) -> vec4f`,
+//! `<model>_pdf(…) -> f32` and `<model>_sample(p, wo, uc: f32, u: vec2f, lambda) -> BsdfSample`;
+//! shared pieces (Fresnel, cosine sampling, GGX, metals, dispersion) are compiled in only
+//! when a compiled model needs them. The GPU tests compare every one with the CPU.
+//!
+//! # Specialisation
+//!
+//! With `specialise = true` only the models the materials use are compiled in, and only
+//! the features they use: the Cauchy/Sellmeier code only if some material disperses
+//! (otherwise `mat_dispersion_ior` is a stub returning the constant index), the tables
+//! of the metal presets in use only, emission and absorption lookups only if some
+//! material emits or absorbs (otherwise the accessors return zero). With
+//! `specialise = false` all nine models and every feature are compiled in.
+//!
+//! # The WGSL contract
+//!
+//! ```wgsl
+//! @group(0) @binding(10) var<storage, read> material_data: array<u32>;
+//! @group(0) @binding(11) var<storage, read> spectra: array<f32>;
+//! struct BsdfSample { wi: vec3f, f: vec4f, pdf: f32, flags: u32 }   // pdf == 0: no sample
+//! const SCATTER_REFLECTION: u32 = 1u; … SCATTER_WAVELENGTH_DEPENDENT: u32 = 32u;
+//! fn spectrum_at(offset: u32, lambda: vec4f) -> vec4f;
+//! fn material_flags(m: u32) -> u32;
+//! fn material_two_sided(m: u32) -> bool;
+//! fn material_dispersive(m: u32) -> bool;
+//! fn material_emission(m: u32, lambda: vec4f) -> vec4f;
+//! fn material_absorption(m: u32, lambda: vec4f) -> vec4f;
+//! fn bsdf_eval(m: u32, wo: vec3f, wi: vec3f, lambda: vec4f) -> vec4f;
+//! fn bsdf_pdf(m: u32, wo: vec3f, wi: vec3f, lambda: vec4f) -> f32;
+//! fn bsdf_sample(m: u32, wo: vec3f, uc: f32, u: vec2f, lambda: vec4f) -> BsdfSample;
+//! ```
+//!
+//! Every other identifier the generated source declares starts with `mat_`, `MAT_`,
+//! `SPECTRUM_`, `MATERIAL_`, a model's name (`lambert_…`, `load_lambert`) or ends in
+//! `Params`/`State`, so that the path kernel can use any other name.
+//!
+//! # Buffer layout
+//!
+//! `material_data` (u32 words; f32 stored by `to_bits`): first one header of
+//! [`HEADER_WORDS`] words per material, in scene order (material `m` at
+//! `m * HEADER_WORDS`), then each material's parameters:
+//!
+//! | word | [`header`] | content |
+//! |---|---|---|
+//! | 0 | `MODEL` | the model's index in [`BuiltinModel::ALL`] ([`model_id`]) |
+//! | 1 | `FLAGS` | [`ScatterFlags`] bits: the union of `bsdf.flags()` over 360–830 nm |
+//! | 2 | `PROPERTIES` | [`PROPERTY_TWO_SIDED`] \| [`PROPERTY_DISPERSIVE`] |
+//! | 3 | `EMISSION` | offset of the emitted radiance in `spectra`, or [`NO_SPECTRUM`] |
+//! | 4 | `ABSORPTION` | offset of the absorption coefficient in `spectra`, or [`NO_SPECTRUM`] |
+//! | 5 | `PARAMS` | word index of the material's parameters (one word per declared parameter) |
+//!
+//! `spectra` (f32): every distinct spectrum the materials use (parameters, emission,
+//! absorption), each tabulated at 1 nm from [`SPECTRUM_LAMBDA_MIN`] ([`SPECTRUM_SAMPLES`]
+//! values, [`tabulate`]), identical tables stored once; then the (λ, n, k) rows of the
+//! metal presets in use. Neither vector is ever empty (a zero is stored if nothing else).
+
+use crate::GpuError;
+use brdf::models::{Ggx, Metal, ashikhmin, dielectric, schlick};
+use brdf::params::{ModelDef, ParamKind, ResolvedParams};
+use brdf::{Bsdf, ScatterFlags};
+use spectral::SampledWavelengths;
+use spectral::spectrum::Colour;
+use std::collections::HashMap;
+use std::fmt::Write as _;
+use tracer::material::{BuiltinModel, Material, Surface};
+
+/// The first wavelength (nm) of every table in `spectra`.
+pub const SPECTRUM_LAMBDA_MIN: f32 = spectral::sampled::LAMBDA_MIN;
+/// Entries per table: one per nm from 360 to 830 nm inclusive.
+pub const SPECTRUM_SAMPLES: usize = (spectral::sampled::LAMBDA_MAX - spectral::sampled::LAMBDA_MIN) as usize + 1;
+/// Words per material header in `material_data`.
+pub const HEADER_WORDS: u32 = 6;
+/// The offset that stands for "no spectrum" (no emission, no absorption).
+pub const NO_SPECTRUM: u32 = u32::MAX;
+/// Header property bit: the BSDF acts on both faces alike ([`Material::is_two_sided`]).
+pub const PROPERTY_TWO_SIDED: u32 = 1;
+/// Header property bit: the index of refraction varies with wavelength
+/// ([`Material::is_dispersive`]).
+pub const PROPERTY_DISPERSIVE: u32 = 2;
+
+/// Word indices within a material header.
+pub mod header {
+    /// The model id ([`super::model_id`]).
+    pub const MODEL: u32 = 0;
+    /// The scatter flags.
+    pub const FLAGS: u32 = 1;
+    /// [`super::PROPERTY_TWO_SIDED`] | [`super::PROPERTY_DISPERSIVE`].
+    pub const PROPERTIES: u32 = 2;
+    /// Emission spectrum offset or [`super::NO_SPECTRUM`].
+    pub const EMISSION: u32 = 3;
+    /// Absorption spectrum offset or [`super::NO_SPECTRUM`].
+    pub const ABSORPTION: u32 = 4;
+    /// Word index of the parameters.
+    pub const PARAMS: u32 = 5;
+}
+
+/// The optional code paths a kernel contains besides its models.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct Features {
+    /// Wavelength-dependent index of refraction (Cauchy, Sellmeier presets).
+    pub dispersion: bool,
+    /// Beer–Lambert absorption coefficients (`material_absorption` reads them).
+    pub absorption: bool,
+    /// Emitted radiance (`material_emission` reads it).
+    pub emission: bool,
+    /// The measured metal presets whose tables are uploaded, in [`Metal::ALL`] order.
+    pub metals: Vec<Metal>,
+}
+
+impl Features {
+    /// Everything (the unspecialised kernel).
+    pub fn all() -> Self {
+        Self { dispersion: true, absorption: true, emission: true, metals: Metal::ALL.to_vec() }
+    }
+
+    /// What `materials` use.
+    pub fn of(materials: &[Material]) -> Self {
+        let mut metals = Vec::new();
+        for m in materials {
+            if let Surface::Builtin { model, params } = &m.surface
+                && let Some((i, _)) = model.def().param("metal")
+                && let Some(metal) = Metal::from_param(params.scalar(i))
+                && !metals.contains(&metal)
+            {
+                metals.push(metal);
+            }
+        }
+        metals.sort_by_key(|m| Metal::ALL.iter().position(|a| a == m));
+        Self {
+            dispersion: materials.iter().any(Material::is_dispersive),
+            absorption: materials.iter().any(|m| m.absorption().is_some()),
+            emission: materials.iter().any(|m| m.emission.is_some()),
+            metals,
+        }
+    }
+}
+
+/// The materials part of a GPU kernel: WGSL and the buffers it reads.
+#[derive(Clone, Debug)]
+pub struct MaterialKernel {
+    /// WGSL to concatenate with the path kernel (see the module documentation for what
+    /// it declares).
+    pub wgsl: String,
+    /// The `material_data` buffer (binding 10): headers, then parameters.
+    pub data: Vec<u32>,
+    /// The `spectra` buffer (binding 11): 1-nm tables, then metal tables.
+    pub spectra: Vec<f32>,
+    /// The models compiled in, in [`BuiltinModel::ALL`] order.
+    pub models: Vec<BuiltinModel>,
+    /// The optional code paths compiled in.
+    pub features: Features,
+}
+
+/// The id of `model` in `material_data` headers: its index in [`BuiltinModel::ALL`].
+pub fn model_id(model: BuiltinModel) -> u32 {
+    BuiltinModel::ALL.iter().position(|&m| m == model).expect("every model is in ALL") as u32
+}
+
+/// The name of the generated params struct of a model: its declared name, capitalised,
+/// followed by `Params` (`lambert` → `LambertParams`).
+pub fn params_struct_name(def: &ModelDef) -> String {
+    let mut chars = def.name.chars();
+    let first = chars.next().map(|c| c.to_ascii_uppercase()).into_iter();
+    first.chain(chars).chain("Params".chars()).collect()
+}
+
+/// `colour` at 1-nm steps from [`SPECTRUM_LAMBDA_MIN`]: [`SPECTRUM_SAMPLES`] values of
+/// [`Colour::sample`] (spectral mode).
+pub fn tabulate(colour: &Colour) -> Vec<f32> {
+    (0..SPECTRUM_SAMPLES)
+        .map(|i| colour.sample(&SampledWavelengths::<1>::fixed_bins(SPECTRUM_LAMBDA_MIN + i as f32, 1.0)).0[0])
+        .collect()
+}
+
+/// The CPU twin of WGSL `spectrum_at` for one wavelength: linear interpolation in a
+/// table made by [`tabulate`], λ clamped to the table.
+pub fn spectrum_lookup(table: &[f32], lambda: f32) -> f32 {
+    let last = (SPECTRUM_SAMPLES - 1) as f32;
+    let x = (lambda - SPECTRUM_LAMBDA_MIN).clamp(0.0, last);
+    let i = (x as usize).min(SPECTRUM_SAMPLES - 2);
+    let t = x - i as f32;
+    table[i] + t * (table[i + 1] - table[i])
+}
+
+/// Every spectrum of a kernel, deduplicated by value.
+#[derive(Default)]
+struct SpectrumPool {
+    data: Vec<f32>,
+    index: HashMap<Vec<u32>, u32>,
+}
+
+impl SpectrumPool {
+    fn offset(&self) -> Result<u32, GpuError> {
+        u32::try_from(self.data.len()).ok().filter(|&o| o != NO_SPECTRUM).ok_or(GpuError::Limit {
+            what: "spectra",
+            needed: 4 * self.data.len() as u64,
+            limit_name: "u32 offsets",
+            limit: 4 * u32::MAX as u64,
+        })
+    }
+
+    /// The offset of `colour`'s table, adding it if new.
+    fn colour(&mut self, colour: &Colour) -> Result<u32, GpuError> {
+        let table = tabulate(colour);
+        let key: Vec<u32> = table.iter().map(|v| v.to_bits()).collect();
+        if let Some(&o) = self.index.get(&key) {
+            return Ok(o);
+        }
+        let o = self.offset()?;
+        self.data.extend_from_slice(&table);
+        self.index.insert(key, o);
+        Ok(o)
+    }
+
+    /// Appends raw values, returning their offset.
+    fn raw(&mut self, values: impl IntoIterator<Item = f32>) -> Result<u32, GpuError> {
+        let o = self.offset()?;
+        self.data.extend(values);
+        Ok(o)
+    }
+}
+
+/// One word per declared parameter of `def`, in declaration order: a scalar as its f32
+/// bits, a spectrum or coefficient as the offset of its table in `spectra` (added to
+/// `pool`). The layout `load_<model>` reads.
+fn pack_params(def: &ModelDef, params: &ResolvedParams, pool: &mut SpectrumPool) -> Result<Vec<u32>, GpuError> {
+    def.params
+        .iter()
+        .enumerate()
+        .map(|(i, p)| match p.kind {
+            ParamKind::Scalar => Ok(params.scalar(i).to_bits()),
+            ParamKind::Spectrum | ParamKind::Coefficient => pool.colour(&params.colour(i)),
+        })
+        .collect()
+}
+
+/// The union of the material's CPU `bsdf.flags()` over hero-wavelength sets covering
+/// 360–830 nm at 1 nm (flags can depend on the wavelengths: Shirley–Ashikhmin is diffuse
+/// only where R_d (1 − R_s) is not zero).
+fn material_flags(material: &Material) -> u32 {
+    let mut bits = 0u8;
+    for first in (0..SPECTRUM_SAMPLES).step_by(4) {
+        let wl = SampledWavelengths::<4>::fixed_bins(SPECTRUM_LAMBDA_MIN + first as f32, 1.0);
+        bits |= material.bsdf(&wl).flags().bits();
+    }
+    bits as u32
+}
+
+/// Builds the WGSL and buffers for `materials` (in scene order: material index `m` in the
+/// WGSL is `materials[m]`). `specialise`: compile in only the models and features the
+/// materials use (else all). Custom BSDFs cannot run on the GPU.
+pub fn generate(materials: &[Material], specialise: bool) -> Result<MaterialKernel, GpuError> {
+    let mut builtin = Vec::with_capacity(materials.len());
+    for m in materials {
+        match &m.surface {
+            Surface::Builtin { model, params } => builtin.push((m, *model, params)),
+            Surface::Custom { .. } => {
+                return Err(GpuError::Unsupported(format!("custom BSDF in material '{}'", m.name)));
+            }
+        }
+    }
+    let models: Vec<BuiltinModel> = BuiltinModel::ALL
+        .into_iter()
+        .filter(|model| !specialise || builtin.iter().any(|(_, m, _)| m == model))
+        .collect();
+    let features = if specialise { Features::of(materials) } else { Features::all() };
+
+    let mut pool = SpectrumPool::default();
+    let mut data = vec![0u32; materials.len() * HEADER_WORDS as usize];
+    for (k, (material, model, params)) in builtin.iter().enumerate() {
+        let h = k * HEADER_WORDS as usize;
+        let base =
+            u32::try_from(data.len()).map_err(|_| GpuError::Unsupported("over 2³² words of materials".into()))?;
+        data.extend(pack_params(model.def(), params, &mut pool)?);
+        let emission = match &material.emission {
+            Some(c) => pool.colour(c)?,
+            None => NO_SPECTRUM,
+        };
+        let absorption = match material.absorption() {
+            Some(c) => pool.colour(c)?,
+            None => NO_SPECTRUM,
+        };
+        let mut properties = 0;
+        if material.is_two_sided() {
+            properties |= PROPERTY_TWO_SIDED;
+        }
+        if material.is_dispersive() {
+            properties |= PROPERTY_DISPERSIVE;
+        }
+        data[h + header::MODEL as usize] = model_id(*model);
+        data[h + header::FLAGS as usize] = material_flags(material);
+        data[h + header::PROPERTIES as usize] = properties;
+        data[h + header::EMISSION as usize] = emission;
+        data[h + header::ABSORPTION as usize] = absorption;
+        data[h + header::PARAMS as usize] = base;
+    }
+    let needs_metals = models.iter().any(|m| source(*m).needs.contains(&Piece::Metal));
+    let mut metal_tables = Vec::new();
+    if needs_metals {
+        for &metal in &features.metals {
+            let rows = metal.table();
+            let offset = pool.raw(rows.iter().flatten().copied())?;
+            metal_tables.push((metal, offset, rows.len() as u32));
+        }
+    }
+    let wgsl = wgsl(&models, &features, &metal_tables)?;
+    let mut spectra = pool.data;
+    if spectra.is_empty() {
+        spectra.push(0.0);
+    }
+    if data.is_empty() {
+        data.push(0);
+    }
+    Ok(MaterialKernel { wgsl, data, spectra, models, features })
+}
+
+/// Shared WGSL a model may need.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+enum Piece {
+    Fresnel,
+    Sampling,
+    Ggx,
+    Metal,
+    Dispersion,
+}
+
+/// A model's hand-written WGSL and the pieces it calls.
+struct ModelSource {
+    wgsl: &'static str,
+    needs: &'static [Piece],
+    /// Constants of the CPU model that the WGSL uses.
+    constants: Constants,
+}
+
+/// (WGSL name, value) of the constants a model's WGSL shares with its CPU code.
+type Constants = fn() -> Vec<(&'static str, f32)>;
+
+fn no_constants() -> Vec<(&'static str, f32)> {
+    Vec::new()
+}
+
+fn source(model: BuiltinModel) -> ModelSource {
+    use BuiltinModel as B;
+    use Piece as P;
+    let (wgsl, needs, constants): (&'static str, &'static [Piece], Constants) = match model {
+        B::Lambert => (include_str!("wgsl/bsdf/lambert.wgsl"), &[P::Sampling], no_constants),
+        B::Mirror => (include_str!("wgsl/bsdf/mirror.wgsl"), &[], no_constants),
+        B::Dielectric => (include_str!("wgsl/bsdf/dielectric.wgsl"), &[P::Fresnel, P::Dispersion], no_constants),
+        B::Conductor => (include_str!("wgsl/bsdf/conductor.wgsl"), &[P::Fresnel, P::Metal], no_constants),
+        B::RoughConductor => {
+            (include_str!("wgsl/bsdf/roughconductor.wgsl"), &[P::Fresnel, P::Metal, P::Ggx], no_constants)
+        }
+        B::RoughDielectric => (include_str!("wgsl/bsdf/roughdielectric.wgsl"), &[P::Fresnel, P::Ggx], no_constants),
+        B::OrenNayar => (include_str!("wgsl/bsdf/orennayar.wgsl"), &[P::Sampling], no_constants),
+        B::Schlick => (include_str!("wgsl/bsdf/schlick.wgsl"), &[P::Sampling], || {
+            vec![
+                ("MAT_SCHLICK_MIN_ROUGHNESS", schlick::MIN_ROUGHNESS),
+                ("MAT_SCHLICK_MIN_ISOTROPY", schlick::MIN_ISOTROPY),
+            ]
+        }),
+        B::ShirleyAshikhmin => (include_str!("wgsl/bsdf/ashikhmin.wgsl"), &[P::Sampling], || {
+            vec![("MAT_ASHIKHMIN_MAX_EXPONENT", ashikhmin::MAX_EXPONENT)]
+        }),
+    };
+    ModelSource { wgsl, needs, constants }
+}
+
+/// An f32 as a WGSL literal that parses back to the same value.
+fn f32_literal(v: f32) -> String {
+    assert!(v.is_finite(), "WGSL has no literal for {v}");
+    format!("{v:?}f")
+}
+
+fn is_identifier(s: &str) -> bool {
+    let mut chars = s.chars();
+    matches!(chars.next(), Some(c) if c.is_ascii_lowercase() || c == '_')
+        && chars.all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || c == '_')
+}
+
+/// The generated struct and loader of one model.
+fn params_wgsl(def: &ModelDef, out: &mut String) -> Result<(), GpuError> {
+    let bad = |what: &str| GpuError::Shader(format!("model '{}': {what} is not a WGSL identifier", def.name));
+    if !is_identifier(def.name) {
+        return Err(bad("the model name"));
+    }
+    let name = params_struct_name(def);
+    let _ = writeln!(out, "// {}: {}", def.name, def.doc.replace('\n', " "));
+    let _ = writeln!(out, "struct {name} {{");
+    for p in def.params {
+        if !is_identifier(p.name) {
+            return Err(bad(&format!("parameter '{}'", p.name)));
+        }
+        let (ty, kind) = match p.kind {
+            ParamKind::Scalar => ("f32", "scalar"),
+            ParamKind::Spectrum => ("u32", "spectrum offset"),
+            ParamKind::Coefficient => ("u32", "coefficient spectrum offset"),
+        };
+        let _ = writeln!(out, "    {}: {ty}, // {kind}: {}", p.name, p.doc.replace('\n', " "));
+    }
+    let _ = writeln!(out, "}}\n");
+    let fields: Vec<String> = def
+        .params
+        .iter()
+        .enumerate()
+        .map(|(i, p)| match p.kind {
+            ParamKind::Scalar => format!("bitcast<f32>(material_data[base + {i}u])"),
+            ParamKind::Spectrum | ParamKind::Coefficient => format!("material_data[base + {i}u]"),
+        })
+        .collect();
+    let _ = writeln!(out, "fn load_{}(base: u32) -> {name} {{", def.name);
+    let _ = writeln!(out, "    return {name}({});", fields.join(", "));
+    let _ = writeln!(out, "}}\n");
+    Ok(())
+}
+
+fn constant(out: &mut String, name: &str, v: f32) {
+    let _ = writeln!(out, "const {name}: f32 = {};", f32_literal(v));
+}
+
+fn vec3_constant(out: &mut String, name: &str, v: [f32; 3]) {
+    let _ = writeln!(
+        out,
+        "const {name}: vec3f = vec3f({}, {}, {});",
+        f32_literal(v[0]),
+        f32_literal(v[1]),
+        f32_literal(v[2])
+    );
+}
+
+/// The whole materials WGSL.
+fn wgsl(models: &[BuiltinModel], features: &Features, metal_tables: &[(Metal, u32, u32)]) -> Result<String, GpuError> {
+    let mut out = String::new();
+    let names: Vec<&str> = models.iter().map(|m| m.def().name).collect();
+    let _ = writeln!(out, "// ---- Materials: generated by gpu::materials from brdf's parameter definitions.");
+    let _ = writeln!(
+        out,
+        "// Models: {}. Features: dispersion {}, absorption {}, emission {}, metals [{}].\n",
+        names.join(", "),
+        features.dispersion,
+        features.absorption,
+        features.emission,
+        metal_tables.iter().map(|(m, ..)| m.name()).collect::<Vec<_>>().join(", ")
+    );
+    out.push_str("@group(0) @binding(10) var<storage, read> material_data: array<u32>;\n");
+    out.push_str("@group(0) @binding(11) var<storage, read> spectra: array<f32>;\n\n");
+    out.push_str("// pdf == 0.0: no sample.\nstruct BsdfSample {\n    wi: vec3f,\n    f: vec4f,\n    pdf: f32,\n    flags: u32,\n}\n\n");
+    for (name, flag) in [
+        ("REFLECTION", ScatterFlags::REFLECTION),
+        ("TRANSMISSION", ScatterFlags::TRANSMISSION),
+        ("DIFFUSE", ScatterFlags::DIFFUSE),
+        ("GLOSSY", ScatterFlags::GLOSSY),
+        ("SPECULAR", ScatterFlags::SPECULAR),
+        ("WAVELENGTH_DEPENDENT", ScatterFlags::WAVELENGTH_DEPENDENT),
+    ] {
+        let _ = writeln!(out, "const SCATTER_{name}: u32 = {}u;", flag.bits());
+    }
+    let _ = writeln!(out, "\nconst SPECTRUM_LAMBDA_MIN: f32 = {};", f32_literal(SPECTRUM_LAMBDA_MIN));
+    let _ = writeln!(out, "const SPECTRUM_SAMPLES: u32 = {SPECTRUM_SAMPLES}u;");
+    let _ = writeln!(out, "const MATERIAL_HEADER_WORDS: u32 = {HEADER_WORDS}u;");
+    let _ = writeln!(out, "const MAT_NO_SPECTRUM: u32 = {NO_SPECTRUM}u;");
+    let _ = writeln!(out, "const MAT_PROPERTY_TWO_SIDED: u32 = {PROPERTY_TWO_SIDED}u;");
+    let _ = writeln!(out, "const MAT_PROPERTY_DISPERSIVE: u32 = {PROPERTY_DISPERSIVE}u;");
+    for &m in models {
+        let _ = writeln!(out, "const MAT_MODEL_{}: u32 = {}u;", m.def().name.to_ascii_uppercase(), model_id(m));
+    }
+    out.push('\n');
+    out.push_str(include_str!("wgsl/bsdf/common.wgsl"));
+
+    let mut pieces: Vec<Piece> = models.iter().flat_map(|m| source(*m).needs.iter().copied()).collect();
+    pieces.sort();
+    pieces.dedup();
+    for piece in pieces {
+        out.push('\n');
+        match piece {
+            Piece::Fresnel => out.push_str(include_str!("wgsl/bsdf/fresnel.wgsl")),
+            Piece::Sampling => out.push_str(include_str!("wgsl/bsdf/sampling.wgsl")),
+            Piece::Ggx => {
+                constant(&mut out, "MAT_GGX_ALPHA_MIN", Ggx::ALPHA_MIN);
+                out.push_str(include_str!("wgsl/bsdf/ggx.wgsl"));
+            }
+            Piece::Metal => {
+                out.push_str("// (offset, rows) of a metal preset's table in `spectra` (generated).\n");
+                out.push_str("fn mat_metal_table(id: u32) -> vec2u {\n    switch id {\n");
+                for (metal, offset, rows) in metal_tables {
+                    let id = Metal::ALL.iter().position(|m| m == metal).expect("in ALL") + 1;
+                    let _ = writeln!(
+                        out,
+                        "        case {id}u: {{ return vec2u({offset}u, {rows}u); }} // {}",
+                        metal.name()
+                    );
+                }
+                out.push_str("        default: {}\n    }\n    return vec2u(0u, 0u);\n}\n\n");
+                out.push_str(include_str!("wgsl/bsdf/metal.wgsl"));
+            }
+            Piece::Dispersion if features.dispersion => {
+                constant(&mut out, "MAT_LAMBDA_D", dielectric::LAMBDA_D);
+                vec3_constant(&mut out, "MAT_BK7_B", dielectric::BK7.b);
+                vec3_constant(&mut out, "MAT_BK7_C", dielectric::BK7.c);
+                vec3_constant(&mut out, "MAT_FUSED_SILICA_B", dielectric::FUSED_SILICA.b);
+                vec3_constant(&mut out, "MAT_FUSED_SILICA_C", dielectric::FUSED_SILICA.c);
+                out.push_str(include_str!("wgsl/bsdf/dispersion.wgsl"));
+            }
+            Piece::Dispersion => {
+                out.push_str("// No material disperses: the index is the same at every wavelength.\n");
+                out.push_str("fn mat_dispersion_ior(preset: f32, cauchy_b: f32, ior: f32, lambda_nm: f32) -> f32 {\n");
+                out.push_str("    return ior;\n}\n");
+            }
+        }
+    }
+
+    for &m in models {
+        out.push('\n');
+        let src = source(m);
+        params_wgsl(m.def(), &mut out)?;
+        for (name, v) in (src.constants)() {
+            constant(&mut out, name, v);
+        }
+        out.push_str(src.wgsl);
+    }
+
+    out.push_str("\n// ---- Material accessors and the per-model dispatch (generated).\n\n");
+    out.push_str("fn mat_header(m: u32, word: u32) -> u32 {\n");
+    out.push_str("    return material_data[m * MATERIAL_HEADER_WORDS + word];\n}\n\n");
+    let _ = writeln!(out, "fn material_flags(m: u32) -> u32 {{\n    return mat_header(m, {}u);\n}}\n", header::FLAGS);
+    let _ = writeln!(
+        out,
+        "fn material_two_sided(m: u32) -> bool {{\n    return (mat_header(m, {}u) & MAT_PROPERTY_TWO_SIDED) != 0u;\n}}\n",
+        header::PROPERTIES
+    );
+    let _ = writeln!(
+        out,
+        "fn material_dispersive(m: u32) -> bool {{\n    return (mat_header(m, {}u) & MAT_PROPERTY_DISPERSIVE) != 0u;\n}}\n",
+        header::PROPERTIES
+    );
+    for (name, word, enabled) in
+        [("emission", header::EMISSION, features.emission), ("absorption", header::ABSORPTION, features.absorption)]
+    {
+        let _ = writeln!(out, "fn material_{name}(m: u32, lambda: vec4f) -> vec4f {{");
+        if enabled {
+            let _ = writeln!(out, "    let offset = mat_header(m, {word}u);");
+            out.push_str("    if offset != MAT_NO_SPECTRUM {\n        return spectrum_at(offset, lambda);\n    }\n");
+        } else {
+            let _ = writeln!(out, "    // No material has {name}.");
+        }
+        out.push_str("    return vec4f(0.0);\n}\n\n");
+    }
+    let dispatch = |out: &mut String, signature: &str, suffix: &str, args: &str, zero: &str| {
+        let _ = writeln!(out, "fn bsdf_{suffix}({signature} {{");
+        let _ = writeln!(out, "    let base = mat_header(m, {}u);", header::PARAMS);
+        let _ = writeln!(out, "    switch mat_header(m, {}u) {{", header::MODEL);
+        for &model in models {
+            let n = model.def().name;
+            let _ = writeln!(
+                out,
+                "        case MAT_MODEL_{}: {{ return {n}_{suffix}(load_{n}(base), {args}); }}",
+                n.to_ascii_uppercase()
+            );
+        }
+        let _ = writeln!(out, "        default: {{}}\n    }}\n    return {zero};\n}}\n");
+    };
+    dispatch(&mut out, "m: u32, wo: vec3f, wi: vec3f, lambda: vec4f) -> vec4f", "eval", "wo, wi, lambda", "vec4f(0.0)");
+    dispatch(&mut out, "m: u32, wo: vec3f, wi: vec3f, lambda: vec4f) -> f32", "pdf", "wo, wi, lambda", "0.0");
+    dispatch(
+        &mut out,
+        "m: u32, wo: vec3f, uc: f32, u: vec2f, lambda: vec4f) -> BsdfSample",
+        "sample",
+        "wo, uc, u, lambda",
+        "mat_no_sample()",
+    );
+    Ok(out)
+}

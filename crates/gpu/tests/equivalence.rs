@@ -1,0 +1,447 @@
+//! CPU/GPU equivalence: the same scene and settings rendered by both backends agree
+//! statistically — per pixel-channel z = Δ/√(se_cpu² + se_gpu²) within the Šidák-corrected
+//! threshold at α = 0.01 for ≥ 99 % of pixel-channels, and image channel means within
+//! 1 % — on the Cornell box and on small scenes of glass and of every built-in BSDF
+//! model. Plus the GPU backend's errors. Skipped (with a message) where no adapter
+//! exists, unless `SPT_REQUIRE_GPU` is set.
+//!
+//! Each scene is rendered once on the CPU and twice on the GPU:
+//!
+//! * with the **same seed**: the GPU draws the CPU's own random stream (`Pcg32` per
+//!   pixel sample, in the same order), so its paths start as the CPU's and the two
+//!   images are strongly correlated — the channel means must agree within 1 % and ≥ 99 %
+//!   of pixel-channels pass the z-test (conservative for correlated images);
+//! * with **another seed**: independent estimates of the same image — ≥ 99 % of
+//!   pixel-channels pass the z-test, and the channel means agree within 4.5 standard
+//!   errors (at these sample counts a standard error is ~0.5 %, so "within 1 %" would be
+//!   a coin toss for independent images; the same-seed render makes it sharp).
+//!
+//! Russian roulette makes per-pixel sample distributions heavy-tailed (a few paths carry
+//! 1/(1−q) weights), which skews per-pixel z-tests at low sample counts; the renders
+//! here use `rr_depth` beyond `max_depth`, so no path is ever rouletted.
+
+use brdf::params::ParamValue;
+use glam::Vec3;
+use gpu::backend::SceneData;
+use gpu::{GpuBackend, GpuError};
+use spectral::spectrum::Colour;
+use std::path::Path;
+use std::time::Instant;
+use tracer::film::{Film, PixelStats};
+use tracer::integrator::{PathSettings, ShadingNormals};
+use tracer::material::{BuiltinModel, Material};
+use tracer::mesh::{quad, uv_sphere};
+use tracer::render::{Backend, CpuBackend, PreparedScene, RenderSettings};
+use tracer::scene::{Environment, Scene};
+use tracer::{Camera, SpectralMode};
+
+const CORNELL: &str =
+    concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/scenes/cornell-box/CornellBox-Original.obj");
+
+/// Two-sided normal quantile for a tail probability `p`, by bisection on erfc.
+fn z_threshold(p: f64) -> f64 {
+    let (mut lo, mut hi) = (0.0f64, 40.0f64);
+    for _ in 0..200 {
+        let mid = 0.5 * (lo + hi);
+        if erfc(mid / std::f64::consts::SQRT_2) > p { lo = mid } else { hi = mid }
+    }
+    0.5 * (lo + hi)
+}
+
+/// Complementary error function: Maclaurin series of erf below 2, Lentz's continued
+/// fraction above.
+fn erfc(x: f64) -> f64 {
+    if x < 0.0 {
+        return 2.0 - erfc(-x);
+    }
+    if x < 2.0 {
+        let (mut sum, mut term, x2) = (x, x, x * x);
+        for n in 1..200 {
+            term *= -x2 / n as f64;
+            let add = term / (2 * n + 1) as f64;
+            sum += add;
+            if add.abs() < 1e-17 {
+                break;
+            }
+        }
+        1.0 - 2.0 / std::f64::consts::PI.sqrt() * sum
+    } else {
+        let (mut f, mut c, mut d) = (x, x, 0.0);
+        for n in 1..300 {
+            let a = n as f64 / 2.0;
+            d = 1.0 / (x + a * d);
+            c = x + a / c;
+            let delta = c * d;
+            f *= delta;
+            if (delta - 1.0).abs() < 1e-16 {
+                break;
+            }
+        }
+        (-x * x).exp() / (f * std::f64::consts::PI.sqrt())
+    }
+}
+
+/// How two films compare.
+#[derive(Debug)]
+struct Comparison {
+    /// Fraction of pixel-channels with |z| within the threshold.
+    pass_fraction: f64,
+    /// The Šidák-corrected threshold.
+    z_max: f64,
+    /// The worst |z|.
+    worst: f64,
+    /// Image channel means, CPU and GPU.
+    means: [[f64; 3]; 2],
+    /// Relative differences of the channel means, GPU vs CPU.
+    mean_rel_diff: [f64; 3],
+    /// Standard error of each channel mean difference (independent images), relative to
+    /// the CPU mean.
+    mean_rel_se: [f64; 3],
+}
+
+impl Comparison {
+    fn summary(&self) -> String {
+        format!(
+            "{:.2} % of pixel-channels pass |z| ≤ {:.2} (worst {:.2}); channel means cpu {:.4?} gpu {:.4?}, difference \
+             {:+.3?} % (s.e. {:.3?} %)",
+            100.0 * self.pass_fraction,
+            self.z_max,
+            self.worst,
+            self.means[0],
+            self.means[1],
+            self.mean_rel_diff.map(|d| 100.0 * d),
+            self.mean_rel_se.map(|d| 100.0 * d),
+        )
+    }
+
+    /// What fails the same-seed criteria (≥ 99 % pass, means within 1 %), if anything.
+    fn same_seed_failures(&self) -> Option<String> {
+        let bad_mean = self.mean_rel_diff.iter().any(|d| d.abs() > 0.01);
+        (self.pass_fraction < 0.99 || bad_mean).then(|| format!("same seed: {}", self.summary()))
+    }
+
+    /// What fails the independent-seed criteria (≥ 99 % pass, means within 4.5 s.e.).
+    fn independent_failures(&self) -> Option<String> {
+        let bad_mean = (0..3).any(|c| self.mean_rel_diff[c].abs() > 4.5 * self.mean_rel_se[c]);
+        (self.pass_fraction < 0.99 || bad_mean).then(|| format!("other seed: {}", self.summary()))
+    }
+}
+
+fn compare(cpu: &Film, gpu: &Film) -> Comparison {
+    let n = cpu.pixels().len();
+    let tests = 3 * n;
+    let z_max = z_threshold(1.0 - (1.0 - 0.01f64).powf(1.0 / tests as f64));
+    let (mut pass, mut worst) = (0usize, 0.0f64);
+    let mut var_sum = [0.0f64; 3];
+    for (a, b) in cpu.pixels().iter().zip(gpu.pixels()) {
+        let (sa, sb) = (a.std_error(), b.std_error());
+        for c in 0..3 {
+            let se = (sa[c] * sa[c] + sb[c] * sb[c]).sqrt();
+            var_sum[c] += se * se;
+            let d = (a.mean[c] - b.mean[c]).abs();
+            let z = if se > 0.0 {
+                d / se
+            } else if d < 1e-6 {
+                0.0
+            } else {
+                f64::INFINITY
+            };
+            worst = worst.max(z);
+            pass += (z <= z_max) as usize;
+        }
+    }
+    let means = [cpu.channel_means(), gpu.channel_means()];
+    let mean_rel_diff = std::array::from_fn(|c| (means[1][c] - means[0][c]) / means[0][c]);
+    let mean_rel_se = std::array::from_fn(|c| var_sum[c].sqrt() / n as f64 / means[0][c]);
+    Comparison { pass_fraction: pass as f64 / tests as f64, z_max, worst, means, mean_rel_diff, mean_rel_se }
+}
+
+/// The films and rates of one scene: CPU, GPU with the same seed, GPU with another.
+struct Renders {
+    cpu: Film,
+    same: Film,
+    other: Film,
+    cpu_rate: f64,
+    gpu_rate: f64,
+}
+
+fn render_three(gpu: &GpuBackend, scene: &PreparedScene, s: &RenderSettings) -> Result<Renders, tracer::Error> {
+    let cpu_backend = CpuBackend::new(2)?;
+    let samples = (s.width * s.height * s.spp) as f64;
+    let timed = |b: &dyn Backend, s: &RenderSettings| -> Result<(Film, f64), tracer::Error> {
+        let start = Instant::now();
+        let (film, _) = tracer::render(b, scene, s, &|_| {})?;
+        Ok((film, samples / start.elapsed().as_secs_f64()))
+    };
+    // One sample first, so that the GPU timing excludes upload and compilation.
+    gpu.render_pass(scene, s, &mut Film::new(s.width, s.height), 0, 1, &|_| {})?;
+    let (cpu, cpu_rate) = timed(&cpu_backend, s)?;
+    let (same, gpu_rate) = timed(gpu, s)?;
+    let (other, _) = timed(gpu, &RenderSettings { seed: s.seed + 1000, ..s.clone() })?;
+    Ok(Renders { cpu, same, other, cpu_rate, gpu_rate })
+}
+
+/// Compares the renders of one scene; prints both comparisons and returns the failures.
+fn compare_all(name: &str, r: &Renders) -> Vec<String> {
+    let same = compare(&r.cpu, &r.same);
+    let other = compare(&r.cpu, &r.other);
+    println!("{name}, same seed: {}", same.summary());
+    println!("{name}, other seed: {}", other.summary());
+    println!(
+        "{name}: non-finite samples cpu {}, gpu {} and {}",
+        r.cpu.non_finite, r.same.non_finite, r.other.non_finite
+    );
+    [same.same_seed_failures(), other.independent_failures()]
+        .into_iter()
+        .flatten()
+        .map(|f| format!("{name}: {f}"))
+        .collect()
+}
+
+/// Depth 8 without Russian roulette (see the module docs).
+fn settings(width: u32, height: u32, spp: u32) -> RenderSettings {
+    RenderSettings {
+        width,
+        height,
+        spp,
+        seed: 7,
+        mode: SpectralMode::Hero,
+        path: PathSettings { max_depth: 8, rr_depth: 100, ..PathSettings::default() },
+        camera: None,
+    }
+}
+
+fn cornell() -> Option<PreparedScene> {
+    if !Path::new(CORNELL).exists() {
+        eprintln!("skipping: {CORNELL} is absent");
+        return None;
+    }
+    Some(PreparedScene::new(tracer::obj::load_obj(Path::new(CORNELL)).unwrap()).unwrap())
+}
+
+#[test]
+fn cornell_box_matches_the_cpu() {
+    let Some(ctx) = gpu::require_gpu() else { return };
+    let Some(scene) = cornell() else { return };
+    println!("adapter: {} ({:?})", ctx.info.name, ctx.info.backend);
+    let gpu = GpuBackend::with_context(ctx);
+    let s = settings(48, 48, 256);
+    let r = render_three(&gpu, &scene, &s).unwrap();
+    println!(
+        "Cornell box {}×{} at {} spp: cpu (2 threads) {:.0} samples/s, gpu {:.0} samples/s; shader compile and \
+         pipeline {:?}, scene preparation {:?}",
+        s.width,
+        s.height,
+        s.spp,
+        r.cpu_rate,
+        r.gpu_rate,
+        gpu.compile_time().unwrap(),
+        gpu.prepare_time().unwrap(),
+    );
+    let failures = compare_all("Cornell box", &r);
+    assert!(failures.is_empty(), "{failures:#?}");
+}
+
+/// A small preview scene: a low-polygon sphere of `material` (smooth normals, tangents
+/// along the parallels) on a coloured floor, under a warm area light and a dim sky.
+fn model_scene(material: Material) -> PreparedScene {
+    let mut scene = Scene::default();
+    scene.add(&uv_sphere(Vec3::new(0.0, 1.0, 0.0), 1.0, 10, 20, false), material);
+    let floor = Material::diffuse("floor", Colour::reflectance_rgb([0.6, 0.45, 0.3]).unwrap()).unwrap();
+    scene.add(&quad(Vec3::ZERO, Vec3::Y, 3.0), floor);
+    let lamp = Material::diffuse("lamp", Colour::constant(0.0))
+        .unwrap()
+        .with_emission(Colour::illuminant_rgb([5.0, 4.5, 3.5]).unwrap());
+    let mut light = quad(Vec3::new(-1.5, 4.0, 1.5), -Vec3::Y, 1.0);
+    light.normals.clear();
+    scene.add(&light, lamp);
+    scene.environment = Some(Environment { radiance: Colour::constant(0.3) });
+    scene.camera =
+        Some(Camera { eye: Vec3::new(0.0, 2.0, 3.6), center: Vec3::new(0.0, 0.9, 0.0), up: Vec3::Y, fov_y_deg: 40.0 });
+    PreparedScene::new(scene).unwrap()
+}
+
+/// Every built-in model at its defaults, plus a dispersive (N-BK7), absorbing glass.
+fn model_cases() -> Vec<(String, Material)> {
+    let mut v: Vec<_> = BuiltinModel::ALL
+        .into_iter()
+        .map(|m| (m.def().name.to_string(), Material::builtin(m.def().name, m, &[]).unwrap()))
+        .collect();
+    let glass = Material::builtin(
+        "dispersive glass",
+        BuiltinModel::Dielectric,
+        &[("dispersion", ParamValue::Scalar(2.0)), ("absorption", ParamValue::Rgb([0.4, 0.15, 0.05]))],
+    )
+    .unwrap();
+    v.push(("dispersive absorbing glass".into(), glass));
+    v
+}
+
+#[test]
+fn every_model_and_glass_match_the_cpu() {
+    let Some(ctx) = gpu::require_gpu() else { return };
+    let gpu = GpuBackend::with_context(ctx);
+    let s = settings(32, 32, 128);
+    let mut failures = Vec::new();
+    for (name, material) in model_cases() {
+        let scene = model_scene(material);
+        match render_three(&gpu, &scene, &s) {
+            Ok(r) => {
+                println!(
+                    "{name}: cpu {:.0} samples/s, gpu {:.0} samples/s, compile {:?}",
+                    r.cpu_rate,
+                    r.gpu_rate,
+                    gpu.compile_time().unwrap()
+                );
+                failures.extend(compare_all(&name, &r));
+            }
+            Err(e) => {
+                println!("{name}: {e}");
+                failures.push(format!("{name}: {e}"));
+            }
+        }
+    }
+    assert!(failures.is_empty(), "{failures:#?}");
+}
+
+/// The integrator's other settings, on glass with smooth normals (where the shading-normal
+/// modes differ most): same seed only, which replicates the CPU's paths closely enough
+/// that few samples suffice.
+#[test]
+fn path_settings_match_the_cpu() {
+    let Some(ctx) = gpu::require_gpu() else { return };
+    let gpu = GpuBackend::with_context(ctx);
+    let cpu = CpuBackend::new(2).unwrap();
+    let scene = model_scene(Material::dielectric("glass", 1.5).unwrap());
+    let base = settings(32, 32, 64);
+    let variants = [
+        ("face-forward normals", PathSettings { shading_normals: ShadingNormals::FaceForward, ..base.path }),
+        ("geometric normals", PathSettings { shading_normals: ShadingNormals::Geometric, ..base.path }),
+        ("unbounded depth, roulette from 3", PathSettings::default()),
+        ("depth 2, specular extension 3", PathSettings { max_depth: 2, specular_extension: 3, ..base.path }),
+    ];
+    let mut failures = Vec::new();
+    for (name, path) in variants {
+        let s = RenderSettings { path, ..base.clone() };
+        let (a, _) = tracer::render(&cpu, &scene, &s, &|_| {}).unwrap();
+        let (b, _) = tracer::render(&gpu, &scene, &s, &|_| {}).unwrap();
+        let c = compare(&a, &b);
+        println!("{name}: {}", c.summary());
+        failures.extend(c.same_seed_failures().map(|f| format!("{name}: {f}")));
+    }
+    assert!(failures.is_empty(), "{failures:#?}");
+}
+
+#[test]
+fn passes_bands_and_reruns_add_up() {
+    let Some(ctx) = gpu::require_gpu() else { return };
+    let Some(scene) = cornell() else { return };
+    // Accumulators limited to the largest scene buffer (at least 8 KiB): an image of
+    // twice that many rows and a bit is rendered in three bands.
+    let largest = SceneData::new(&scene).unwrap().buffer_sizes().iter().map(|b| b.1).max().unwrap();
+    let limit = largest.max(8 << 10);
+    let rows_per_band = ((limit - 16) / (32 * 32)) as u32;
+    let s = settings(32, 2 * rows_per_band + 3, 16);
+    let limits = wgpu::Limits { max_storage_buffer_binding_size: limit, ..ctx.limits.clone() };
+    let gpu = GpuBackend::with_context(ctx);
+    let (whole, _) = tracer::render(&gpu, &scene, &s, &|_| {}).unwrap();
+    let (again, _) = tracer::render(&gpu, &scene, &s, &|_| {}).unwrap();
+    assert_eq!(whole, again, "a seed must give the same image");
+    // Two passes of 8 samples: the same samples, grouped differently.
+    let mut split = Film::new(s.width, s.height);
+    let counted = std::sync::atomic::AtomicU64::new(0);
+    let progress = |n: u64| {
+        counted.fetch_add(n, std::sync::atomic::Ordering::Relaxed);
+    };
+    gpu.render_pass(&scene, &s, &mut split, 0, 8, &progress).unwrap();
+    gpu.render_pass(&scene, &s, &mut split, 8, 8, &progress).unwrap();
+    assert_eq!(counted.into_inner(), whole.samples());
+    assert_eq!(split.samples(), whole.samples());
+    for (a, b) in split.pixels().iter().zip(whole.pixels()) {
+        for c in 0..3 {
+            assert!((a.mean[c] - b.mean[c]).abs() <= 1e-5 * b.mean[c].abs().max(1e-3), "{a:?} vs {b:?}");
+            assert!((a.m2[c] - b.m2[c]).abs() <= 1e-4 * b.m2[c].abs().max(1e-3), "{a:?} vs {b:?}");
+        }
+    }
+    // Banded: the same pixels, bit for bit.
+    let ctx = gpu::require_gpu().unwrap();
+    let banded = GpuBackend::with_context(gpu::GpuContext { limits, ..ctx });
+    let (bands, stats) = tracer::render(&banded, &scene, &s, &|_| {}).unwrap();
+    assert_eq!(bands, whole, "bands of rows must not change the image");
+    assert!(stats.rays >= stats.samples, "{} rays for {} samples", stats.rays, stats.samples);
+}
+
+/// Long passes are read back and merged every `SAMPLES_PER_READBACK` samples: one pass
+/// of 1100 samples is, bit for bit, a pass of 1024 and one of 76.
+#[test]
+fn long_passes_are_merged_in_groups() {
+    let Some(ctx) = gpu::require_gpu() else { return };
+    let Some(scene) = cornell() else { return };
+    let gpu = GpuBackend::with_context(ctx);
+    let s = settings(8, 8, 1100);
+    assert_eq!(gpu::backend::SAMPLES_PER_READBACK, 1024);
+    let (one, _) = tracer::render(&gpu, &scene, &s, &|_| {}).unwrap();
+    let mut two = Film::new(8, 8);
+    gpu.render_pass(&scene, &s, &mut two, 0, 1024, &|_| {}).unwrap();
+    gpu.render_pass(&scene, &s, &mut two, 1024, 76, &|_| {}).unwrap();
+    assert_eq!(one, two);
+}
+
+#[test]
+fn unsupported_scenes_and_modes_are_clear_errors() {
+    // Analytic shapes: no device needed to find out.
+    let flake = PreparedScene::new(tracer::scenes::sphere_flake(0).unwrap()).unwrap();
+    match SceneData::new(&flake) {
+        Err(e @ GpuError::Unsupported(_)) => assert!(e.to_string().contains("analytic shapes"), "{e}"),
+        Err(e) => panic!("wrong error {e}"),
+        Ok(_) => panic!("a scene with spheres was accepted"),
+    }
+    let Some(ctx) = gpu::require_gpu() else { return };
+    let gpu = GpuBackend::with_context(ctx);
+    let s = settings(8, 8, 1);
+    let err = tracer::render(&gpu, &flake, &s, &|_| {}).unwrap_err().to_string();
+    assert!(err.contains("does not support analytic shapes"), "{err}");
+    let scene = model_scene(Material::diffuse("grey", Colour::constant(0.5)).unwrap());
+    for mode in [SpectralMode::Rgb, SpectralMode::Bins40] {
+        let err = tracer::render(&gpu, &scene, &RenderSettings { mode, ..s.clone() }, &|_| {}).unwrap_err().to_string();
+        assert!(err.contains(mode.name()) && err.contains("--backend cpu"), "{err}");
+        println!("{err}");
+    }
+}
+
+#[test]
+fn buffers_beyond_the_limits_are_named() {
+    let scene = model_scene(Material::diffuse("grey", Colour::constant(0.5)).unwrap());
+    let data = SceneData::new(&scene).unwrap();
+    assert!(data.check_limits(&wgpu::Limits::default()).is_ok());
+    let tiny = wgpu::Limits { max_storage_buffer_binding_size: 4096, ..wgpu::Limits::default() };
+    let err = data.check_limits(&tiny).unwrap_err();
+    let needed = data.buffer_sizes().iter().find(|(_, n)| *n > 4096).unwrap().1;
+    assert!(matches!(err, GpuError::Limit { limit_name: "max_storage_buffer_binding_size", limit: 4096, .. }), "{err}");
+    let msg = err.to_string();
+    assert!(msg.contains("max_storage_buffer_binding_size") && msg.contains(&needed.to_string()), "{msg}");
+    println!("{msg}");
+    let small = wgpu::Limits { max_buffer_size: 2048, ..wgpu::Limits::default() };
+    assert!(data.check_limits(&small).unwrap_err().to_string().contains("max_buffer_size"));
+    let few = wgpu::Limits { max_storage_buffers_per_shader_stage: 4, ..wgpu::Limits::default() };
+    assert!(data.check_limits(&few).unwrap_err().to_string().contains("max_storage_buffers_per_shader_stage"));
+}
+
+#[test]
+fn merging_pass_statistics_equals_adding_every_sample() {
+    let xs: Vec<[f32; 3]> = (0..37).map(|i| [(i as f32 * 0.37).sin(), (i * i % 11) as f32, 2.0]).collect();
+    let mut all = PixelStats::default();
+    xs.iter().for_each(|&x| all.add(x));
+    let mut merged = PixelStats::default();
+    for chunk in xs.chunks(10) {
+        let mut pass = PixelStats::default();
+        chunk.iter().for_each(|&x| pass.add(x));
+        merged.merge(&pass);
+    }
+    merged.merge(&PixelStats::default());
+    assert_eq!(merged.count, all.count);
+    for c in 0..3 {
+        assert!((merged.mean[c] - all.mean[c]).abs() < 1e-12);
+        assert!((merged.m2[c] - all.m2[c]).abs() < 1e-9 * all.m2[c].max(1.0));
+    }
+}

@@ -1,0 +1,541 @@
+//! The interactive viewer: a window showing the progressive image, refined frame by frame
+//! as the thesis's running mean, with a mouse and keyboard camera.
+//!
+//! [`run`] opens a window (winit) the size of the image and, every frame, asks the given
+//! [`Backend`] for `spp_per_frame` more samples of every pixel into one [`Film`], whose
+//! per-pixel running mean g_i = g_{i−1} + (f_i − g_{i−1})/i is shown through a CPU
+//! framebuffer (softbuffer, so it works under Xvfb and needs no GPU surface). Any camera
+//! move or window resize starts the accumulation again.
+//!
+//! Controls:
+//!
+//! | input | action |
+//! |---|---|
+//! | left drag | orbit around the centre (the scene follows the cursor) |
+//! | right or middle drag | pan (eye and centre move together) |
+//! | wheel, `+` / `-` | dolly towards / away from the centre (never past it) |
+//! | `W` `A` `S` `D` | fly forward, left, back, right (eye and centre move together) |
+//! | `Q` / `E` | fly down / up |
+//! | arrow keys | turn the view from the eye (left, right, up, down) |
+//! | Shift | five times larger fly steps and turns |
+//! | `R` | back to the starting camera |
+//! | `P` / `X` | save the current mean image as `spt-view-<spp>spp.png` (8-bit sRGB) / `.exr` (linear) in the working directory |
+//! | Escape, closing the window | quit |
+//!
+//! The title bar shows the samples per pixel so far and the sampling rate:
+//! `spt — <title> — <spp> spp, <M> M samples/s (<backend>)`.
+//!
+//! On Linux the viewer needs an X11 or Wayland display; on a machine without one run it
+//! under `xvfb-run`. X11 needs libX11, libX11-xcb, libxcb, libXcursor, libXrandr, libXi
+//! and libxkbcommon-x11 at run time (loaded when the window opens); on Debian
+//! `apt-get install libx11-6 libx11-xcb1 libxcb1 libxcursor1 libxrandr2 libxi6
+//! libxkbcommon0 libxkbcommon-x11-0` (plus `xvfb xauth` for `xvfb-run`).
+
+pub mod camera_control;
+
+use anyhow::{Context as _, anyhow};
+use camera_control::CameraControl;
+use std::num::NonZeroU32;
+use std::path::{Path, PathBuf};
+use std::rc::Rc;
+use std::time::{Duration, Instant};
+use tracer::film::Film;
+use tracer::render::{MAX_IMAGE_SIDE, PreparedScene};
+use tracer::{Backend, RenderSettings};
+use winit::application::ApplicationHandler;
+use winit::dpi::{PhysicalPosition, PhysicalSize};
+use winit::event::{ElementState, KeyEvent, MouseButton, MouseScrollDelta, WindowEvent};
+use winit::event_loop::{ActiveEventLoop, ControlFlow, EventLoop};
+use winit::keyboard::{Key, KeyCode, ModifiersState, NamedKey, PhysicalKey};
+use winit::window::{Window, WindowId};
+
+/// How the viewer window behaves.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct ViewerOptions {
+    /// Initial image (and window) width in pixels; a resize renders at the new size.
+    pub width: u32,
+    /// Initial image (and window) height in pixels.
+    pub height: u32,
+    /// Samples per pixel added every frame (at least 1).
+    pub spp_per_frame: u32,
+    /// Stop refining once this many samples per pixel have been taken (the window stays
+    /// open and a camera move starts again); `None` refines for ever.
+    pub max_spp: Option<u32>,
+    /// Quit after this many rendered frames (for tests and CI); also quits once refining
+    /// stops at `max_spp`. `None` runs until the window is closed.
+    pub exit_after_frames: Option<u32>,
+    /// Write the current image here (PNG or EXR by extension) when the viewer quits.
+    pub save_on_exit: Option<PathBuf>,
+    /// What the title bar calls the scene.
+    pub title: String,
+}
+
+impl Default for ViewerOptions {
+    fn default() -> Self {
+        Self {
+            width: 512,
+            height: 512,
+            spp_per_frame: 1,
+            max_spp: None,
+            exit_after_frames: None,
+            save_on_exit: None,
+            title: "scene".into(),
+        }
+    }
+}
+
+impl ViewerOptions {
+    /// Rejects an empty or oversized window and zero samples per frame.
+    pub fn validate(&self) -> anyhow::Result<()> {
+        for (name, v) in [("width", self.width), ("height", self.height)] {
+            if v == 0 || v > MAX_IMAGE_SIDE {
+                return Err(anyhow!("viewer {name} {v} must be between 1 and {MAX_IMAGE_SIDE}"));
+            }
+        }
+        if self.spp_per_frame == 0 {
+            return Err(anyhow!("samples per frame must be at least 1"));
+        }
+        if self.max_spp == Some(0) {
+            return Err(anyhow!("the viewer's maximum samples per pixel must be at least 1"));
+        }
+        Ok(())
+    }
+}
+
+/// Figures from a viewer session.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ViewStats {
+    /// Frames rendered (render passes), over all camera positions.
+    pub frames: u32,
+    /// Samples per pixel in the image shown at the end (since the last reset).
+    pub spp: u32,
+    /// Samples per second over all frames (samples taken / time spent rendering).
+    pub samples_per_second: f64,
+}
+
+/// Opens a window and shows `scene` refining progressively until the window is closed
+/// (or `options.exit_after_frames` frames were rendered).
+///
+/// The image size is `options`'s (then the window's), not `settings`'s; the camera starts
+/// at `scene.camera(settings)` and is then the user's; every other setting (seed,
+/// spectral mode, path depth) is used as given. Samples keep their indices across frames
+/// (`first_sample` advances), so with a still camera the image after n samples per pixel
+/// is the one a single n-spp render gives.
+///
+/// Fails with "cannot open a window: … (set DISPLAY, or run under xvfb-run)" when there
+/// is no display, and with the backend's error if a render pass fails. On Linux it may be
+/// called from any thread, once per process (winit allows one event loop per process).
+pub fn run(
+    scene: PreparedScene,
+    settings: RenderSettings,
+    backend: Box<dyn Backend>,
+    options: ViewerOptions,
+) -> anyhow::Result<ViewStats> {
+    options.validate()?;
+    let mut settings = RenderSettings { width: options.width, height: options.height, ..settings };
+    settings.spp = options.spp_per_frame;
+    let camera = scene.camera(&settings);
+    settings.validate().context("render settings")?;
+    camera.validate().map_err(|e| anyhow!("camera: {e}"))?;
+    let bounds = scene.scene.bounds();
+    let scene_size = if bounds.is_empty() { 1.0 } else { bounds.extent().length() };
+
+    let mut builder = EventLoop::builder();
+    #[cfg(target_os = "linux")]
+    winit::platform::x11::EventLoopBuilderExtX11::with_any_thread(&mut builder, true);
+    let event_loop = builder.build().map_err(no_window)?;
+
+    let mut app = App {
+        film: Film::new(options.width, options.height),
+        pixels: vec![0; options.width as usize * options.height as usize],
+        control: CameraControl::new(camera, scene_size),
+        scene,
+        settings,
+        backend,
+        options,
+        spp: 0,
+        dirty: false,
+        window: None,
+        surface: None,
+        input: Input::default(),
+        stats: Counters::default(),
+        title_at: None,
+        title_rate: 0.0,
+        error: None,
+    };
+    event_loop.run_app(&mut app).map_err(|e| anyhow!("the window's event loop failed: {e}"))?;
+    if let Some(e) = app.error.take() {
+        return Err(e);
+    }
+    if let Some(path) = app.options.save_on_exit.clone() {
+        app.save(&path)?;
+    }
+    Ok(ViewStats { frames: app.stats.frames, spp: app.spp, samples_per_second: app.stats.rate() })
+}
+
+fn no_window(e: impl std::fmt::Display) -> anyhow::Error {
+    // winit's OS errors read "os error at FILE:LINE: message"; keep the message.
+    let text = e.to_string();
+    let message = text.strip_prefix("os error at ").and_then(|r| r.split_once(": ")).map_or(text.as_str(), |(_, m)| m);
+    anyhow!("cannot open a window: {message} (set DISPLAY, or run under xvfb-run)")
+}
+
+/// Packs a film's mean (linear sRGB) into softbuffer's 0x00RRGGBB pixels, sRGB-encoded
+/// and clamped.
+fn film_to_pixels(film: &Film, out: &mut [u32]) {
+    for (o, p) in out.iter_mut().zip(film.pixels()) {
+        let [r, g, b] = p.mean.map(|v| spectral::srgb_to_u8(v as f32) as u32);
+        *o = (r << 16) | (g << 8) | b;
+    }
+}
+
+/// Mouse state between events.
+#[derive(Default)]
+struct Input {
+    orbiting: bool,
+    panning_right: bool,
+    panning_middle: bool,
+    cursor: Option<PhysicalPosition<f64>>,
+    modifiers: ModifiersState,
+}
+
+/// Totals over all frames, and since the title was last written.
+#[derive(Default)]
+struct Counters {
+    frames: u32,
+    samples: u64,
+    time: Duration,
+    recent_samples: u64,
+    recent_time: Duration,
+}
+
+impl Counters {
+    fn rate(&self) -> f64 {
+        if self.time.is_zero() { 0.0 } else { self.samples as f64 / self.time.as_secs_f64() }
+    }
+}
+
+/// How often the title bar is rewritten.
+const TITLE_INTERVAL: Duration = Duration::from_millis(250);
+
+struct App {
+    scene: PreparedScene,
+    settings: RenderSettings,
+    backend: Box<dyn Backend>,
+    options: ViewerOptions,
+    control: CameraControl,
+    film: Film,
+    /// Samples per pixel in `film`.
+    spp: u32,
+    /// The camera or size changed since `film` was started: reset before the next pass.
+    dirty: bool,
+    /// The image on screen, 0RGB.
+    pixels: Vec<u32>,
+    window: Option<Rc<Window>>,
+    surface: Option<softbuffer::Surface<Rc<Window>, Rc<Window>>>,
+    input: Input,
+    stats: Counters,
+    title_at: Option<Instant>,
+    title_rate: f64,
+    error: Option<anyhow::Error>,
+}
+
+impl App {
+    fn refining(&self) -> bool {
+        self.dirty || self.options.max_spp.is_none_or(|m| self.spp < m)
+    }
+
+    fn fail(&mut self, event_loop: &ActiveEventLoop, e: anyhow::Error) {
+        self.error.get_or_insert(e);
+        event_loop.exit();
+    }
+
+    fn open(&mut self, event_loop: &ActiveEventLoop) -> anyhow::Result<()> {
+        let attributes = Window::default_attributes()
+            .with_title(format!("spt — {}", self.options.title))
+            .with_inner_size(PhysicalSize::new(self.settings.width, self.settings.height));
+        let window = Rc::new(event_loop.create_window(attributes).map_err(no_window)?);
+        let context = softbuffer::Context::new(window.clone()).map_err(no_window)?;
+        let surface = softbuffer::Surface::new(&context, window.clone()).map_err(no_window)?;
+        self.window = Some(window.clone());
+        self.surface = Some(surface);
+        let size = window.inner_size();
+        self.resize(size.width, size.height);
+        window.request_redraw();
+        Ok(())
+    }
+
+    /// Renders at a new image size (from the next frame on).
+    fn resize(&mut self, width: u32, height: u32) {
+        let (width, height) = (width.min(MAX_IMAGE_SIDE), height.min(MAX_IMAGE_SIDE));
+        if width == 0 || height == 0 || (width, height) == (self.film.width(), self.film.height()) {
+            return;
+        }
+        self.settings.width = width;
+        self.settings.height = height;
+        self.film = Film::new(width, height);
+        self.pixels = vec![0; width as usize * height as usize];
+        self.spp = 0;
+        self.dirty = false;
+    }
+
+    /// Marks the accumulation stale after a camera move and asks for a frame.
+    fn moved(&mut self) {
+        self.dirty = true;
+        if let Some(w) = &self.window {
+            w.request_redraw();
+        }
+    }
+
+    /// Adds one frame's samples to the film and refreshes the displayed image.
+    fn render_pass(&mut self) -> anyhow::Result<()> {
+        if self.dirty {
+            self.film = Film::new(self.settings.width, self.settings.height);
+            self.spp = 0;
+            self.dirty = false;
+        }
+        let spp = match self.options.max_spp {
+            Some(max) => self.options.spp_per_frame.min(max - self.spp),
+            None => self.options.spp_per_frame.min(u32::MAX - self.spp),
+        };
+        if spp == 0 {
+            return Ok(());
+        }
+        let settings = RenderSettings { spp, camera: Some(self.control.camera()), ..self.settings.clone() };
+        let start = Instant::now();
+        self.backend
+            .render_pass(&self.scene, &settings, &mut self.film, self.spp, spp, &|_| {})
+            .with_context(|| format!("{} backend", self.backend.name()))?;
+        let elapsed = start.elapsed();
+        let samples = settings.width as u64 * settings.height as u64 * spp as u64;
+        self.spp += spp;
+        self.stats.frames += 1;
+        self.stats.samples += samples;
+        self.stats.time += elapsed;
+        self.stats.recent_samples += samples;
+        self.stats.recent_time += elapsed;
+        film_to_pixels(&self.film, &mut self.pixels);
+        Ok(())
+    }
+
+    fn update_title(&mut self, force: bool) {
+        let now = Instant::now();
+        if !force && self.title_at.is_some_and(|t| now - t < TITLE_INTERVAL) {
+            return;
+        }
+        if !self.stats.recent_time.is_zero() {
+            self.title_rate = self.stats.recent_samples as f64 / self.stats.recent_time.as_secs_f64();
+        }
+        self.stats.recent_samples = 0;
+        self.stats.recent_time = Duration::ZERO;
+        self.title_at = Some(now);
+        let done = if self.refining() { "" } else { " — done" };
+        let title = format!(
+            "spt — {} — {} spp, {:.2} M samples/s ({}){done}",
+            self.options.title,
+            self.spp,
+            self.title_rate / 1e6,
+            self.backend.name()
+        );
+        if let Some(w) = &self.window {
+            w.set_title(&title);
+        }
+    }
+
+    fn present(&mut self) -> anyhow::Result<()> {
+        let Some(surface) = self.surface.as_mut() else { return Ok(()) };
+        let (w, h) = (self.film.width(), self.film.height());
+        let (Some(nw), Some(nh)) = (NonZeroU32::new(w), NonZeroU32::new(h)) else { return Ok(()) };
+        surface.resize(nw, nh).map_err(|e| anyhow!("cannot resize the window's buffer: {e}"))?;
+        let mut buffer = surface.buffer_mut().map_err(|e| anyhow!("cannot draw in the window: {e}"))?;
+        if buffer.len() == self.pixels.len() {
+            buffer.copy_from_slice(&self.pixels);
+        }
+        buffer.present().map_err(|e| anyhow!("cannot draw in the window: {e}"))
+    }
+
+    fn redraw(&mut self, event_loop: &ActiveEventLoop) {
+        let refining = self.refining();
+        if refining && let Err(e) = self.render_pass() {
+            return self.fail(event_loop, e);
+        }
+        self.update_title(refining && !self.refining());
+        if let Err(e) = self.present() {
+            return self.fail(event_loop, e);
+        }
+        if let Some(n) = self.options.exit_after_frames
+            && (self.stats.frames >= n || !self.refining())
+        {
+            self.update_title(true);
+            event_loop.exit();
+            return;
+        }
+        if self.refining()
+            && let Some(w) = &self.window
+        {
+            w.request_redraw();
+        }
+    }
+
+    /// Writes the current mean image, PNG or EXR by extension.
+    fn save(&self, path: &Path) -> anyhow::Result<()> {
+        tracer::output::write_image(path, self.film.width(), self.film.height(), &self.film.mean_rgb())?;
+        eprintln!("saved {} ({} spp)", path.display(), self.spp);
+        Ok(())
+    }
+
+    fn key(&mut self, event_loop: &ActiveEventLoop, event: &KeyEvent) {
+        if event.state != ElementState::Pressed {
+            return;
+        }
+        let fast = if self.input.modifiers.shift_key() { 5.0 } else { 1.0 };
+        if let Key::Named(NamedKey::Escape) = event.logical_key {
+            event_loop.exit();
+            return;
+        }
+        if let PhysicalKey::Code(code) = event.physical_key
+            && self.physical_key(code, fast)
+        {
+            return self.moved();
+        }
+        if let Key::Character(s) = &event.logical_key {
+            match s.to_lowercase().as_str() {
+                "+" | "=" => {
+                    self.control.dolly(1.0);
+                    self.moved();
+                }
+                "-" | "_" => {
+                    self.control.dolly(-1.0);
+                    self.moved();
+                }
+                "r" => {
+                    self.control.reset();
+                    self.moved();
+                }
+                "p" | "x" if !event.repeat => {
+                    let ext = if s.eq_ignore_ascii_case("p") { "png" } else { "exr" };
+                    let path = PathBuf::from(format!("spt-view-{}spp.{ext}", self.spp));
+                    if let Err(e) = self.save(&path) {
+                        eprintln!("cannot save the image: {e:#}");
+                    }
+                }
+                _ => {}
+            }
+        }
+    }
+
+    /// Camera moves bound to key positions (WASD, QE, arrows, keypad ±), whatever the
+    /// layout; true if `code` is one.
+    fn physical_key(&mut self, code: KeyCode, fast: f32) -> bool {
+        let turn = 5f32.to_radians() * fast;
+        let c = &mut self.control;
+        match code {
+            KeyCode::KeyW => c.fly(fast, 0.0, 0.0),
+            KeyCode::KeyS => c.fly(-fast, 0.0, 0.0),
+            KeyCode::KeyA => c.fly(0.0, -fast, 0.0),
+            KeyCode::KeyD => c.fly(0.0, fast, 0.0),
+            KeyCode::KeyQ => c.fly(0.0, 0.0, -fast),
+            KeyCode::KeyE => c.fly(0.0, 0.0, fast),
+            KeyCode::ArrowLeft => c.turn(turn, 0.0),
+            KeyCode::ArrowRight => c.turn(-turn, 0.0),
+            KeyCode::ArrowUp => c.turn(0.0, turn),
+            KeyCode::ArrowDown => c.turn(0.0, -turn),
+            KeyCode::NumpadAdd => c.dolly(1.0),
+            KeyCode::NumpadSubtract => c.dolly(-1.0),
+            _ => return false,
+        }
+        true
+    }
+
+    fn cursor_moved(&mut self, position: PhysicalPosition<f64>) {
+        let last = self.input.cursor.replace(position);
+        let Some(last) = last else { return };
+        let height = self.film.height().max(1) as f64;
+        let (dx, dy) = (((position.x - last.x) / height) as f32, ((position.y - last.y) / height) as f32);
+        if dx == 0.0 && dy == 0.0 {
+            return;
+        }
+        if self.input.orbiting {
+            self.control.orbit(dx * std::f32::consts::PI, dy * std::f32::consts::PI);
+            self.moved();
+        } else if self.input.panning_right || self.input.panning_middle {
+            self.control.pan(dx, dy);
+            self.moved();
+        }
+    }
+}
+
+impl ApplicationHandler for App {
+    fn resumed(&mut self, event_loop: &ActiveEventLoop) {
+        event_loop.set_control_flow(ControlFlow::Wait);
+        if self.window.is_none()
+            && let Err(e) = self.open(event_loop)
+        {
+            self.fail(event_loop, e);
+        }
+    }
+
+    fn window_event(&mut self, event_loop: &ActiveEventLoop, _id: WindowId, event: WindowEvent) {
+        match event {
+            WindowEvent::CloseRequested => event_loop.exit(),
+            WindowEvent::Resized(size) => {
+                self.resize(size.width, size.height);
+                if let Some(w) = &self.window {
+                    w.request_redraw();
+                }
+            }
+            WindowEvent::RedrawRequested => self.redraw(event_loop),
+            WindowEvent::ModifiersChanged(m) => self.input.modifiers = m.state(),
+            WindowEvent::KeyboardInput { event, .. } => self.key(event_loop, &event),
+            WindowEvent::MouseInput { state, button, .. } => {
+                let pressed = state == ElementState::Pressed;
+                match button {
+                    MouseButton::Left => self.input.orbiting = pressed,
+                    MouseButton::Right => self.input.panning_right = pressed,
+                    MouseButton::Middle => self.input.panning_middle = pressed,
+                    _ => {}
+                }
+            }
+            WindowEvent::CursorMoved { position, .. } => self.cursor_moved(position),
+            WindowEvent::CursorLeft { .. } => self.input.cursor = None,
+            WindowEvent::MouseWheel { delta, .. } => {
+                let steps = match delta {
+                    MouseScrollDelta::LineDelta(_, y) => y,
+                    MouseScrollDelta::PixelDelta(p) => (p.y / 40.0) as f32,
+                };
+                if steps != 0.0 {
+                    self.control.dolly(steps);
+                    self.moved();
+                }
+            }
+            _ => {}
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use tracer::film::PixelStats;
+
+    #[test]
+    fn pixels_are_srgb_encoded_0rgb() {
+        let mut film = Film::new(3, 1);
+        let px = film.pixels_mut();
+        px[0] = PixelStats { count: 1, mean: [1.0, 0.0, 0.5], m2: [0.0; 3] };
+        px[1] = PixelStats { count: 1, mean: [7.0, -1.0, 0.0], m2: [0.0; 3] };
+        let mut out = vec![0xdead_beef; 3];
+        film_to_pixels(&film, &mut out);
+        let half = spectral::srgb_to_u8(0.5) as u32;
+        assert_eq!(half, 188);
+        assert_eq!(out, [0xff_00_00 | half, 0xff_00_00, 0]);
+    }
+
+    #[test]
+    fn options_are_checked() {
+        assert!(ViewerOptions::default().validate().is_ok());
+        assert!(ViewerOptions { width: 0, ..Default::default() }.validate().is_err());
+        assert!(ViewerOptions { spp_per_frame: 0, ..Default::default() }.validate().is_err());
+        assert!(ViewerOptions { max_spp: Some(0), ..Default::default() }.validate().is_err());
+    }
+}
