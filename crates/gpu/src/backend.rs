@@ -144,6 +144,20 @@ const HAS_ENVIRONMENT: u32 = 4;
 /// Floats per light in the tables: three vertices, cdf, pmf, material id (bits).
 const LIGHT_FLOATS: usize = 12;
 
+/// What the kernel's uniforms and the camera need of a scene besides its buffers, kept
+/// from [`SceneData`] into [`GpuScene`].
+#[derive(Clone, Copy, Debug)]
+struct SceneConstants {
+    node_count: u32,
+    light_count: u32,
+    lights_offset: u32,
+    env_offset: u32,
+    env_pmf: f32,
+    scene_flags: u32,
+    camera: Option<Camera>,
+    bounds: Aabb,
+}
+
 /// A scene as the flat arrays the kernel reads, built on the CPU; see the module docs.
 pub struct SceneData {
     nodes: Vec<BvhNode>,
@@ -154,14 +168,7 @@ pub struct SceneData {
     material_wgsl: String,
     material_data: Vec<u32>,
     spectra: Vec<f32>,
-    node_count: u32,
-    light_count: u32,
-    lights_offset: u32,
-    env_offset: u32,
-    env_pmf: f32,
-    scene_flags: u32,
-    camera: Option<Camera>,
-    bounds: Aabb,
+    constants: SceneConstants,
 }
 
 impl SceneData {
@@ -237,8 +244,18 @@ impl SceneData {
             tables.extend([cdf, pmfs[prim as usize], f32::from_bits(scene.material_ids[prim as usize])]);
         }
 
-        Ok(Self {
+        let constants = SceneConstants {
             node_count: bvh.nodes().len() as u32,
+            light_count: lights.prims().len() as u32,
+            lights_offset,
+            env_offset,
+            env_pmf: lights.environment_pmf(),
+            scene_flags,
+            camera: scene.camera,
+            bounds: scene.bounds(),
+        };
+        Ok(Self {
+            constants,
             nodes: bvh.nodes().to_vec(),
             tri_verts,
             tri_vidx,
@@ -247,13 +264,6 @@ impl SceneData {
             material_wgsl: kernel.wgsl,
             material_data: kernel.data,
             spectra: kernel.spectra,
-            light_count: lights.prims().len() as u32,
-            lights_offset,
-            env_offset,
-            env_pmf: lights.environment_pmf(),
-            scene_flags,
-            camera: scene.camera,
-            bounds: scene.bounds(),
         })
     }
 
@@ -329,14 +339,7 @@ pub struct GpuScene {
     /// Scene buffers in binding order 1–5, then the material buffers (10, 11).
     buffers: Vec<wgpu::Buffer>,
     film: Mutex<Option<FilmBuffers>>,
-    node_count: u32,
-    light_count: u32,
-    lights_offset: u32,
-    env_offset: u32,
-    env_pmf: f32,
-    scene_flags: u32,
-    camera: Option<Camera>,
-    bounds: Aabb,
+    constants: SceneConstants,
     compile_time: Duration,
     prepare_time: Duration,
 }
@@ -357,8 +360,8 @@ impl GpuScene {
     fn camera(&self, settings: &RenderSettings) -> Camera {
         settings
             .camera
-            .or(self.camera)
-            .unwrap_or_else(|| Camera::framing(&self.bounds, settings.width as f32 / settings.height as f32))
+            .or(self.constants.camera)
+            .unwrap_or_else(|| Camera::framing(&self.constants.bounds, settings.width as f32 / settings.height as f32))
     }
 }
 
@@ -526,14 +529,7 @@ impl GpuBackend {
             params,
             buffers,
             film: Mutex::new(None),
-            node_count: data.node_count,
-            light_count: data.light_count,
-            lights_offset: data.lights_offset,
-            env_offset: data.env_offset,
-            env_pmf: data.env_pmf,
-            scene_flags: data.scene_flags,
-            camera: data.camera,
-            bounds: data.bounds,
+            constants: data.constants,
             compile_time,
             prepare_time: start.elapsed(),
         })
@@ -610,17 +606,17 @@ impl GpuBackend {
             rr_depth: settings.path.rr_depth,
             specular_extension: settings.path.specular_extension,
             shading,
-            scene_flags: gpu.scene_flags,
-            node_count: gpu.node_count,
-            light_count: gpu.light_count,
-            env_pmf: gpu.env_pmf,
+            scene_flags: gpu.constants.scene_flags,
+            node_count: gpu.constants.node_count,
+            light_count: gpu.constants.light_count,
+            env_pmf: gpu.constants.env_pmf,
             eye: v4(eye),
             forward: v4(forward),
             right: v4(right),
             up: v4(up),
             inv_size: [1.0 / width as f32, 1.0 / height as f32],
-            lights_offset: gpu.lights_offset,
-            env_offset: gpu.env_offset,
+            lights_offset: gpu.constants.lights_offset,
+            env_offset: gpu.constants.env_offset,
             ..Params::default()
         };
 
