@@ -236,6 +236,56 @@ pub fn sidak(alpha: f64, tests: usize) -> f64 {
     1.0 - (1.0 - alpha).powf(1.0 / tests.max(1) as f64)
 }
 
+/// Complementary error function: erf's Maclaurin series below 2, Lentz's continued
+/// fraction above (relative error < 1e-10 over the range the z-tests use).
+pub fn erfc(x: f64) -> f64 {
+    if x < 0.0 {
+        return 2.0 - erfc(-x);
+    }
+    let sqrt_pi = std::f64::consts::PI.sqrt();
+    if x < 2.0 {
+        let (mut sum, mut term, x2) = (x, x, x * x);
+        for n in 1..200 {
+            term *= -x2 / n as f64;
+            let add = term / (2 * n + 1) as f64;
+            sum += add;
+            if add.abs() < 1e-17 {
+                break;
+            }
+        }
+        1.0 - 2.0 / sqrt_pi * sum
+    } else {
+        let (mut f, mut c, mut d) = (x, x, 0.0);
+        for n in 1..300 {
+            let a = n as f64 / 2.0;
+            d = 1.0 / (x + a * d);
+            c = x + a / c;
+            let delta = c * d;
+            f *= delta;
+            if (delta - 1.0).abs() < 1e-16 {
+                break;
+            }
+        }
+        (-x * x).exp() / (f * sqrt_pi)
+    }
+}
+
+/// Two-sided normal quantile: the |z| exceeded with probability `p`, by bisection on
+/// [`erfc`] (accurate to ~1e-6, plenty for thresholds).
+pub fn z_threshold(p: f64) -> f64 {
+    let (mut lo, mut hi) = (0.0f64, 40.0f64);
+    for _ in 0..200 {
+        let mid = 0.5 * (lo + hi);
+        if erfc(mid / std::f64::consts::SQRT_2) > p { lo = mid } else { hi = mid }
+    }
+    0.5 * (lo + hi)
+}
+
+/// The |z| threshold for `tests` two-sided z-tests at family-wise level `alpha` (Šidák).
+pub fn sidak_z(alpha: f64, tests: usize) -> f64 {
+    z_threshold(sidak(alpha, tests))
+}
+
 /// ∫ pdf(ωo, ω) dω over the sphere, by a stratified (cos θ, φ) grid of `n`² points.
 pub fn pdf_integral(bsdf: &impl Bsdf<1>, wo: Vec3, n: usize) -> f64 {
     let mut sum = 0.0;

@@ -1103,59 +1103,26 @@ mod tests {
         (tris, soa, ids, rs)
     }
 
-    #[test]
-    fn leaf_kernel_is_bit_identical_to_intersect_triangle() {
-        // Leaves of 1 to 9 triangles (1 to 3 groups of four, partial groups included), with
-        // degenerate and edge-sharing triangles, against sequential `intersect_triangle`.
+    /// Checks the SIMD leaf kernel for `test` against the scalar test applied to each
+    /// triangle in order, on leaves of 1 to 9 triangles (1 to 3 groups of four, partial
+    /// groups included) with degenerate and edge-sharing triangles: same hit, same
+    /// shrunk t_max, any-hit stopping at the first.
+    fn leaf_kernel_matches_the_scalar_test(test: TriangleTest, seed: u64) {
         let mut hits = 0;
         for n in 1..=9usize {
-            let (tris, soa, ids, rs) = leaf_fixture(n, n as u64, n as u64 ^ 5);
-            let tri: Vec<Triangle> = tris.iter().map(Triangle::new).collect();
-            for r in &rs {
-                for t_max in [r.t_max, 0.7] {
-                    for any_hit in [false, true] {
-                        let mut expected = None;
-                        let mut limit = t_max;
-                        for (i, t) in tri.iter().enumerate() {
-                            if let Some((t, u, v)) = intersect_triangle(t, r, limit) {
-                                limit = t;
-                                expected = Some(Hit { prim: 100 + i as u32, t, u, v });
-                                if any_hit {
-                                    break;
-                                }
-                            }
-                        }
-                        let (mut got, mut got_t_max) = (None, t_max);
-                        let leaf = Leaf { soa: &soa, ids: &ids };
-                        let found = if any_hit {
-                            Kernel::new(r).triangles::<true>(r, leaf, &mut got_t_max, &mut got)
-                        } else {
-                            Kernel::new(r).triangles::<false>(r, leaf, &mut got_t_max, &mut got)
-                        };
-                        assert_eq!(got, expected, "{n} triangles, {r:?}");
-                        assert_eq!(found, any_hit && expected.is_some());
-                        assert_eq!(got_t_max, limit);
-                        hits += found as usize;
-                    }
-                }
-            }
-        }
-        assert!(hits > 200, "{hits} any-hit hits");
-    }
-
-    #[test]
-    fn watertight_leaf_kernel_is_bit_identical_to_the_scalar_test() {
-        let mut hits = 0;
-        for n in 1..=9usize {
-            let (tris, soa, ids, rs) = leaf_fixture(n, n as u64 + 40, n as u64 ^ 9);
+            let (tris, soa, ids, rs) = leaf_fixture(n, n as u64 + seed, n as u64 ^ (5 + seed));
             for r in &rs {
                 let w = WatertightRay::new(r);
+                let scalar = |t: &[Vec3; 3], limit: f32| match test {
+                    TriangleTest::MollerTrumbore => intersect_triangle(&Triangle::new(t), r, limit),
+                    TriangleTest::Watertight => intersect_triangle_watertight(t, &w, limit),
+                };
                 for t_max in [r.t_max, 0.7] {
                     for any_hit in [false, true] {
                         let mut expected = None;
                         let mut limit = t_max;
                         for (i, t) in tris.iter().enumerate() {
-                            if let Some((t, u, v)) = intersect_triangle_watertight(t, &w, limit) {
+                            if let Some((t, u, v)) = scalar(t, limit) {
                                 limit = t;
                                 expected = Some(Hit { prim: 100 + i as u32, t, u, v });
                                 if any_hit {
@@ -1165,12 +1132,22 @@ mod tests {
                         }
                         let (mut got, mut got_t_max) = (None, t_max);
                         let leaf = Leaf { soa: &soa, ids: &ids };
-                        let found = if any_hit {
-                            Kernel::new(r).watertight::<true>(&w, leaf, &mut got_t_max, &mut got)
-                        } else {
-                            Kernel::new(r).watertight::<false>(&w, leaf, &mut got_t_max, &mut got)
+                        let k = Kernel::new(r);
+                        let found = match (test, any_hit) {
+                            (TriangleTest::MollerTrumbore, true) => {
+                                k.triangles::<true>(r, leaf, &mut got_t_max, &mut got)
+                            }
+                            (TriangleTest::MollerTrumbore, false) => {
+                                k.triangles::<false>(r, leaf, &mut got_t_max, &mut got)
+                            }
+                            (TriangleTest::Watertight, true) => {
+                                k.watertight::<true>(&w, leaf, &mut got_t_max, &mut got)
+                            }
+                            (TriangleTest::Watertight, false) => {
+                                k.watertight::<false>(&w, leaf, &mut got_t_max, &mut got)
+                            }
                         };
-                        assert_eq!(got, expected, "{n} triangles, {r:?}");
+                        assert_eq!(got, expected, "{test:?}, {n} triangles, {r:?}");
                         assert_eq!(found, any_hit && expected.is_some());
                         assert_eq!(got_t_max, limit);
                         hits += found as usize;
@@ -1178,7 +1155,17 @@ mod tests {
                 }
             }
         }
-        assert!(hits > 200, "{hits} any-hit hits");
+        assert!(hits > 200, "{test:?}: {hits} any-hit hits");
+    }
+
+    #[test]
+    fn leaf_kernel_is_bit_identical_to_intersect_triangle() {
+        leaf_kernel_matches_the_scalar_test(TriangleTest::MollerTrumbore, 0);
+    }
+
+    #[test]
+    fn watertight_leaf_kernel_is_bit_identical_to_the_scalar_test() {
+        leaf_kernel_matches_the_scalar_test(TriangleTest::Watertight, 40);
     }
 
     #[test]

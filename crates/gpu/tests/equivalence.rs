@@ -38,49 +38,6 @@ use tracer::{Camera, SpectralMode};
 const CORNELL: &str =
     concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/scenes/cornell-box/CornellBox-Original.obj");
 
-/// Two-sided normal quantile for a tail probability `p`, by bisection on erfc.
-fn z_threshold(p: f64) -> f64 {
-    let (mut lo, mut hi) = (0.0f64, 40.0f64);
-    for _ in 0..200 {
-        let mid = 0.5 * (lo + hi);
-        if erfc(mid / std::f64::consts::SQRT_2) > p { lo = mid } else { hi = mid }
-    }
-    0.5 * (lo + hi)
-}
-
-/// Complementary error function: Maclaurin series of erf below 2, Lentz's continued
-/// fraction above.
-fn erfc(x: f64) -> f64 {
-    if x < 0.0 {
-        return 2.0 - erfc(-x);
-    }
-    if x < 2.0 {
-        let (mut sum, mut term, x2) = (x, x, x * x);
-        for n in 1..200 {
-            term *= -x2 / n as f64;
-            let add = term / (2 * n + 1) as f64;
-            sum += add;
-            if add.abs() < 1e-17 {
-                break;
-            }
-        }
-        1.0 - 2.0 / std::f64::consts::PI.sqrt() * sum
-    } else {
-        let (mut f, mut c, mut d) = (x, x, 0.0);
-        for n in 1..300 {
-            let a = n as f64 / 2.0;
-            d = 1.0 / (x + a * d);
-            c = x + a / c;
-            let delta = c * d;
-            f *= delta;
-            if (delta - 1.0).abs() < 1e-16 {
-                break;
-            }
-        }
-        (-x * x).exp() / (f * std::f64::consts::PI.sqrt())
-    }
-}
-
 /// How two films compare.
 #[derive(Debug)]
 struct Comparison {
@@ -130,7 +87,7 @@ impl Comparison {
 fn compare(cpu: &Film, gpu: &Film) -> Comparison {
     let n = cpu.pixels().len();
     let tests = 3 * n;
-    let z_max = z_threshold(1.0 - (1.0 - 0.01f64).powf(1.0 / tests as f64));
+    let z_max = brdf::validation::sidak_z(0.01, tests);
     let (mut pass, mut worst) = (0usize, 0.0f64);
     let mut var_sum = [0.0f64; 3];
     for (a, b) in cpu.pixels().iter().zip(gpu.pixels()) {

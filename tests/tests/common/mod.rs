@@ -3,63 +3,7 @@
 
 use tracer::film::Film;
 
-/// Two-sided normal quantile for a tail probability `p` (|z| exceeded with prob. p),
-/// by bisection on erfc — accurate to ~1e-6, plenty for thresholds.
-pub fn z_threshold(p: f64) -> f64 {
-    let (mut lo, mut hi) = (0.0f64, 40.0f64);
-    for _ in 0..200 {
-        let mid = 0.5 * (lo + hi);
-        if erfc(mid / std::f64::consts::SQRT_2) > p { lo = mid } else { hi = mid }
-    }
-    0.5 * (lo + hi)
-}
-
-/// Complementary error function (W. J. Cody's rational approximations via libm-free
-/// continued fraction for large x, series for small x); |rel. error| < 1e-10 here.
-pub fn erfc(x: f64) -> f64 {
-    if x < 0.0 {
-        return 2.0 - erfc(-x);
-    }
-    if x < 2.0 {
-        // erf by its Maclaurin series.
-        let mut sum = x;
-        let mut term = x;
-        let x2 = x * x;
-        for n in 1..200 {
-            term *= -x2 / n as f64;
-            let add = term / (2 * n + 1) as f64;
-            sum += add;
-            if add.abs() < 1e-17 {
-                break;
-            }
-        }
-        1.0 - 2.0 / std::f64::consts::PI.sqrt() * sum
-    } else {
-        // Lentz's continued fraction.
-        let mut f = x;
-        let mut c = x;
-        let mut d = 0.0;
-        for n in 1..300 {
-            let a = n as f64 / 2.0;
-            d = x + a * d;
-            d = 1.0 / d;
-            c = x + a / c;
-            let delta = c * d;
-            f *= delta;
-            if (delta - 1.0).abs() < 1e-16 {
-                break;
-            }
-        }
-        (-x * x).exp() / (f * std::f64::consts::PI.sqrt())
-    }
-}
-
-/// The threshold for per-pixel-channel z-tests at family-wise level `alpha` over `tests`
-/// comparisons (Šidák correction).
-pub fn sidak_z(alpha: f64, tests: usize) -> f64 {
-    let per_test = 1.0 - (1.0 - alpha).powf(1.0 / tests as f64);
-    z_threshold(per_test)
-}
+pub use brdf::validation::{erfc, sidak_z, z_threshold};
 
 /// Result of comparing an image against expected values.
 #[derive(Debug)]
