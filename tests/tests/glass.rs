@@ -11,13 +11,13 @@ use spectral::SpectralMode;
 use spectral::spectrum::Colour;
 use tracer::camera::Camera;
 use tracer::integrator::PathSettings;
-use tracer::material::{BuiltinModel, Material};
+use tracer::material::{ModelId, Material};
 use tracer::mesh::{quad, uv_sphere};
 use tracer::render::PreparedScene;
 use tracer::{CpuBackend, Environment, RenderSettings, Scene};
 
 fn glass(params: &[(&str, ParamValue)]) -> Material {
-    Material::builtin("glass", BuiltinModel::Dielectric, params).unwrap()
+    Material::builtin("glass", ModelId::Dielectric, params).unwrap()
 }
 
 #[test]

@@ -9,14 +9,14 @@ use glam::Vec3;
 use spectral::SpectralMode;
 use spectral::spectrum::Colour;
 use tracer::camera::Camera;
-use tracer::material::{BuiltinModel, Material};
+use tracer::material::{ModelId, Material};
 use tracer::mesh::uv_sphere;
 use tracer::render::PreparedScene;
 use tracer::{CpuBackend, Environment, RenderSettings, Scene};
 
 #[test]
 fn no_model_is_brighter_than_the_furnace_or_produces_nan() {
-    for model in BuiltinModel::ALL {
+    for &model in ModelId::ALL {
         let mut scene = Scene::default();
         let material = Material::builtin(model.def().name, model, &[]).unwrap();
         scene.add(&uv_sphere(Vec3::ZERO, 1.0, 24, 48, false), material);

@@ -55,6 +55,25 @@ impl Frame {
     }
 }
 
+/// Mirror reflection of `wo` about the local normal (0, 0, 1).
+#[inline]
+pub fn reflect_local(wo: Vec3) -> Vec3 {
+    Vec3::new(-wo.x, -wo.y, wo.z)
+}
+
+/// Reflection of `w` about the unit vector `h` (a microfacet normal): 2 (w·h) h − w.
+#[inline]
+pub fn reflect(w: Vec3, h: Vec3) -> Vec3 {
+    2.0 * w.dot(h) * h - w
+}
+
+/// A local direction mirrored to the other side of the surface (z negated): models that
+/// act alike on both sides evaluate the upper side only.
+#[inline]
+pub fn flip_z(w: Vec3) -> Vec3 {
+    Vec3::new(w.x, w.y, -w.z)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -52,12 +52,6 @@ pub fn fresnel_schlick(cos_i: f32, eta: f32) -> f32 {
     r0 + (1.0 - r0) * (1.0 - c.min(1.0)).powi(5)
 }
 
-/// Mirror reflection of `wo` about the local normal (0, 0, 1).
-#[inline]
-pub fn reflect_local(wo: Vec3) -> Vec3 {
-    Vec3::new(-wo.x, -wo.y, wo.z)
-}
-
 /// Refraction of `wo` through the local interface z = 0 by Snell's law, where η is
 /// n_inside / n_outside and +z points outside. `None` under total internal reflection.
 #[inline]

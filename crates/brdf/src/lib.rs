@@ -12,11 +12,18 @@ pub mod frame;
 pub mod fresnel;
 pub mod models;
 pub mod params;
+pub mod registry;
 pub mod sampling;
 pub mod validation;
+pub mod wgsl;
 
 pub use frame::Frame;
-pub use models::{Dielectric, Lambert, Mirror};
+pub use models::{Dielectric, Lambert, Mirror, ModelBsdf, ModelId, ModelParams};
+pub use registry::Model;
+
+// For the exported macros, so that their users need not depend on glam and spectral.
+#[doc(hidden)]
+pub use {glam, spectral};
 
 use glam::{Vec2, Vec3};
 use spectral::SampledSpectrum;

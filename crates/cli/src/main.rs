@@ -167,8 +167,8 @@ fn run_sheet(args: SheetArgs) -> Result<()> {
     let mut sweep = match (&args.preset, &args.model, &args.param) {
         (Some(p), _, _) => sheet::preset(p)?,
         (None, Some(m), Some(param)) => sheet::Sweep {
-            model: tracer::material::BuiltinModel::by_name(m).ok_or_else(|| {
-                let known: Vec<&str> = tracer::material::BuiltinModel::ALL.iter().map(|b| b.def().name).collect();
+            model: tracer::material::ModelId::by_name(m).ok_or_else(|| {
+                let known: Vec<&str> = tracer::material::ModelId::ALL.iter().map(|b| b.def().name).collect();
                 anyhow::anyhow!("unknown model '{m}' (known: {})", known.join(", "))
             })?,
             fixed: vec![],

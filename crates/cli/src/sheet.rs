@@ -5,14 +5,14 @@ use anyhow::{Context, Result, anyhow, bail};
 use brdf::params::ParamValue;
 use font8x8::UnicodeFonts;
 use std::path::Path;
-use tracer::material::{BuiltinModel, Material};
+use tracer::material::{ModelId, Material};
 use tracer::render::PreparedScene;
 use tracer::{CpuBackend, RenderSettings, SpectralMode};
 
 /// One sweep: a model, fixed parameters, and the parameter(s) varied per cell.
 pub struct Sweep {
     /// The model.
-    pub model: BuiltinModel,
+    pub model: ModelId,
     /// Parameters held fixed.
     pub fixed: Vec<(String, f32)>,
     /// Per cell: the parameters that vary, with their values.
@@ -24,7 +24,7 @@ pub const PRESETS: &[&str] = &["schlick-r", "schlick-p", "sa-n", "sa-aniso"];
 
 /// A named preset sweep.
 pub fn preset(name: &str) -> Result<Sweep> {
-    let model = |n: &str| BuiltinModel::by_name(n).ok_or_else(|| anyhow!("model '{n}' is not built in"));
+    let model = |n: &str| ModelId::by_name(n).ok_or_else(|| anyhow!("model '{n}' is not built in"));
     let one = |p: &str, vs: &[f32]| vs.iter().map(|&v| vec![(p.to_string(), v)]).collect::<Vec<_>>();
     Ok(match name {
         // Figure 9.1: Schlick roughness from specular to diffuse.

@@ -17,13 +17,15 @@
 //! * the measured metal tables ([`Metal::table`]) of the presets the scene uses, copied
 //!   into `spectra` as they are.
 //!
-//! The per-model mathematics is hand-written WGSL, one file per model under
-//! `src/wgsl/bsdf/` (`lambert.wgsl`, …, named after [`ModelDef::name`]), each a line-by-line
-//! transcription of its `crates/brdf` model taking the generated params struct:
+//! The per-model mathematics is hand-written WGSL that each model ships beside its Rust
+//! file in `crates/brdf` ([`brdf::wgsl::ModelWgsl`], a line-by-line transcription taking
+//! the generated params struct:
 //! `fn <model>_eval(p: <Model>Params, wo: vec3f, wi: vec3f, lambda: vec4f) -> vec4f`,
-//! `<model>_pdf(…) -> f32` and `<model>_sample(p, wo, uc: f32, u: vec2f, lambda) -> BsdfSample`;
-//! shared pieces (Fresnel, cosine sampling, GGX, metals, dispersion) are compiled in only
-//! when a compiled model needs them. The GPU tests compare every one with the CPU.
+//! `<model>_pdf(…) -> f32` and `<model>_sample(p, wo, uc: f32, u: vec2f, lambda) -> BsdfSample`);
+//! shared pieces ([`WgslPiece`]: Fresnel, cosine sampling, GGX, metals, dispersion) are
+//! compiled in only when a compiled model needs them. This file names no model: it
+//! iterates the registry ([`ModelId::ALL`]), so a model registered in `brdf` runs on the
+//! GPU without a change here. The GPU tests compare every twin with its Rust model.
 //!
 //! # Specialisation
 //!
@@ -64,7 +66,7 @@
 //!
 //! | word | [`header`] | content |
 //! |---|---|---|
-//! | 0 | `MODEL` | the model's index in [`BuiltinModel::ALL`] ([`model_id`]) |
+//! | 0 | `MODEL` | the model's index in [`ModelId::ALL`] ([`model_id`]) |
 //! | 1 | `FLAGS` | [`ScatterFlags`] bits: the union of `bsdf.flags()` over 360–830 nm |
 //! | 2 | `PROPERTIES` | [`PROPERTY_TWO_SIDED`] \| [`PROPERTY_DISPERSIVE`] |
 //! | 3 | `EMISSION` | offset of the emitted radiance in `spectra`, or [`NO_SPECTRUM`] |
@@ -77,14 +79,15 @@
 //! metal presets in use. Neither vector is ever empty (a zero is stored if nothing else).
 
 use crate::GpuError;
-use brdf::models::{Ggx, Metal, ashikhmin, dielectric, schlick};
-use brdf::params::{ModelDef, ParamKind, ResolvedParams};
-use brdf::{Bsdf, ScatterFlags};
+use brdf::models::{Metal, MetalPreset};
+use brdf::params::{ModelDef, ParamChoice, ParamKind, Resolved, ResolvedParams};
+use brdf::wgsl::{COMMON, ModelWgsl, WgslPiece};
+use brdf::{Bsdf, ModelId, ScatterFlags};
 use spectral::SampledWavelengths;
 use spectral::spectrum::Colour;
 use std::collections::HashMap;
 use std::fmt::Write as _;
-use tracer::material::{BuiltinModel, Material, Surface};
+use tracer::material::{Material, Surface};
 
 /// The first wavelength (nm) of every table in `spectra`.
 pub const SPECTRUM_LAMBDA_MIN: f32 = spectral::sampled::LAMBDA_MIN;
@@ -139,9 +142,10 @@ impl Features {
     pub fn of(materials: &[Material]) -> Self {
         let mut metals = Vec::new();
         for m in materials {
-            if let Surface::Builtin { model, params } = &m.surface
-                && let Some((i, _)) = model.def().param("metal")
-                && let Some(metal) = Metal::from_param(params.scalar(i))
+            if let Some(params) = m.params()
+                && let Some((i, _)) = params.model().def().param("metal")
+                && let Resolved::Choice(k) = params.to_resolved().values()[i]
+                && let Some(metal) = MetalPreset::from_index(k).and_then(MetalPreset::metal)
                 && !metals.contains(&metal)
             {
                 metals.push(metal);
@@ -167,15 +171,35 @@ pub struct MaterialKernel {
     pub data: Vec<u32>,
     /// The `spectra` buffer (binding 11): 1-nm tables, then metal tables.
     pub spectra: Vec<f32>,
-    /// The models compiled in, in [`BuiltinModel::ALL`] order.
-    pub models: Vec<BuiltinModel>,
+    /// The models compiled in, in [`ModelId::ALL`] order.
+    pub models: Vec<ModelId>,
     /// The optional code paths compiled in.
     pub features: Features,
 }
 
-/// The id of `model` in `material_data` headers: its index in [`BuiltinModel::ALL`].
-pub fn model_id(model: BuiltinModel) -> u32 {
-    BuiltinModel::ALL.iter().position(|&m| m == model).expect("every model is in ALL") as u32
+/// The id of `model` in `material_data` headers: its index in [`ModelId::ALL`].
+pub fn model_id(model: ModelId) -> u32 {
+    model.index()
+}
+
+/// What the generator needs of a registered model: its id in `material_data` headers,
+/// its declaration and its WGSL twin. The generator compiles the models of any registry
+/// ([`ModelEntry::of`] for the built-in one; `tests/toy_model.rs` registers another).
+#[derive(Clone, Copy, Debug)]
+pub struct ModelEntry {
+    /// The id the headers carry (the model's index in its registry).
+    pub id: u32,
+    /// The parameter declaration.
+    pub def: &'static ModelDef,
+    /// The hand-written WGSL.
+    pub wgsl: &'static ModelWgsl,
+}
+
+impl ModelEntry {
+    /// The entry of a model of the built-in registry.
+    pub fn of(model: ModelId) -> Self {
+        Self { id: model_id(model), def: model.def(), wgsl: model.wgsl() }
+    }
 }
 
 /// The name of the generated params struct of a model: its declared name, capitalised,
@@ -242,16 +266,18 @@ impl SpectrumPool {
     }
 }
 
-/// One word per declared parameter of `def`, in declaration order: a scalar as its f32
-/// bits, a spectrum or coefficient as the offset of its table in `spectra` (added to
-/// `pool`). The layout `load_<model>` reads.
-fn pack_params(def: &ModelDef, params: &ResolvedParams, pool: &mut SpectrumPool) -> Result<Vec<u32>, GpuError> {
-    def.params
+/// One word per declared parameter, in declaration order: a scalar as its f32 bits, a
+/// spectrum or coefficient as the offset of its table in `spectra` (added to `pool`), a
+/// switch as 0 or 1, a choice as its index. The layout `load_<model>` reads.
+fn pack_params(params: &ResolvedParams, pool: &mut SpectrumPool) -> Result<Vec<u32>, GpuError> {
+    params
+        .values()
         .iter()
-        .enumerate()
-        .map(|(i, p)| match p.kind {
-            ParamKind::Scalar => Ok(params.scalar(i).to_bits()),
-            ParamKind::Spectrum | ParamKind::Coefficient => pool.colour(&params.colour(i)),
+        .map(|v| match v {
+            Resolved::Scalar(x) => Ok(x.to_bits()),
+            Resolved::Colour(c) => pool.colour(c),
+            Resolved::Bool(b) => Ok(u32::from(*b)),
+            Resolved::Choice(k) => Ok(*k),
         })
         .collect()
 }
@@ -275,25 +301,26 @@ pub fn generate(materials: &[Material], specialise: bool) -> Result<MaterialKern
     let mut builtin = Vec::with_capacity(materials.len());
     for m in materials {
         match &m.surface {
-            Surface::Builtin { model, params } => builtin.push((m, *model, params)),
+            Surface::Builtin(params) => builtin.push((m, params)),
             Surface::Custom { .. } => {
                 return Err(GpuError::Unsupported(format!("custom BSDF in material '{}'", m.name)));
             }
         }
     }
-    let models: Vec<BuiltinModel> = BuiltinModel::ALL
-        .into_iter()
-        .filter(|model| !specialise || builtin.iter().any(|(_, m, _)| m == model))
+    let models: Vec<ModelId> = ModelId::ALL
+        .iter()
+        .copied()
+        .filter(|&model| !specialise || builtin.iter().any(|(_, p)| p.model() == model))
         .collect();
     let features = if specialise { Features::of(materials) } else { Features::all() };
 
     let mut pool = SpectrumPool::default();
     let mut data = vec![0u32; materials.len() * HEADER_WORDS as usize];
-    for (k, (material, model, params)) in builtin.iter().enumerate() {
+    for (k, (material, params)) in builtin.iter().enumerate() {
         let h = k * HEADER_WORDS as usize;
         let base =
             u32::try_from(data.len()).map_err(|_| GpuError::Unsupported("over 2³² words of materials".into()))?;
-        data.extend(pack_params(model.def(), params, &mut pool)?);
+        data.extend(pack_params(&params.to_resolved(), &mut pool)?);
         let emission = match &material.emission {
             Some(c) => pool.colour(c)?,
             None => NO_SPECTRUM,
@@ -309,23 +336,23 @@ pub fn generate(materials: &[Material], specialise: bool) -> Result<MaterialKern
         if material.is_dispersive() {
             properties |= PROPERTY_DISPERSIVE;
         }
-        data[h + header::MODEL as usize] = model_id(*model);
+        data[h + header::MODEL as usize] = model_id(params.model());
         data[h + header::FLAGS as usize] = material_flags(material);
         data[h + header::PROPERTIES as usize] = properties;
         data[h + header::EMISSION as usize] = emission;
         data[h + header::ABSORPTION as usize] = absorption;
         data[h + header::PARAMS as usize] = base;
     }
-    let needs_metals = models.iter().any(|m| source(*m).needs.contains(&Piece::Metal));
+    let entries: Vec<ModelEntry> = models.iter().map(|&m| ModelEntry::of(m)).collect();
     let mut metal_tables = Vec::new();
-    if needs_metals {
+    if entries.iter().any(|e| e.wgsl.needs.contains(&WgslPiece::Metal)) {
         for &metal in &features.metals {
             let rows = metal.table();
             let offset = pool.raw(rows.iter().flatten().copied())?;
             metal_tables.push((metal, offset, rows.len() as u32));
         }
     }
-    let wgsl = wgsl(&models, &features, &metal_tables)?;
+    let wgsl = wgsl_for(&entries, &features, &metal_tables)?;
     let mut spectra = pool.data;
     if spectra.is_empty() {
         spectra.push(0.0);
@@ -334,57 +361,6 @@ pub fn generate(materials: &[Material], specialise: bool) -> Result<MaterialKern
         data.push(0);
     }
     Ok(MaterialKernel { wgsl, data, spectra, models, features })
-}
-
-/// Shared WGSL a model may need.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
-enum Piece {
-    Fresnel,
-    Sampling,
-    Ggx,
-    Metal,
-    Dispersion,
-}
-
-/// A model's hand-written WGSL and the pieces it calls.
-struct ModelSource {
-    wgsl: &'static str,
-    needs: &'static [Piece],
-    /// Constants of the CPU model that the WGSL uses.
-    constants: Constants,
-}
-
-/// (WGSL name, value) of the constants a model's WGSL shares with its CPU code.
-type Constants = fn() -> Vec<(&'static str, f32)>;
-
-fn no_constants() -> Vec<(&'static str, f32)> {
-    Vec::new()
-}
-
-fn source(model: BuiltinModel) -> ModelSource {
-    use BuiltinModel as B;
-    use Piece as P;
-    let (wgsl, needs, constants): (&'static str, &'static [Piece], Constants) = match model {
-        B::Lambert => (include_str!("wgsl/bsdf/lambert.wgsl"), &[P::Sampling], no_constants),
-        B::Mirror => (include_str!("wgsl/bsdf/mirror.wgsl"), &[], no_constants),
-        B::Dielectric => (include_str!("wgsl/bsdf/dielectric.wgsl"), &[P::Fresnel, P::Dispersion], no_constants),
-        B::Conductor => (include_str!("wgsl/bsdf/conductor.wgsl"), &[P::Fresnel, P::Metal], no_constants),
-        B::RoughConductor => {
-            (include_str!("wgsl/bsdf/roughconductor.wgsl"), &[P::Fresnel, P::Metal, P::Ggx], no_constants)
-        }
-        B::RoughDielectric => (include_str!("wgsl/bsdf/roughdielectric.wgsl"), &[P::Fresnel, P::Ggx], no_constants),
-        B::OrenNayar => (include_str!("wgsl/bsdf/orennayar.wgsl"), &[P::Sampling], no_constants),
-        B::Schlick => (include_str!("wgsl/bsdf/schlick.wgsl"), &[P::Sampling], || {
-            vec![
-                ("MAT_SCHLICK_MIN_ROUGHNESS", schlick::MIN_ROUGHNESS),
-                ("MAT_SCHLICK_MIN_ISOTROPY", schlick::MIN_ISOTROPY),
-            ]
-        }),
-        B::ShirleyAshikhmin => (include_str!("wgsl/bsdf/ashikhmin.wgsl"), &[P::Sampling], || {
-            vec![("MAT_ASHIKHMIN_MAX_EXPONENT", ashikhmin::MAX_EXPONENT)]
-        }),
-    };
-    ModelSource { wgsl, needs, constants }
 }
 
 /// An f32 as a WGSL literal that parses back to the same value.
@@ -399,7 +375,8 @@ fn is_identifier(s: &str) -> bool {
         && chars.all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || c == '_')
 }
 
-/// The generated struct and loader of one model.
+/// The generated struct and loader of one model: a field per declared parameter, named
+/// and typed by its declaration.
 fn params_wgsl(def: &ModelDef, out: &mut String) -> Result<(), GpuError> {
     let bad = |what: &str| GpuError::Shader(format!("model '{}': {what} is not a WGSL identifier", def.name));
     if !is_identifier(def.name) {
@@ -408,51 +385,42 @@ fn params_wgsl(def: &ModelDef, out: &mut String) -> Result<(), GpuError> {
     let name = params_struct_name(def);
     let _ = writeln!(out, "// {}: {}", def.name, def.doc.replace('\n', " "));
     let _ = writeln!(out, "struct {name} {{");
-    for p in def.params {
+    let mut fields = Vec::with_capacity(def.params.len());
+    for (i, p) in def.params.iter().enumerate() {
         if !is_identifier(p.name) {
             return Err(bad(&format!("parameter '{}'", p.name)));
         }
-        let (ty, kind) = match p.kind {
-            ParamKind::Scalar => ("f32", "scalar"),
-            ParamKind::Spectrum => ("u32", "spectrum offset"),
-            ParamKind::Coefficient => ("u32", "coefficient spectrum offset"),
+        let word = format!("material_data[base + {i}u]");
+        let (ty, kind, load) = match p.kind {
+            ParamKind::Scalar => ("f32", "scalar".to_string(), format!("bitcast<f32>({word})")),
+            ParamKind::Spectrum => ("u32", "spectrum offset".to_string(), word),
+            ParamKind::Coefficient => ("u32", "coefficient spectrum offset".to_string(), word),
+            ParamKind::Bool => ("bool", "switch".to_string(), format!("{word} != 0u")),
+            ParamKind::Choice(names) => {
+                let options = names.iter().enumerate().map(|(k, n)| format!("{k} {n}")).collect::<Vec<_>>();
+                ("u32", format!("choice ({})", options.join(", ")), word)
+            }
         };
         let _ = writeln!(out, "    {}: {ty}, // {kind}: {}", p.name, p.doc.replace('\n', " "));
+        fields.push(load);
     }
     let _ = writeln!(out, "}}\n");
-    let fields: Vec<String> = def
-        .params
-        .iter()
-        .enumerate()
-        .map(|(i, p)| match p.kind {
-            ParamKind::Scalar => format!("bitcast<f32>(material_data[base + {i}u])"),
-            ParamKind::Spectrum | ParamKind::Coefficient => format!("material_data[base + {i}u]"),
-        })
-        .collect();
     let _ = writeln!(out, "fn load_{}(base: u32) -> {name} {{", def.name);
     let _ = writeln!(out, "    return {name}({});", fields.join(", "));
     let _ = writeln!(out, "}}\n");
     Ok(())
 }
 
-fn constant(out: &mut String, name: &str, v: f32) {
-    let _ = writeln!(out, "const {name}: f32 = {};", f32_literal(v));
-}
-
-fn vec3_constant(out: &mut String, name: &str, v: [f32; 3]) {
-    let _ = writeln!(
-        out,
-        "const {name}: vec3f = vec3f({}, {}, {});",
-        f32_literal(v[0]),
-        f32_literal(v[1]),
-        f32_literal(v[2])
-    );
-}
-
-/// The whole materials WGSL.
-fn wgsl(models: &[BuiltinModel], features: &Features, metal_tables: &[(Metal, u32, u32)]) -> Result<String, GpuError> {
+/// The materials WGSL for `models` (any registry's; ids must be distinct), with the
+/// optional code paths `features` selects and the metal tables' places in `spectra`
+/// ((preset, offset, rows)).
+pub fn wgsl_for(
+    models: &[ModelEntry],
+    features: &Features,
+    metal_tables: &[(Metal, u32, u32)],
+) -> Result<String, GpuError> {
     let mut out = String::new();
-    let names: Vec<&str> = models.iter().map(|m| m.def().name).collect();
+    let names: Vec<&str> = models.iter().map(|m| m.def.name).collect();
     let _ = writeln!(out, "// ---- Materials: generated by gpu::materials from brdf's parameter definitions.");
     let _ = writeln!(
         out,
@@ -482,29 +450,26 @@ fn wgsl(models: &[BuiltinModel], features: &Features, metal_tables: &[(Metal, u3
     let _ = writeln!(out, "const MAT_NO_SPECTRUM: u32 = {NO_SPECTRUM}u;");
     let _ = writeln!(out, "const MAT_PROPERTY_TWO_SIDED: u32 = {PROPERTY_TWO_SIDED}u;");
     let _ = writeln!(out, "const MAT_PROPERTY_DISPERSIVE: u32 = {PROPERTY_DISPERSIVE}u;");
-    for &m in models {
-        let _ = writeln!(out, "const MAT_MODEL_{}: u32 = {}u;", m.def().name.to_ascii_uppercase(), model_id(m));
+    for m in models {
+        let _ = writeln!(out, "const MAT_MODEL_{}: u32 = {}u;", m.def.name.to_ascii_uppercase(), m.id);
     }
     out.push('\n');
-    out.push_str(include_str!("wgsl/bsdf/common.wgsl"));
+    out.push_str(COMMON);
 
-    let mut pieces: Vec<Piece> = models.iter().flat_map(|m| source(*m).needs.iter().copied()).collect();
+    let mut pieces: Vec<WgslPiece> = models.iter().flat_map(|m| m.wgsl.needs.iter().copied()).collect();
     pieces.sort();
     pieces.dedup();
     for piece in pieces {
         out.push('\n');
+        for c in piece.constants() {
+            let _ = writeln!(out, "{}", c.declaration());
+        }
         match piece {
-            Piece::Fresnel => out.push_str(include_str!("wgsl/bsdf/fresnel.wgsl")),
-            Piece::Sampling => out.push_str(include_str!("wgsl/bsdf/sampling.wgsl")),
-            Piece::Ggx => {
-                constant(&mut out, "MAT_GGX_ALPHA_MIN", Ggx::ALPHA_MIN);
-                out.push_str(include_str!("wgsl/bsdf/ggx.wgsl"));
-            }
-            Piece::Metal => {
+            WgslPiece::Metal => {
                 out.push_str("// (offset, rows) of a metal preset's table in `spectra` (generated).\n");
                 out.push_str("fn mat_metal_table(id: u32) -> vec2u {\n    switch id {\n");
                 for (metal, offset, rows) in metal_tables {
-                    let id = Metal::ALL.iter().position(|m| m == metal).expect("in ALL") + 1;
+                    let id = MetalPreset::ALL.iter().position(|p| p.metal() == Some(*metal)).expect("a preset");
                     let _ = writeln!(
                         out,
                         "        case {id}u: {{ return vec2u({offset}u, {rows}u); }} // {}",
@@ -512,32 +477,24 @@ fn wgsl(models: &[BuiltinModel], features: &Features, metal_tables: &[(Metal, u3
                     );
                 }
                 out.push_str("        default: {}\n    }\n    return vec2u(0u, 0u);\n}\n\n");
-                out.push_str(include_str!("wgsl/bsdf/metal.wgsl"));
+                out.push_str(piece.source());
             }
-            Piece::Dispersion if features.dispersion => {
-                constant(&mut out, "MAT_LAMBDA_D", dielectric::LAMBDA_D);
-                vec3_constant(&mut out, "MAT_BK7_B", dielectric::BK7.b);
-                vec3_constant(&mut out, "MAT_BK7_C", dielectric::BK7.c);
-                vec3_constant(&mut out, "MAT_FUSED_SILICA_B", dielectric::FUSED_SILICA.b);
-                vec3_constant(&mut out, "MAT_FUSED_SILICA_C", dielectric::FUSED_SILICA.c);
-                out.push_str(include_str!("wgsl/bsdf/dispersion.wgsl"));
-            }
-            Piece::Dispersion => {
+            WgslPiece::Dispersion if !features.dispersion => {
                 out.push_str("// No material disperses: the index is the same at every wavelength.\n");
-                out.push_str("fn mat_dispersion_ior(preset: f32, cauchy_b: f32, ior: f32, lambda_nm: f32) -> f32 {\n");
+                out.push_str("fn mat_dispersion_ior(preset: u32, cauchy_b: f32, ior: f32, lambda_nm: f32) -> f32 {\n");
                 out.push_str("    return ior;\n}\n");
             }
+            _ => out.push_str(piece.source()),
         }
     }
 
-    for &m in models {
+    for m in models {
         out.push('\n');
-        let src = source(m);
-        params_wgsl(m.def(), &mut out)?;
-        for (name, v) in (src.constants)() {
-            constant(&mut out, name, v);
+        params_wgsl(m.def, &mut out)?;
+        for c in m.wgsl.constants {
+            let _ = writeln!(out, "{}", c.declaration());
         }
-        out.push_str(src.wgsl);
+        out.push_str(m.wgsl.source);
     }
 
     out.push_str("\n// ---- Material accessors and the per-model dispatch (generated).\n\n");
@@ -570,8 +527,8 @@ fn wgsl(models: &[BuiltinModel], features: &Features, metal_tables: &[(Metal, u3
         let _ = writeln!(out, "fn bsdf_{suffix}({signature} {{");
         let _ = writeln!(out, "    let base = mat_header(m, {}u);", header::PARAMS);
         let _ = writeln!(out, "    switch mat_header(m, {}u) {{", header::MODEL);
-        for &model in models {
-            let n = model.def().name;
+        for m in models {
+            let n = m.def.name;
             let _ = writeln!(
                 out,
                 "        case MAT_MODEL_{}: {{ return {n}_{suffix}(load_{n}(base), {args}); }}",

@@ -29,7 +29,7 @@ use std::path::Path;
 use std::time::Instant;
 use tracer::film::{Film, PixelStats};
 use tracer::integrator::{PathSettings, ShadingNormals};
-use tracer::material::{BuiltinModel, Material};
+use tracer::material::{ModelId, Material};
 use tracer::mesh::{quad, uv_sphere};
 use tracer::render::{Backend, CpuBackend, PreparedScene, RenderSettings};
 use tracer::scene::{Environment, Scene};
@@ -220,13 +220,14 @@ fn model_scene(material: Material) -> PreparedScene {
 
 /// Every built-in model at its defaults, plus a dispersive (N-BK7), absorbing glass.
 fn model_cases() -> Vec<(String, Material)> {
-    let mut v: Vec<_> = BuiltinModel::ALL
-        .into_iter()
+    let mut v: Vec<_> = ModelId::ALL
+        .iter()
+        .copied()
         .map(|m| (m.def().name.to_string(), Material::builtin(m.def().name, m, &[]).unwrap()))
         .collect();
     let glass = Material::builtin(
         "dispersive glass",
-        BuiltinModel::Dielectric,
+        ModelId::Dielectric,
         &[("dispersion", ParamValue::Scalar(2.0)), ("absorption", ParamValue::Rgb([0.4, 0.15, 0.05]))],
     )
     .unwrap();

@@ -27,14 +27,15 @@
 //! not count as an error in f. Flags, and whether a sample exists, must agree exactly.
 
 use brdf::Bsdf;
-use brdf::params::{ParamKind, ParamValue};
+use brdf::params::{ParamKind, ParamValue, ResolvedParams};
 use glam::{Vec2, Vec3};
 use gpu::materials::{self, MaterialKernel, generate};
 use spectral::SampledWavelengths;
 use spectral::spectrum::{Colour, Spectrum, TabulatedSpectrum};
 use std::collections::BTreeMap;
 use std::time::Instant;
-use tracer::material::{BuiltinModel, Material, Surface};
+use brdf::params::Resolved;
+use tracer::material::{Material, ModelId};
 use wgpu::util::DeviceExt;
 
 /// Relative tolerance of every GPU–CPU comparison.
@@ -54,7 +55,7 @@ fn lambert(name: &str, rgb: [f32; 3]) -> Material {
     Material::diffuse(name, Colour::reflectance_rgb(rgb).unwrap()).unwrap()
 }
 
-fn builtin(name: &str, model: BuiltinModel, params: &[(&str, ParamValue)]) -> Material {
+fn builtin(name: &str, model: ModelId, params: &[(&str, ParamValue)]) -> Material {
     Material::builtin(name, model, params).unwrap_or_else(|e| panic!("{name}: {e}"))
 }
 
@@ -65,14 +66,14 @@ fn builtin(name: &str, model: BuiltinModel, params: &[(&str, ParamValue)]) -> Ma
 fn test_materials() -> Vec<Material> {
     const COLOURS: [[f32; 3]; 3] = [[0.8, 0.35, 0.1], [0.15, 0.6, 0.9], [0.3, 0.9, 0.25]];
     let mut out = Vec::new();
-    for model in BuiltinModel::ALL {
+    for &model in ModelId::ALL {
         let def = model.def();
         out.push(builtin(&format!("{} defaults", def.name), model, &[]));
         let coloured: Vec<(&str, ParamValue)> = def
             .params
             .iter()
             .enumerate()
-            .filter(|(_, p)| p.kind != ParamKind::Scalar)
+            .filter(|(_, p)| p.kind.is_colour())
             .map(|(i, p)| {
                 let v = match p.kind {
                     ParamKind::Coefficient => ParamValue::Rgb([0.5, 1.0, 2.0]),
@@ -96,9 +97,9 @@ fn test_materials() -> Vec<Material> {
             }
         }
     }
-    use BuiltinModel as B;
+    use ModelId as B;
     use ParamValue::{Rgb, Scalar};
-    type Extra = (&'static str, BuiltinModel, Vec<(&'static str, ParamValue)>);
+    type Extra = (&'static str, ModelId, Vec<(&'static str, ParamValue)>);
     let extras: Vec<Extra> = vec![
         ("gold", B::Conductor, vec![("metal", Scalar(1.0))]),
         ("silver", B::Conductor, vec![("metal", Scalar(2.0)), ("tint", Rgb([0.9, 0.8, 0.7]))]),
@@ -133,13 +134,13 @@ fn test_materials() -> Vec<Material> {
             ],
         ),
         ("schlick rough", B::Schlick, vec![("roughness", Scalar(0.7)), ("isotropy", Scalar(0.5))]),
-        ("sa aniso", B::ShirleyAshikhmin, vec![("nu", Scalar(10.0)), ("nv", Scalar(1000.0))]),
+        ("sa aniso", B::Ashikhmin, vec![("nu", Scalar(10.0)), ("nv", Scalar(1000.0))]),
         (
             "sa sharp",
-            B::ShirleyAshikhmin,
+            B::Ashikhmin,
             vec![("nu", Scalar(1.0e4)), ("nv", Scalar(10.0)), ("rs", Scalar(0.9)), ("rd", Scalar(0.0))],
         ),
-        ("sa metal", B::ShirleyAshikhmin, vec![("rs", Scalar(1.0)), ("rd", Rgb([0.2, 0.5, 0.8]))]),
+        ("sa metal", B::Ashikhmin, vec![("rs", Scalar(1.0)), ("rd", Rgb([0.2, 0.5, 0.8]))]),
         ("oren-nayar rough", B::OrenNayar, vec![("sigma", Scalar(1.2)), ("reflectance", Rgb([0.9, 0.5, 0.3]))]),
     ];
     for (name, model, params) in extras {
@@ -156,29 +157,22 @@ fn tabulated(c: &Colour) -> Colour {
 }
 
 fn reference(m: &Material) -> Material {
-    let Surface::Builtin { model, params } = &m.surface else { panic!("custom") };
-    let def = model.def();
-    let given: Vec<(&str, ParamValue)> = def
-        .params
+    let params = m.params().expect("a registered model");
+    let values = params
+        .to_resolved()
+        .values()
         .iter()
-        .enumerate()
-        .map(|(i, p)| match p.kind {
-            ParamKind::Scalar => (p.name, ParamValue::Scalar(params.scalar(i))),
-            _ => (p.name, ParamValue::Colour(tabulated(&params.colour(i)))),
+        .map(|v| match v {
+            Resolved::Colour(c) => Resolved::Colour(tabulated(c)),
+            other => other.clone(),
         })
         .collect();
-    Material {
-        name: m.name.clone(),
-        surface: Surface::Builtin { model: *model, params: def.resolve(&m.name, &given).unwrap() },
-        emission: m.emission.as_ref().map(tabulated),
-    }
+    let params = params.model().from_resolved(&ResolvedParams::from_values(values));
+    Material { emission: m.emission.as_ref().map(tabulated), ..Material::from_params(&m.name, params) }
 }
 
-fn model_of(m: &Material) -> BuiltinModel {
-    match &m.surface {
-        Surface::Builtin { model, .. } => *model,
-        Surface::Custom { .. } => panic!("custom"),
-    }
+fn model_of(m: &Material) -> ModelId {
+    m.model().expect("a registered model")
 }
 
 fn dir(theta_deg: f32, phi_deg: f32) -> Vec3 {
@@ -265,11 +259,11 @@ fn function_names(module: &naga::Module) -> Vec<String> {
 fn a_lambert_only_scene_compiles_only_lambert() {
     let scene = [lambert("white", [0.8; 3]), lambert("red", [0.8, 0.1, 0.1])];
     let k = generate(&scene, true).unwrap();
-    assert_eq!(k.models, vec![BuiltinModel::Lambert]);
+    assert_eq!(k.models, vec![ModelId::Lambert]);
     let module = naga_validate(&k.wgsl).unwrap_or_else(|e| panic!("{e}"));
     let names = function_names(&module);
     assert!(names.iter().any(|n| n == "lambert_eval") && names.iter().any(|n| n == "load_lambert"));
-    for model in BuiltinModel::ALL.into_iter().filter(|&m| m != BuiltinModel::Lambert) {
+    for model in ModelId::ALL.iter().copied().filter(|&m| m != ModelId::Lambert) {
         let prefix = format!("{}_", model.def().name);
         assert!(!names.iter().any(|n| n.starts_with(&prefix)), "{prefix}* compiled into a Lambert-only kernel");
         assert!(!k.wgsl.contains(&materials::params_struct_name(model.def())));
@@ -287,10 +281,10 @@ fn a_lambert_only_scene_compiles_only_lambert() {
 fn unspecialised_kernels_contain_every_model_and_feature() {
     let scene = [lambert("white", [0.8; 3])];
     let k = generate(&scene, false).unwrap();
-    assert_eq!(k.models, BuiltinModel::ALL.to_vec());
+    assert_eq!(k.models, ModelId::ALL.to_vec());
     assert_eq!(k.features, materials::Features::all());
     let names = function_names(&naga_validate(&k.wgsl).unwrap_or_else(|e| panic!("{e}")));
-    for model in BuiltinModel::ALL {
+    for &model in ModelId::ALL {
         for f in ["eval", "pdf", "sample"] {
             let name = format!("{}_{f}", model.def().name);
             assert!(names.contains(&name), "{name} missing");
@@ -303,7 +297,7 @@ fn unspecialised_kernels_contain_every_model_and_feature() {
 
 #[test]
 fn features_follow_the_materials() {
-    let plain = [builtin("glass", BuiltinModel::Dielectric, &[])];
+    let plain = [builtin("glass", ModelId::Dielectric, &[])];
     let k = generate(&plain, true).unwrap();
     assert!(!k.features.dispersion && !k.features.absorption);
     assert!(!k.wgsl.contains("fn mat_sellmeier") && k.wgsl.contains("No material disperses"));
@@ -311,7 +305,7 @@ fn features_follow_the_materials() {
 
     let dispersive = [builtin(
         "bk7",
-        BuiltinModel::Dielectric,
+        ModelId::Dielectric,
         &[("dispersion", ParamValue::Scalar(2.0)), ("absorption", ParamValue::Rgb([0.1, 0.2, 0.3]))],
     )];
     let k = generate(&dispersive, true).unwrap();
@@ -321,9 +315,9 @@ fn features_follow_the_materials() {
 
     // Only the metal presets in use are uploaded; custom (eta, k) needs none.
     let metals = [
-        builtin("gold", BuiltinModel::Conductor, &[("metal", ParamValue::Scalar(1.0))]),
-        builtin("al", BuiltinModel::RoughConductor, &[("metal", ParamValue::Scalar(4.0))]),
-        builtin("custom", BuiltinModel::Conductor, &[("metal", ParamValue::Scalar(0.0))]),
+        builtin("gold", ModelId::Conductor, &[("metal", ParamValue::Scalar(1.0))]),
+        builtin("al", ModelId::RoughConductor, &[("metal", ParamValue::Scalar(4.0))]),
+        builtin("custom", ModelId::Conductor, &[("metal", ParamValue::Scalar(0.0))]),
     ];
     let k = generate(&metals, true).unwrap();
     assert_eq!(k.features.metals, vec![brdf::models::Metal::Gold, brdf::models::Metal::Aluminium]);
@@ -339,7 +333,7 @@ fn every_model_and_feature_combination_validates() {
         let k = generate(&all, specialise).unwrap();
         naga_validate(&k.wgsl).unwrap_or_else(|e| panic!("specialise={specialise}: {e}"));
     }
-    for model in BuiltinModel::ALL {
+    for &model in ModelId::ALL {
         let one: Vec<Material> = all.iter().filter(|m| model_of(m) == model).take(1).cloned().collect();
         let k = generate(&one, true).unwrap();
         assert_eq!(k.models, vec![model]);
@@ -354,18 +348,20 @@ fn params_are_packed_in_declaration_order() {
     let k = generate(&all, true).unwrap();
     let module = naga_validate(&k.wgsl).unwrap();
     for (index, m) in all.iter().enumerate() {
-        let Surface::Builtin { model, params } = &m.surface else { unreachable!() };
-        let def = model.def();
+        let model = model_of(m);
+        let params = m.params().unwrap().to_resolved();
         let h = index * materials::HEADER_WORDS as usize;
-        assert_eq!(k.data[h + materials::header::MODEL as usize], materials::model_id(*model));
+        assert_eq!(k.data[h + materials::header::MODEL as usize], materials::model_id(model));
         let base = k.data[h + materials::header::PARAMS as usize] as usize;
-        for (i, p) in def.params.iter().enumerate() {
+        for (i, (p, value)) in model.def().params.iter().zip(params.values()).enumerate() {
             let word = k.data[base + i];
-            match p.kind {
-                ParamKind::Scalar => assert_eq!(f32::from_bits(word), params.scalar(i), "{}.{}", m.name, p.name),
-                _ => {
+            match value {
+                Resolved::Scalar(v) => assert_eq!(f32::from_bits(word), *v, "{}.{}", m.name, p.name),
+                Resolved::Bool(b) => assert_eq!(word, u32::from(*b), "{}.{}", m.name, p.name),
+                Resolved::Choice(c) => assert_eq!(word, *c, "{}.{}", m.name, p.name),
+                Resolved::Colour(c) => {
                     let table = &k.spectra[word as usize..word as usize + materials::SPECTRUM_SAMPLES];
-                    assert_eq!(table, materials::tabulate(&params.colour(i)).as_slice(), "{}.{}", m.name, p.name);
+                    assert_eq!(table, materials::tabulate(c).as_slice(), "{}.{}", m.name, p.name);
                 }
             }
         }
@@ -379,7 +375,7 @@ fn params_are_packed_in_declaration_order() {
         );
     }
     // The generated structs have the declared fields, in order, with the declared types.
-    for model in BuiltinModel::ALL {
+    for &model in ModelId::ALL {
         let def = model.def();
         let name = materials::params_struct_name(def);
         let ty = module.types.iter().find(|(_, t)| t.name.as_deref() == Some(name.as_str())).map(|(_, t)| t);
@@ -850,7 +846,7 @@ fn every_model_matches_the_cpu_on_the_gpu() {
         let cpu_flags = bsdf.flags().bits() as u32;
         let extra = flags & !cpu_flags;
         let diffuse = brdf::ScatterFlags::DIFFUSE.bits() as u32;
-        if cpu_flags & !flags != 0 || (extra != 0 && !(model == BuiltinModel::ShirleyAshikhmin && extra == diffuse)) {
+        if cpu_flags & !flags != 0 || (extra != 0 && !(model == ModelId::Ashikhmin && extra == diffuse)) {
             failures.push(format!("material flags: gpu {flags} cpu {cpu_flags} at {}", at()));
         }
         let props = g[15].to_bits();
@@ -916,7 +912,7 @@ fn every_model_matches_the_cpu_on_the_gpu() {
         }
     }
     println!("emission/absorption: max error {:.2e}", accessor_worst.err);
-    assert_eq!(reports.len(), BuiltinModel::ALL.len());
+    assert_eq!(reports.len(), ModelId::ALL.len());
     if !failures.is_empty() {
         for f in failures.iter().take(40) {
             println!("FAIL {f}");
@@ -977,10 +973,10 @@ fn spectrum_lookup_matches_the_cpu() {
     // Every distinct colour of the test materials (and some emitters), with its offset.
     let mut colours: Vec<Colour> = Vec::new();
     for m in &all {
-        if let Surface::Builtin { model, params } = &m.surface {
-            for (i, p) in model.def().params.iter().enumerate() {
-                if p.kind != ParamKind::Scalar {
-                    colours.push(params.colour(i));
+        if let Some(params) = m.params() {
+            for v in params.to_resolved().values() {
+                if let Resolved::Colour(c) = v {
+                    colours.push(c.clone());
                 }
             }
         }
@@ -1048,7 +1044,7 @@ fn specialisation_compile_time_and_speed() {
     let scene = [
         lambert("white", [0.8; 3]),
         lambert("red", [0.8, 0.1, 0.1]),
-        builtin("glass", BuiltinModel::Dielectric, &[("ior", ParamValue::Scalar(1.5))]),
+        builtin("glass", ModelId::Dielectric, &[("ior", ParamValue::Scalar(1.5))]),
     ];
     let mut report = Vec::new();
     for specialise in [true, false] {

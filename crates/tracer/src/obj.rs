@@ -18,7 +18,7 @@
 //! first malformed or non-finite `v`/`vn`/`vt`/`f` line and reports its line number,
 //! which `tobj`'s errors do not carry.
 
-use crate::material::{BuiltinModel, Material};
+use crate::material::{ModelId, Material};
 use crate::mesh::Mesh;
 use crate::scene::Scene;
 use crate::{Error, Result};
@@ -108,29 +108,28 @@ fn convert_material(m: &tobj::Material) -> Result<Material> {
 
 /// The model an MTL material asks for: an explicit `bsdf NAME` statement (our extension),
 /// else by `illum` and `d` as documented at the top of this module.
-fn choose_model(m: &tobj::Material) -> Result<BuiltinModel> {
+fn choose_model(m: &tobj::Material) -> Result<ModelId> {
     if let Some(name) = m.unknown_param.get("bsdf") {
         let name = name.trim();
-        return BuiltinModel::by_name(name).ok_or_else(|| {
-            let known: Vec<&str> = BuiltinModel::ALL.iter().map(|b| b.def().name).collect();
-            Error::Setting(format!("material '{}': unknown bsdf '{name}' (known: {})", m.name, known.join(", ")))
+        return ModelId::by_name(name).ok_or_else(|| {
+            Error::Setting(format!("material '{}': unknown bsdf '{name}' (known: {})", m.name, ModelId::names()))
         });
     }
     // The thesis's MTL extensions name their model by its parameters.
     let has = |keys: &[&str]| keys.iter().any(|k| m.unknown_param.contains_key(*k));
     if has(&["nu", "nv", "Rs", "Rd"]) {
-        return Ok(BuiltinModel::ShirleyAshikhmin);
+        return Ok(ModelId::Ashikhmin);
     }
     if has(&["rough", "p"]) {
-        return Ok(BuiltinModel::Schlick);
+        return Ok(ModelId::Schlick);
     }
     let illum = m.illumination_model.unwrap_or(2);
     Ok(if matches!(illum, 4 | 6 | 7) || m.dissolve.unwrap_or(1.0) < 1.0 {
-        BuiltinModel::Dielectric
+        ModelId::Dielectric
     } else if matches!(illum, 3 | 5) {
-        BuiltinModel::Mirror
+        ModelId::Mirror
     } else {
-        BuiltinModel::Lambert
+        ModelId::Lambert
     })
 }
 
@@ -282,7 +281,7 @@ mod tests {
 #[cfg(test)]
 mod mtl_tests {
     use super::*;
-    use crate::material::Surface;
+    use crate::material::ModelParams;
 
     fn load(mtl: &str) -> Result<Scene> {
         let dir = std::env::temp_dir().join(format!("spt-obj-test-{}-{}", std::process::id(), mtl.len()));
@@ -293,27 +292,22 @@ mod mtl_tests {
         load_obj(&dir.join("s.obj"))
     }
 
-    fn model(scene: &Scene) -> BuiltinModel {
-        match &scene.materials[0].surface {
-            Surface::Builtin { model, .. } => *model,
-            Surface::Custom { .. } => panic!("custom"),
-        }
+    fn model(scene: &Scene) -> ModelId {
+        scene.materials[0].model().expect("a registered model")
     }
 
     #[test]
     fn thesis_extensions_choose_their_models_and_read_parameters() {
         let s = load("newmtl a\nKd 0.5 0.2 0.1\nrough 0.2\np 0.5\n").unwrap();
-        assert_eq!(model(&s), BuiltinModel::Schlick);
-        let Surface::Builtin { params, .. } = &s.materials[0].surface else { unreachable!() };
-        let def = BuiltinModel::Schlick.def();
-        assert_eq!(params.scalar(def.param("roughness").unwrap().0), 0.2);
-        assert_eq!(params.scalar(def.param("isotropy").unwrap().0), 0.5);
+        assert_eq!(model(&s), ModelId::Schlick);
+        let Some(ModelParams::Schlick(params)) = s.materials[0].params() else { unreachable!() };
+        assert_eq!((params.roughness, params.isotropy), (0.2, 0.5));
         let s = load("newmtl a\nnu 1000\nnv 10\nRs 0.1 0.1 0.1\nRd 0.4 0.4 0.4\n").unwrap();
-        assert_eq!(model(&s), BuiltinModel::ShirleyAshikhmin);
+        assert_eq!(model(&s), ModelId::Ashikhmin);
         let s = load("newmtl a\nbsdf orennayar\nKd 0.5 0.5 0.5\nsigma 0.3\n").unwrap();
-        assert_eq!(model(&s), BuiltinModel::OrenNayar);
+        assert_eq!(model(&s), ModelId::OrenNayar);
         let s = load("newmtl a\nillum 7\nNi 1.33\n").unwrap();
-        assert_eq!(model(&s), BuiltinModel::Dielectric);
+        assert_eq!(model(&s), ModelId::Dielectric);
     }
 
     #[test]

@@ -2,11 +2,11 @@
 
 use crate::camera::Camera;
 use crate::geometry::ShapeKind;
-use crate::material::{BuiltinModel, Material};
+use crate::material::Material;
 use crate::mesh::{quad, smooth_normals, uv_sphere};
 use crate::scene::{Environment, Scene};
 use crate::{Error, Result};
-use brdf::params::ParamValue;
+use brdf::models::{ConductorParams, MetalPreset};
 use glam::Vec3;
 use shapes::ShapeError;
 use shapes::implicit::Implicit;
@@ -53,7 +53,7 @@ pub fn sphere_flake(level: u32) -> Result<Scene> {
     }
     let mut scene = Scene::default();
     let silver = scene.materials.len() as u32;
-    scene.materials.push(metal("silver", 2.0));
+    scene.materials.push(metal("silver", MetalPreset::Silver));
     let mut stack = vec![(Vec3::new(0.0, 0.5, 0.0), 0.5f32, Vec3::Y, 0u32)];
     while let Some((centre, radius, axis, depth)) = stack.pop() {
         scene.add_shape_with_material(ShapeKind::Sphere(sphere(centre, radius)?), silver);
@@ -161,9 +161,8 @@ fn sphere(centre: Vec3, radius: f32) -> Result<Sphere> {
     Sphere::new(centre, radius, SphereMethod::default()).map_err(shape_error)
 }
 
-fn metal(name: &str, preset: f32) -> Material {
-    Material::builtin(name, BuiltinModel::Conductor, &[("metal", ParamValue::Scalar(preset))])
-        .expect("metal presets 1–4 are valid")
+fn metal(name: &str, preset: MetalPreset) -> Material {
+    Material::from_params(name, ConductorParams { metal: preset, ..Default::default() }.into())
 }
 
 fn glass(ior: f32) -> Result<Material> {

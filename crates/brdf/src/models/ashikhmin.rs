@@ -20,57 +20,53 @@
 //! 1 − n·h is below f32's resolution (WGSL has no `log1p`/`expm1`: mirror them with the
 //! usual `log(1 + x)·x/((1 + x) − 1)` and `(exp(x) − 1)` series guards).
 
-use crate::params::{ModelDef, ParamDef, ParamKind, ResolvedParams};
+use crate::frame::flip_z;
 use crate::sampling::{cosine_hemisphere, cosine_hemisphere_pdf};
-use crate::{Bsdf, BsdfSample, ScatterFlags};
+use crate::wgsl::{ModelWgsl, WgslConstant, WgslPiece, WgslValue};
+use crate::{Bsdf, BsdfSample, Model, ScatterFlags};
 use glam::{Vec2, Vec3};
 use spectral::{SampledSpectrum, SampledWavelengths};
 use std::f32::consts::{FRAC_1_PI, FRAC_PI_2};
 
-/// The Ashikhmin–Shirley declaration.
-pub const DEF: ModelDef = ModelDef {
-    name: "ashikhmin",
-    doc: "Ashikhmin & Shirley 2000 (JGT 5(2)) anisotropic Phong: a Schlick-Fresnel specular lobe with exponents \
-          n_u, n_v over a coupled, energy-conserving diffuse term; reflection only, two-sided.",
-    params: &[
-        ParamDef {
-            name: "nu",
-            kind: ParamKind::Scalar,
-            min: 0.0,
-            max: 1.0e6,
-            default: 100.0,
-            mtl_key: Some("nu"),
+crate::model_params! {
+    /// The Ashikhmin–Shirley parameters.
+    pub struct AshikhminParams for "ashikhmin" {
+        doc: "Ashikhmin & Shirley 2000 (JGT 5(2)) anisotropic Phong: a Schlick-Fresnel specular lobe with \
+              exponents n_u, n_v over a coupled, energy-conserving diffuse term; reflection only, two-sided.",
+        nu: scalar {
             doc: "Phong exponent n_u along the tangent u (larger: a narrower highlight across u)",
-        },
-        ParamDef {
-            name: "nv",
-            kind: ParamKind::Scalar,
-            min: 0.0,
-            max: 1.0e6,
             default: 100.0,
-            mtl_key: Some("nv"),
-            doc: "Phong exponent n_v along the bitangent v",
-        },
-        ParamDef {
-            name: "rs",
-            kind: ParamKind::Spectrum,
             min: 0.0,
-            max: 1.0,
-            default: 0.05,
-            mtl_key: Some("Rs"),
+            max: MAX_EXPONENT,
+            mtl: "nu",
+        },
+        nv: scalar { doc: "Phong exponent n_v along the bitangent v", default: 100.0, min: 0.0, max: MAX_EXPONENT, mtl: "nv" },
+        rs: spectrum {
             doc: "specular reflectance R_s at normal incidence (Schlick Fresnel towards 1 at grazing)",
+            default: 0.05,
+            mtl: "Rs",
         },
-        ParamDef {
-            name: "rd",
-            kind: ParamKind::Spectrum,
-            min: 0.0,
-            max: 1.0,
-            default: 0.5,
-            mtl_key: Some("Rd"),
-            doc: "diffuse reflectance R_d of the substrate under the specular coat",
-        },
-    ],
-};
+        rd: spectrum { doc: "diffuse reflectance R_d of the substrate under the specular coat", default: 0.5, mtl: "Rd" },
+    }
+}
+
+impl Model for AshikhminParams {
+    type Bsdf<const N: usize> = Ashikhmin<N>;
+    const WGSL: ModelWgsl = ModelWgsl {
+        source: include_str!("ashikhmin.wgsl"),
+        needs: &[WgslPiece::Sampling],
+        constants: &[
+            WgslConstant { name: "MAT_ASHIKHMIN_MAX_EXPONENT", value: WgslValue::F32(MAX_EXPONENT) },
+            WgslConstant { name: "MAT_ASHIKHMIN_MIN_COS", value: WgslValue::F32(MIN_COS) },
+            WgslConstant { name: "MAT_ASHIKHMIN_MIN_LOBE_PROBABILITY", value: WgslValue::F32(MIN_LOBE_PROBABILITY) },
+        ],
+    };
+
+    #[inline]
+    fn bsdf<const N: usize>(&self, wl: &SampledWavelengths<N>) -> Ashikhmin<N> {
+        Ashikhmin::new(self.nu, self.nv, self.rs.sample(wl), self.rd.sample(wl))
+    }
+}
 
 /// The largest Phong exponent (the declared range).
 pub const MAX_EXPONENT: f32 = 1.0e6;
@@ -81,7 +77,7 @@ const MIN_LOBE_PROBABILITY: f32 = 0.1;
 
 /// The Ashikhmin–Shirley BRDF bound to a path's wavelengths.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct AshikhminShirley<const N: usize> {
+pub struct Ashikhmin<const N: usize> {
     nu: f32,
     nv: f32,
     rs: SampledSpectrum<N>,
@@ -137,11 +133,6 @@ pub fn sample_half(nu: f32, nv: f32, aspect: f32, u: Vec2) -> Vec3 {
     Vec3::new(sx * sin_theta * cos_phi, sy * sin_theta * sin_phi, cos_theta)
 }
 
-#[inline]
-fn flip(w: Vec3) -> Vec3 {
-    Vec3::new(w.x, w.y, -w.z)
-}
-
 /// 1 − (1 − x/2)⁵, the diffuse term's angular factor.
 #[inline]
 fn diffuse_factor(x: f32) -> f32 {
@@ -149,7 +140,7 @@ fn diffuse_factor(x: f32) -> f32 {
     1.0 - (m * m) * (m * m) * m
 }
 
-impl<const N: usize> AshikhminShirley<N> {
+impl<const N: usize> Ashikhmin<N> {
     /// The BRDF with exponents n_u, n_v (clamped to [0, 10⁶]) and reflectances R_s, R_d.
     pub fn new(nu: f32, nv: f32, rs: SampledSpectrum<N>, rd: SampledSpectrum<N>) -> Self {
         let (nu, nv) = (nu.clamp(0.0, MAX_EXPONENT), nv.clamp(0.0, MAX_EXPONENT));
@@ -164,11 +155,6 @@ impl<const N: usize> AshikhminShirley<N> {
             mean_rs: rs.average(),
             mean_rd,
         }
-    }
-
-    /// From parameters resolved against [`DEF`], at the path's wavelengths.
-    pub fn from_params(p: &ResolvedParams, wl: &SampledWavelengths<N>) -> Self {
-        Self::new(p.scalar(0), p.scalar(1), p.colour(2).sample(wl), p.colour(3).sample(wl))
     }
 
     /// The probability of sampling the specular lobe for ωo at cosine `v2`: its estimated
@@ -225,7 +211,7 @@ impl<const N: usize> AshikhminShirley<N> {
     }
 }
 
-impl<const N: usize> Bsdf<N> for AshikhminShirley<N> {
+impl<const N: usize> Bsdf<N> for Ashikhmin<N> {
     fn flags(&self) -> ScatterFlags {
         let f = ScatterFlags::REFLECTION | ScatterFlags::GLOSSY;
         if self.mean_rd > 0.0 { f | ScatterFlags::DIFFUSE } else { f }
@@ -236,7 +222,7 @@ impl<const N: usize> Bsdf<N> for AshikhminShirley<N> {
         if wo.z * wi.z <= 0.0 {
             return SampledSpectrum::zero();
         }
-        if wo.z < 0.0 { self.eval_up(flip(wo), flip(wi)) } else { self.eval_up(wo, wi) }
+        if wo.z < 0.0 { self.eval_up(flip_z(wo), flip_z(wi)) } else { self.eval_up(wo, wi) }
     }
 
     #[inline]
@@ -244,7 +230,7 @@ impl<const N: usize> Bsdf<N> for AshikhminShirley<N> {
         if wo.z * wi.z <= 0.0 {
             return 0.0;
         }
-        if wo.z < 0.0 { self.pdf_up(flip(wo), flip(wi)) } else { self.pdf_up(wo, wi) }
+        if wo.z < 0.0 { self.pdf_up(flip_z(wo), flip_z(wi)) } else { self.pdf_up(wo, wi) }
     }
 
     #[inline]
@@ -253,7 +239,7 @@ impl<const N: usize> Bsdf<N> for AshikhminShirley<N> {
             return None;
         }
         let down = wo.z < 0.0;
-        let wo_up = if down { flip(wo) } else { wo };
+        let wo_up = if down { flip_z(wo) } else { wo };
         let (wi, flags) = if uc < self.specular_probability(wo_up.z) {
             let h = sample_half(self.nu, self.nv, self.aspect, u);
             let oh = wo_up.dot(h);
@@ -272,7 +258,7 @@ impl<const N: usize> Bsdf<N> for AshikhminShirley<N> {
             return None;
         }
         let f = self.eval_up(wo_up, wi);
-        Some(BsdfSample { wi: if down { flip(wi) } else { wi }, f, pdf, flags })
+        Some(BsdfSample { wi: if down { flip_z(wi) } else { wi }, f, pdf, flags })
     }
 }
 
@@ -284,8 +270,8 @@ mod tests {
         Chi2Config, Chi2Result, TestRng, chi2_test, directional_albedo, pdf_integral, reciprocity_error, sidak,
     };
 
-    fn sa(nu: f32, nv: f32, rs: f32, rd: f32) -> AshikhminShirley<1> {
-        AshikhminShirley::new(nu, nv, SampledSpectrum([rs]), SampledSpectrum([rd]))
+    fn sa(nu: f32, nv: f32, rs: f32, rd: f32) -> Ashikhmin<1> {
+        Ashikhmin::new(nu, nv, SampledSpectrum([rs]), SampledSpectrum([rd]))
     }
 
     fn dir(z: f32, phi_deg: f32) -> Vec3 {
@@ -318,7 +304,7 @@ mod tests {
 
     struct Case {
         name: String,
-        bsdf: AshikhminShirley<1>,
+        bsdf: Ashikhmin<1>,
         wo: Vec3,
         grid: Grid,
     }
@@ -486,7 +472,7 @@ mod tests {
     }
 
     /// The specular lobe's pdf without the reflection's Jacobian 1/(4 ωo·h): must fail.
-    struct NoJacobian(AshikhminShirley<1>);
+    struct NoJacobian(Ashikhmin<1>);
 
     impl Bsdf<1> for NoJacobian {
         fn flags(&self) -> ScatterFlags {
@@ -523,7 +509,7 @@ mod tests {
     }
 
     /// The fraction of `sample` calls that return a direction.
-    fn accepted(b: &AshikhminShirley<1>, wo: Vec3, n: usize, seed: u64) -> f64 {
+    fn accepted(b: &Ashikhmin<1>, wo: Vec3, n: usize, seed: u64) -> f64 {
         let mut rng = TestRng::new(seed);
         let k = (0..n)
             .filter(|_| b.sample(wo, rng.next_f32(), Vec2::new(rng.next_f32(), rng.next_f32())).is_some())
@@ -645,7 +631,7 @@ mod tests {
             Vec3::new(0.3, 0.4, 0.866).normalize(),
             Vec3::new(-0.3, -0.4, 0.866).normalize(),
         ];
-        let check = |b: &AshikhminShirley<1>, wo: Vec3, wi: Vec3, uc: f32, u: Vec2| {
+        let check = |b: &Ashikhmin<1>, wo: Vec3, wi: Vec3, uc: f32, u: Vec2| {
             let (f, p) = (b.eval(wo, wi)[0], b.pdf(wo, wi));
             assert!(f.is_finite() && f >= 0.0 && p.is_finite() && p >= 0.0, "{b:?} {wo} {wi}: f={f} pdf={p}");
             if let Some(s) = b.sample(wo, uc, u) {
@@ -708,17 +694,18 @@ mod tests {
 
     #[test]
     fn parameters_resolve() {
-        use crate::params::ParamValue;
+        use crate::params::{ParamSet, ParamValue};
         let wl = SampledWavelengths::<1>::fixed_bins(550.0, 10.0);
-        let b = AshikhminShirley::<1>::from_params(&DEF.defaults(), &wl);
+        let b = AshikhminParams::default().bsdf(&wl);
         assert_eq!((b.nu, b.nv), (100.0, 100.0));
         assert!((b.rs[0] - 0.05).abs() < 0.01 && (b.rd[0] - 0.5).abs() < 0.05, "{b:?}");
-        let given = DEF.resolve("m", &[("nu", ParamValue::Scalar(1e6)), ("nv", ParamValue::Scalar(0.0))]).unwrap();
-        let b = AshikhminShirley::<1>::from_params(&given, &wl);
+        let given =
+            AshikhminParams::resolve("m", &[("nu", ParamValue::Scalar(1e6)), ("nv", ParamValue::Scalar(0.0))]).unwrap();
+        let b = given.bsdf(&wl);
         assert_eq!((b.nu, b.nv), (1e6, 0.0));
-        assert!(DEF.resolve("m", &[("nu", ParamValue::Scalar(2e6))]).is_err());
+        assert!(AshikhminParams::resolve("m", &[("nu", ParamValue::Scalar(2e6))]).is_err());
         for key in ["nu", "nv", "Rs", "Rd"] {
-            assert!(DEF.param_by_mtl_key(key).is_some(), "{key}");
+            assert!(AshikhminParams::DEF.param_by_mtl_key(key).is_some(), "{key}");
         }
     }
 }

@@ -1,316 +1,59 @@
-//! Conductors (metals): the exact Fresnel reflectance of a complex index η + iκ,
-//! measured n, k of four metals, and the smooth conductor.
-//!
-//! Measured data (linear interpolation in wavelength between the papers' own sample
-//! points, clamped outside the table; every table spans at least 360–830 nm):
-//!
-//! * gold, silver, copper: P. B. Johnson & R. W. Christy, "Optical Constants of the
-//!   Noble Metals", Phys. Rev. B 6, 4370 (1972), room temperature, at their photon
-//!   energies 3.50, 3.37, …, 1.39 eV (354.2–892.0 nm, 18 points, 14–71 nm apart);
-//! * aluminium: A. D. Rakić, "Algorithm for the determination of intrinsic optical
-//!   constants of metal films: application to aluminum", Appl. Opt. 34, 4755 (1995),
-//!   at its points from 326.3 to 837.7 nm (16 points, 20–48 nm apart).
-//!
-//! Both were transcribed from the refractiveindex.info database (public domain, CC0;
-//! files `data-nk/main/{Au,Ag,Cu}/Johnson.yml` and `data-nk/main/Al/Rakic.yml`),
-//! wavelengths converted from µm to nm, values unchanged.
-//!
-//! In RGB mode (no wavelengths) n and k are taken at [`RGB_LAMBDA`] = 630, 532 and
-//! 465 nm for the R, G and B channels: a crude stand-in, as in RGB renderers.
+//! The smooth conductor: a metal mirror weighted by the exact conductor Fresnel
+//! reflectance of a measured metal ([`crate::models::metal`]) or of constants η + iκ.
 
-use crate::fresnel::reflect_local;
-use crate::params::{ModelDef, ParamDef, ParamKind, ResolvedParams};
-use crate::{Bsdf, BsdfSample, ScatterFlags};
+use crate::frame::reflect_local;
+use crate::models::metal::{Metal, MetalPreset, fresnel_spectrum};
+use crate::wgsl::{ModelWgsl, WgslPiece};
+use crate::{Bsdf, BsdfSample, Model, ScatterFlags};
 use glam::{Vec2, Vec3};
 use spectral::{SampledSpectrum, SampledWavelengths};
 
-/// Declaration shared by the conductor models: `metal`, `eta`, `k`, `tint`, in this
-/// order, starting at some index of the model's parameter list.
-pub(crate) const METAL_PARAMS: [ParamDef; 4] = [
-    ParamDef {
-        name: "metal",
-        kind: ParamKind::Scalar,
-        min: 0.0,
-        max: 4.0,
-        default: 3.0,
-        mtl_key: None,
-        doc: "measured metal, rounded to the nearest integer: 0 = custom (eta, k), 1 = gold, 2 = silver, \
-              3 = copper (default, as pbrt-v4's conductor), 4 = aluminium",
-    },
-    ParamDef {
-        name: "eta",
-        kind: ParamKind::Scalar,
-        min: 0.0,
-        max: 10.0,
-        default: 1.5,
-        mtl_key: None,
-        doc: "real part n of the complex index of refraction, at every wavelength (used when metal = 0)",
-    },
-    ParamDef {
-        name: "k",
-        kind: ParamKind::Scalar,
-        min: 0.0,
-        max: 20.0,
-        default: 3.0,
-        mtl_key: None,
-        doc: "extinction coefficient κ (imaginary part of the index), at every wavelength (used when metal = 0)",
-    },
-    ParamDef {
-        name: "tint",
-        kind: ParamKind::Spectrum,
-        min: 0.0,
-        max: 1.0,
-        default: 1.0,
-        mtl_key: None,
-        doc: "colour filter multiplying the Fresnel reflectance (1 for a physical metal)",
-    },
-];
-
-/// The smooth conductor's declaration.
-pub const DEF: ModelDef = ModelDef {
-    name: "conductor",
-    doc: "Smooth conductor: specular reflection weighted by the exact conductor Fresnel reflectance of a \
-          complex index η + iκ per wavelength (Born & Wolf, Principles of Optics, 7th ed., ch. 14; pbrt-v3 §8.2.1), two-sided.",
-    params: &METAL_PARAMS,
-};
-
-/// Wavelengths (nm) at which n and k are taken for the R, G and B channels in RGB mode.
-pub const RGB_LAMBDA: [f32; 3] = [630.0, 532.0, 465.0];
-
-/// Exact unpolarised Fresnel reflectance (R⊥ + R∥)/2 of a conductor of complex relative
-/// index η + iκ, for light at `cos_i` to the normal (either side; |cos_i| is used).
-///
-/// The real closed form of the complex Fresnel equations (Born & Wolf, *Principles of
-/// Optics*, 7th ed., ch. 14 "Optics of metals"; pbrt-v3 §8.2.1; pbrt-v4 §9.3 evaluates the
-/// same equations in complex arithmetic, which the tests compare against):
-/// a² + b² = √((η² − κ² − sin²θ)² + 4η²κ²), a² = (a² + b² + η² − κ² − sin²θ)/2,
-/// R⊥ = (a² + b² − 2a cos θ + cos²θ) / (a² + b² + 2a cos θ + cos²θ),
-/// R∥ = R⊥ (cos²θ (a² + b²) − 2a cos θ sin²θ + sin⁴θ) / (cos²θ (a² + b²) + 2a cos θ sin²θ + sin⁴θ).
-/// a² is computed without cancellation. κ = 0 gives the dielectric formula, with total
-/// internal reflection (R = 1) for η < 1.
-#[inline]
-pub fn fresnel_conductor(cos_i: f32, eta: f32, k: f32) -> f32 {
-    let c = cos_i.abs().min(1.0);
-    let c2 = c * c;
-    let s2 = 1.0 - c2;
-    let (e2, k2) = (eta * eta, k * k);
-    let t0 = e2 - k2 - s2;
-    let a2b2 = (t0 * t0 + 4.0 * e2 * k2).sqrt();
-    // a² = (a²+b² + t0)/2; for t0 < 0 use the equivalent 2η²κ²/(a²+b² − t0).
-    let a2 = if t0 >= 0.0 { 0.5 * (a2b2 + t0) } else { 2.0 * e2 * k2 / (a2b2 - t0) };
-    let a = a2.max(0.0).sqrt();
-    let (t1, t2) = (a2b2 + c2, 2.0 * a * c);
-    if t1 + t2 <= 0.0 {
-        // η = 1, κ = 0 exactly at grazing incidence: the grazing limit.
-        return 1.0;
-    }
-    let rs = (t1 - t2) / (t1 + t2);
-    let (t3, t4) = (c2 * a2b2 + s2 * s2, t2 * s2);
-    let rp = if t3 + t4 > 0.0 { rs * (t3 - t4) / (t3 + t4) } else { rs };
-    (0.5 * (rs + rp)).clamp(0.0, 1.0)
-}
-
-/// A metal with measured optical constants (see the module documentation for sources).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum Metal {
-    /// Au, Johnson & Christy 1972.
-    Gold,
-    /// Ag, Johnson & Christy 1972.
-    Silver,
-    /// Cu, Johnson & Christy 1972.
-    Copper,
-    /// Al, Rakić 1995.
-    Aluminium,
-}
-
-/// Au, Johnson & Christy 1972: (λ nm, n, k).
-const AU: [[f32; 3]; 18] = [
-    [354.2, 1.50, 1.866],
-    [367.9, 1.48, 1.895],
-    [381.5, 1.46, 1.933],
-    [397.4, 1.47, 1.952],
-    [413.3, 1.46, 1.958],
-    [430.5, 1.45, 1.948],
-    [450.9, 1.38, 1.914],
-    [471.4, 1.31, 1.849],
-    [495.9, 1.04, 1.833],
-    [520.9, 0.62, 2.081],
-    [548.6, 0.43, 2.455],
-    [582.1, 0.29, 2.863],
-    [616.8, 0.21, 3.272],
-    [659.5, 0.14, 3.697],
-    [704.5, 0.13, 4.103],
-    [756.0, 0.14, 4.542],
-    [821.1, 0.16, 5.083],
-    [892.0, 0.17, 5.663],
-];
-
-/// Ag, Johnson & Christy 1972: (λ nm, n, k).
-const AG: [[f32; 3]; 18] = [
-    [354.2, 0.10, 1.419],
-    [367.9, 0.07, 1.657],
-    [381.5, 0.05, 1.864],
-    [397.4, 0.05, 2.070],
-    [413.3, 0.05, 2.275],
-    [430.5, 0.04, 2.462],
-    [450.9, 0.04, 2.657],
-    [471.4, 0.05, 2.869],
-    [495.9, 0.05, 3.093],
-    [520.9, 0.05, 3.324],
-    [548.6, 0.06, 3.586],
-    [582.1, 0.05, 3.858],
-    [616.8, 0.06, 4.152],
-    [659.5, 0.05, 4.483],
-    [704.5, 0.04, 4.838],
-    [756.0, 0.03, 5.242],
-    [821.1, 0.04, 5.727],
-    [892.0, 0.04, 6.312],
-];
-
-/// Cu, Johnson & Christy 1972: (λ nm, n, k).
-const CU: [[f32; 3]; 18] = [
-    [354.2, 1.37, 1.916],
-    [367.9, 1.36, 1.975],
-    [381.5, 1.33, 2.045],
-    [397.4, 1.32, 2.116],
-    [413.3, 1.28, 2.207],
-    [430.5, 1.25, 2.305],
-    [450.9, 1.24, 2.397],
-    [471.4, 1.25, 2.483],
-    [495.9, 1.22, 2.564],
-    [520.9, 1.18, 2.608],
-    [548.6, 1.02, 2.577],
-    [582.1, 0.70, 2.704],
-    [616.8, 0.30, 3.205],
-    [659.5, 0.22, 3.747],
-    [704.5, 0.21, 4.205],
-    [756.0, 0.24, 4.665],
-    [821.1, 0.26, 5.180],
-    [892.0, 0.30, 5.768],
-];
-
-/// Al, Rakić 1995: (λ nm, n, k).
-const AL: [[f32; 3]; 16] = [
-    [326.28, 0.31474, 3.9165],
-    [364.66, 0.39877, 4.3957],
-    [413.28, 0.52135, 5.0008],
-    [442.80, 0.60790, 5.3676],
-    [476.87, 0.72780, 5.7781],
-    [516.60, 0.87340, 6.2418],
-    [563.57, 1.0728, 6.7839],
-    [619.93, 1.3660, 7.4052],
-    [652.25, 1.5724, 7.7354],
-    [688.81, 1.8301, 8.0601],
-    [729.32, 2.1606, 8.3565],
-    [774.91, 2.6154, 8.4914],
-    [794.78, 2.7675, 8.3866],
-    [815.69, 2.7668, 8.2573],
-    [837.74, 2.6945, 8.1878],
-    [885.61, 2.2802, 8.1134],
-];
-
-/// Linear interpolation in a (λ, n, k) table, clamped to its ends (a loop, no search
-/// structure: the tables are short and the same code runs in WGSL).
-#[inline]
-fn interpolate(table: &[[f32; 3]], lambda: f32) -> (f32, f32) {
-    let last = table.len() - 1;
-    if lambda.is_nan() || lambda <= table[0][0] {
-        // Below the table, or NaN.
-        return (table[0][1], table[0][2]);
-    }
-    if lambda >= table[last][0] {
-        return (table[last][1], table[last][2]);
-    }
-    let mut i = 0;
-    while i + 1 < last && table[i + 1][0] <= lambda {
-        i += 1;
-    }
-    let (a, b) = (table[i], table[i + 1]);
-    let t = (lambda - a[0]) / (b[0] - a[0]);
-    (a[1] + t * (b[1] - a[1]), a[2] + t * (b[2] - a[2]))
-}
-
-impl Metal {
-    /// Every preset, in the order of the `metal` parameter (1, 2, 3, 4).
-    pub const ALL: [Metal; 4] = [Metal::Gold, Metal::Silver, Metal::Copper, Metal::Aluminium];
-
-    /// The preset for the `metal` parameter's value (rounded); `None` for 0 (custom) or
-    /// out-of-range values.
-    pub fn from_param(v: f32) -> Option<Metal> {
-        let i = v.round();
-        if (1.0..=4.0).contains(&i) { Some(Self::ALL[i as usize - 1]) } else { None }
-    }
-
-    /// English name.
-    pub fn name(self) -> &'static str {
-        match self {
-            Self::Gold => "gold",
-            Self::Silver => "silver",
-            Self::Copper => "copper",
-            Self::Aluminium => "aluminium",
-        }
-    }
-
-    /// The measured rows (λ nm, n, k), increasing in λ, that [`Metal::eta_k`]
-    /// interpolates: for code generators (the GPU crate uploads them as they are).
-    pub fn table(self) -> &'static [[f32; 3]] {
-        match self {
-            Self::Gold => &AU,
-            Self::Silver => &AG,
-            Self::Copper => &CU,
-            Self::Aluminium => &AL,
-        }
-    }
-
-    /// (n, k) at `lambda_nm`, linearly interpolated, clamped outside the data.
-    #[inline]
-    pub fn eta_k(self, lambda_nm: f32) -> (f32, f32) {
-        interpolate(self.table(), lambda_nm)
-    }
-
-    /// (n, k) at the path's wavelengths, or at [`RGB_LAMBDA`] in RGB mode.
-    pub fn sample<const N: usize>(self, wl: &SampledWavelengths<N>) -> (SampledSpectrum<N>, SampledSpectrum<N>) {
-        let (mut eta, mut k) = (SampledSpectrum::zero(), SampledSpectrum::zero());
-        for i in 0..N {
-            let lambda = if wl.is_rgb() { RGB_LAMBDA[i.min(2)] } else { wl.lambda[i] };
-            (eta[i], k[i]) = self.eta_k(lambda);
-        }
-        (eta, k)
+crate::model_params! {
+    /// The smooth conductor's parameters.
+    pub struct ConductorParams for "conductor" {
+        doc: "Smooth conductor: specular reflection weighted by the exact conductor Fresnel reflectance of a \
+              complex index η + iκ per wavelength (Born & Wolf, Principles of Optics, 7th ed., ch. 14; pbrt-v3 \
+              §8.2.1), two-sided.",
+        metal: choice(MetalPreset) {
+            doc: "measured metal: custom (eta, k), gold, silver, copper (default, as pbrt-v4's conductor), aluminium",
+            default: MetalPreset::Copper,
+        },
+        eta: scalar {
+            doc: "real part n of the complex index of refraction, at every wavelength (used when metal = custom)",
+            default: 1.5,
+            min: 0.0,
+            max: 10.0,
+        },
+        k: scalar {
+            doc: "extinction coefficient κ (imaginary part of the index), at every wavelength (used when metal = \
+                  custom)",
+            default: 3.0,
+            min: 0.0,
+            max: 20.0,
+        },
+        tint: spectrum { doc: "colour filter multiplying the Fresnel reflectance (1 for a physical metal)", default: 1.0 },
     }
 }
 
-/// (η, κ, tint) from the four [`METAL_PARAMS`] starting at declaration index `first`.
-pub(crate) fn metal_from_params<const N: usize>(
-    p: &ResolvedParams,
-    first: usize,
-    wl: &SampledWavelengths<N>,
-) -> (SampledSpectrum<N>, SampledSpectrum<N>, SampledSpectrum<N>) {
-    let (eta, k) = match Metal::from_param(p.scalar(first)) {
-        Some(m) => m.sample(wl),
-        None => (SampledSpectrum::splat(p.scalar(first + 1)), SampledSpectrum::splat(p.scalar(first + 2))),
+impl Model for ConductorParams {
+    type Bsdf<const N: usize> = Conductor<N>;
+    const WGSL: ModelWgsl = ModelWgsl {
+        source: include_str!("conductor.wgsl"),
+        needs: &[WgslPiece::Fresnel, WgslPiece::Metal],
+        constants: &[],
     };
-    (eta, k, p.colour(first + 3).sample(wl))
-}
 
-/// Per-wavelength conductor Fresnel reflectance times a tint.
-#[inline]
-pub(crate) fn fresnel_spectrum<const N: usize>(
-    cos_i: f32,
-    eta: &SampledSpectrum<N>,
-    k: &SampledSpectrum<N>,
-    tint: &SampledSpectrum<N>,
-) -> SampledSpectrum<N> {
-    let mut f = SampledSpectrum::zero();
-    for i in 0..N {
-        f[i] = tint[i] * fresnel_conductor(cos_i, eta[i], k[i]);
+    #[inline]
+    fn bsdf<const N: usize>(&self, wl: &SampledWavelengths<N>) -> Conductor<N> {
+        let (eta, k) = self.metal.eta_k(self.eta, self.k, wl);
+        Conductor { eta, k, tint: self.tint.sample(wl) }
     }
-    f
 }
 
 /// A smooth metal: a Dirac delta at the mirror direction weighted by the conductor
 /// Fresnel reflectance per wavelength. Two-sided, like [`crate::Mirror`].
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct SmoothConductor<const N: usize> {
+pub struct Conductor<const N: usize> {
     /// Real part n of the complex index, per wavelength.
     pub eta: SampledSpectrum<N>,
     /// Extinction coefficient κ, per wavelength.
@@ -319,7 +62,7 @@ pub struct SmoothConductor<const N: usize> {
     pub tint: SampledSpectrum<N>,
 }
 
-impl<const N: usize> SmoothConductor<N> {
+impl<const N: usize> Conductor<N> {
     /// A conductor of index η + iκ (per wavelength), untinted.
     pub fn new(eta: SampledSpectrum<N>, k: SampledSpectrum<N>) -> Self {
         Self { eta, k, tint: SampledSpectrum::one() }
@@ -330,15 +73,9 @@ impl<const N: usize> SmoothConductor<N> {
         let (eta, k) = metal.sample(wl);
         Self::new(eta, k)
     }
-
-    /// From parameters resolved against [`DEF`], at the path's wavelengths.
-    pub fn from_params(p: &ResolvedParams, wl: &SampledWavelengths<N>) -> Self {
-        let (eta, k, tint) = metal_from_params(p, 0, wl);
-        Self { eta, k, tint }
-    }
 }
 
-impl<const N: usize> Bsdf<N> for SmoothConductor<N> {
+impl<const N: usize> Bsdf<N> for Conductor<N> {
     fn flags(&self) -> ScatterFlags {
         ScatterFlags::REFLECTION | ScatterFlags::SPECULAR
     }
@@ -362,152 +99,14 @@ impl<const N: usize> Bsdf<N> for SmoothConductor<N> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::fresnel::fresnel_dielectric;
-    use crate::validation::{TestRng, directional_albedo};
-    use spectral::colour::{spectrum_to_xyz, xyz_to_linear_srgb};
-    use spectral::uplift::d65_normalised;
-
-    /// Reference: the Fresnel equations in complex arithmetic (f64), as pbrt-v4's
-    /// `FrComplex`: cos θt = √(1 − sin²θi/η²), r∥ = (η cos θi − cos θt)/(η cos θi + cos θt),
-    /// r⊥ = (cos θi − η cos θt)/(cos θi + η cos θt), R = (|r∥|² + |r⊥|²)/2.
-    fn fresnel_complex(cos_i: f64, n: f64, k: f64) -> f64 {
-        #[derive(Clone, Copy)]
-        struct C(f64, f64);
-        let mul = |a: C, b: C| C(a.0 * b.0 - a.1 * b.1, a.0 * b.1 + a.1 * b.0);
-        let div = |a: C, b: C| {
-            let d = b.0 * b.0 + b.1 * b.1;
-            C((a.0 * b.0 + a.1 * b.1) / d, (a.1 * b.0 - a.0 * b.1) / d)
-        };
-        let sqrt = |a: C| {
-            let r = (a.0 * a.0 + a.1 * a.1).sqrt();
-            let re = (0.5 * (r + a.0)).max(0.0).sqrt();
-            let im = (0.5 * (r - a.0)).max(0.0).sqrt().copysign(a.1);
-            C(re, im)
-        };
-        let eta = C(n, k);
-        let sin2_t = div(C(1.0 - cos_i * cos_i, 0.0), mul(eta, eta));
-        let cos_t = sqrt(C(1.0 - sin2_t.0, -sin2_t.1));
-        let ec = C(n * cos_i, k * cos_i);
-        let r_par = div(C(ec.0 - cos_t.0, ec.1 - cos_t.1), C(ec.0 + cos_t.0, ec.1 + cos_t.1));
-        let ect = mul(eta, cos_t);
-        let r_perp = div(C(cos_i - ect.0, -ect.1), C(cos_i + ect.0, ect.1));
-        0.5 * (r_par.0 * r_par.0 + r_par.1 * r_par.1 + r_perp.0 * r_perp.0 + r_perp.1 * r_perp.1)
-    }
-
-    #[test]
-    fn normal_incidence_matches_the_closed_form() {
-        for (n, k) in [(0.2f32, 3.0f32), (1.5, 0.0), (0.05, 4.0), (2.7, 8.3), (1.0, 1.0), (0.5, 0.0)] {
-            let expect = ((n - 1.0).powi(2) + k * k) / ((n + 1.0).powi(2) + k * k);
-            let got = fresnel_conductor(1.0, n, k);
-            assert!((got - expect).abs() < 1e-6, "n={n} k={k}: {got} vs {expect}");
-            assert_eq!(fresnel_conductor(-1.0, n, k), got, "two-sided");
-        }
-    }
-
-    #[test]
-    fn zero_extinction_is_the_dielectric_formula() {
-        for eta in [1.0001f32, 1.33, 1.5, 2.4, 1.0 / 1.5, 0.5] {
-            for i in 0..=900 {
-                let c = (i as f32 / 10.0).to_radians().cos();
-                let (a, b) = (fresnel_conductor(c, eta, 0.0), fresnel_dielectric(c, eta));
-                assert!((a - b).abs() < 2e-5, "η={eta} θ={}: {a} vs {b}", i as f32 / 10.0);
-            }
-        }
-        // Beyond the critical angle: total internal reflection.
-        assert_eq!(fresnel_conductor(0.3, 1.0 / 1.5, 0.0), 1.0);
-    }
-
-    #[test]
-    fn closed_form_agrees_with_complex_arithmetic() {
-        let mut worst = 0.0f64;
-        let mut cases: Vec<(f32, f32)> = vec![(0.2, 3.0), (1.5, 0.0), (0.05, 4.0), (2.7, 8.3), (1.0, 1e-3)];
-        for m in Metal::ALL {
-            for l in (360..=830).step_by(10) {
-                cases.push(m.eta_k(l as f32));
-            }
-        }
-        for (n, k) in cases {
-            for i in 0..=180 {
-                let c = (i as f32 / 2.0).to_radians().cos();
-                let got = fresnel_conductor(c, n, k) as f64;
-                let expect = fresnel_complex(c as f64, n as f64, k as f64);
-                worst = worst.max((got - expect).abs());
-            }
-        }
-        println!("worst |closed form − complex arithmetic| = {worst:.2e}");
-        assert!(worst < 2e-5, "worst |closed form − complex| = {worst}");
-    }
-
-    #[test]
-    fn reflectance_is_bounded_and_finite_even_for_extreme_inputs() {
-        let mut rng = TestRng::new(11);
-        for _ in 0..100_000 {
-            let c = 2.0 * rng.next_f32() - 1.0;
-            let n = 10.0 * rng.next_f32();
-            let k = 20.0 * rng.next_f32();
-            let r = fresnel_conductor(c, n, k);
-            assert!((0.0..=1.0).contains(&r), "c={c} n={n} k={k}: {r}");
-        }
-        for (c, n, k) in [(0.0, 1.0, 0.0), (0.0, 0.0, 0.0), (1.0, 0.0, 0.0), (0.5, 0.0, 0.0), (0.0, 0.2, 3.0)] {
-            let r = fresnel_conductor(c, n, k);
-            assert!(r.is_finite() && (0.0..=1.0).contains(&r), "c={c} n={n} k={k}: {r}");
-        }
-        assert_eq!(fresnel_conductor(0.0, 0.2, 3.0), 1.0, "grazing reflection is total");
-        assert!(fresnel_conductor(1.0, 1.0, 1e4) > 0.9999);
-    }
-
-    #[test]
-    fn tables_cover_the_visible_range_and_interpolate() {
-        for m in Metal::ALL {
-            let t = m.table();
-            assert!(t[0][0] <= 360.0 && t[t.len() - 1][0] >= 830.0, "{}", m.name());
-            for w in t.windows(2) {
-                assert!(w[0][0] < w[1][0] && w[1][0] - w[0][0] <= 75.0);
-            }
-            for row in t {
-                assert_eq!(m.eta_k(row[0]), (row[1], row[2]));
-            }
-            // Midpoints interpolate; ends clamp.
-            let (a, b) = (t[3], t[4]);
-            let (n, k) = m.eta_k(0.5 * (a[0] + b[0]));
-            assert!((n - 0.5 * (a[1] + b[1])).abs() < 1e-5 && (k - 0.5 * (a[2] + b[2])).abs() < 1e-5);
-            assert_eq!(m.eta_k(100.0), (t[0][1], t[0][2]));
-            assert_eq!(m.eta_k(2000.0), (t[t.len() - 1][1], t[t.len() - 1][2]));
-            assert_eq!(m.eta_k(f32::NAN), (t[0][1], t[0][2]));
-        }
-        // Spot values from the papers: gold at 1.88 eV (659.5 nm), aluminium at 2 eV.
-        assert_eq!(Metal::Gold.eta_k(659.5), (0.14, 3.697));
-        assert_eq!(Metal::Aluminium.eta_k(619.93), (1.3660, 7.4052));
-    }
-
-    /// Linear sRGB of the normal-incidence reflectance seen under D65.
-    fn normal_incidence_srgb(m: Metal) -> [f32; 3] {
-        xyz_to_linear_srgb(spectrum_to_xyz(|l| {
-            let (n, k) = m.eta_k(l);
-            fresnel_conductor(1.0, n, k) * d65_normalised(l)
-        }))
-    }
-
-    #[test]
-    fn gold_is_yellow_copper_is_orange_silver_and_aluminium_are_grey() {
-        for m in Metal::ALL {
-            println!("{} normal-incidence linear sRGB under D65: {:.4?}", m.name(), normal_incidence_srgb(m));
-        }
-        let au = normal_incidence_srgb(Metal::Gold);
-        assert!(au[0] > au[1] && au[1] > au[2] && au[2] < 0.6 * au[0], "gold {au:?}");
-        let cu = normal_incidence_srgb(Metal::Copper);
-        assert!(cu[0] > cu[1] && cu[1] > cu[2] && cu[1] < 0.8 * cu[0], "copper {cu:?}");
-        for m in [Metal::Silver, Metal::Aluminium] {
-            let c = normal_incidence_srgb(m);
-            let (lo, hi) = (c[0].min(c[1]).min(c[2]), c[0].max(c[1]).max(c[2]));
-            assert!(lo > 0.8 && hi - lo < 0.1, "{} {c:?}", m.name());
-        }
-    }
+    use crate::models::metal::{RGB_LAMBDA, fresnel_conductor};
+    use crate::params::{ParamSet, ParamValue};
+    use crate::validation::directional_albedo;
 
     #[test]
     fn smooth_conductor_reflects_its_fresnel_reflectance() {
         let wl = SampledWavelengths::<4>::fixed_bins(450.0, 100.0);
-        let au = SmoothConductor::metal(Metal::Gold, &wl);
+        let au = Conductor::metal(Metal::Gold, &wl);
         let wo = Vec3::new(0.3, -0.4, 0.866).normalize();
         let s = au.sample(wo, 0.5, Vec2::ZERO).unwrap();
         assert!((s.wi - Vec3::new(-wo.x, -wo.y, wo.z)).length() < 1e-6);
@@ -522,7 +121,7 @@ mod tests {
         assert!((below.f[0] - s.f[0]).abs() < 1e-6 && below.wi.z < 0.0);
         assert!(au.sample(Vec3::X, 0.5, Vec2::ZERO).is_none());
         // Single-wavelength albedo is the Fresnel reflectance.
-        let one = SmoothConductor::<1>::new(SampledSpectrum([0.2]), SampledSpectrum([3.0]));
+        let one = Conductor::<1>::new(SampledSpectrum([0.2]), SampledSpectrum([3.0]));
         let (a, _) = directional_albedo(&one, wo, 10, 1);
         assert!((a - fresnel_conductor(wo.z, 0.2, 3.0) as f64).abs() < 1e-6);
     }
@@ -530,31 +129,29 @@ mod tests {
     #[test]
     fn parameters_choose_a_preset_or_custom_constants() {
         let wl = SampledWavelengths::<4>::fixed_bins(450.0, 100.0);
-        let gold = DEF.resolve("m", &[("metal", crate::params::ParamValue::Scalar(1.0))]).unwrap();
-        let c = SmoothConductor::from_params(&gold, &wl);
-        assert_eq!(c, SmoothConductor::metal(Metal::Gold, &wl));
-        let custom = DEF
-            .resolve(
-                "m",
-                &[
-                    ("metal", crate::params::ParamValue::Scalar(0.0)),
-                    ("eta", crate::params::ParamValue::Scalar(0.3)),
-                    ("k", crate::params::ParamValue::Scalar(2.0)),
-                ],
-            )
-            .unwrap();
-        let c = SmoothConductor::from_params(&custom, &wl);
+        let gold = ConductorParams::resolve("m", &[("metal", ParamValue::Scalar(1.0))]).unwrap();
+        let c = gold.bsdf(&wl);
+        assert_eq!(c, Conductor::metal(Metal::Gold, &wl));
+        let by_name = ConductorParams::resolve("m", &[("metal", ParamValue::Name("gold".into()))]).unwrap();
+        assert_eq!(by_name, gold);
+        let custom = ConductorParams::resolve(
+            "m",
+            &[("metal", ParamValue::Scalar(0.0)), ("eta", ParamValue::Scalar(0.3)), ("k", ParamValue::Scalar(2.0))],
+        )
+        .unwrap();
+        let c = custom.bsdf(&wl);
         assert_eq!(
             (c.eta, c.k, c.tint),
             (SampledSpectrum::splat(0.3), SampledSpectrum::splat(2.0), SampledSpectrum::one())
         );
         // Default: copper. RGB mode: n, k at 630, 532, 465 nm.
-        let rgb = SmoothConductor::<3>::from_params(&DEF.defaults(), &SampledWavelengths::rgb());
+        let rgb: Conductor<3> = ConductorParams::default().bsdf(&SampledWavelengths::rgb());
         for i in 0..3 {
             assert_eq!((rgb.eta[i], rgb.k[i]), Metal::Copper.eta_k(RGB_LAMBDA[i]));
         }
-        assert!(DEF.resolve("m", &[("metal", crate::params::ParamValue::Scalar(5.0))]).is_err());
-        assert_eq!(Metal::from_param(0.0), None);
-        assert_eq!(Metal::from_param(4.2), Some(Metal::Aluminium));
+        assert!(ConductorParams::resolve("m", &[("metal", ParamValue::Scalar(5.0))]).is_err());
+        assert!(ConductorParams::resolve("m", &[("metal", ParamValue::Scalar(4.2))]).is_err());
+        assert_eq!(MetalPreset::Custom.metal(), None);
+        assert_eq!(MetalPreset::Aluminium.metal(), Some(Metal::Aluminium));
     }
 }

@@ -1,143 +1,79 @@
 //! The smooth dielectric interface.
 
-use crate::fresnel::{fresnel_dielectric, fresnel_schlick, reflect_local, refract_local};
-use crate::params::{ModelDef, ParamDef, ParamKind, ResolvedParams};
-use crate::{Bsdf, BsdfSample, ScatterFlags};
+use crate::frame::reflect_local;
+use crate::fresnel::{fresnel_dielectric, fresnel_schlick, refract_local};
+use crate::models::dispersion::{Dispersion, DispersionPreset};
+use crate::params::Colour;
+use crate::wgsl::{ModelWgsl, WgslPiece};
+use crate::{Bsdf, BsdfSample, Model, ScatterFlags};
 use glam::{Vec2, Vec3};
 use spectral::{SampledSpectrum, SampledWavelengths};
 
-/// The smooth dielectric's declaration.
-pub const DEF: ModelDef = ModelDef {
-    name: "dielectric",
-    doc: "Smooth dielectric: specular reflection with Fresnel probability, Snell refraction, total internal reflection.",
-    params: &[
-        ParamDef {
-            name: "ior",
-            kind: ParamKind::Scalar,
+crate::model_params! {
+    /// The smooth dielectric's parameters.
+    pub struct DielectricParams for "dielectric" {
+        doc: "Smooth dielectric: specular reflection with Fresnel probability, Snell refraction, total internal \
+              reflection.",
+        ior: scalar {
+            doc: "index of refraction inside (the normal points outside, index 1)",
+            default: 1.5,
             min: 1.0e-3,
             max: 10.0,
-            default: 1.5,
-            mtl_key: Some("Ni"),
-            doc: "index of refraction inside (the normal points outside, index 1)",
+            mtl: "Ni",
         },
-        ParamDef {
-            name: "tint",
-            kind: ParamKind::Spectrum,
-            min: 0.0,
-            max: 1.0,
-            default: 1.0,
-            mtl_key: Some("Tf"),
-            doc: "colour filter on reflection and transmission",
+        tint: spectrum { doc: "colour filter on reflection and transmission", default: 1.0, mtl: "Tf" },
+        schlick: bool { doc: "Schlick's Fresnel approximation instead of the exact formula", default: false },
+        dispersion: choice(DispersionPreset) {
+            doc: "how the index varies with wavelength: none (ior at every wavelength), cauchy (with cauchy_b), \
+                  bk7 (Schott N-BK7 Sellmeier), fused-silica (Malitson 1965); the Sellmeier presets ignore ior",
+            default: DispersionPreset::None,
+            mtl: "dispersion",
         },
-        ParamDef {
-            name: "schlick",
-            kind: ParamKind::Scalar,
-            min: 0.0,
-            max: 1.0,
-            default: 0.0,
-            mtl_key: None,
-            doc: "1 for Schlick's Fresnel approximation, 0 for the exact formula",
-        },
-        ParamDef {
-            name: "dispersion",
-            kind: ParamKind::Scalar,
-            min: 0.0,
-            max: 3.0,
-            default: 0.0,
-            mtl_key: Some("dispersion"),
-            doc: "0 none (ior at every wavelength), 1 Cauchy with cauchy_b, 2 Schott N-BK7 Sellmeier, 3 fused-silica Sellmeier (Malitson 1965); the presets ignore ior",
-        },
-        ParamDef {
-            name: "cauchy_b",
-            kind: ParamKind::Scalar,
-            min: 0.0,
-            max: 1.0,
-            default: 0.004_2,
-            mtl_key: Some("cauchy_b"),
+        cauchy_b: scalar {
             doc: "Cauchy's B in µm² for n(λ) = A + B/λ², A chosen so that n(587.56 nm) = ior",
-        },
-        ParamDef {
-            name: "absorption",
-            kind: ParamKind::Coefficient,
+            default: 0.004_2,
             min: 0.0,
-            max: f32::INFINITY,
-            default: 0.0,
-            mtl_key: Some("absorption"),
-            doc: "Beer–Lambert absorption coefficient α per scene unit inside: I(s) = I₀·e^(−αs)",
+            max: 1.0,
+            mtl: "cauchy_b",
         },
-    ],
-};
-
-/// Sellmeier coefficients n²(λ) = 1 + Σ Bᵢλ²/(λ² − Cᵢ), λ in µm.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Sellmeier {
-    /// B₁, B₂, B₃.
-    pub b: [f32; 3],
-    /// C₁, C₂, C₃ in µm².
-    pub c: [f32; 3],
-}
-
-/// Schott N-BK7 (Schott optical glass data sheet): n_d = 1.5168.
-pub const BK7: Sellmeier =
-    Sellmeier { b: [1.039_612, 0.231_792_34, 1.010_469_5], c: [0.006_000_699, 0.020_017_914, 103.560_65] };
-
-/// Fused silica (Malitson 1965, JOSA 55(10)): n_d = 1.4585.
-pub const FUSED_SILICA: Sellmeier =
-    Sellmeier { b: [0.696_166_3, 0.407_942_6, 0.897_479_4], c: [0.004_679_148, 0.013_512_063, 97.934_003] };
-
-impl Sellmeier {
-    /// The index at `lambda_nm`.
-    #[inline]
-    pub fn ior(&self, lambda_nm: f32) -> f32 {
-        let l2 = (lambda_nm * 1e-3).powi(2);
-        let mut n2 = 1.0;
-        for i in 0..3 {
-            n2 += self.b[i] * l2 / (l2 - self.c[i]);
-        }
-        n2.max(1e-6).sqrt()
+        absorption: coefficient {
+            doc: "Beer–Lambert absorption coefficient α per scene unit inside: I(s) = I₀·e^(−αs)",
+            default: 0.0,
+            mtl: "absorption",
+        },
     }
 }
 
-/// The helium d-line, nm: where `ior` is the index for Cauchy dispersion (n_d).
-pub const LAMBDA_D: f32 = 587.56;
+impl Model for DielectricParams {
+    type Bsdf<const N: usize> = Dielectric<N>;
+    const WGSL: ModelWgsl = ModelWgsl {
+        source: include_str!("dielectric.wgsl"),
+        needs: &[WgslPiece::Fresnel, WgslPiece::Dispersion],
+        constants: &[],
+    };
 
-/// How the index of refraction depends on wavelength.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub enum Dispersion {
-    /// The same index at every wavelength.
-    #[default]
-    None,
-    /// Cauchy's n(λ) = A + B/λ² with B in µm² and n(λ_d) = the base index.
-    Cauchy {
-        /// B, µm².
-        b: f32,
-    },
-    /// A Sellmeier glass (the base index is ignored).
-    Sellmeier(Sellmeier),
-}
-
-impl Dispersion {
-    /// The index at `lambda_nm` for base index `ior` (n_d).
     #[inline]
-    pub fn ior(&self, ior: f32, lambda_nm: f32) -> f32 {
-        match self {
-            Self::None => ior,
-            Self::Cauchy { b } => {
-                let (l, ld) = (lambda_nm * 1e-3, LAMBDA_D * 1e-3);
-                ior + b * (1.0 / (l * l) - 1.0 / (ld * ld))
-            }
-            Self::Sellmeier(s) => s.ior(lambda_nm),
-        }
+    fn bsdf<const N: usize>(&self, wl: &SampledWavelengths<N>) -> Dielectric<N> {
+        let fresnel = if self.schlick { FresnelModel::Schlick } else { FresnelModel::Exact };
+        // RGB mode has no wavelengths: it uses the base index (n_d) without dispersion.
+        let (eta, dispersive) = if wl.is_rgb() || self.dispersion == DispersionPreset::None {
+            (self.ior, false)
+        } else {
+            (Dispersion::from_preset(self.dispersion, self.cauchy_b).ior(self.ior, wl.lambda[0]), N > 1)
+        };
+        Dielectric { eta, dispersive, fresnel, tint: self.tint.sample(wl) }
     }
 
-    /// From the `dispersion` and `cauchy_b` parameters.
-    pub fn from_preset(preset: f32, cauchy_b: f32) -> Self {
-        match preset.round() as i32 {
-            1 => Self::Cauchy { b: cauchy_b },
-            2 => Self::Sellmeier(BK7),
-            3 => Self::Sellmeier(FUSED_SILICA),
-            _ => Self::None,
-        }
+    fn is_transmissive(&self) -> bool {
+        true
+    }
+
+    fn is_dispersive(&self) -> bool {
+        self.dispersion != DispersionPreset::None
+    }
+
+    fn absorption(&self) -> Option<&Colour> {
+        Some(&self.absorption).filter(|a| !a.is_black())
     }
 }
 
@@ -218,71 +154,25 @@ impl<const N: usize> Bsdf<N> for Dielectric<N> {
     }
 }
 
-impl<const N: usize> Dielectric<N> {
-    /// From parameters resolved against [`DEF`], at the path's wavelengths.
-    pub fn from_params(p: &ResolvedParams, wl: &SampledWavelengths<N>) -> Self {
-        let fresnel = if p.scalar(2) >= 0.5 { FresnelModel::Schlick } else { FresnelModel::Exact };
-        let dispersion = Dispersion::from_preset(p.scalar(3), p.scalar(4));
-        // RGB mode has no wavelengths: it uses the base index (n_d) without dispersion.
-        let (eta, dispersive) = if wl.is_rgb() || dispersion == Dispersion::None {
-            (p.scalar(0), false)
-        } else {
-            (dispersion.ior(p.scalar(0), wl.lambda[0]), N > 1)
-        };
-        Self { eta, dispersive, fresnel, tint: p.colour(1).sample(wl) }
-    }
-
-    /// The Beer–Lambert absorption coefficient inside, if any (index 5 of [`DEF`]).
-    pub fn absorption(p: &ResolvedParams) -> Option<&spectral::spectrum::Colour> {
-        // Borrowed, not cloned: the integrator asks at every hit inside glass.
-        match &p.values()[5] {
-            crate::params::Resolved::Colour(a) if !a.is_black() => Some(a),
-            _ => None,
-        }
-    }
-
-    /// True if the parameters ask for wavelength-dependent refraction.
-    pub fn is_dispersive(p: &ResolvedParams) -> bool {
-        Dispersion::from_preset(p.scalar(3), p.scalar(4)) != Dispersion::None
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
 
     #[test]
-    fn sellmeier_presets_give_the_catalogue_indices() {
-        // Catalogue n_d at 587.56 nm: N-BK7 1.5168, fused silica 1.4585.
-        assert!((BK7.ior(LAMBDA_D) - 1.5168).abs() < 2e-4, "{}", BK7.ior(LAMBDA_D));
-        assert!((FUSED_SILICA.ior(LAMBDA_D) - 1.4585).abs() < 2e-4, "{}", FUSED_SILICA.ior(LAMBDA_D));
-        // Normal dispersion: blue bends more than red. Abbe number V_d = (n_d − 1)/(n_F − n_C):
-        // N-BK7 64.17, fused silica 67.8.
-        for (glass, abbe) in [(BK7, 64.17f32), (FUSED_SILICA, 67.8)] {
-            let v = (glass.ior(LAMBDA_D) - 1.0) / (glass.ior(486.13) - glass.ior(656.27));
-            assert!((v - abbe).abs() < 0.5, "Abbe {v} vs {abbe}");
-        }
-    }
-
-    #[test]
-    fn cauchy_is_anchored_at_the_d_line() {
-        let d = Dispersion::Cauchy { b: 0.0042 };
-        assert!((d.ior(1.5, LAMBDA_D) - 1.5).abs() < 1e-6);
-        assert!(d.ior(1.5, 450.0) > 1.5 && d.ior(1.5, 650.0) < 1.5);
-        assert_eq!(Dispersion::None.ior(1.33, 400.0), 1.33);
-    }
-
-    #[test]
     fn dispersive_glass_flags_wavelength_dependence_except_in_rgb() {
-        let p = DEF.resolve("glass", &[("dispersion", crate::params::ParamValue::Scalar(2.0))]).unwrap();
+        use crate::params::{ParamSet, ParamValue};
+        let p = DielectricParams::resolve("glass", &[("dispersion", ParamValue::Scalar(2.0))]).unwrap();
+        assert_eq!(p.dispersion, DispersionPreset::Bk7);
         let hero = SampledWavelengths::<4>::sample_hero(0.3);
-        let d = Dielectric::from_params(&p, &hero);
+        let d = p.bsdf(&hero);
         assert!(d.flags().contains(ScatterFlags::WAVELENGTH_DEPENDENT));
-        assert!((d.eta - BK7.ior(hero.lambda[0])).abs() < 1e-6);
-        let rgb = Dielectric::from_params(&p, &SampledWavelengths::<3>::rgb());
+        assert!((d.eta - crate::models::dispersion::BK7.ior(hero.lambda[0])).abs() < 1e-6);
+        let rgb = p.bsdf(&SampledWavelengths::<3>::rgb());
         assert!(!rgb.flags().contains(ScatterFlags::WAVELENGTH_DEPENDENT));
-        let plain = Dielectric::from_params(&DEF.defaults(), &hero);
-        assert!(!plain.flags().contains(ScatterFlags::WAVELENGTH_DEPENDENT));
-        assert!(Dielectric::<4>::absorption(&DEF.defaults()).is_none());
+        let plain = DielectricParams::default();
+        assert!(!plain.bsdf(&hero).flags().contains(ScatterFlags::WAVELENGTH_DEPENDENT));
+        assert!(plain.absorption().is_none() && !plain.is_dispersive() && p.is_dispersive());
+        let named = DielectricParams::resolve("glass", &[("dispersion", ParamValue::Name("fused-silica".into()))]);
+        assert_eq!(named.unwrap().dispersion, DispersionPreset::FusedSilica);
     }
 }

@@ -1,26 +1,29 @@
 //! Lambertian (perfectly diffuse) reflection.
 
-use crate::params::{ModelDef, ParamDef, ParamKind, ResolvedParams};
 use crate::sampling::{cosine_hemisphere_two_sided, cosine_hemisphere_two_sided_pdf};
-use crate::{Bsdf, BsdfSample, ScatterFlags};
+use crate::wgsl::{ModelWgsl, WgslPiece};
+use crate::{Bsdf, BsdfSample, Model, ScatterFlags};
 use glam::{Vec2, Vec3};
 use spectral::{SampledSpectrum, SampledWavelengths};
 use std::f32::consts::FRAC_1_PI;
 
-/// Lambert's declaration.
-pub const DEF: ModelDef = ModelDef {
-    name: "lambert",
-    doc: "Lambertian reflection f = R/π (Lambert 1760), two-sided.",
-    params: &[ParamDef {
-        name: "reflectance",
-        kind: ParamKind::Spectrum,
-        min: 0.0,
-        max: 1.0,
-        default: 0.5,
-        mtl_key: Some("Kd"),
-        doc: "diffuse albedo R",
-    }],
-};
+crate::model_params! {
+    /// Lambert's parameters.
+    pub struct LambertParams for "lambert" {
+        doc: "Lambertian reflection f = R/π (Lambert 1760), two-sided.",
+        reflectance: spectrum { doc: "diffuse albedo R", default: 0.5, mtl: "Kd" },
+    }
+}
+
+impl Model for LambertParams {
+    type Bsdf<const N: usize> = Lambert<N>;
+    const WGSL: ModelWgsl = ModelWgsl { source: include_str!("lambert.wgsl"), needs: &[WgslPiece::Sampling], constants: &[] };
+
+    #[inline]
+    fn bsdf<const N: usize>(&self, wl: &SampledWavelengths<N>) -> Lambert<N> {
+        Lambert { reflectance: self.reflectance.sample(wl) }
+    }
+}
 
 #[inline]
 pub(crate) fn same_hemisphere(a: Vec3, b: Vec3) -> bool {
@@ -54,12 +57,5 @@ impl<const N: usize> Bsdf<N> for Lambert<N> {
     fn sample(&self, wo: Vec3, _uc: f32, u: Vec2) -> Option<BsdfSample<N>> {
         let (wi, pdf) = cosine_hemisphere_two_sided(wo, u)?;
         Some(BsdfSample { wi, f: self.reflectance * FRAC_1_PI, pdf, flags: self.flags() })
-    }
-}
-
-impl<const N: usize> Lambert<N> {
-    /// From parameters resolved against [`DEF`], at the path's wavelengths.
-    pub fn from_params(p: &ResolvedParams, wl: &SampledWavelengths<N>) -> Self {
-        Self { reflectance: p.colour(0).sample(wl) }
     }
 }

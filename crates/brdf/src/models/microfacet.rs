@@ -23,77 +23,97 @@
 //! s(ω) = √(α_x² ω_x² + α_y² ω_y² + ω_z²), G1(ω) = 2|ω_z| / (|ω_z| + s(ω)), so the
 //! cosines in the denominators of the BSDFs cancel analytically.
 
+use crate::frame::{flip_z, reflect};
 use crate::fresnel::fresnel_dielectric;
-use crate::models::conductor::{METAL_PARAMS, fresnel_spectrum, metal_from_params};
-use crate::params::{ModelDef, ParamDef, ParamKind, ResolvedParams};
-use crate::{Bsdf, BsdfSample, ScatterFlags};
+use crate::models::metal::{MetalPreset, fresnel_spectrum};
+use crate::wgsl::{ModelWgsl, WgslPiece};
+use crate::{Bsdf, BsdfSample, Model, ScatterFlags};
 use glam::{Vec2, Vec3};
 use spectral::{SampledSpectrum, SampledWavelengths};
 use std::f32::consts::{PI, TAU};
 
-const ALPHA: ParamDef = ParamDef {
-    name: "alpha",
-    kind: ParamKind::Scalar,
-    min: Ggx::ALPHA_MIN,
-    max: 1.0,
-    default: 0.1,
-    mtl_key: None,
-    doc: "GGX roughness α (the slope-space width, not perceptual roughness; α = r² for a perceptual r); \
-          α_x when alpha_y is set",
-};
-
-const ALPHA_Y: ParamDef = ParamDef {
-    name: "alpha_y",
-    kind: ParamKind::Scalar,
-    min: 0.0,
-    max: 1.0,
-    default: 0.0,
-    mtl_key: None,
-    doc: "GGX roughness along the bitangent for anisotropic surfaces; 0 means alpha (isotropic)",
-};
-
-/// The rough conductor's declaration.
-pub const ROUGH_CONDUCTOR_DEF: ModelDef = ModelDef {
-    name: "roughconductor",
-    doc: "Rough conductor: GGX microfacets (Walter et al. 2007) with height-correlated Smith masking \
-          (Heitz 2014), the exact conductor Fresnel term and visible-normal sampling (Heitz 2018); two-sided.",
-    params: &[ALPHA, ALPHA_Y, METAL_PARAMS[0], METAL_PARAMS[1], METAL_PARAMS[2], METAL_PARAMS[3]],
-};
-
-/// The rough dielectric's declaration.
-pub const ROUGH_DIELECTRIC_DEF: ModelDef = ModelDef {
-    name: "roughdielectric",
-    doc: "Rough dielectric: GGX microfacet reflection and refraction (Walter et al. 2007, eq. 20–21) with \
-          separable Smith masking, exact dielectric Fresnel and visible-normal sampling (Heitz 2018).",
-    params: &[
-        ALPHA,
-        ALPHA_Y,
-        ParamDef {
-            name: "ior",
-            kind: ParamKind::Scalar,
-            min: 1.0e-3,
-            max: 10.0,
-            default: 1.5,
-            mtl_key: Some("Ni"),
-            doc: "index of refraction inside (the normal points outside, index 1)",
+crate::model_params! {
+    /// The rough conductor's parameters.
+    pub struct RoughConductorParams for "roughconductor" {
+        doc: "Rough conductor: GGX microfacets (Walter et al. 2007) with height-correlated Smith masking \
+              (Heitz 2014), the exact conductor Fresnel term and visible-normal sampling (Heitz 2018); two-sided.",
+        alpha: scalar {
+            doc: "GGX roughness α (the slope-space width, not perceptual roughness; α = r² for a perceptual r); \
+                  α_x when alpha_y is set",
+            default: 0.1,
+            min: Ggx::ALPHA_MIN,
+            max: 1.0,
         },
-        ParamDef {
-            name: "tint",
-            kind: ParamKind::Spectrum,
+        alpha_y: scalar {
+            doc: "GGX roughness along the bitangent for anisotropic surfaces; 0 means alpha (isotropic)",
+            default: 0.0,
             min: 0.0,
             max: 1.0,
-            default: 1.0,
-            mtl_key: Some("Tf"),
-            doc: "colour filter on reflection and transmission",
         },
-    ],
-};
+        metal: choice(MetalPreset) {
+            doc: "measured metal: custom (eta, k), gold, silver, copper (default), aluminium",
+            default: MetalPreset::Copper,
+        },
+        eta: scalar { doc: "real part n of the complex index (metal = custom)", default: 1.5, min: 0.0, max: 10.0 },
+        k: scalar { doc: "extinction coefficient κ (metal = custom)", default: 3.0, min: 0.0, max: 20.0 },
+        tint: spectrum { doc: "colour filter multiplying the Fresnel reflectance", default: 1.0 },
+    }
+}
 
-/// α_x, α_y from the `alpha` and `alpha_y` parameters at indices 0 and 1.
-fn alphas_from_params(p: &ResolvedParams) -> Ggx {
-    let ax = p.scalar(0);
-    let ay = p.scalar(1);
-    Ggx::new(ax, if ay > 0.0 { ay } else { ax })
+impl Model for RoughConductorParams {
+    type Bsdf<const N: usize> = RoughConductor<N>;
+    const WGSL: ModelWgsl = ModelWgsl {
+        source: include_str!("rough_conductor.wgsl"),
+        needs: &[WgslPiece::Fresnel, WgslPiece::Metal, WgslPiece::Ggx],
+        constants: &[],
+    };
+
+    #[inline]
+    fn bsdf<const N: usize>(&self, wl: &SampledWavelengths<N>) -> RoughConductor<N> {
+        let (eta, k) = self.metal.eta_k(self.eta, self.k, wl);
+        RoughConductor { distribution: Ggx::from_alphas(self.alpha, self.alpha_y), eta, k, tint: self.tint.sample(wl) }
+    }
+}
+
+crate::model_params! {
+    /// The rough dielectric's parameters.
+    pub struct RoughDielectricParams for "roughdielectric" {
+        doc: "Rough dielectric: GGX microfacet reflection and refraction (Walter et al. 2007, eq. 20–21) with \
+              separable Smith masking, exact dielectric Fresnel and visible-normal sampling (Heitz 2018).",
+        alpha: scalar {
+            doc: "GGX roughness α (slope-space width); α_x when alpha_y is set",
+            default: 0.1,
+            min: Ggx::ALPHA_MIN,
+            max: 1.0,
+        },
+        alpha_y: scalar { doc: "GGX roughness along the bitangent; 0 means alpha", default: 0.0, min: 0.0, max: 1.0 },
+        ior: scalar {
+            doc: "index of refraction inside (the normal points outside, index 1)",
+            default: 1.5,
+            min: 1.0e-3,
+            max: 10.0,
+            mtl: "Ni",
+        },
+        tint: spectrum { doc: "colour filter on reflection and transmission", default: 1.0, mtl: "Tf" },
+    }
+}
+
+impl Model for RoughDielectricParams {
+    type Bsdf<const N: usize> = RoughDielectric<N>;
+    const WGSL: ModelWgsl = ModelWgsl {
+        source: include_str!("rough_dielectric.wgsl"),
+        needs: &[WgslPiece::Fresnel, WgslPiece::Ggx],
+        constants: &[],
+    };
+
+    #[inline]
+    fn bsdf<const N: usize>(&self, wl: &SampledWavelengths<N>) -> RoughDielectric<N> {
+        RoughDielectric { distribution: Ggx::from_alphas(self.alpha, self.alpha_y), eta: self.ior, tint: self.tint.sample(wl) }
+    }
+
+    fn is_transmissive(&self) -> bool {
+        true
+    }
 }
 
 /// The anisotropic GGX (Trowbridge–Reitz) microfacet distribution in the local frame
@@ -114,6 +134,11 @@ impl Ggx {
     /// A distribution with roughnesses α_x, α_y, each raised to at least [`Self::ALPHA_MIN`].
     pub fn new(alpha_x: f32, alpha_y: f32) -> Self {
         Self { alpha_x: alpha_x.max(Self::ALPHA_MIN), alpha_y: alpha_y.max(Self::ALPHA_MIN) }
+    }
+
+    /// From the `alpha` and `alpha_y` parameters: α_y = 0 means α_y = α_x.
+    pub fn from_alphas(alpha: f32, alpha_y: f32) -> Self {
+        Self::new(alpha, if alpha_y > 0.0 { alpha_y } else { alpha })
     }
 
     /// An isotropic distribution.
@@ -210,19 +235,6 @@ impl Ggx {
     }
 }
 
-/// Reflection of `w` about the unit vector `h`.
-#[inline]
-fn reflect(w: Vec3, h: Vec3) -> Vec3 {
-    2.0 * w.dot(h) * h - w
-}
-
-/// Flips a direction to the other side of the surface (mirror in the tangent plane),
-/// which leaves the anisotropic distribution unchanged.
-#[inline]
-fn flip_z(w: Vec3) -> Vec3 {
-    Vec3::new(w.x, w.y, -w.z)
-}
-
 #[inline]
 fn finite_dir(w: Vec3) -> bool {
     w.is_finite() && w.length_squared() > 0.0
@@ -247,12 +259,6 @@ impl<const N: usize> RoughConductor<N> {
     /// A rough conductor of index η + iκ (per wavelength), untinted.
     pub fn new(distribution: Ggx, eta: SampledSpectrum<N>, k: SampledSpectrum<N>) -> Self {
         Self { distribution, eta, k, tint: SampledSpectrum::one() }
-    }
-
-    /// From parameters resolved against [`ROUGH_CONDUCTOR_DEF`], at the path's wavelengths.
-    pub fn from_params(p: &ResolvedParams, wl: &SampledWavelengths<N>) -> Self {
-        let (eta, k, tint) = metal_from_params(p, 2, wl);
-        Self { distribution: alphas_from_params(p), eta, k, tint }
     }
 
     /// (ωo, ωi, h) moved to the upper hemisphere, or None if not a reflection.
@@ -340,11 +346,6 @@ impl<const N: usize> RoughDielectric<N> {
     /// A rough dielectric of relative index η, untinted.
     pub fn new(distribution: Ggx, eta: f32) -> Self {
         Self { distribution, eta, tint: SampledSpectrum::one() }
-    }
-
-    /// From parameters resolved against [`ROUGH_DIELECTRIC_DEF`], at the path's wavelengths.
-    pub fn from_params(p: &ResolvedParams, wl: &SampledWavelengths<N>) -> Self {
-        Self { distribution: alphas_from_params(p), eta: p.scalar(2), tint: p.colour(3).sample(wl) }
     }
 
     /// f (if `with_f`) and pdf together: they share h, F, D and the Jacobian. ωo below
@@ -458,7 +459,7 @@ impl<const N: usize> Bsdf<N> for RoughDielectric<N> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::models::conductor::{Metal, fresnel_conductor};
+    use crate::models::metal::{Metal, fresnel_conductor};
     use crate::sampling::uniform_sphere;
     use crate::validation::{
         Chi2Config, TestRng, chi2_test, directional_albedo, pdf_integral, reciprocity_error, sidak,
@@ -976,28 +977,18 @@ mod tests {
     #[test]
     fn parameters_resolve() {
         let wl = SampledWavelengths::<4>::fixed_bins(450.0, 100.0);
-        let p = ROUGH_CONDUCTOR_DEF
-            .resolve(
-                "m",
-                &[("alpha", crate::params::ParamValue::Scalar(0.2)), ("metal", crate::params::ParamValue::Scalar(1.0))],
-            )
-            .unwrap();
-        let c = RoughConductor::from_params(&p, &wl);
+        use crate::params::{ParamSet, ParamValue::Scalar};
+        let p = RoughConductorParams::resolve("m", &[("alpha", Scalar(0.2)), ("metal", Scalar(1.0))]).unwrap();
+        let c = p.bsdf(&wl);
         assert_eq!(c.distribution, Ggx::isotropic(0.2));
         assert_eq!(c.eta, Metal::Gold.sample(&wl).0);
-        let p = ROUGH_DIELECTRIC_DEF
-            .resolve(
-                "m",
-                &[
-                    ("alpha", crate::params::ParamValue::Scalar(0.2)),
-                    ("alpha_y", crate::params::ParamValue::Scalar(0.6)),
-                    ("ior", crate::params::ParamValue::Scalar(1.33)),
-                ],
-            )
-            .unwrap();
-        let d = RoughDielectric::from_params(&p, &wl);
+        let p =
+            RoughDielectricParams::resolve("m", &[("alpha", Scalar(0.2)), ("alpha_y", Scalar(0.6)), ("ior", Scalar(1.33))])
+                .unwrap();
+        let d = p.bsdf(&wl);
         assert_eq!((d.distribution, d.eta, d.tint), (Ggx::new(0.2, 0.6), 1.33, SampledSpectrum::one()));
-        assert!(ROUGH_DIELECTRIC_DEF.resolve("m", &[("alpha", crate::params::ParamValue::Scalar(0.0))]).is_err());
-        assert_eq!(ROUGH_DIELECTRIC_DEF.param_by_mtl_key("Ni").map(|p| p.name), Some("ior"));
+        assert!(p.is_transmissive() && !RoughConductorParams::default().is_transmissive());
+        assert!(RoughDielectricParams::resolve("m", &[("alpha", Scalar(0.0))]).is_err());
+        assert_eq!(RoughDielectricParams::DEF.param_by_mtl_key("Ni").map(|p| p.name), Some("ior"));
     }
 }

@@ -1,25 +1,28 @@
 //! The perfect mirror.
 
-use crate::fresnel::reflect_local;
-use crate::params::{ModelDef, ParamDef, ParamKind, ResolvedParams};
-use crate::{Bsdf, BsdfSample, ScatterFlags};
+use crate::frame::reflect_local;
+use crate::wgsl::ModelWgsl;
+use crate::{Bsdf, BsdfSample, Model, ScatterFlags};
 use glam::{Vec2, Vec3};
 use spectral::{SampledSpectrum, SampledWavelengths};
 
-/// The mirror's declaration.
-pub const DEF: ModelDef = ModelDef {
-    name: "mirror",
-    doc: "Perfect specular reflection (a Dirac delta at the mirror direction), two-sided.",
-    params: &[ParamDef {
-        name: "reflectance",
-        kind: ParamKind::Spectrum,
-        min: 0.0,
-        max: 1.0,
-        default: 1.0,
-        mtl_key: Some("Ks"),
-        doc: "reflectance at every angle",
-    }],
-};
+crate::model_params! {
+    /// The mirror's parameters.
+    pub struct MirrorParams for "mirror" {
+        doc: "Perfect specular reflection (a Dirac delta at the mirror direction), two-sided.",
+        reflectance: spectrum { doc: "reflectance at every angle", default: 1.0, mtl: "Ks" },
+    }
+}
+
+impl Model for MirrorParams {
+    type Bsdf<const N: usize> = Mirror<N>;
+    const WGSL: ModelWgsl = ModelWgsl { source: include_str!("mirror.wgsl"), needs: &[], constants: &[] };
+
+    #[inline]
+    fn bsdf<const N: usize>(&self, wl: &SampledWavelengths<N>) -> Mirror<N> {
+        Mirror { reflectance: self.reflectance.sample(wl) }
+    }
+}
 
 /// A perfect mirror with reflectance R (1 for an ideal mirror): a Dirac delta at the
 /// mirror direction.
@@ -46,12 +49,5 @@ impl<const N: usize> Bsdf<N> for Mirror<N> {
         }
         let wi = reflect_local(wo);
         Some(BsdfSample { wi, f: self.reflectance / wi.z.abs(), pdf: 1.0, flags: self.flags() })
-    }
-}
-
-impl<const N: usize> Mirror<N> {
-    /// From parameters resolved against [`DEF`], at the path's wavelengths.
-    pub fn from_params(p: &ResolvedParams, wl: &SampledWavelengths<N>) -> Self {
-        Self { reflectance: p.colour(0).sample(wl) }
     }
 }

@@ -1,42 +1,52 @@
-//! The BSDF models, one file each, each with its parameter declaration (`DEF`).
+//! The BSDF models, one file each: its typed parameters (declared once with
+//! [`model_params!`](crate::model_params)), its [`Model`](crate::Model) impl, the BSDF
+//! itself and, beside it, its WGSL twin. The registry below lists them.
 
 pub mod ashikhmin;
 pub mod conductor;
 pub mod dielectric;
+pub mod dispersion;
 pub mod lambert;
+pub mod metal;
 pub mod microfacet;
 pub mod mirror;
 pub mod oren_nayar;
 pub mod schlick;
 
-pub use ashikhmin::AshikhminShirley;
-pub use conductor::{Metal, SmoothConductor, fresnel_conductor};
-pub use dielectric::{Dielectric, Dispersion, FresnelModel};
-pub use lambert::Lambert;
-pub use microfacet::{Ggx, RoughConductor, RoughDielectric};
-pub use mirror::Mirror;
-pub use oren_nayar::OrenNayar;
-pub use schlick::{Schlick, SchlickGeometry};
+pub use ashikhmin::{Ashikhmin, AshikhminParams};
+pub use conductor::{Conductor, ConductorParams};
+pub use dielectric::{Dielectric, DielectricParams, FresnelModel};
+pub use dispersion::{Dispersion, DispersionPreset};
+pub use lambert::{Lambert, LambertParams};
+pub use metal::{Metal, MetalPreset, fresnel_conductor};
+pub use microfacet::{Ggx, RoughConductor, RoughConductorParams, RoughDielectric, RoughDielectricParams};
+pub use mirror::{Mirror, MirrorParams};
+pub use oren_nayar::{OrenNayar, OrenNayarParams};
+pub use schlick::{Schlick, SchlickGeometry, SchlickParams};
 
-use crate::params::ModelDef;
-
-/// Every built-in model's declaration, for loaders, validation and code generation.
-pub const ALL: &[&ModelDef] = &[
-    &lambert::DEF,
-    &mirror::DEF,
-    &dielectric::DEF,
-    &conductor::DEF,
-    &microfacet::ROUGH_CONDUCTOR_DEF,
-    &microfacet::ROUGH_DIELECTRIC_DEF,
-    &oren_nayar::DEF,
-    &schlick::DEF,
-    &ashikhmin::DEF,
-];
-
-/// The declaration of the model called `name`.
-pub fn by_name(name: &str) -> Option<&'static ModelDef> {
-    ALL.iter().copied().find(|d| d.name.eq_ignore_ascii_case(name))
+/// Calls `callback!` with the built-in models, `Variant(ParamsType)` each, followed by
+/// `extra` entries: the one list of models. Adding a model to the renderer is one line
+/// here (and its file). A program may register its own models beside the built-ins:
+/// `brdf::with_builtin_models!(brdf::registry, Toy(ToyParams));`
+#[macro_export]
+macro_rules! with_builtin_models {
+    ($callback:path $(, $($extra:tt)*)?) => {
+        $callback! {
+            Lambert($crate::models::LambertParams),
+            Mirror($crate::models::MirrorParams),
+            Dielectric($crate::models::DielectricParams),
+            Conductor($crate::models::ConductorParams),
+            RoughConductor($crate::models::RoughConductorParams),
+            RoughDielectric($crate::models::RoughDielectricParams),
+            OrenNayar($crate::models::OrenNayarParams),
+            Schlick($crate::models::SchlickParams),
+            Ashikhmin($crate::models::AshikhminParams),
+            $($($extra)*)?
+        }
+    };
 }
+
+crate::with_builtin_models!(crate::registry);
 
 #[cfg(test)]
 mod tests {
@@ -142,14 +152,23 @@ mod tests {
 
     #[test]
     fn every_model_is_registered_with_valid_defaults() {
-        for def in ALL {
-            let _ = def.defaults();
-            assert!(by_name(def.name).is_some());
+        let mut names = std::collections::HashSet::new();
+        for (k, &model) in ModelId::ALL.iter().enumerate() {
+            let def = model.def();
+            assert!(names.insert(def.name), "two models called {}", def.name);
+            assert_eq!(model.index() as usize, k);
+            assert_eq!(ModelId::by_name(def.name), Some(model));
+            assert_eq!(ModelId::by_name(&def.name.to_uppercase()), Some(model));
+            assert!(def.name.chars().all(|c| c.is_ascii_lowercase()), "{}: not a WGSL-friendly name", def.name);
+            let defaults = model.defaults();
+            assert_eq!(defaults.model(), model);
+            assert_eq!(model.from_resolved(&defaults.to_resolved()), defaults);
             for p in def.params {
                 assert!(p.min <= p.default && p.default <= p.max, "{}.{}", def.name, p.name);
                 assert!(!p.doc.is_empty());
             }
+            assert!(model.wgsl().source.contains(&format!("fn {}_sample(", def.name)), "{}", def.name);
         }
-        assert!(by_name("nonexistent").is_none());
+        assert!(ModelId::by_name("nonexistent").is_none());
     }
 }

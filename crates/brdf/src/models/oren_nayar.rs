@@ -1,39 +1,38 @@
 //! Oren–Nayar rough diffuse reflection.
 
 use crate::models::lambert::same_hemisphere;
-use crate::params::{ModelDef, ParamDef, ParamKind, ResolvedParams};
 use crate::sampling::{cosine_hemisphere_two_sided, cosine_hemisphere_two_sided_pdf};
-use crate::{Bsdf, BsdfSample, ScatterFlags};
+use crate::wgsl::{ModelWgsl, WgslPiece};
+use crate::{Bsdf, BsdfSample, Model, ScatterFlags};
 use glam::{Vec2, Vec3};
 use spectral::{SampledSpectrum, SampledWavelengths};
 use std::f32::consts::{FRAC_1_PI, FRAC_PI_2};
 
-/// Oren–Nayar's declaration.
-pub const DEF: ModelDef = ModelDef {
-    name: "orennayar",
-    doc: "Oren–Nayar rough diffuse reflection, the qualitative model (Oren & Nayar 1994, \"Generalization of \
-          Lambert's Reflectance Model\", SIGGRAPH); σ = 0 is Lambert; two-sided.",
-    params: &[
-        ParamDef {
-            name: "reflectance",
-            kind: ParamKind::Spectrum,
-            min: 0.0,
-            max: 1.0,
-            default: 0.5,
-            mtl_key: Some("Kd"),
-            doc: "diffuse albedo R (of the facets)",
-        },
-        ParamDef {
-            name: "sigma",
-            kind: ParamKind::Scalar,
+crate::model_params! {
+    /// Oren–Nayar's parameters.
+    pub struct OrenNayarParams for "orennayar" {
+        doc: "Oren–Nayar rough diffuse reflection, the qualitative model (Oren & Nayar 1994, \"Generalization of \
+              Lambert's Reflectance Model\", SIGGRAPH); σ = 0 is Lambert; two-sided.",
+        reflectance: spectrum { doc: "diffuse albedo R (of the facets)", default: 0.5, mtl: "Kd" },
+        sigma: scalar {
+            doc: "roughness σ: standard deviation of the facet slope angle, radians",
+            default: 0.3,
             min: 0.0,
             max: FRAC_PI_2,
-            default: 0.3,
-            mtl_key: None,
-            doc: "roughness σ: standard deviation of the facet slope angle, radians",
         },
-    ],
-};
+    }
+}
+
+impl Model for OrenNayarParams {
+    type Bsdf<const N: usize> = OrenNayar<N>;
+    const WGSL: ModelWgsl =
+        ModelWgsl { source: include_str!("oren_nayar.wgsl"), needs: &[WgslPiece::Sampling], constants: &[] };
+
+    #[inline]
+    fn bsdf<const N: usize>(&self, wl: &SampledWavelengths<N>) -> OrenNayar<N> {
+        OrenNayar::new(self.reflectance.sample(wl), self.sigma)
+    }
+}
 
 /// The qualitative Oren–Nayar model (Oren & Nayar 1994, "Generalization of Lambert's
 /// Reflectance Model", SIGGRAPH, its simplified "qualitative model"):
@@ -63,11 +62,6 @@ impl<const N: usize> OrenNayar<N> {
     pub fn new(reflectance: SampledSpectrum<N>, sigma: f32) -> Self {
         let s2 = sigma * sigma;
         Self { reflectance, a: 1.0 - 0.5 * s2 / (s2 + 0.33), b: 0.45 * s2 / (s2 + 0.09) }
-    }
-
-    /// From parameters resolved against [`DEF`], at the path's wavelengths.
-    pub fn from_params(p: &ResolvedParams, wl: &SampledWavelengths<N>) -> Self {
-        Self::new(p.colour(0).sample(wl), p.scalar(1))
     }
 
     /// f / (R/π) = A + B max(0, cos Δφ) sin α tan β, for ωo, ωi on the same side.
@@ -281,9 +275,9 @@ mod tests {
     #[test]
     fn parameters_resolve() {
         let wl = SampledWavelengths::<4>::fixed_bins(450.0, 100.0);
-        let p = DEF.resolve("m", &[("sigma", crate::params::ParamValue::Scalar(0.5))]).unwrap();
-        let on = OrenNayar::from_params(&p, &wl);
-        assert_eq!(on, OrenNayar::new(SampledSpectrum::splat(0.5), 0.5));
-        assert!(DEF.resolve("m", &[("sigma", crate::params::ParamValue::Scalar(2.0))]).is_err());
+        use crate::params::{ParamSet, ParamValue};
+        let p = OrenNayarParams::resolve("m", &[("sigma", ParamValue::Scalar(0.5))]).unwrap();
+        assert_eq!(p.bsdf(&wl), OrenNayar::new(SampledSpectrum::splat(0.5), 0.5));
+        assert!(OrenNayarParams::resolve("m", &[("sigma", ParamValue::Scalar(2.0))]).is_err());
     }
 }

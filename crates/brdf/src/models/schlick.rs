@@ -39,84 +39,72 @@
 //! grazing ωo (B₂'s multiple-scattering term alone integrates to b(1 − G(v₂)Ḡ)/(2 v₂),
 //! Ḡ = ∫₀¹ G); see the tests for measured values.
 
-use crate::params::{ModelDef, ParamDef, ParamKind, ResolvedParams};
+use crate::frame::flip_z;
 use crate::sampling::{cosine_hemisphere, cosine_hemisphere_pdf};
-use crate::{Bsdf, BsdfSample, ScatterFlags};
+use crate::wgsl::{ModelWgsl, WgslConstant, WgslPiece, WgslValue};
+use crate::{Bsdf, BsdfSample, Model, ScatterFlags};
 use glam::{Vec2, Vec3};
 use spectral::{SampledSpectrum, SampledWavelengths};
 use std::f32::consts::{FRAC_1_PI, FRAC_PI_2, TAU};
 
-/// Schlick's declaration.
-pub const DEF: ModelDef = ModelDef {
-    name: "schlick",
-    doc: "Schlick 1994 (CGF 13(3)): R = S(u)·(a/π + b·B + c·mirror), Schlick Fresnel S, rational \
-          zenith Z(r) and azimuth A(p) factors, B1 or B2 (self-shadowing); reflection only, two-sided.",
-    params: &[
-        ParamDef {
-            name: "reflectance",
-            kind: ParamKind::Spectrum,
-            min: 0.0,
-            max: 1.0,
-            default: 0.5,
-            mtl_key: Some("Kd"),
+crate::model_params! {
+    /// Schlick's parameters.
+    pub struct SchlickParams for "schlick" {
+        doc: "Schlick 1994 (CGF 13(3)): R = S(u)·(a/π + b·B + c·mirror), Schlick Fresnel S, rational \
+              zenith Z(r) and azimuth A(p) factors, B1 or B2 (self-shadowing); reflection only, two-sided.",
+        reflectance: spectrum {
             doc: "reflection factor C (reflectance at normal incidence, S(1) = C)",
+            default: 0.5,
+            mtl: "Kd",
         },
-        ParamDef {
-            name: "roughness",
-            kind: ParamKind::Scalar,
-            min: 0.0,
-            max: 1.0,
-            default: 0.3,
-            mtl_key: Some("rough"),
-            doc: "roughness r: 0 a mirror, 1 Lambertian-like",
-        },
-        ParamDef {
-            name: "isotropy",
-            kind: ParamKind::Scalar,
-            min: 0.0,
-            max: 1.0,
-            default: 1.0,
-            mtl_key: Some("p"),
+        roughness: scalar { doc: "roughness r: 0 a mirror, 1 Lambertian-like", default: 0.3, min: 0.0, max: 1.0, mtl: "rough" },
+        isotropy: scalar {
             doc: "isotropy p: 1 isotropic, towards 0 grooves along the tangent (highlight stretched along the bitangent)",
-        },
-        ParamDef {
-            name: "a",
-            kind: ParamKind::Scalar,
-            min: -1.0,
-            max: 1.0,
-            default: -1.0,
-            mtl_key: None,
-            doc: "Lambertian weight a; if a, b or c is negative, all three come from r (thesis eq. 6.5)",
-        },
-        ParamDef {
-            name: "b",
-            kind: ParamKind::Scalar,
-            min: -1.0,
-            max: 1.0,
-            default: -1.0,
-            mtl_key: None,
-            doc: "glossy (microfacet) weight b; negative: derived from r",
-        },
-        ParamDef {
-            name: "c",
-            kind: ParamKind::Scalar,
-            min: -1.0,
-            max: 1.0,
-            default: -1.0,
-            mtl_key: None,
-            doc: "mirror weight c; negative: derived from r. Given weights summing over 1 are scaled to sum 1",
-        },
-        ParamDef {
-            name: "geometric",
-            kind: ParamKind::Scalar,
+            default: 1.0,
             min: 0.0,
             max: 1.0,
-            default: 1.0,
-            mtl_key: None,
-            doc: "0: B1 (no self-shadowing), 1: B2 (self-shadowing G(v) = v/(r − rv + v) and its multiple-reflection term)",
+            mtl: "p",
         },
-    ],
-};
+        a: scalar {
+            doc: "Lambertian weight a; if a, b or c is negative, all three come from r (thesis eq. 6.5)",
+            default: -1.0,
+            min: -1.0,
+            max: 1.0,
+        },
+        b: scalar { doc: "glossy (microfacet) weight b; negative: derived from r", default: -1.0, min: -1.0, max: 1.0 },
+        c: scalar {
+            doc: "mirror weight c; negative: derived from r. Given weights summing over 1 are scaled to sum 1",
+            default: -1.0,
+            min: -1.0,
+            max: 1.0,
+        },
+        geometric: choice(SchlickGeometry) {
+            doc: "b1: no self-shadowing; b2: self-shadowing G(v) = v/(r − rv + v) and its multiple-reflection term",
+            default: SchlickGeometry::B2,
+        },
+    }
+}
+
+impl Model for SchlickParams {
+    type Bsdf<const N: usize> = Schlick<N>;
+    const WGSL: ModelWgsl = ModelWgsl {
+        source: include_str!("schlick.wgsl"),
+        needs: &[WgslPiece::Sampling],
+        constants: &[
+            WgslConstant { name: "MAT_SCHLICK_MIN_ROUGHNESS", value: WgslValue::F32(MIN_ROUGHNESS) },
+            WgslConstant { name: "MAT_SCHLICK_MIN_ISOTROPY", value: WgslValue::F32(MIN_ISOTROPY) },
+            WgslConstant { name: "MAT_SCHLICK_MIN_COS", value: WgslValue::F32(MIN_COS) },
+            WgslConstant { name: "MAT_SCHLICK_B2", value: WgslValue::U32(SchlickGeometry::B2.index()) },
+        ],
+    };
+
+    #[inline]
+    fn bsdf<const N: usize>(&self, wl: &SampledWavelengths<N>) -> Schlick<N> {
+        let w = [self.a, self.b, self.c];
+        let weights = if w.iter().any(|&x| x < 0.0) { None } else { Some(w) };
+        Schlick::new(self.reflectance.sample(wl), self.roughness, self.isotropy, weights, self.geometric)
+    }
+}
 
 /// Roughness used by the glossy terms when r is smaller (r = 0 makes Z a Dirac delta; the
 /// derived weights then give everything to the mirror lobe instead).
@@ -126,19 +114,19 @@ pub const MIN_ISOTROPY: f32 = 1e-3;
 /// Smallest cosine in the 1/(4π v₁ v₂) factors, so that f stays finite on the horizon.
 const MIN_COS: f32 = 1e-6;
 
-/// Which microfacet term B Schlick's model uses.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum SchlickGeometry {
-    /// B₁ = Z Â / (4π v₁ v₂): no self-shadowing.
-    B1,
-    /// B₂: self-shadowing by G(v) = v/(r − r v + v), the shadowed fraction re-emitted by
-    /// the multiple-reflection term (1 − G G)/(4π v₁ v₂) (paper §5, thesis eq. 6.2–6.8).
-    #[default]
-    B2,
+crate::choice_param! {
+    /// Which microfacet term B Schlick's model uses.
+    pub enum SchlickGeometry {
+        /// B₁ = Z Â / (4π v₁ v₂): no self-shadowing.
+        B1 = "b1",
+        /// B₂: self-shadowing by G(v) = v/(r − r v + v), the shadowed fraction re-emitted by
+        /// the multiple-reflection term (1 − G G)/(4π v₁ v₂) (paper §5, thesis eq. 6.2–6.8).
+        B2 = "b2",
+    }
 }
 
 /// Schlick's BRDF bound to a path's wavelengths. Build it with [`Schlick::new`] or
-/// [`Schlick::from_params`]: the constructor derives the weights and normalisations.
+/// [`SchlickParams`]: the constructor derives the weights and normalisations.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Schlick<const N: usize> {
     reflectance: SampledSpectrum<N>,
@@ -240,11 +228,6 @@ pub fn half_pdf(r: f32, p: f32, h: Vec3) -> f32 {
     2.0 * h.z.max(0.0) * zenith(r, h.z * h.z, s2) * azimuth_pdf(p, h.x, h.y)
 }
 
-#[inline]
-fn flip(w: Vec3) -> Vec3 {
-    Vec3::new(w.x, w.y, -w.z)
-}
-
 /// A uniform direction on the +z hemisphere (pdf 1/2π).
 #[inline]
 fn uniform_hemisphere(u: Vec2) -> Vec3 {
@@ -276,14 +259,6 @@ impl<const N: usize> Schlick<N> {
         let r = roughness.clamp(MIN_ROUGHNESS, 1.0);
         let p = isotropy.clamp(MIN_ISOTROPY, 1.0);
         Self { reflectance, r, p, a, b, c, geometry, agm: agm1(p), g_mean: shadowing_mean(r) }
-    }
-
-    /// From parameters resolved against [`DEF`], at the path's wavelengths.
-    pub fn from_params(p: &ResolvedParams, wl: &SampledWavelengths<N>) -> Self {
-        let w = [p.scalar(3), p.scalar(4), p.scalar(5)];
-        let weights = if w.iter().any(|&x| x < 0.0) { None } else { Some(w) };
-        let geometry = if p.scalar(6) >= 0.5 { SchlickGeometry::B2 } else { SchlickGeometry::B1 };
-        Self::new(p.colour(0).sample(wl), p.scalar(1), p.scalar(2), weights, geometry)
     }
 
     /// The lobe weights (a, b, c) in use.
@@ -397,7 +372,7 @@ impl<const N: usize> Bsdf<N> for Schlick<N> {
         if wo.z * wi.z <= 0.0 {
             return SampledSpectrum::zero();
         }
-        if wo.z < 0.0 { self.eval_up(flip(wo), flip(wi)) } else { self.eval_up(wo, wi) }
+        if wo.z < 0.0 { self.eval_up(flip_z(wo), flip_z(wi)) } else { self.eval_up(wo, wi) }
     }
 
     #[inline]
@@ -405,7 +380,7 @@ impl<const N: usize> Bsdf<N> for Schlick<N> {
         if wo.z * wi.z <= 0.0 {
             return 0.0;
         }
-        if wo.z < 0.0 { self.pdf_up(flip(wo), flip(wi)) } else { self.pdf_up(wo, wi) }
+        if wo.z < 0.0 { self.pdf_up(flip_z(wo), flip_z(wi)) } else { self.pdf_up(wo, wi) }
     }
 
     #[inline]
@@ -414,9 +389,9 @@ impl<const N: usize> Bsdf<N> for Schlick<N> {
             return None;
         }
         let down = wo.z < 0.0;
-        let wo_up = if down { flip(wo) } else { wo };
+        let wo_up = if down { flip_z(wo) } else { wo };
         let [pd, pg, pm, ps] = self.lobe_probabilities(wo_up.z);
-        let back = |w: Vec3| if down { flip(w) } else { w };
+        let back = |w: Vec3| if down { flip_z(w) } else { w };
         if uc < ps {
             // The mirror lobe c·δ: h = n, so u = v₂; weight c·S(v₂).
             let wi = Vec3::new(-wo_up.x, -wo_up.y, wo_up.z);
@@ -1009,13 +984,12 @@ pub(crate) mod tests {
 
     #[test]
     fn parameters_resolve() {
-        use crate::params::ParamValue;
+        use crate::params::{ParamSet, ParamValue};
         let wl = SampledWavelengths::<1>::fixed_bins(550.0, 10.0);
-        let b = Schlick::<1>::from_params(&DEF.defaults(), &wl);
+        let b = SchlickParams::default().bsdf(&wl);
         assert_eq!(b.weights(), derived_weights(0.3));
         assert_eq!(b.geometry, SchlickGeometry::B2);
-        let given = DEF
-            .resolve(
+        let given = SchlickParams::resolve(
                 "m",
                 &[
                     ("a", ParamValue::Scalar(0.5)),
@@ -1023,9 +997,9 @@ pub(crate) mod tests {
                     ("c", ParamValue::Scalar(0.25)),
                     ("geometric", ParamValue::Scalar(0.0)),
                 ],
-            )
-            .unwrap();
-        let b = Schlick::<1>::from_params(&given, &wl);
+        )
+        .unwrap();
+        let b = given.bsdf(&wl);
         let w = b.weights();
         assert!(
             (w[0] - 1.0 / 3.0).abs() < 1e-6 && (w[1] - 0.5).abs() < 1e-6 && (w[2] - 1.0 / 6.0).abs() < 1e-6,
@@ -1034,6 +1008,7 @@ pub(crate) mod tests {
         assert_eq!(b.geometry, SchlickGeometry::B1);
         assert_eq!(derived_weights(0.25), [0.0, 0.75, 0.25]);
         assert_eq!(derived_weights(0.75), [0.25, 0.75, 0.0]);
-        assert!(DEF.param_by_mtl_key("rough").is_some() && DEF.param_by_mtl_key("p").is_some());
+        let def = SchlickParams::DEF;
+        assert!(def.param_by_mtl_key("rough").is_some() && def.param_by_mtl_key("p").is_some());
     }
 }

@@ -1,7 +1,7 @@
 // The anisotropic GGX distribution, mirroring crates/brdf/src/models/microfacet.rs (Ggx).
 // a = (α_x, α_y).
 
-// alphas_from_params + Ggx::new: α_y = 0 means α_x; both raised to ALPHA_MIN.
+// Ggx::from_alphas: α_y = 0 means α_x; both raised to ALPHA_MIN.
 fn mat_ggx_alphas(alpha: f32, alpha_y: f32) -> vec2f {
     let ay = select(alpha, alpha_y, alpha_y > 0.0);
     return vec2f(max(alpha, MAT_GGX_ALPHA_MIN), max(ay, MAT_GGX_ALPHA_MIN));

@@ -1,5 +1,5 @@
 // Fresnel reflectance, mirroring crates/brdf/src/fresnel.rs and
-// models/conductor.rs::fresnel_conductor line by line.
+// models/metal.rs::fresnel_conductor line by line.
 
 // brdf::fresnel::fresnel_dielectric: unpolarised (r∥² + r⊥²)/2, 1 under total internal
 // reflection; cos_i < 0: light from inside (η inverted).

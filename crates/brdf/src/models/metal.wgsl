@@ -1,4 +1,4 @@
-// Measured metals, mirroring crates/brdf/src/models/conductor.rs: the (λ, n, k) rows of
+// Measured metals, mirroring crates/brdf/src/models/metal.rs: the (λ, n, k) rows of
 // each preset a scene uses are uploaded to `spectra` as they are; mat_metal_table (generated)
 // says where: (offset, rows), rows = 0 for a preset not compiled in.
 
@@ -7,7 +7,7 @@ struct MatEtaK {
     k: vec4f,
 }
 
-// conductor.rs::interpolate: linear in λ, clamped to the first and last rows (also for NaN).
+// metal.rs::interpolate: linear in λ, clamped to the first and last rows (also for NaN).
 fn mat_metal_interpolate(table: vec2u, lambda: f32) -> vec2f {
     let base = table.x;
     let last = table.y - 1u;
@@ -29,12 +29,11 @@ fn mat_metal_interpolate(table: vec2u, lambda: f32) -> vec2f {
         spectra[a + 2u] + t * (spectra[b + 2u] - spectra[a + 2u]));
 }
 
-// conductor.rs::metal_from_params: a preset (metal rounded to 1..4) at each wavelength,
-// else the constants (eta, k).
-fn mat_metal_eta_k(metal: f32, eta: f32, k: f32, lambda: vec4f) -> MatEtaK {
-    let id = mat_round(metal);
-    if id >= 1.0 && id <= 4.0 {
-        let table = mat_metal_table(u32(id));
+// MetalPreset::eta_k: a measured metal (the `metal` choice; 0 = custom) at each
+// wavelength, else the constants (eta, k).
+fn mat_metal_eta_k(metal: u32, eta: f32, k: f32, lambda: vec4f) -> MatEtaK {
+    if metal != 0u {
+        let table = mat_metal_table(metal);
         if table.y > 0u {
             let a = mat_metal_interpolate(table, lambda.x);
             let b = mat_metal_interpolate(table, lambda.y);
@@ -46,7 +45,7 @@ fn mat_metal_eta_k(metal: f32, eta: f32, k: f32, lambda: vec4f) -> MatEtaK {
     return MatEtaK(vec4f(eta), vec4f(k));
 }
 
-// conductor.rs::fresnel_spectrum: tint × the conductor Fresnel reflectance per lane.
+// metal.rs::fresnel_spectrum: tint × the conductor Fresnel reflectance per lane.
 fn mat_conductor_fresnel4(cos_i: f32, ek: MatEtaK, tint: vec4f) -> vec4f {
     return tint * vec4f(mat_fresnel_conductor(cos_i, ek.eta.x, ek.k.x), mat_fresnel_conductor(cos_i, ek.eta.y, ek.k.y),
         mat_fresnel_conductor(cos_i, ek.eta.z, ek.k.z), mat_fresnel_conductor(cos_i, ek.eta.w, ek.k.w));

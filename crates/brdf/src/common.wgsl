@@ -1,5 +1,5 @@
-// Helpers every BSDF model may use: hand-written, mirroring crates/brdf (fresnel.rs,
-// frame conventions) and Rust's f32 library where WGSL lacks a function. Everything
+// Helpers every BSDF model may use: hand-written, mirroring crates/brdf (frame.rs,
+// fresnel.rs) and Rust's f32 library where WGSL lacks a function. Everything
 // here is named mat_* / MAT_* so that it cannot collide with the path kernel.
 
 const MAT_PI: f32 = 3.14159265358979323846264338327950288;
@@ -33,15 +33,6 @@ fn mat_finite3(v: vec3f) -> bool {
 
 fn mat_finite4(v: vec4f) -> bool {
     return mat_finite(v.x) && mat_finite(v.y) && mat_finite(v.z) && mat_finite(v.w);
-}
-
-// Rust's f32::round (half away from zero; WGSL's round() rounds half to even).
-fn mat_round(x: f32) -> f32 {
-    let t = trunc(x);
-    if abs(x - t) >= 0.5 {
-        return t + sign(x);
-    }
-    return t;
 }
 
 // ln(1 + x) for x > -1, accurate to a few ulp near 0 (Rust's ln_1p; WGSL has none, and

@@ -14,8 +14,6 @@ struct SchlickState {
     g_mean: f32,
 }
 
-const MAT_SCHLICK_MIN_COS: f32 = 1e-6;
-
 // Thesis eq. 6.5: b = 4r(1 − r); a = 0, c = 1 − b below r = ½, a = 1 − b, c = 0 above.
 fn schlick_derived_weights(r: f32) -> vec3f {
     let b = 4.0 * r * (1.0 - r);
@@ -68,7 +66,7 @@ fn schlick_state(p: SchlickParams, lambda: vec4f) -> SchlickState {
     }
     let r = clamp(p.roughness, MAT_SCHLICK_MIN_ROUGHNESS, 1.0);
     let iso = clamp(p.isotropy, MAT_SCHLICK_MIN_ISOTROPY, 1.0);
-    return SchlickState(spectrum_at(p.reflectance, lambda), r, iso, w.x, w.y, w.z, p.geometric >= 0.5,
+    return SchlickState(spectrum_at(p.reflectance, lambda), r, iso, w.x, w.y, w.z, p.geometric == MAT_SCHLICK_B2,
         schlick_agm1(iso), schlick_shadowing_mean(r));
 }
 

@@ -21,7 +21,7 @@ fn dielectric_sample(p: DielectricParams, wo: vec3f, uc: f32, u: vec2f, lambda: 
     }
     let eta = dielectric_eta(p, lambda);
     var r: f32;
-    if p.schlick >= 0.5 {
+    if p.schlick {
         r = mat_fresnel_schlick(wo.z, eta);
     } else {
         r = mat_fresnel_dielectric(wo.z, eta);

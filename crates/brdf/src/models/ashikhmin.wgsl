@@ -13,9 +13,6 @@ struct AshikhminState {
     mean_rd: f32,
 }
 
-const MAT_ASHIKHMIN_MIN_COS: f32 = 1e-6;
-const MAT_ASHIKHMIN_MIN_LOBE_PROBABILITY: f32 = 0.1;
-
 fn ashikhmin_state(p: AshikhminParams, lambda: vec4f) -> AshikhminState {
     let nu = clamp(p.nu, 0.0, MAT_ASHIKHMIN_MAX_EXPONENT);
     let nv = clamp(p.nv, 0.0, MAT_ASHIKHMIN_MAX_EXPONENT);

@@ -1,0 +1,136 @@
+//! The WGSL twins of the BSDF models, for the GPU crate's code generator.
+//!
+//! Each model ships, beside its Rust file, a hand-written WGSL file that transcribes its
+//! `eval`, `pdf` and `sample` line by line ([`ModelWgsl`]); shared WGSL that several
+//! models call lives beside the Rust file it mirrors ([`WgslPiece`]). The GPU crate
+//! generates everything else from the parameter declarations: the parameter structs and
+//! their loaders, the per-model dispatch, the buffers. The GPU crate's tests run every
+//! twin against its Rust model.
+//!
+//! # The contract a model's WGSL is written against
+//!
+//! For a model declared as `"name"` with parameter struct `NameParams` (generated: one
+//! field per declared parameter, in order — a scalar is an `f32`, a spectrum or
+//! coefficient a `u32` offset for `spectrum_at`, a switch a `bool`, a choice a `u32`
+//! index), the WGSL defines
+//!
+//! ```wgsl
+//! fn name_eval(p: NameParams, wo: vec3f, wi: vec3f, lambda: vec4f) -> vec4f;
+//! fn name_pdf(p: NameParams, wo: vec3f, wi: vec3f, lambda: vec4f) -> f32;
+//! fn name_sample(p: NameParams, wo: vec3f, uc: f32, u: vec2f, lambda: vec4f) -> BsdfSample;
+//! ```
+//!
+//! and may call what [`COMMON`] declares (`BsdfSample`, `spectrum_at`, the `SCATTER_*`
+//! flags, `mat_*` helpers mirroring Rust's f32 library and [`crate::frame`]), the pieces
+//! it lists in [`ModelWgsl::needs`], and its own [`ModelWgsl::constants`]. Its own
+//! identifiers start with its name (`name_…`) so that models never collide.
+
+
+use crate::models::dispersion::{BK7, DispersionPreset, FUSED_SILICA, LAMBDA_D};
+use crate::models::microfacet::Ggx;
+
+/// Helpers every model's WGSL may use (see the module documentation).
+pub const COMMON: &str = include_str!("common.wgsl");
+
+/// A model's WGSL twin.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ModelWgsl {
+    /// The WGSL source: `<name>_eval`, `<name>_pdf`, `<name>_sample`.
+    pub source: &'static str,
+    /// The shared pieces it calls.
+    pub needs: &'static [WgslPiece],
+    /// Constants it shares with its Rust code, declared before its source.
+    pub constants: &'static [WgslConstant],
+}
+
+/// A constant the WGSL shares with Rust, so that it is written once (in Rust).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct WgslConstant {
+    /// The WGSL name.
+    pub name: &'static str,
+    /// The value.
+    pub value: WgslValue,
+}
+
+/// The value of a [`WgslConstant`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum WgslValue {
+    /// An `f32`.
+    F32(f32),
+    /// A `u32`.
+    U32(u32),
+    /// A `vec3f`.
+    Vec3([f32; 3]),
+}
+
+impl WgslConstant {
+    /// The WGSL declaration, with literals that parse back to the same values.
+    pub fn declaration(&self) -> String {
+        fn f(v: f32) -> String {
+            assert!(v.is_finite(), "WGSL has no literal for {v}");
+            format!("{v:?}f")
+        }
+        match self.value {
+            WgslValue::F32(v) => format!("const {}: f32 = {};", self.name, f(v)),
+            WgslValue::U32(v) => format!("const {}: u32 = {v}u;", self.name),
+            WgslValue::Vec3(v) => format!("const {}: vec3f = vec3f({}, {}, {});", self.name, f(v[0]), f(v[1]), f(v[2])),
+        }
+    }
+}
+
+/// Shared WGSL that models may need; each mirrors one Rust file.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub enum WgslPiece {
+    /// Dielectric and conductor Fresnel terms (`fresnel.rs`, `models/metal.rs`).
+    Fresnel,
+    /// Cosine-weighted hemisphere sampling (`sampling.rs`).
+    Sampling,
+    /// The anisotropic GGX distribution (`models/microfacet.rs`).
+    Ggx,
+    /// Measured metals' (n, k) lookup (`models/metal.rs`); the GPU crate generates
+    /// `mat_metal_table(id) -> vec2u` (offset, rows) for the presets a scene uses before it.
+    Metal,
+    /// Wavelength-dependent index of refraction (`models/dispersion.rs`); where no
+    /// material disperses the GPU crate replaces it by a constant-index stub of the same
+    /// signature.
+    Dispersion,
+}
+
+impl WgslPiece {
+    /// Every piece, in the order they are emitted.
+    pub const ALL: [WgslPiece; 5] = [Self::Fresnel, Self::Sampling, Self::Ggx, Self::Metal, Self::Dispersion];
+
+    /// The WGSL source.
+    pub fn source(self) -> &'static str {
+        match self {
+            Self::Fresnel => include_str!("fresnel.wgsl"),
+            Self::Sampling => include_str!("sampling.wgsl"),
+            Self::Ggx => include_str!("models/ggx.wgsl"),
+            Self::Metal => include_str!("models/metal.wgsl"),
+            Self::Dispersion => include_str!("models/dispersion.wgsl"),
+        }
+    }
+
+    /// The constants it shares with Rust.
+    pub fn constants(self) -> &'static [WgslConstant] {
+        const GGX: &[WgslConstant] = &[WgslConstant { name: "MAT_GGX_ALPHA_MIN", value: WgslValue::F32(Ggx::ALPHA_MIN) }];
+        const DISPERSION: &[WgslConstant] = &[
+            WgslConstant { name: "MAT_LAMBDA_D", value: WgslValue::F32(LAMBDA_D) },
+            WgslConstant { name: "MAT_BK7_B", value: WgslValue::Vec3(BK7.b) },
+            WgslConstant { name: "MAT_BK7_C", value: WgslValue::Vec3(BK7.c) },
+            WgslConstant { name: "MAT_FUSED_SILICA_B", value: WgslValue::Vec3(FUSED_SILICA.b) },
+            WgslConstant { name: "MAT_FUSED_SILICA_C", value: WgslValue::Vec3(FUSED_SILICA.c) },
+            WgslConstant { name: "MAT_DISPERSION_CAUCHY", value: WgslValue::U32(DispersionPreset::Cauchy.index()) },
+            WgslConstant { name: "MAT_DISPERSION_BK7", value: WgslValue::U32(DispersionPreset::Bk7.index()) },
+            WgslConstant {
+                name: "MAT_DISPERSION_FUSED_SILICA",
+                value: WgslValue::U32(DispersionPreset::FusedSilica.index()),
+            },
+        ];
+        match self {
+            Self::Ggx => GGX,
+            Self::Dispersion => DISPERSION,
+            Self::Fresnel | Self::Sampling | Self::Metal => &[],
+        }
+    }
+}
