@@ -13,10 +13,10 @@ use tracer::camera::Camera;
 use tracer::integrator::PathSettings;
 use tracer::material::Material;
 use tracer::mesh::uv_sphere;
-use tracer::render::PreparedScene;
 use tracer::{CpuBackend, RenderSettings, Scene};
+use tracer::{CpuScene, SceneOptions};
 
-fn glowing_room(albedo: f32, le: f32) -> PreparedScene {
+fn glowing_room(albedo: f32, le: f32) -> CpuScene {
     let mut scene = Scene::default();
     let material = Material::diffuse("wall", Colour::constant(albedo)).unwrap().with_emission(Colour::constant(le));
     // Flat-shaded: the analytic answer holds for the faceted room with its true normals.
@@ -26,7 +26,7 @@ fn glowing_room(albedo: f32, le: f32) -> PreparedScene {
     scene.add(&room, material);
     scene.camera =
         Some(Camera { eye: Vec3::new(0.1, 0.2, 0.3), center: Vec3::new(0.0, 0.0, -1.0), up: Vec3::Y, fov_y_deg: 90.0 });
-    PreparedScene::new(scene).unwrap()
+    CpuBackend::new(2).unwrap().prepare_cpu(scene, &SceneOptions::default()).unwrap()
 }
 
 /// The colour a constant spectrum of 1 has in each mode (E is not sRGB white; the
@@ -53,8 +53,7 @@ fn check_room(albedo: f32, mode: SpectralMode, spp: u32) {
         path: PathSettings { max_depth: 0, rr_depth: 3, ..Default::default() },
         camera: None,
     };
-    let backend = CpuBackend::new(2).unwrap();
-    let (film, stats) = tracer::render(&backend, &prepared, &settings, &|_| {}).unwrap();
+    let (film, stats) = tracer::render(&prepared, &settings, &|_| {}).unwrap();
     assert_eq!(stats.non_finite, 0);
     let expected = unit_colour(mode).map(|c| c * (le / (1.0 - albedo)) as f64);
     // Image means against the analytic value, at a 4.5σ bound on the mean's own error.
@@ -112,8 +111,7 @@ fn a_depth_limit_cuts_the_series() {
             path: PathSettings { max_depth: k, rr_depth: 100, ..Default::default() },
             camera: None,
         };
-        let backend = CpuBackend::new(2).unwrap();
-        let (film, _) = tracer::render(&backend, &prepared, &settings, &|_| {}).unwrap();
+        let (film, _) = tracer::render(&prepared, &settings, &|_| {}).unwrap();
         let expected: f64 = (0..=k).map(|j| (le * albedo.powi(j as i32)) as f64).sum();
         let (mean, se) = channel_mean_and_se(&film, 1);
         assert!(((mean - expected) / se).abs() < 4.5, "k={k}: {mean} vs {expected} (se {se})");

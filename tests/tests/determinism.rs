@@ -6,10 +6,10 @@ use spectral::spectrum::Colour;
 use tracer::camera::Camera;
 use tracer::material::Material;
 use tracer::mesh::{quad, uv_sphere};
-use tracer::render::PreparedScene;
-use tracer::{CpuBackend, RenderSettings, Scene};
+use tracer::{CpuBackend, CpuScene, PreparedScene, RenderSettings, Scene, SceneOptions};
 
-fn scene() -> PreparedScene {
+/// The test scene, prepared on a CPU backend with `threads` threads.
+fn scene(threads: usize) -> CpuScene {
     let mut s = Scene::default();
     let red = Material::diffuse("red", Colour::reflectance_rgb([0.7, 0.1, 0.1]).unwrap()).unwrap();
     let glass = Material::dielectric("glass", 1.5).unwrap();
@@ -21,23 +21,23 @@ fn scene() -> PreparedScene {
     s.add(&quad(Vec3::new(0.0, 2.0, 0.0), -Vec3::Y, 0.5), light);
     s.camera =
         Some(Camera { eye: Vec3::new(0.0, 1.0, 3.0), center: Vec3::new(0.0, 0.5, 0.0), up: Vec3::Y, fov_y_deg: 45.0 });
-    PreparedScene::new(s).unwrap()
+    CpuBackend::new(threads).unwrap().prepare_cpu(s, &SceneOptions::default()).unwrap()
 }
 
 #[test]
 fn one_and_two_threads_give_identical_images() {
-    let prepared = scene();
+    let (one, two) = (scene(1), scene(2));
     for mode in SpectralMode::ALL {
         // 37×29 is not a multiple of the tile size: edge tiles are exercised too.
         let settings = RenderSettings { width: 37, height: 29, spp: 8, seed: 1234, mode, ..Default::default() };
-        let (a, _) = tracer::render(&CpuBackend::new(1).unwrap(), &prepared, &settings, &|_| {}).unwrap();
-        let (b, _) = tracer::render(&CpuBackend::new(2).unwrap(), &prepared, &settings, &|_| {}).unwrap();
+        let (a, _) = tracer::render(&one, &settings, &|_| {}).unwrap();
+        let (b, _) = tracer::render(&two, &settings, &|_| {}).unwrap();
         let bits =
             |f: &tracer::Film| f.mean_rgb().iter().chain(&f.std_error_rgb()).map(|v| v.to_bits()).collect::<Vec<_>>();
         assert_eq!(bits(&a), bits(&b), "{mode:?}");
         // A different seed must change the image (the test can fail).
         let other = RenderSettings { seed: 1235, ..settings };
-        let (c, _) = tracer::render(&CpuBackend::new(2).unwrap(), &prepared, &other, &|_| {}).unwrap();
+        let (c, _) = tracer::render(&two, &other, &|_| {}).unwrap();
         assert_ne!(bits(&a), bits(&c));
     }
 }
@@ -45,13 +45,11 @@ fn one_and_two_threads_give_identical_images() {
 #[test]
 fn progressive_passes_equal_one_pass() {
     // Samples 0..4 then 4..8 must give the same film as 0..8 in one go.
-    let prepared = scene();
+    let prepared = scene(2);
     let settings = RenderSettings { width: 20, height: 20, spp: 8, seed: 9, ..Default::default() };
-    let backend = CpuBackend::new(2).unwrap();
-    let (one, _) = tracer::render(&backend, &prepared, &settings, &|_| {}).unwrap();
+    let (one, _) = tracer::render(&prepared, &settings, &|_| {}).unwrap();
     let mut film = tracer::Film::new(20, 20);
-    use tracer::Backend;
-    backend.render_pass(&prepared, &settings, &mut film, 0, 4, &|_| {}).unwrap();
-    backend.render_pass(&prepared, &settings, &mut film, 4, 4, &|_| {}).unwrap();
+    prepared.render_pass(&settings, &mut film, 0, 4, &|_| {}).unwrap();
+    prepared.render_pass(&settings, &mut film, 4, 4, &|_| {}).unwrap();
     assert_eq!(one.mean_rgb(), film.mean_rgb());
 }

@@ -11,10 +11,10 @@ use spectral::spectrum::Colour;
 use tracer::camera::Camera;
 use tracer::material::Material;
 use tracer::mesh::{quad, uv_sphere};
-use tracer::render::PreparedScene;
 use tracer::{CpuBackend, Environment, RenderSettings, Scene};
+use tracer::{CpuScene, SceneOptions};
 
-fn furnace(albedo: f32) -> PreparedScene {
+fn furnace(albedo: f32) -> CpuScene {
     let white = || Material::diffuse("white", Colour::constant(albedo)).unwrap();
     let mut scene = Scene::default();
     scene.add(&uv_sphere(Vec3::new(0.0, 0.5, 0.0), 0.5, 16, 32, false), white());
@@ -31,12 +31,12 @@ fn furnace(albedo: f32) -> PreparedScene {
     scene.environment = Some(Environment { radiance: Colour::constant(1.0) });
     scene.camera =
         Some(Camera { eye: Vec3::new(0.0, 1.0, 3.5), center: Vec3::new(0.0, 1.0, 0.0), up: Vec3::Y, fov_y_deg: 40.0 });
-    PreparedScene::new(scene).unwrap()
+    CpuBackend::new(2).unwrap().prepare_cpu(scene, &SceneOptions::default()).unwrap()
 }
 
 fn mean_image(albedo: f32, mode: SpectralMode) -> [(f64, f64); 3] {
     let settings = RenderSettings { width: 32, height: 32, spp: 64, seed: 3, mode, ..Default::default() };
-    let (film, stats) = tracer::render(&CpuBackend::new(2).unwrap(), &furnace(albedo), &settings, &|_| {}).unwrap();
+    let (film, stats) = tracer::render(&furnace(albedo), &settings, &|_| {}).unwrap();
     assert_eq!(stats.non_finite, 0);
     std::array::from_fn(|c| channel_mean_and_se(&film, c))
 }

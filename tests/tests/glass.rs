@@ -11,10 +11,10 @@ use spectral::SpectralMode;
 use spectral::spectrum::Colour;
 use tracer::camera::Camera;
 use tracer::integrator::PathSettings;
-use tracer::material::{ModelId, Material};
+use tracer::material::{Material, ModelId};
 use tracer::mesh::{quad, uv_sphere};
-use tracer::render::PreparedScene;
 use tracer::{CpuBackend, Environment, RenderSettings, Scene};
+use tracer::{CpuScene, SceneOptions};
 
 fn glass(params: &[(&str, ParamValue)]) -> Material {
     Material::builtin("glass", ModelId::Dielectric, params).unwrap()
@@ -32,15 +32,15 @@ fn beer_lambert_matches_exp_minus_alpha_s() {
     scene.environment = Some(Environment { radiance: Colour::constant(1.0) });
     let eye = Vec3::new(0.0, 0.0, 3.0);
     scene.camera = Some(Camera { eye, center: Vec3::ZERO, up: Vec3::Y, fov_y_deg: 0.05 });
-    let prepared = PreparedScene::new(scene).unwrap();
+    let prepared = CpuBackend::new(2).unwrap().prepare_cpu(scene, &SceneOptions::default()).unwrap();
     // The chord through the faceted sphere, measured on the geometry itself.
-    let enter = prepared.geometry.triangles.intersect(&Ray::new(eye, -Vec3::Z)).unwrap().t;
+    let enter = prepared.geometry().triangles.intersect(&Ray::new(eye, -Vec3::Z)).unwrap().t;
     let exit =
-        prepared.geometry.triangles.intersect(&Ray::segment(eye, -Vec3::Z, enter + 1e-4, f32::INFINITY)).unwrap().t;
+        prepared.geometry().triangles.intersect(&Ray::segment(eye, -Vec3::Z, enter + 1e-4, f32::INFINITY)).unwrap().t;
     let chord = exit - enter;
     assert!((chord - 1.0).abs() < 0.01, "chord {chord}");
     let settings = RenderSettings { width: 1, height: 1, spp: 16, mode: SpectralMode::Rgb, ..Default::default() };
-    let (film, _) = tracer::render(&CpuBackend::new(1).unwrap(), &prepared, &settings, &|_| {}).unwrap();
+    let (film, _) = tracer::render(&prepared, &settings, &|_| {}).unwrap();
     for c in 0..3 {
         let expected = (-alpha[c] * chord).exp() as f64;
         let got = film.pixel(0, 0).mean[c];
@@ -48,12 +48,12 @@ fn beer_lambert_matches_exp_minus_alpha_s() {
     }
     // Spectral: the uplifted coefficient absorbs red most, as in RGB.
     let hero = RenderSettings { mode: SpectralMode::Hero, spp: 4096, ..settings };
-    let (film, _) = tracer::render(&CpuBackend::new(1).unwrap(), &prepared, &hero, &|_| {}).unwrap();
+    let (film, _) = tracer::render(&prepared, &hero, &|_| {}).unwrap();
     let m = film.pixel(0, 0).mean;
     assert!(m[0] < m[1] && m[1] < m[2], "{m:?}");
 }
 
-fn furnace_with(object: Material) -> PreparedScene {
+fn furnace_with(object: Material) -> CpuScene {
     let mut scene = Scene::default();
     let white = || Material::diffuse("white", Colour::constant(1.0)).unwrap();
     scene.add(&uv_sphere(Vec3::new(0.0, 0.6, 0.0), 0.5, 16, 32, false), object);
@@ -63,7 +63,7 @@ fn furnace_with(object: Material) -> PreparedScene {
     scene.environment = Some(Environment { radiance: Colour::constant(1.0) });
     scene.camera =
         Some(Camera { eye: Vec3::new(0.0, 0.8, 3.0), center: Vec3::new(0.0, 0.6, 0.0), up: Vec3::Y, fov_y_deg: 30.0 });
-    PreparedScene::new(scene).unwrap()
+    CpuBackend::new(2).unwrap().prepare_cpu(scene, &SceneOptions::default()).unwrap()
 }
 
 #[test]
@@ -73,7 +73,7 @@ fn dispersive_glass_vanishes_in_the_furnace() {
     let prepared = furnace_with(glass(&[("dispersion", ParamValue::Scalar(2.0))]));
     for mode in [SpectralMode::Hero, SpectralMode::Bins40] {
         let settings = RenderSettings { width: 24, height: 24, spp: 1024, seed: 4, mode, ..Default::default() };
-        let (film, stats) = tracer::render(&CpuBackend::new(2).unwrap(), &prepared, &settings, &|_| {}).unwrap();
+        let (film, stats) = tracer::render(&prepared, &settings, &|_| {}).unwrap();
         assert_eq!(stats.non_finite, 0);
         let sky: [f64; 3] = match mode {
             SpectralMode::Bins40 => spectral::SampledWavelengths::<40>::fixed_bins(380.0, 10.0)
@@ -97,7 +97,7 @@ fn path_extension_sees_through_glass_beyond_the_depth_limit() {
     let lamp = Material::diffuse("lamp", Colour::constant(0.0)).unwrap().with_emission(Colour::constant(1.0));
     scene.add(&quad(Vec3::new(0.0, 0.0, -2.0), Vec3::Z, 4.0), lamp);
     scene.camera = Some(Camera { eye: Vec3::new(0.0, 0.0, 3.0), center: Vec3::ZERO, up: Vec3::Y, fov_y_deg: 1.0 });
-    let prepared = PreparedScene::new(scene).unwrap();
+    let prepared = CpuBackend::new(2).unwrap().prepare_cpu(scene, &SceneOptions::default()).unwrap();
     let centre = |max_depth, specular_extension| {
         let settings = RenderSettings {
             width: 1,
@@ -107,7 +107,7 @@ fn path_extension_sees_through_glass_beyond_the_depth_limit() {
             path: PathSettings { max_depth, rr_depth: 100, specular_extension, ..Default::default() },
             ..Default::default()
         };
-        let (film, _) = tracer::render(&CpuBackend::new(1).unwrap(), &prepared, &settings, &|_| {}).unwrap();
+        let (film, _) = tracer::render(&prepared, &settings, &|_| {}).unwrap();
         film.pixel(0, 0).mean[1]
     };
     // Through two interfaces of n = 1.5 at normal incidence: T² = 0.96² ≈ 0.92 (plus

@@ -8,10 +8,10 @@ use common::channel_mean_and_se;
 use glam::Vec3;
 use spectral::SpectralMode;
 use spectral::spectrum::Colour;
+use tracer::SceneOptions;
 use tracer::camera::Camera;
-use tracer::material::{ModelId, Material};
+use tracer::material::{Material, ModelId};
 use tracer::mesh::uv_sphere;
-use tracer::render::PreparedScene;
 use tracer::{CpuBackend, Environment, RenderSettings, Scene};
 
 #[test]
@@ -23,10 +23,10 @@ fn no_model_is_brighter_than_the_furnace_or_produces_nan() {
         scene.environment = Some(Environment { radiance: Colour::constant(1.0) });
         // Close enough that the sphere fills the frame.
         scene.camera = Some(Camera { eye: Vec3::new(0.0, 0.0, 2.0), center: Vec3::ZERO, up: Vec3::Y, fov_y_deg: 30.0 });
-        let prepared = PreparedScene::new(scene).unwrap();
+        let prepared = CpuBackend::new(2).unwrap().prepare_cpu(scene, &SceneOptions::default()).unwrap();
         for mode in [SpectralMode::Rgb, SpectralMode::Hero] {
             let settings = RenderSettings { width: 16, height: 16, spp: 64, seed: 8, mode, ..Default::default() };
-            let (film, stats) = tracer::render(&CpuBackend::new(2).unwrap(), &prepared, &settings, &|_| {}).unwrap();
+            let (film, stats) = tracer::render(&prepared, &settings, &|_| {}).unwrap();
             assert_eq!(stats.non_finite, 0, "{model:?} {mode:?}");
             let sky = if mode == SpectralMode::Rgb {
                 [1.0; 3]

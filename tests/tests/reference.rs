@@ -9,10 +9,10 @@ use common::z_test;
 use glam::Vec3;
 use spectral::SpectralMode;
 use std::path::{Path, PathBuf};
+use tracer::SceneOptions;
 use tracer::camera::Camera;
 use tracer::integrator::PathSettings;
 use tracer::output::read_rgb32f;
-use tracer::render::PreparedScene;
 use tracer::{CpuBackend, RenderSettings};
 
 fn shared() -> PathBuf {
@@ -56,7 +56,7 @@ fn compare(variant: &str, mode: SpectralMode, spp: u32) {
     let Some(reference) = load_reference(variant) else { return };
     let scene_path = shared().join("scenes/cornell-box/CornellBox-Original-fixed.obj");
     let scene = tracer::obj::load_obj(&scene_path).expect("Cornell box loads");
-    let prepared = PreparedScene::new(scene).unwrap();
+    let prepared = CpuBackend::new(2).unwrap().prepare_cpu(scene, &SceneOptions::default()).unwrap();
     let settings = RenderSettings {
         width: reference.width,
         height: reference.height,
@@ -67,7 +67,7 @@ fn compare(variant: &str, mode: SpectralMode, spp: u32) {
         path: PathSettings { max_depth: 0, rr_depth: 5, ..Default::default() },
         camera: Some(reference.camera),
     };
-    let (film, stats) = tracer::render(&CpuBackend::new(0).unwrap(), &prepared, &settings, &|_| {}).unwrap();
+    let (film, stats) = tracer::render(&prepared, &settings, &|_| {}).unwrap();
     assert_eq!(stats.non_finite, 0, "NaN/Inf samples");
     let ours = film.mean_rgb();
     let ours_se = film.std_error_rgb();

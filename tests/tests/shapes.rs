@@ -25,25 +25,25 @@ use tracer::camera::Camera;
 use tracer::integrator::{PathSettings, ShadingNormals};
 use tracer::material::Material;
 use tracer::mesh::uv_sphere;
-use tracer::render::PreparedScene;
 use tracer::{CpuBackend, Environment, Film, RenderSettings, Scene, ShapeKind};
+use tracer::{CpuScene, PreparedScene, SceneOptions};
 
-fn render(scene: Scene, size: u32, spp: u32, path: PathSettings) -> (PreparedScene, Film) {
-    let prepared = PreparedScene::new(scene).unwrap();
+fn render(scene: Scene, size: u32, spp: u32, path: PathSettings) -> (CpuScene, Film) {
+    let prepared = CpuBackend::new(2).unwrap().prepare_cpu(scene, &SceneOptions::default()).unwrap();
     let settings =
         RenderSettings { width: size, height: size, spp, seed: 5, mode: SpectralMode::Rgb, path, camera: None };
-    let (film, stats) = tracer::render(&CpuBackend::new(2).unwrap(), &prepared, &settings, &|_| {}).unwrap();
+    let (film, stats) = tracer::render(&prepared, &settings, &|_| {}).unwrap();
     assert_eq!(stats.non_finite, 0, "NaN/Inf samples");
     (prepared, film)
 }
 
 /// Pixels whose four corners all see the object (primary rays hit primitive `prim`).
-fn interior_pixels(prepared: &PreparedScene, size: u32, prim_of_interest: impl Fn(u32) -> bool) -> Vec<usize> {
-    let camera = prepared.scene.camera.unwrap().rays(size, size);
+fn interior_pixels(prepared: &CpuScene, size: u32, prim_of_interest: impl Fn(u32) -> bool) -> Vec<usize> {
+    let camera = prepared.scene().camera.unwrap().rays(size, size);
     let view = tracer::integrator::SceneView {
-        scene: &prepared.scene,
-        geometry: &prepared.geometry,
-        lights: &prepared.lights,
+        scene: prepared.scene(),
+        geometry: prepared.geometry(),
+        lights: prepared.lights(),
     };
     let sees =
         |x: f32, y: f32| view.intersect(&camera.ray(glam::Vec2::new(x, y))).is_some_and(|h| prim_of_interest(h.prim));

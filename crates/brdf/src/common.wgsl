@@ -1,5 +1,6 @@
-// Helpers every BSDF model may use: hand-written, mirroring crates/brdf (frame.rs,
-// fresnel.rs) and Rust's f32 library where WGSL lacks a function. Everything
+// Helpers every BSDF model may use: hand-written, mirroring crates/brdf/src/frame.rs
+// (flip_z, reflect, reflect_local), crates/brdf/src/fresnel.rs (refract_local) and Rust's
+// f32 library where WGSL lacks a function. Everything
 // here is named mat_* / MAT_* so that it cannot collide with the path kernel.
 
 const MAT_PI: f32 = 3.14159265358979323846264338327950288;

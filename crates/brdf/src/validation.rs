@@ -6,8 +6,9 @@
 //! All of them work on a single-wavelength BSDF ([`Bsdf<1>`]) and are deterministic for
 //! a seed.
 
-use crate::{Bsdf, ScatterFlags};
-use glam::{Vec2, Vec3};
+use crate::{Bsdf, BsdfSample, ScatterFlags};
+use glam::{DVec3, Vec2, Vec3};
+use spectral::SampledSpectrum;
 use std::f64::consts::{PI, TAU};
 
 /// A small deterministic generator (PCG32) for the tests' random numbers.
@@ -340,6 +341,164 @@ pub fn reciprocity_error(bsdf: &impl Bsdf<1>, pairs: usize, seed: u64) -> f32 {
         }
     }
     worst
+}
+
+/// A direction at cosine `z` to the normal and azimuth `phi_deg` degrees from the tangent.
+pub fn direction(z: f32, phi_deg: f32) -> Vec3 {
+    let s = (1.0 - z * z).max(0.0).sqrt();
+    let phi = phi_deg.to_radians();
+    Vec3::new(s * phi.cos(), s * phi.sin(), z)
+}
+
+/// Zooms into a narrow lobe for the chi-square test: directions on the lobe's side of a
+/// frame (s, t, c) around its centre c get their gnomonic coordinates (x/z, y/z) scaled by
+/// (a_s, a_t); the other side is left alone. The map is a bijection of the sphere with
+/// dω/dω' = z³ / (z'³ a_s a_t), so the zoomed BSDF's pdf is known exactly, and a θ×φ
+/// histogram of the zoomed directions resolves a lobe far narrower than its cells.
+pub struct Zoom<B> {
+    inner: B,
+    frame: [DVec3; 3],
+    scale: (f64, f64),
+}
+
+impl<B: Bsdf<1>> Zoom<B> {
+    /// Zooms around the mirror direction of `wo` (the frame's t axis is perpendicular to
+    /// the plane of incidence, s lies in it).
+    pub fn mirror(inner: B, wo: Vec3, a_s: f64, a_t: f64) -> Self {
+        let c = DVec3::new(-wo.x as f64, -wo.y as f64, wo.z as f64).normalize();
+        let t = if c.z.abs() < 0.999_999 { DVec3::Z.cross(c).normalize() } else { DVec3::Y };
+        let s = t.cross(c);
+        Self { inner, frame: [s, t, c], scale: (a_s, a_t) }
+    }
+    /// World direction → zoomed direction, and dω/dω' there.
+    fn forward(&self, w: Vec3) -> (Vec3, f64) {
+        let w = w.as_dvec3();
+        let l = DVec3::new(w.dot(self.frame[0]), w.dot(self.frame[1]), w.dot(self.frame[2])).normalize();
+        if l.z <= 0.0 {
+            return (l.as_vec3(), 1.0);
+        }
+        let (x, y) = (self.scale.0 * l.x / l.z, self.scale.1 * l.y / l.z);
+        let z2 = 1.0 / (1.0 + x * x + y * y).sqrt();
+        (DVec3::new(x * z2, y * z2, z2).as_vec3(), l.z.powi(3) / (z2.powi(3) * self.scale.0 * self.scale.1))
+    }
+    /// Zoomed direction → world direction, and dω/dω' there.
+    fn inverse(&self, w2: Vec3) -> (Vec3, f64) {
+        let l2 = w2.as_dvec3().normalize();
+        let l = if l2.z <= 0.0 {
+            l2
+        } else {
+            let (x, y) = (l2.x / (l2.z * self.scale.0), l2.y / (l2.z * self.scale.1));
+            let z = 1.0 / (1.0 + x * x + y * y).sqrt();
+            DVec3::new(x * z, y * z, z)
+        };
+        let jac = if l2.z <= 0.0 { 1.0 } else { l.z.powi(3) / (l2.z.powi(3) * self.scale.0 * self.scale.1) };
+        ((self.frame[0] * l.x + self.frame[1] * l.y + self.frame[2] * l.z).as_vec3(), jac)
+    }
+}
+
+impl<B: Bsdf<1>> Bsdf<1> for Zoom<B> {
+    fn flags(&self) -> ScatterFlags {
+        self.inner.flags()
+    }
+    fn eval(&self, wo: Vec3, wi: Vec3) -> SampledSpectrum<1> {
+        self.inner.eval(wo, self.inverse(wi).0)
+    }
+    fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
+        let (w, jac) = self.inverse(wi);
+        (self.inner.pdf(wo, w) as f64 * jac) as f32
+    }
+    fn sample(&self, wo: Vec3, uc: f32, u: Vec2) -> Option<BsdfSample<1>> {
+        let s = self.inner.sample(wo, uc, u)?;
+        if s.flags.is_specular() {
+            return Some(s);
+        }
+        let (wi, _) = self.forward(s.wi);
+        // f and pdf are re-evaluated at the zoomed direction: for the narrowest lobes
+        // (and f ∝ 1/cos θi near the horizon) they are ill-conditioned against the f32
+        // round trip of the direction. `sample_agrees_with_eval_and_pdf` checks `sample`
+        // against `eval` and `pdf` on the unzoomed BSDFs instead.
+        Some(BsdfSample { wi, f: self.eval(wo, wi), pdf: self.pdf(wo, wi), ..s })
+    }
+}
+
+impl Chi2Config {
+    /// A 1°×1° grid with `quadrature`² points per cell, for lobes a few degrees wide.
+    pub const fn fine(quadrature: usize) -> Self {
+        Self { theta_bins: 180, phi_bins: 360, samples: 1_000_000, min_expected: 5.0, quadrature }
+    }
+
+    /// 0.5° in θ × 0.25° in φ, for a lobe a fraction of a degree wide that also meets the
+    /// horizon (which stays a cell boundary).
+    pub const FINER: Self =
+        Self { theta_bins: 360, phi_bins: 1440, samples: 1_000_000, min_expected: 5.0, quadrature: 4 };
+}
+
+/// How a [`Chi2Case`] bins the sampled directions.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Chi2Grid {
+    /// [`Chi2Config::default`].
+    Default,
+    /// [`Chi2Config::fine`] with this quadrature.
+    Fine(usize),
+    /// [`Chi2Config::FINER`].
+    Finer,
+    /// The default grid over a [`Zoom`] around the mirror direction by (a_s, a_t), with
+    /// this quadrature.
+    Zoom(f64, f64, usize),
+}
+
+/// One chi-square case: a BSDF, an incidence and a grid that resolves its lobes.
+#[derive(Clone, Debug)]
+pub struct Chi2Case<B> {
+    /// What it is (printed, and named on failure).
+    pub name: String,
+    /// The BSDF.
+    pub bsdf: B,
+    /// ωo.
+    pub wo: Vec3,
+    /// The grid.
+    pub grid: Chi2Grid,
+}
+
+impl<B: Bsdf<1> + Clone> Chi2Case<B> {
+    /// [`chi2_test`] of the case on its grid.
+    pub fn run(&self, seed: u64) -> Chi2Result {
+        match self.grid {
+            Chi2Grid::Default => chi2_test(&self.bsdf, self.wo, &Chi2Config::default(), seed),
+            Chi2Grid::Fine(q) => chi2_test(&self.bsdf, self.wo, &Chi2Config::fine(q), seed),
+            Chi2Grid::Finer => chi2_test(&self.bsdf, self.wo, &Chi2Config::FINER, seed),
+            Chi2Grid::Zoom(a, b, q) => {
+                let config = Chi2Config { quadrature: q, ..Chi2Config::default() };
+                chi2_test(&Zoom::mirror(self.bsdf.clone(), self.wo, a, b), self.wo, &config, seed)
+            }
+        }
+    }
+}
+
+/// Runs every `parts`-th case of `cases` starting at `part` (so that a long list can be
+/// split over several tests) at α = 0.01 Šidák-corrected over all of `cases`, seeding case
+/// `k` with `seed + k`; panics naming every failure. `label` prefixes the printed lines.
+pub fn check_chi2_cases<B: Bsdf<1> + Clone>(label: &str, cases: &[Chi2Case<B>], part: usize, parts: usize, seed: u64) {
+    let alpha = sidak(0.01, cases.len());
+    let mut failed = Vec::new();
+    for (k, case) in cases.iter().enumerate().filter(|(k, _)| k % parts == part) {
+        let res = case.run(seed + k as u64);
+        eprintln!("chi2 {label} | {:<45} | p = {:.4} (dof {})", case.name, res.p_value, res.dof);
+        if !(res.p_value > alpha && res.inconsistent == 0) {
+            failed.push(format!("{}: {res:?}", case.name));
+        }
+    }
+    assert!(failed.is_empty(), "α = {alpha:.2e}: {failed:#?}");
+}
+
+/// [`sample_consistency`] of every case's BSDF and ωo (a zoomed case's sample is checked
+/// unzoomed: [`Zoom`] re-evaluates f and pdf at its direction); panics on the first failure.
+pub fn check_sample_consistency<B: Bsdf<1>>(cases: &[Chi2Case<B>]) {
+    for (k, case) in cases.iter().enumerate() {
+        if let Some(e) = sample_consistency(&case.bsdf, case.wo, 20_000, k as u64, 1e-5) {
+            panic!("{}: {e}", case.name);
+        }
+    }
 }
 
 #[cfg(test)]

@@ -25,7 +25,6 @@
 //! it lists in [`ModelWgsl::needs`], and its own [`ModelWgsl::constants`]. Its own
 //! identifiers start with its name (`name_…`) so that models never collide.
 
-
 use crate::models::dispersion::{BK7, DispersionPreset, FUSED_SILICA, LAMBDA_D};
 use crate::models::microfacet::Ggx;
 
@@ -113,7 +112,8 @@ impl WgslPiece {
 
     /// The constants it shares with Rust.
     pub fn constants(self) -> &'static [WgslConstant] {
-        const GGX: &[WgslConstant] = &[WgslConstant { name: "MAT_GGX_ALPHA_MIN", value: WgslValue::F32(Ggx::ALPHA_MIN) }];
+        const GGX: &[WgslConstant] =
+            &[WgslConstant { name: "MAT_GGX_ALPHA_MIN", value: WgslValue::F32(Ggx::ALPHA_MIN) }];
         const DISPERSION: &[WgslConstant] = &[
             WgslConstant { name: "MAT_LAMBDA_D", value: WgslValue::F32(LAMBDA_D) },
             WgslConstant { name: "MAT_BK7_B", value: WgslValue::Vec3(BK7.b) },

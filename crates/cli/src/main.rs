@@ -15,8 +15,8 @@ use std::process::ExitCode;
 use tracer::camera::Camera;
 use tracer::integrator::{PathSettings, ShadingNormals};
 use tracer::output::write_image;
-use tracer::render::PreparedScene;
-use tracer::{Backend, CpuBackend, RenderSettings, Scene};
+use tracer::render::{PreparedScene, RenderStats, SceneOptions};
+use tracer::{Backend, CpuBackend, PathTracer, RenderSettings, Scene};
 
 #[derive(Parser)]
 #[command(name = "spt", version, about = "A spectral, physically based path tracer")]
@@ -70,9 +70,7 @@ fn run_view(args: ViewArgs) -> Result<()> {
     if let Some(p) = &args.save {
         tracer::output::ImageFormat::from_path(p)?;
     }
-    let prepared = prepare(&args.scene)?;
-    let settings = settings(&args.scene, args.spp_per_frame.max(1), args.spectral, &prepared.scene)?;
-    let backend = make_backend(&args.scene)?;
+    let (prepared, settings) = prepare(&args.scene, args.spp_per_frame.max(1), args.spectral)?;
     let options = viewer::ViewerOptions {
         width: args.scene.width,
         height: args.scene.height,
@@ -83,7 +81,7 @@ fn run_view(args: ViewArgs) -> Result<()> {
         title: args.scene.scene.display().to_string(),
     };
     options.validate()?;
-    let stats = viewer::run(prepared, settings, backend, options)?;
+    let stats = viewer::run(prepared, settings, options)?;
     eprintln!("{} frames, {} spp, {:.3} M samples/s", stats.frames, stats.spp, stats.samples_per_second / 1e6);
     Ok(())
 }
@@ -168,8 +166,7 @@ fn run_sheet(args: SheetArgs) -> Result<()> {
         (Some(p), _, _) => sheet::preset(p)?,
         (None, Some(m), Some(param)) => sheet::Sweep {
             model: tracer::material::ModelId::by_name(m).ok_or_else(|| {
-                let known: Vec<&str> = tracer::material::ModelId::ALL.iter().map(|b| b.def().name).collect();
-                anyhow::anyhow!("unknown model '{m}' (known: {})", known.join(", "))
+                anyhow::anyhow!("unknown model '{m}' (known: {})", tracer::material::ModelId::names())
             })?,
             fixed: vec![],
             cells: args.values.iter().map(|&v| vec![(param.clone(), v)]).collect(),
@@ -225,9 +222,13 @@ struct SceneArgs {
     #[arg(long, default_value = "watertight", value_parser = parse_triangle_test)]
     triangle_test: TriangleTest,
     /// Where to trace: cpu (rayon, every feature) or gpu (wgpu compute; hero mode, triangle
-    /// meshes, built-in BSDFs).
+    /// meshes, registered BSDFs). A request outside a backend's capabilities is refused
+    /// before any work, with the way out.
     #[arg(long, default_value = "cpu", value_parser = ["cpu", "gpu"])]
     backend: String,
+    /// Light transport: path (path tracing with next-event estimation and MIS).
+    #[arg(long, default_value = "path", value_parser = INTEGRATORS)]
+    integrator: String,
     /// Shading normals: adapted (bent where they disagree with the geometry),
     /// face-forward (the thesis's workaround) or geometric (flat shading).
     #[arg(long, default_value = "adapted", value_parser = parse_shading_normals)]
@@ -344,25 +345,68 @@ fn settings(args: &SceneArgs, spp: u32, mode: SpectralMode, scene: &Scene) -> Re
     Ok(s)
 }
 
-fn prepare(args: &SceneArgs) -> Result<PreparedScene> {
+/// The integrators `--integrator` accepts.
+const INTEGRATORS: [&str; 1] = ["path"];
+
+/// Loads the scene, makes the backend `args` asks for, checks the render settings
+/// against its capabilities (before building anything), and prepares the scene.
+fn prepare(args: &SceneArgs, spp: u32, mode: SpectralMode) -> Result<(Box<dyn PreparedScene>, RenderSettings)> {
     let scene = load_scene(&args.scene)?;
     if scene.triangles.is_empty() && scene.shapes.is_empty() {
         bail!("{}: the scene has no geometry", args.scene.display());
     }
-    Ok(PreparedScene::with_triangle_test(scene, args.triangle_test)?)
+    let settings = settings(args, spp, mode, &scene)?;
+    let backend = make_backend(args)?;
+    backend.capabilities().check_settings(backend.name(), &settings)?;
+    let prepared = backend.prepare(scene, &SceneOptions { triangle_test: args.triangle_test })?;
+    Ok((prepared, settings))
 }
 
-/// The backend `args` asks for; a GPU that cannot be opened is an error that says so.
+/// The backend `args` asks for, running the integrator it names; a GPU that cannot be
+/// opened is an error that says so.
 fn make_backend(args: &SceneArgs) -> Result<Box<dyn Backend>> {
-    Ok(match args.backend.as_str() {
+    let backend: Box<dyn Backend> = match args.backend.as_str() {
         "gpu" => {
             let gpu = gpu::GpuBackend::new()?;
             let info = &gpu.context().info;
             eprintln!("GPU: {} ({:?}, driver {})", info.name, info.backend, info.driver);
             Box::new(gpu)
         }
-        _ => Box::new(CpuBackend::new(args.threads)?),
-    })
+        _ => match args.integrator.as_str() {
+            "path" => Box::new(CpuBackend::with_integrator(args.threads, PathTracer)?),
+            other => bail!("unknown integrator '{other}' (known: {})", INTEGRATORS.join(", ")),
+        },
+    };
+    let integrator = backend.capabilities().integrator;
+    if integrator != args.integrator {
+        bail!(
+            "the {} backend runs the '{integrator}' integrator, not '{}': use --integrator {integrator}, or --backend cpu",
+            backend.name(),
+            args.integrator
+        );
+    }
+    Ok(backend)
+}
+
+/// The end-of-render line: wall time, speed, dropped and truncated samples.
+fn report(output: &Path, stats: &RenderStats, backend: &str, cap: Option<u32>) {
+    let secs = stats.wall.as_secs_f64();
+    eprintln!(
+        "wrote {}: {:.2} s, {:.3} M samples/s, {:.2} M rays/s, {} NaN/Inf samples dropped",
+        output.display(),
+        secs,
+        stats.samples_per_second() / 1e6,
+        stats.rays as f64 / secs.max(1e-9) / 1e6,
+        stats.non_finite
+    );
+    if stats.truncated > 0 {
+        eprintln!(
+            "warning: {} paths reached the {backend} backend's cap of {} bounces and were cut short (a bias; \
+             --backend cpu has no cap)",
+            stats.truncated,
+            cap.map_or("?".into(), |c| c.to_string())
+        );
+    }
 }
 
 fn run_render(args: RenderArgs) -> Result<()> {
@@ -372,24 +416,24 @@ fn run_render(args: RenderArgs) -> Result<()> {
     {
         bail!("{}: the standard-error image must be an .exr (it is linear)", p.display());
     }
-    let prepared = prepare(&args.scene)?;
-    let settings = settings(&args.scene, args.spp, args.spectral, &prepared.scene)?;
-    let backend = make_backend(&args.scene)?;
-    let s = &prepared.scene;
+    let (prepared, settings) = prepare(&args.scene, args.spp, args.spectral)?;
+    let s = prepared.scene();
+    let stats = prepared.stats();
     eprintln!(
-        "{}: {} triangles, {} shapes, {} emissive, BVH built in {:.1} ms; {}×{} at {} spp, {} mode, {} backend",
+        "{}: {} triangles, {} shapes, {} emissive, BVH built in {:.1} ms{}; {}×{} at {} spp, {} mode, {} backend",
         args.scene.scene.display(),
         s.triangles.len(),
         s.shapes.len(),
-        prepared.lights.emitter_count(),
-        prepared.build_time.as_secs_f64() * 1e3,
+        stats.emitters,
+        stats.build.as_secs_f64() * 1e3,
+        stats.compile.map_or(String::new(), |c| format!(", kernel compiled in {:.1} ms", c.as_secs_f64() * 1e3)),
         settings.width,
         settings.height,
         settings.spp,
         settings.mode.name(),
-        backend.name()
+        prepared.backend()
     );
-    if prepared.lights.is_empty() {
+    if stats.emitters == 0 && s.environment.is_none() {
         eprintln!("warning: the scene has no light (no Ke > 0 and no environment): the image will be black");
     }
     let total = settings.width as u64 * settings.height as u64 * settings.spp as u64;
@@ -397,21 +441,13 @@ fn run_render(args: RenderArgs) -> Result<()> {
         ProgressStyle::with_template("{bar:40} {percent:>3}% {human_pos}/{human_len} samples, ETA {eta}")
             .expect("static template"),
     );
-    let (film, stats) = tracer::render(backend.as_ref(), &prepared, &settings, &|n| bar.inc(n))?;
+    let (film, stats) = tracer::render(prepared.as_ref(), &settings, &|n| bar.inc(n))?;
     bar.finish_and_clear();
     write_image(&args.output, film.width(), film.height(), &film.mean_rgb())?;
     if let Some(p) = &args.stderr {
         write_image(p, film.width(), film.height(), &film.std_error_rgb())?;
     }
-    let secs = stats.wall.as_secs_f64();
-    eprintln!(
-        "wrote {}: {:.2} s, {:.3} M samples/s, {:.2} M rays/s, {} NaN/Inf samples dropped",
-        args.output.display(),
-        secs,
-        stats.samples_per_second() / 1e6,
-        stats.rays as f64 / secs.max(1e-9) / 1e6,
-        stats.non_finite
-    );
+    report(&args.output, &stats, prepared.backend(), prepared.capabilities().max_bounces);
     Ok(())
 }
 
@@ -419,23 +455,30 @@ fn run_bench(args: BenchArgs) -> Result<()> {
     if args.repeats == 0 {
         bail!("--repeats must be at least 1");
     }
-    let prepared = prepare(&args.scene)?;
-    let backend = make_backend(&args.scene)?;
+    let (prepared, _) = prepare(&args.scene, args.spp, args.modes.first().copied().unwrap_or_default())?;
+    // Every mode is checked against the backend before anything is timed.
+    let all: Vec<RenderSettings> = args
+        .modes
+        .iter()
+        .map(|&mode| settings(&args.scene, args.spp, mode, prepared.scene()))
+        .collect::<Result<_>>()?;
+    for s in &all {
+        prepared.capabilities().check_settings(prepared.backend(), s)?;
+    }
     println!(
         "# {} {}x{} {} spp, {} backend, median of {}",
         args.scene.scene.display(),
         args.scene.width,
         args.scene.height,
         args.spp,
-        backend.name(),
+        prepared.backend(),
         args.repeats
     );
     println!("{:<8} {:>12} {:>12} {:>10} {:>10}", "mode", "Msamples/s", "Mrays/s", "wall_s", "nan");
-    for mode in &args.modes {
-        let settings = settings(&args.scene, args.spp, *mode, &prepared.scene)?;
+    for settings in &all {
         let mut runs = Vec::new();
         for _ in 0..args.repeats {
-            let (_, stats) = tracer::render(backend.as_ref(), &prepared, &settings, &|_| {})?;
+            let (_, stats) = tracer::render(prepared.as_ref(), settings, &|_| {})?;
             runs.push(stats);
         }
         runs.sort_by_key(|r| r.wall);
@@ -443,7 +486,7 @@ fn run_bench(args: BenchArgs) -> Result<()> {
         let secs = m.wall.as_secs_f64();
         println!(
             "{:<8} {:>12.3} {:>12.3} {:>10.3} {:>10}",
-            mode.name(),
+            settings.mode.name(),
             m.samples_per_second() / 1e6,
             m.rays as f64 / secs / 1e6,
             secs,

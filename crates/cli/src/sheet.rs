@@ -5,9 +5,8 @@ use anyhow::{Context, Result, anyhow, bail};
 use brdf::params::ParamValue;
 use font8x8::UnicodeFonts;
 use std::path::Path;
-use tracer::material::{ModelId, Material};
-use tracer::render::PreparedScene;
-use tracer::{CpuBackend, RenderSettings, SpectralMode};
+use tracer::material::{Material, ModelId};
+use tracer::{CpuBackend, RenderSettings, SceneOptions, SpectralMode};
 
 /// One sweep: a model, fixed parameters, and the parameter(s) varied per cell.
 pub struct Sweep {
@@ -92,9 +91,9 @@ pub fn render_sheet(sweep: &Sweep, cell: u32, spp: u32, mode: SpectralMode, thre
         // Cell labels hold only the values (the title names the parameters).
         let label: String = varied.iter().map(|(_, v)| fmt_value(*v)).collect::<Vec<_>>().join("/");
         let material = Material::builtin("sheet", sweep.model, &params).with_context(|| format!("cell '{label}'"))?;
-        let prepared = PreparedScene::new(tracer::scenes::material_sphere(material))?;
+        let prepared = backend.prepare_cpu(tracer::scenes::material_sphere(material), &SceneOptions::default())?;
         let settings = RenderSettings { width: cell, height: cell, spp, mode, seed: i as u64, ..Default::default() };
-        let (film, stats) = tracer::render(&backend, &prepared, &settings, &|_| {})?;
+        let (film, stats) = tracer::render(&prepared, &settings, &|_| {})?;
         eprintln!("  {label}: {:.2} s, {} NaN/Inf", stats.wall.as_secs_f64(), stats.non_finite);
         let (x0, y0) = ((i as u32 % cols) * cell, title_h + (i as u32 / cols) * (cell + label_h));
         for (k, px) in film.mean_rgb().chunks_exact(3).enumerate() {

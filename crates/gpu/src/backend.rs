@@ -2,19 +2,16 @@
 //!
 //! # Design
 //!
-//! * [`SceneData`] turns a [`PreparedScene`] into the flat arrays the kernel reads — a
-//!   binary BVH (binned SAH, leaves of at most 4 triangles) in `bvh`'s 32-byte node
-//!   layout, the triangles' vertices in leaf order, per-vertex normals and tangents with
-//!   the triangle → vertex map, the CIE 1931 tables, the environment's spectrum, the
-//!   light distribution, and the material kernel from [`crate::materials`] — and checks
-//!   every buffer against the device's limits ([`SceneData::check_limits`]).
-//! * [`GpuScene`] is that data on the device with the compiled pipeline: preparing it
-//!   (upload, shader compilation) is the expensive part, so it is made once per scene —
-//!   explicitly with [`GpuBackend::prepare`], or implicitly by the [`Backend`] impl,
-//!   which caches the last scene it saw (keyed by the `PreparedScene`'s address, its BVH
-//!   build time and the addresses and lengths of its arrays; a scene changed in place
-//!   must be announced with [`GpuBackend::invalidate`]). An interactive viewer calling
-//!   `render_pass` once per frame therefore pays only for the frame's samples.
+//! * [`GpuBackend::prepare`] (the [`Backend`] impl) checks the scene against the
+//!   backend's [`Capabilities`], flattens it ([`SceneData`]: a binary BVH — binned SAH,
+//!   leaves of at most 4 triangles — in `bvh`'s 32-byte node layout, the triangles'
+//!   vertices in leaf order, per-vertex normals and tangents with the triangle → vertex
+//!   map, the CIE 1931 tables, the environment's spectrum, the light distribution, and
+//!   the material kernel from [`crate::materials`]), checks every buffer against the
+//!   device's limits, uploads it and compiles the kernel ([`crate::kernel`]) for the
+//!   scene's materials and the requested triangle test. The result, a [`GpuScene`], owns
+//!   all of that: an interactive viewer calling `render_pass` once per frame pays only
+//!   for the frame's samples.
 //! * A pass renders the image in bands of rows (so that the per-pixel accumulators fit
 //!   the device's buffer limits whatever the image size), each band in dispatches of at
 //!   most [`DISPATCH_BUDGET`] pixel-samples (1–64 samples per pixel; short dispatches
@@ -24,21 +21,22 @@
 //!   into the film's f64 [`PixelStats`] with Chan et al.'s parallel update, so a film
 //!   may mix CPU and GPU passes.
 //! * Rays (camera, extension and shadow, counted as the CPU counts them) are summed
-//!   per invocation and added to a 64-bit atomic counter.
+//!   per invocation and added to a 64-bit atomic counter; paths cut by the bounce cap
+//!   likewise ([`PathCounters::truncated`]).
 //!
 //! # Differences from the CPU integrator
 //!
-//! The kernel (`wgsl/path.wgsl`) is a line-by-line port of `integrator::radiance`, and it
-//! draws the CPU's own random stream (`Pcg32::for_sample(seed, pixel, sample)`, with the
-//! 64-bit arithmetic emulated on word pairs) in the CPU's order, so a GPU path starts as
-//! the CPU path of the same pixel sample and usually stays on it. What differs:
+//! The kernel (`wgsl/path.wgsl`) is a line-by-line port of `tracer`'s `PathTracer`, and
+//! it draws the CPU's own random stream (`Pcg32::for_sample(seed, pixel, sample)`, with
+//! the 64-bit arithmetic emulated on word pairs) in the CPU's order, so a GPU path starts
+//! as the CPU path of the same pixel sample and usually stays on it. What differs:
 //!
-//! * Hero mode only (four wavelengths); `bins40` and `rgb` are
-//!   [`GpuError::Unsupported`], as are analytic shapes and custom (out-of-workspace)
-//!   BSDFs (the latter by [`crate::materials::generate`]).
-//! * A path has at most [`MAX_BOUNCES`] scattering events, also when `max_depth` is 0
-//!   (unbounded on the CPU): with Russian roulette (q ≥ 0.05) the probability of
-//!   reaching the cap is below 0.95²⁵⁶ ≈ 2·10⁻⁶ per path, a negligible bias.
+//! * Hero mode only (four wavelengths); `bins40` and `rgb` are refused up front by the
+//!   capability check, as are analytic shapes and custom (out-of-workspace) BSDFs.
+//! * A path has at most [`MAX_BOUNCES`] scattering events. A `max_depth` beyond it is
+//!   refused; with `max_depth` 0 (unbounded on the CPU) paths that reach it are counted
+//!   ([`PathCounters::truncated`], printed by the CLI): with Russian roulette
+//!   (q ≥ 0.05) the probability of reaching it is below 0.95²⁵⁶ ≈ 2·10⁻⁶ per path.
 //! * Rounding: the driver may contract multiply–adds into FMAs, and `atanh`, `sqrt`,
 //!   `exp`, `sin`/`cos` are the GPU's, so values differ in the last bits and a path
 //!   occasionally takes another branch (a Russian-roulette or Fresnel decision on the
@@ -62,20 +60,23 @@
 //!   [`SAMPLES_PER_READBACK`] samples (relative rounding ≲ 1024 · 2⁻²⁴ ≈ 6·10⁻⁵ in the
 //!   worst case), then merged into the film's f64 statistics.
 
+use crate::kernel::{
+    FILM_HEADER_BYTES, HAS_ENVIRONMENT, HAS_NORMALS, HAS_TANGENTS, KernelOptions, LIGHT_FLOATS, Params, PixelAccum,
+};
 use crate::{GpuContext, GpuError};
-use bvh::{Aabb, BuildConfig, Bvh, BvhNode, SplitMethod};
-use bytemuck::{Pod, Zeroable};
+use bvh::{Aabb, BuildConfig, Bvh, BvhNode, SplitMethod, TriangleTest};
 use spectral::SpectralMode;
 use spectral::tables::{CIE_SAMPLES, CIE_X, CIE_Y, CIE_Z};
 use std::sync::{Arc, Mutex, MutexGuard, PoisonError};
 use std::time::{Duration, Instant};
-use tracer::Camera;
 use tracer::film::{Film, PixelStats};
-use tracer::integrator::{PathCounters, ShadingNormals};
-use tracer::render::{Backend, PreparedScene, RenderSettings};
+use tracer::integrator::PathCounters;
+use tracer::render::{Backend, Capabilities, PrepareStats, PreparedScene, RenderSettings, SceneOptions, check_pass};
+use tracer::{Camera, Scene};
 use wgpu::util::DeviceExt;
 
-/// The most scattering events a GPU path may have, whatever `max_depth` says.
+/// The most scattering events a GPU path may have, whatever `max_depth` says (paths cut
+/// by it are counted).
 pub const MAX_BOUNCES: u32 = 256;
 
 /// The most pixel-samples one dispatch traces (fewer samples per pixel for larger
@@ -92,12 +93,8 @@ pub const SAMPLES_PER_READBACK: u32 = 1024;
 /// The kernel's workgroup side (8 × 8 invocations, one per pixel).
 const WORKGROUP: u32 = 8;
 
-/// Bytes of one pixel's accumulator: mean (3 × f32), count (u32), M2 (3 × f32), dropped
-/// non-finite samples (u32).
-const PIXEL_BYTES: u64 = 32;
-
-/// Bytes before the accumulators: the 64-bit ray counter and padding.
-const FILM_HEADER_BYTES: u64 = 16;
+/// Bytes of one pixel's accumulator.
+const PIXEL_BYTES: u64 = std::mem::size_of::<PixelAccum>() as u64;
 
 /// The largest accumulator buffer a band uses (the device's limits may make it smaller).
 const FILM_BAND_CAP: u64 = 64 << 20;
@@ -105,44 +102,18 @@ const FILM_BAND_CAP: u64 = 64 << 20;
 /// Storage buffers the kernel binds (six of ours, two of the material kernel's).
 const STORAGE_BUFFERS: u32 = 8;
 
-/// The integrator, appended to the generated material kernel.
-const PATH_WGSL: &str = include_str!("wgsl/path.wgsl");
-
-/// The kernel's uniform block (`PtParams` in `path.wgsl`).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
-struct Params {
-    width: u32,
-    height: u32,
-    band_y0: u32,
-    band_rows: u32,
-    first_sample: u32,
-    samples: u32,
-    seed_lo: u32,
-    seed_hi: u32,
-    max_depth: u32,
-    rr_depth: u32,
-    specular_extension: u32,
-    shading: u32,
-    scene_flags: u32,
-    node_count: u32,
-    light_count: u32,
-    env_pmf: f32,
-    eye: [f32; 4],
-    forward: [f32; 4],
-    right: [f32; 4],
-    up: [f32; 4],
-    inv_size: [f32; 2],
-    lights_offset: u32,
-    env_offset: u32,
+/// What the GPU backend can render: hero wavelengths, triangle meshes, registered
+/// models, both triangle tests, the path tracer, at most [`MAX_BOUNCES`] bounces.
+pub fn capabilities() -> Capabilities {
+    Capabilities {
+        spectral_modes: vec![SpectralMode::Hero],
+        analytic_shapes: false,
+        custom_bsdfs: false,
+        triangle_tests: vec![TriangleTest::Watertight, TriangleTest::MollerTrumbore],
+        integrator: "path",
+        max_bounces: Some(MAX_BOUNCES),
+    }
 }
-
-const HAS_NORMALS: u32 = 1;
-const HAS_TANGENTS: u32 = 2;
-const HAS_ENVIRONMENT: u32 = 4;
-
-/// Floats per light in the tables: three vertices, cdf, pmf, material id (bits).
-const LIGHT_FLOATS: usize = 12;
 
 /// What the kernel's uniforms and the camera need of a scene besides its buffers, kept
 /// from [`SceneData`] into [`GpuScene`].
@@ -154,8 +125,7 @@ struct SceneConstants {
     env_offset: u32,
     env_pmf: f32,
     scene_flags: u32,
-    camera: Option<Camera>,
-    bounds: Aabb,
+    emitters: usize,
 }
 
 /// A scene as the flat arrays the kernel reads, built on the CPU; see the module docs.
@@ -169,18 +139,21 @@ pub struct SceneData {
     material_data: Vec<u32>,
     spectra: Vec<f32>,
     constants: SceneConstants,
+    options: KernelOptions,
+    build_time: Duration,
 }
 
 impl SceneData {
-    /// Flattens `scene` for the kernel. Fails with [`GpuError::Unsupported`] for what
-    /// the kernel cannot trace (analytic shapes, custom BSDFs) and passes on the
-    /// material code generator's errors.
-    pub fn new(prepared: &PreparedScene) -> Result<Self, GpuError> {
-        let scene = &prepared.scene;
+    /// Flattens `scene` (validated, within the backend's capabilities) for a kernel with
+    /// `options`: builds its BVH and light distribution and generates its materials.
+    /// Fails with [`GpuError::Unsupported`] for what the kernel cannot trace (analytic
+    /// shapes, custom BSDFs) and passes on the material code generator's errors.
+    pub fn new(scene: &Scene, options: KernelOptions) -> Result<Self, GpuError> {
         if !scene.shapes.is_empty() {
             return Err(GpuError::Unsupported("analytic shapes (spheres, boxes, …)".into()));
         }
         let kernel = crate::materials::generate(&scene.materials, true)?;
+        let start = Instant::now();
         let config = BuildConfig {
             method: SplitMethod::BinnedSah,
             max_leaf_size: 4,
@@ -189,7 +162,8 @@ impl SceneData {
         };
         let bvh = Bvh::build(&scene.triangle_soup(), config)
             .map_err(|e| GpuError::Unsupported(format!("this geometry ({e})")))?;
-        let lights = &prepared.lights;
+        let build_time = start.elapsed();
+        let lights = tracer::lights::Lights::new(scene);
         let pmfs = lights.prim_pmfs();
 
         let mut tri_verts = Vec::with_capacity(3 * bvh.prim_ids().len());
@@ -251,8 +225,7 @@ impl SceneData {
             env_offset,
             env_pmf: lights.environment_pmf(),
             scene_flags,
-            camera: scene.camera,
-            bounds: scene.bounds(),
+            emitters: lights.emitter_count(),
         };
         Ok(Self {
             constants,
@@ -264,6 +237,8 @@ impl SceneData {
             material_wgsl: kernel.wgsl,
             material_data: kernel.data,
             spectra: kernel.spectra,
+            options,
+            build_time,
         })
     }
 
@@ -301,10 +276,10 @@ impl SceneData {
         Ok(())
     }
 
-    /// The WGSL of the whole kernel: the generated materials, then the integrator
-    /// (`wgsl/path.wgsl`) with its bounce cap.
+    /// The WGSL of the whole kernel: the generated materials, the generated header and
+    /// the hand-written integrator ([`crate::kernel::source`]).
     pub fn shader_source(&self) -> String {
-        format!("{}\nconst PT_MAX_BOUNCES: u32 = {MAX_BOUNCES}u;\n{PATH_WGSL}", self.material_wgsl)
+        crate::kernel::source(&self.material_wgsl, &self.options)
     }
 }
 
@@ -330,9 +305,12 @@ struct FilmBuffers {
     bind_group: wgpu::BindGroup,
 }
 
-/// A scene on the device: its buffers and the compiled pipeline. Made by
-/// [`GpuBackend::prepare`]; rendered by [`GpuBackend::render_prepared`].
+/// A scene on the device, made by [`GpuBackend::prepare`]: its buffers, the compiled
+/// pipeline and the scene itself (for the camera and for messages).
 pub struct GpuScene {
+    ctx: Arc<GpuContext>,
+    scene: Scene,
+    bounds: Aabb,
     pipeline: wgpu::ComputePipeline,
     layout: wgpu::BindGroupLayout,
     params: wgpu::Buffer,
@@ -340,60 +318,12 @@ pub struct GpuScene {
     buffers: Vec<wgpu::Buffer>,
     film: Mutex<Option<FilmBuffers>>,
     constants: SceneConstants,
-    compile_time: Duration,
-    prepare_time: Duration,
-}
-
-impl GpuScene {
-    /// Time spent compiling the shader and creating the pipeline.
-    pub fn compile_time(&self) -> Duration {
-        self.compile_time
-    }
-
-    /// Time spent preparing the scene in all: flattening (BVH build, material code
-    /// generation), upload and compilation.
-    pub fn prepare_time(&self) -> Duration {
-        self.prepare_time
-    }
-
-    /// The camera a render uses, as [`PreparedScene::camera`] chooses it.
-    fn camera(&self, settings: &RenderSettings) -> Camera {
-        settings
-            .camera
-            .or(self.constants.camera)
-            .unwrap_or_else(|| Camera::framing(&self.constants.bounds, settings.width as f32 / settings.height as f32))
-    }
-}
-
-/// Identifies the scene the [`Backend`] impl has cached (see the module docs).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-struct SceneKey {
-    address: usize,
-    build_time: Duration,
-    arrays: [(usize, usize); 4],
-}
-
-impl SceneKey {
-    fn of(p: &PreparedScene) -> Self {
-        let s = &p.scene;
-        let arr = |ptr: *const u8, len: usize| (ptr as usize, len);
-        Self {
-            address: p as *const PreparedScene as usize,
-            build_time: p.build_time,
-            arrays: [
-                arr(s.positions.as_ptr().cast(), s.positions.len()),
-                arr(s.triangles.as_ptr().cast(), s.triangles.len()),
-                arr(s.materials.as_ptr().cast(), s.materials.len()),
-                arr(s.normals.as_ptr().cast(), s.normals.len()),
-            ],
-        }
-    }
+    stats: PrepareStats,
 }
 
 /// The tracer's [`Backend`] on a wgpu device.
 pub struct GpuBackend {
-    ctx: GpuContext,
-    cache: Mutex<Option<(SceneKey, Arc<GpuScene>)>>,
+    ctx: Arc<GpuContext>,
 }
 
 fn lock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
@@ -416,7 +346,7 @@ impl GpuBackend {
 
     /// A backend on an already open device.
     pub fn with_context(ctx: GpuContext) -> Self {
-        Self { ctx, cache: Mutex::new(None) }
+        Self { ctx: Arc::new(ctx) }
     }
 
     /// The device the backend renders on.
@@ -424,27 +354,17 @@ impl GpuBackend {
         &self.ctx
     }
 
-    /// Shader compilation and pipeline creation time of the scene the [`Backend`] impl
-    /// has cached (the last one rendered), if any.
-    pub fn compile_time(&self) -> Option<Duration> {
-        lock(&self.cache).as_ref().map(|(_, s)| s.compile_time)
+    /// Checks `scene` against the capabilities, uploads it and compiles its kernel.
+    pub fn prepare_gpu(&self, scene: Scene, options: &SceneOptions) -> Result<GpuScene, tracer::Error> {
+        capabilities().check_scene("gpu", &scene, options)?;
+        scene.validate()?;
+        Ok(self.upload(scene, options)?)
     }
 
-    /// Total preparation time (flattening, upload, compilation) of the cached scene.
-    pub fn prepare_time(&self) -> Option<Duration> {
-        lock(&self.cache).as_ref().map(|(_, s)| s.prepare_time)
-    }
-
-    /// Forgets the cached scene, so that the next `render_pass` prepares it again: call
-    /// it after changing a [`PreparedScene`] in place (its materials, say).
-    pub fn invalidate(&self) {
-        *lock(&self.cache) = None;
-    }
-
-    /// Uploads `scene` and compiles its kernel.
-    pub fn prepare(&self, scene: &PreparedScene) -> Result<GpuScene, GpuError> {
+    fn upload(&self, scene: Scene, options: &SceneOptions) -> Result<GpuScene, GpuError> {
         let start = Instant::now();
-        let data = SceneData::new(scene)?;
+        let data =
+            SceneData::new(&scene, KernelOptions { triangle_test: options.triangle_test, max_bounces: MAX_BOUNCES })?;
         data.check_limits(&self.ctx.limits)?;
         let device = &self.ctx.device;
         let validation = device.push_error_scope(wgpu::ErrorFilter::Validation);
@@ -523,53 +443,50 @@ impl GpuBackend {
         memory_result?;
         validation_result?;
 
+        let stats = PrepareStats {
+            build: data.build_time,
+            compile: Some(compile_time),
+            total: start.elapsed(),
+            emitters: data.constants.emitters,
+        };
         Ok(GpuScene {
+            ctx: Arc::clone(&self.ctx),
+            bounds: scene.bounds(),
+            scene,
             pipeline,
             layout,
             params,
             buffers,
             film: Mutex::new(None),
             constants: data.constants,
-            compile_time,
-            prepare_time: start.elapsed(),
+            stats,
         })
     }
+}
 
-    /// The cached GPU scene for `scene`, prepared now if it is not the cached one.
-    fn cached(&self, scene: &PreparedScene) -> Result<Arc<GpuScene>, GpuError> {
-        let key = SceneKey::of(scene);
-        let mut cache = lock(&self.cache);
-        if let Some((k, s)) = cache.as_ref()
-            && *k == key
-        {
-            return Ok(Arc::clone(s));
-        }
-        *cache = None;
-        let prepared = Arc::new(self.prepare(scene)?);
-        *cache = Some((key, Arc::clone(&prepared)));
-        Ok(prepared)
+impl GpuScene {
+    /// Time spent compiling the shader and creating the pipeline.
+    pub fn compile_time(&self) -> Duration {
+        self.stats.compile.unwrap_or_default()
+    }
+
+    /// Time spent preparing the scene in all: flattening (BVH build, material code
+    /// generation), upload and compilation.
+    pub fn prepare_time(&self) -> Duration {
+        self.stats.total
     }
 
     /// Adds samples `first_sample .. first_sample + spp` of every pixel to `film`, as
-    /// [`Backend::render_pass`] does, on a scene prepared by [`GpuBackend::prepare`]
-    /// (with this backend's device). `settings` should have passed
-    /// [`RenderSettings::validate`]; the film must have the settings' size.
-    pub fn render_prepared(
+    /// [`PreparedScene::render_pass`] does, returning the GPU's own errors.
+    pub fn render_gpu(
         &self,
-        gpu: &GpuScene,
         settings: &RenderSettings,
         film: &mut Film,
         first_sample: u32,
         spp: u32,
         progress: &(dyn Fn(u64) + Sync),
     ) -> Result<PathCounters, GpuError> {
-        if settings.mode != SpectralMode::Hero {
-            return Err(unsupported_mode(settings.mode));
-        }
         let (width, height) = (settings.width, settings.height);
-        if film.width() != width || film.height() != height {
-            return Err(GpuError::Unsupported("a film whose size differs from the settings' image size".into()));
-        }
         if spp == 0 || width == 0 || height == 0 {
             return Ok(PathCounters::default());
         }
@@ -584,19 +501,15 @@ impl GpuBackend {
         let band_rows_max = ((cap.saturating_sub(FILM_HEADER_BYTES) / row_bytes).max(1) as u32).min(height);
         let band_pixels_max = band_rows_max as u64 * width as u64;
 
-        let mut film_slot = lock(&gpu.film);
+        let mut film_slot = lock(&self.film);
         if film_slot.as_ref().is_none_or(|f| f.pixels < band_pixels_max) {
-            *film_slot = Some(self.film_buffers(gpu, band_pixels_max));
+            *film_slot = Some(self.film_buffers(band_pixels_max));
         }
         let fb = film_slot.as_ref().expect("just made");
 
-        let (eye, forward, right, up) = gpu.camera(settings).rays(width, height).basis();
+        let (eye, forward, right, up) = PreparedScene::camera(self, settings).rays(width, height).basis();
         let v4 = |v: glam::Vec3| [v.x, v.y, v.z, 0.0];
-        let shading = match settings.path.shading_normals {
-            ShadingNormals::Adapted => 0,
-            ShadingNormals::FaceForward => 1,
-            ShadingNormals::Geometric => 2,
-        };
+        let shading = settings.path.shading_normals.code();
         let mut params = Params {
             width,
             height,
@@ -606,22 +519,22 @@ impl GpuBackend {
             rr_depth: settings.path.rr_depth,
             specular_extension: settings.path.specular_extension,
             shading,
-            scene_flags: gpu.constants.scene_flags,
-            node_count: gpu.constants.node_count,
-            light_count: gpu.constants.light_count,
-            env_pmf: gpu.constants.env_pmf,
+            scene_flags: self.constants.scene_flags,
+            node_count: self.constants.node_count,
+            light_count: self.constants.light_count,
+            env_pmf: self.constants.env_pmf,
             eye: v4(eye),
             forward: v4(forward),
             right: v4(right),
             up: v4(up),
             inv_size: [1.0 / width as f32, 1.0 / height as f32],
-            lights_offset: gpu.constants.lights_offset,
-            env_offset: gpu.constants.env_offset,
+            lights_offset: self.constants.lights_offset,
+            env_offset: self.constants.env_offset,
             ..Params::default()
         };
 
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
-        let mut rays = 0u64;
+        let mut counters = PathCounters::default();
         let mut y0 = 0;
         while y0 < height {
             let rows = band_rows_max.min(height - y0);
@@ -635,7 +548,7 @@ impl GpuBackend {
                 let n = per_dispatch.min(spp - done).min(SAMPLES_PER_READBACK - done % SAMPLES_PER_READBACK);
                 params.first_sample = first_sample.wrapping_add(done);
                 params.samples = n;
-                queue.write_buffer(&gpu.params, 0, bytemuck::bytes_of(&params));
+                queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
                 let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
                 if done % SAMPLES_PER_READBACK == 0 {
                     encoder.clear_buffer(&fb.accum, 0, Some(band_bytes));
@@ -645,7 +558,7 @@ impl GpuBackend {
                         label: Some("spt"),
                         timestamp_writes: None,
                     });
-                    pass.set_pipeline(&gpu.pipeline);
+                    pass.set_pipeline(&self.pipeline);
                     pass.set_bind_group(0, &fb.bind_group, &[]);
                     pass.dispatch_workgroups(width.div_ceil(WORKGROUP), rows.div_ceil(WORKGROUP), 1);
                 }
@@ -656,17 +569,17 @@ impl GpuBackend {
                 progress(band_pixels * n as u64);
                 done += n;
                 if done % SAMPLES_PER_READBACK == 0 || done == spp {
-                    rays += self.read_band(fb, band_bytes, film, y0, rows)?;
+                    counters += self.read_band(fb, band_bytes, film, y0, rows)?;
                 }
             }
             y0 += rows;
         }
         pop_scope(scope, "rendering")?;
-        Ok(PathCounters { rays })
+        Ok(counters)
     }
 
     /// Accumulator and read-back buffers for `pixels` pixels, with their bind group.
-    fn film_buffers(&self, gpu: &GpuScene, pixels: u64) -> FilmBuffers {
+    fn film_buffers(&self, pixels: u64) -> FilmBuffers {
         let device = &self.ctx.device;
         let size = FILM_HEADER_BYTES + pixels * PIXEL_BYTES;
         let accum = device.create_buffer(&wgpu::BufferDescriptor {
@@ -681,9 +594,9 @@ impl GpuBackend {
             usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        let b = &gpu.buffers;
+        let b = &self.buffers;
         let bindings = [
-            (0, &gpu.params),
+            (0, &self.params),
             (1, &b[0]),
             (2, &b[1]),
             (3, &b[2]),
@@ -699,7 +612,7 @@ impl GpuBackend {
             .collect();
         let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("spt"),
-            layout: &gpu.layout,
+            layout: &self.layout,
             entries: &entries,
         });
         FilmBuffers { pixels, accum, readback, bind_group }
@@ -707,7 +620,14 @@ impl GpuBackend {
 
     /// Copies a band's accumulators back, merges them into `film` (rows `y0 ..
     /// y0 + rows`) and returns the band's ray count.
-    fn read_band(&self, fb: &FilmBuffers, bytes: u64, film: &mut Film, y0: u32, rows: u32) -> Result<u64, GpuError> {
+    fn read_band(
+        &self,
+        fb: &FilmBuffers,
+        bytes: u64,
+        film: &mut Film,
+        y0: u32,
+        rows: u32,
+    ) -> Result<PathCounters, GpuError> {
         let device = &self.ctx.device;
         let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
         encoder.copy_buffer_to_buffer(&fb.accum, 0, &fb.readback, 0, Some(bytes));
@@ -722,36 +642,29 @@ impl GpuBackend {
         rx.recv()
             .map_err(|e| GpuError::Shader(format!("reading the accumulators back: {e}")))?
             .map_err(|e| GpuError::Shader(format!("reading the accumulators back: {e}")))?;
-        let rays;
+        let counters;
         {
             let view = fb
                 .readback
                 .get_mapped_range(0..bytes)
                 .map_err(|e| GpuError::Shader(format!("reading the accumulators back: {e}")))?;
-            let words: &[u32] = bytemuck::cast_slice(&view);
-            rays = words[0] as u64 | (words[1] as u64) << 32;
+            let (header, pixels) = view.split_at(FILM_HEADER_BYTES as usize);
+            let words: &[u32] = bytemuck::cast_slice(header);
+            counters = PathCounters { rays: words[0] as u64 | (words[1] as u64) << 32, truncated: words[2] as u64 };
+            let pixels: &[PixelAccum] = bytemuck::cast_slice(pixels);
             let width = film.width() as usize;
             let first = y0 as usize * width;
-            let pixels = &words[(FILM_HEADER_BYTES / 4) as usize..];
             let mut non_finite = 0u64;
-            for (i, px) in pixels.chunks_exact(8).take(rows as usize * width).enumerate() {
-                let f = |k: usize| f32::from_bits(px[k]) as f64;
-                let pass = PixelStats { count: px[3], mean: [f(0), f(1), f(2)], m2: [f(4), f(5), f(6)] };
+            for (i, px) in pixels.iter().take(rows as usize * width).enumerate() {
+                let pass = PixelStats { count: px.count, mean: px.mean.map(f64::from), m2: px.m2.map(f64::from) };
                 film.pixels_mut()[first + i].merge(&pass);
-                non_finite += px[7] as u64;
+                non_finite += px.non_finite as u64;
             }
             film.non_finite += non_finite;
         }
         fb.readback.unmap();
-        Ok(rays)
+        Ok(counters)
     }
-}
-
-fn unsupported_mode(mode: SpectralMode) -> GpuError {
-    GpuError::Unsupported(format!(
-        "the '{}' spectral mode (it traces hero wavelengths only: use --spectral hero, or --backend cpu)",
-        mode.name()
-    ))
 }
 
 impl From<GpuError> for tracer::Error {
@@ -765,23 +678,48 @@ impl Backend for GpuBackend {
         "gpu"
     }
 
+    fn capabilities(&self) -> Capabilities {
+        capabilities()
+    }
+
+    fn prepare(&self, scene: Scene, options: &SceneOptions) -> tracer::Result<Box<dyn PreparedScene>> {
+        Ok(Box::new(self.prepare_gpu(scene, options)?))
+    }
+}
+
+impl PreparedScene for GpuScene {
+    fn backend(&self) -> &str {
+        "gpu"
+    }
+
+    fn capabilities(&self) -> Capabilities {
+        capabilities()
+    }
+
+    fn scene(&self) -> &Scene {
+        &self.scene
+    }
+
+    fn stats(&self) -> PrepareStats {
+        self.stats
+    }
+
     fn render_pass(
         &self,
-        scene: &PreparedScene,
         settings: &RenderSettings,
         film: &mut Film,
         first_sample: u32,
         spp: u32,
         progress: &(dyn Fn(u64) + Sync),
     ) -> tracer::Result<PathCounters> {
-        settings.validate()?;
-        if film.width() != settings.width || film.height() != settings.height {
-            return Err(tracer::Error::Setting("film size differs from the settings' image size".into()));
-        }
-        if settings.mode != SpectralMode::Hero {
-            return Err(unsupported_mode(settings.mode).into());
-        }
-        let gpu = self.cached(scene)?;
-        Ok(self.render_prepared(&gpu, settings, film, first_sample, spp, progress)?)
+        check_pass(self, settings, film)?;
+        Ok(self.render_gpu(settings, film, first_sample, spp, progress)?)
+    }
+
+    fn camera(&self, settings: &RenderSettings) -> Camera {
+        settings
+            .camera
+            .or(self.scene.camera)
+            .unwrap_or_else(|| Camera::framing(&self.bounds, settings.width as f32 / settings.height as f32))
     }
 }

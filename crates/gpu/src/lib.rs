@@ -5,13 +5,17 @@
 //! * [`materials`]: WGSL for the material parameter structs, their packing and the
 //!   per-model `eval`/`pdf`/`sample` dispatch, generated from the `brdf` crate's
 //!   parameter definitions (`ModelDef`) for exactly the models a scene uses;
-//! * [`backend`]: [`GpuBackend`], the tracer's [`tracer::Backend`] on the GPU.
+//! * [`kernel`]: the path-tracing kernel's WGSL — structs and constants generated from
+//!   the Rust definitions, the rest one hand-written file per Rust file it mirrors;
+//! * [`backend`]: [`GpuBackend`], the tracer's [`tracer::Backend`] on the GPU, and
+//!   [`GpuScene`], a scene prepared on the device.
 
 pub mod backend;
 pub mod context;
+pub mod kernel;
 pub mod materials;
 
-pub use backend::GpuBackend;
+pub use backend::{GpuBackend, GpuScene};
 pub use context::{GpuContext, require_gpu};
 
 /// What can go wrong on the GPU path.

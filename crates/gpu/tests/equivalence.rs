@@ -29,11 +29,12 @@ use std::path::Path;
 use std::time::Instant;
 use tracer::film::{Film, PixelStats};
 use tracer::integrator::{PathSettings, ShadingNormals};
-use tracer::material::{ModelId, Material};
+use tracer::material::{Material, ModelId};
 use tracer::mesh::{quad, uv_sphere};
-use tracer::render::{Backend, CpuBackend, PreparedScene, RenderSettings};
+use tracer::render::{PreparedScene, RenderSettings, SceneOptions};
 use tracer::scene::{Environment, Scene};
 use tracer::{Camera, SpectralMode};
+use tracer::{CpuBackend, CpuScene};
 
 const CORNELL: &str =
     concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/scenes/cornell-box/CornellBox-Original.obj");
@@ -120,22 +121,32 @@ struct Renders {
     other: Film,
     cpu_rate: f64,
     gpu_rate: f64,
+    /// The GPU's kernel compilation and whole preparation.
+    compile: std::time::Duration,
+    prepare: std::time::Duration,
 }
 
-fn render_three(gpu: &GpuBackend, scene: &PreparedScene, s: &RenderSettings) -> Result<Renders, tracer::Error> {
-    let cpu_backend = CpuBackend::new(2)?;
+/// `scene` prepared on the CPU (2 threads) and on `gpu`.
+fn prepare_both(gpu: &GpuBackend, scene: &Scene) -> Result<(CpuScene, gpu::GpuScene), tracer::Error> {
+    let options = SceneOptions::default();
+    Ok((CpuBackend::new(2)?.prepare_cpu(scene.clone(), &options)?, gpu.prepare_gpu(scene.clone(), &options)?))
+}
+
+fn render_three(gpu: &GpuBackend, scene: &Scene, s: &RenderSettings) -> Result<Renders, tracer::Error> {
+    let (cpu_scene, gpu_scene) = prepare_both(gpu, scene)?;
     let samples = (s.width * s.height * s.spp) as f64;
-    let timed = |b: &dyn Backend, s: &RenderSettings| -> Result<(Film, f64), tracer::Error> {
+    let timed = |p: &dyn PreparedScene, s: &RenderSettings| -> Result<(Film, f64), tracer::Error> {
         let start = Instant::now();
-        let (film, _) = tracer::render(b, scene, s, &|_| {})?;
+        let (film, _) = tracer::render(p, s, &|_| {})?;
         Ok((film, samples / start.elapsed().as_secs_f64()))
     };
-    // One sample first, so that the GPU timing excludes upload and compilation.
-    gpu.render_pass(scene, s, &mut Film::new(s.width, s.height), 0, 1, &|_| {})?;
-    let (cpu, cpu_rate) = timed(&cpu_backend, s)?;
-    let (same, gpu_rate) = timed(gpu, s)?;
-    let (other, _) = timed(gpu, &RenderSettings { seed: s.seed + 1000, ..s.clone() })?;
-    Ok(Renders { cpu, same, other, cpu_rate, gpu_rate })
+    // One sample first, so that the GPU timing excludes the driver's first-dispatch work.
+    gpu_scene.render_pass(s, &mut Film::new(s.width, s.height), 0, 1, &|_| {})?;
+    let (cpu, cpu_rate) = timed(&cpu_scene, s)?;
+    let (same, gpu_rate) = timed(&gpu_scene, s)?;
+    let (other, _) = timed(&gpu_scene, &RenderSettings { seed: s.seed + 1000, ..s.clone() })?;
+    let (compile, prepare) = (gpu_scene.compile_time(), gpu_scene.prepare_time());
+    Ok(Renders { cpu, same, other, cpu_rate, gpu_rate, compile, prepare })
 }
 
 /// Compares the renders of one scene; prints both comparisons and returns the failures.
@@ -155,6 +166,11 @@ fn compare_all(name: &str, r: &Renders) -> Vec<String> {
         .collect()
 }
 
+/// The kernel options the backend uses by default.
+fn kernel_options() -> gpu::kernel::KernelOptions {
+    gpu::kernel::KernelOptions { triangle_test: bvh::TriangleTest::Watertight, max_bounces: gpu::backend::MAX_BOUNCES }
+}
+
 /// Depth 8 without Russian roulette (see the module docs).
 fn settings(width: u32, height: u32, spp: u32) -> RenderSettings {
     RenderSettings {
@@ -168,12 +184,12 @@ fn settings(width: u32, height: u32, spp: u32) -> RenderSettings {
     }
 }
 
-fn cornell() -> Option<PreparedScene> {
+fn cornell() -> Option<Scene> {
     if !Path::new(CORNELL).exists() {
         eprintln!("skipping: {CORNELL} is absent");
         return None;
     }
-    Some(PreparedScene::new(tracer::obj::load_obj(Path::new(CORNELL)).unwrap()).unwrap())
+    Some(tracer::obj::load_obj(Path::new(CORNELL)).unwrap())
 }
 
 #[test]
@@ -187,13 +203,7 @@ fn cornell_box_matches_the_cpu() {
     println!(
         "Cornell box {}×{} at {} spp: cpu (2 threads) {:.0} samples/s, gpu {:.0} samples/s; shader compile and \
          pipeline {:?}, scene preparation {:?}",
-        s.width,
-        s.height,
-        s.spp,
-        r.cpu_rate,
-        r.gpu_rate,
-        gpu.compile_time().unwrap(),
-        gpu.prepare_time().unwrap(),
+        s.width, s.height, s.spp, r.cpu_rate, r.gpu_rate, r.compile, r.prepare,
     );
     let failures = compare_all("Cornell box", &r);
     assert!(failures.is_empty(), "{failures:#?}");
@@ -201,7 +211,7 @@ fn cornell_box_matches_the_cpu() {
 
 /// A small preview scene: a low-polygon sphere of `material` (smooth normals, tangents
 /// along the parallels) on a coloured floor, under a warm area light and a dim sky.
-fn model_scene(material: Material) -> PreparedScene {
+fn model_scene(material: Material) -> Scene {
     let mut scene = Scene::default();
     scene.add(&uv_sphere(Vec3::new(0.0, 1.0, 0.0), 1.0, 10, 20, false), material);
     let floor = Material::diffuse("floor", Colour::reflectance_rgb([0.6, 0.45, 0.3]).unwrap()).unwrap();
@@ -215,7 +225,7 @@ fn model_scene(material: Material) -> PreparedScene {
     scene.environment = Some(Environment { radiance: Colour::constant(0.3) });
     scene.camera =
         Some(Camera { eye: Vec3::new(0.0, 2.0, 3.6), center: Vec3::new(0.0, 0.9, 0.0), up: Vec3::Y, fov_y_deg: 40.0 });
-    PreparedScene::new(scene).unwrap()
+    scene
 }
 
 /// Every built-in model at its defaults, plus a dispersive (N-BK7), absorbing glass.
@@ -247,9 +257,7 @@ fn every_model_and_glass_match_the_cpu() {
             Ok(r) => {
                 println!(
                     "{name}: cpu {:.0} samples/s, gpu {:.0} samples/s, compile {:?}",
-                    r.cpu_rate,
-                    r.gpu_rate,
-                    gpu.compile_time().unwrap()
+                    r.cpu_rate, r.gpu_rate, r.compile
                 );
                 failures.extend(compare_all(&name, &r));
             }
@@ -269,8 +277,7 @@ fn every_model_and_glass_match_the_cpu() {
 fn path_settings_match_the_cpu() {
     let Some(ctx) = gpu::require_gpu() else { return };
     let gpu = GpuBackend::with_context(ctx);
-    let cpu = CpuBackend::new(2).unwrap();
-    let scene = model_scene(Material::dielectric("glass", 1.5).unwrap());
+    let (cpu, gpu) = prepare_both(&gpu, &model_scene(Material::dielectric("glass", 1.5).unwrap())).unwrap();
     let base = settings(32, 32, 64);
     let variants = [
         ("face-forward normals", PathSettings { shading_normals: ShadingNormals::FaceForward, ..base.path }),
@@ -281,8 +288,8 @@ fn path_settings_match_the_cpu() {
     let mut failures = Vec::new();
     for (name, path) in variants {
         let s = RenderSettings { path, ..base.clone() };
-        let (a, _) = tracer::render(&cpu, &scene, &s, &|_| {}).unwrap();
-        let (b, _) = tracer::render(&gpu, &scene, &s, &|_| {}).unwrap();
+        let (a, _) = tracer::render(&cpu, &s, &|_| {}).unwrap();
+        let (b, _) = tracer::render(&gpu, &s, &|_| {}).unwrap();
         let c = compare(&a, &b);
         println!("{name}: {}", c.summary());
         failures.extend(c.same_seed_failures().map(|f| format!("{name}: {f}")));
@@ -296,14 +303,14 @@ fn passes_bands_and_reruns_add_up() {
     let Some(scene) = cornell() else { return };
     // Accumulators limited to the largest scene buffer (at least 8 KiB): an image of
     // twice that many rows and a bit is rendered in three bands.
-    let largest = SceneData::new(&scene).unwrap().buffer_sizes().iter().map(|b| b.1).max().unwrap();
+    let largest = SceneData::new(&scene, kernel_options()).unwrap().buffer_sizes().iter().map(|b| b.1).max().unwrap();
     let limit = largest.max(8 << 10);
     let rows_per_band = ((limit - 16) / (32 * 32)) as u32;
     let s = settings(32, 2 * rows_per_band + 3, 16);
     let limits = wgpu::Limits { max_storage_buffer_binding_size: limit, ..ctx.limits.clone() };
-    let gpu = GpuBackend::with_context(ctx);
-    let (whole, _) = tracer::render(&gpu, &scene, &s, &|_| {}).unwrap();
-    let (again, _) = tracer::render(&gpu, &scene, &s, &|_| {}).unwrap();
+    let prepared = GpuBackend::with_context(ctx).prepare_gpu(scene.clone(), &SceneOptions::default()).unwrap();
+    let (whole, _) = tracer::render(&prepared, &s, &|_| {}).unwrap();
+    let (again, _) = tracer::render(&prepared, &s, &|_| {}).unwrap();
     assert_eq!(whole, again, "a seed must give the same image");
     // Two passes of 8 samples: the same samples, grouped differently.
     let mut split = Film::new(s.width, s.height);
@@ -311,8 +318,8 @@ fn passes_bands_and_reruns_add_up() {
     let progress = |n: u64| {
         counted.fetch_add(n, std::sync::atomic::Ordering::Relaxed);
     };
-    gpu.render_pass(&scene, &s, &mut split, 0, 8, &progress).unwrap();
-    gpu.render_pass(&scene, &s, &mut split, 8, 8, &progress).unwrap();
+    prepared.render_pass(&s, &mut split, 0, 8, &progress).unwrap();
+    prepared.render_pass(&s, &mut split, 8, 8, &progress).unwrap();
     assert_eq!(counted.into_inner(), whole.samples());
     assert_eq!(split.samples(), whole.samples());
     for (a, b) in split.pixels().iter().zip(whole.pixels()) {
@@ -324,7 +331,8 @@ fn passes_bands_and_reruns_add_up() {
     // Banded: the same pixels, bit for bit.
     let ctx = gpu::require_gpu().unwrap();
     let banded = GpuBackend::with_context(gpu::GpuContext { limits, ..ctx });
-    let (bands, stats) = tracer::render(&banded, &scene, &s, &|_| {}).unwrap();
+    let banded = banded.prepare_gpu(scene, &SceneOptions::default()).unwrap();
+    let (bands, stats) = tracer::render(&banded, &s, &|_| {}).unwrap();
     assert_eq!(bands, whole, "bands of rows must not change the image");
     assert!(stats.rays >= stats.samples, "{} rays for {} samples", stats.rays, stats.samples);
 }
@@ -335,42 +343,56 @@ fn passes_bands_and_reruns_add_up() {
 fn long_passes_are_merged_in_groups() {
     let Some(ctx) = gpu::require_gpu() else { return };
     let Some(scene) = cornell() else { return };
-    let gpu = GpuBackend::with_context(ctx);
+    let gpu = GpuBackend::with_context(ctx).prepare_gpu(scene, &SceneOptions::default()).unwrap();
     let s = settings(8, 8, 1100);
     assert_eq!(gpu::backend::SAMPLES_PER_READBACK, 1024);
-    let (one, _) = tracer::render(&gpu, &scene, &s, &|_| {}).unwrap();
+    let (one, _) = tracer::render(&gpu, &s, &|_| {}).unwrap();
     let mut two = Film::new(8, 8);
-    gpu.render_pass(&scene, &s, &mut two, 0, 1024, &|_| {}).unwrap();
-    gpu.render_pass(&scene, &s, &mut two, 1024, 76, &|_| {}).unwrap();
+    gpu.render_pass(&s, &mut two, 0, 1024, &|_| {}).unwrap();
+    gpu.render_pass(&s, &mut two, 1024, 76, &|_| {}).unwrap();
     assert_eq!(one, two);
 }
 
 #[test]
 fn unsupported_scenes_and_modes_are_clear_errors() {
-    // Analytic shapes: no device needed to find out.
-    let flake = PreparedScene::new(tracer::scenes::sphere_flake(0).unwrap()).unwrap();
-    match SceneData::new(&flake) {
+    // Analytic shapes: no device needed to find out, from the capabilities or the data.
+    let flake = tracer::scenes::sphere_flake(0).unwrap();
+    match SceneData::new(&flake, kernel_options()) {
         Err(e @ GpuError::Unsupported(_)) => assert!(e.to_string().contains("analytic shapes"), "{e}"),
         Err(e) => panic!("wrong error {e}"),
         Ok(_) => panic!("a scene with spheres was accepted"),
     }
-    let Some(ctx) = gpu::require_gpu() else { return };
-    let gpu = GpuBackend::with_context(ctx);
+    let caps = gpu::backend::capabilities();
+    let err = caps.check_scene("gpu", &flake, &SceneOptions::default()).unwrap_err().to_string();
+    assert!(err.contains("does not support analytic shapes") && err.contains("--backend cpu"), "{err}");
     let s = settings(8, 8, 1);
-    let err = tracer::render(&gpu, &flake, &s, &|_| {}).unwrap_err().to_string();
-    assert!(err.contains("does not support analytic shapes"), "{err}");
-    let scene = model_scene(Material::diffuse("grey", Colour::constant(0.5)).unwrap());
     for mode in [SpectralMode::Rgb, SpectralMode::Bins40] {
-        let err = tracer::render(&gpu, &scene, &RenderSettings { mode, ..s.clone() }, &|_| {}).unwrap_err().to_string();
+        let err = caps.check_settings("gpu", &RenderSettings { mode, ..s.clone() }).unwrap_err().to_string();
         assert!(err.contains(mode.name()) && err.contains("--backend cpu"), "{err}");
         println!("{err}");
+    }
+    let deep = RenderSettings { path: PathSettings { max_depth: 1000, ..s.path }, ..s.clone() };
+    let err = caps.check_settings("gpu", &deep).unwrap_err().to_string();
+    assert!(err.contains("1000 bounces") && err.contains("256"), "{err}");
+    let unbounded = RenderSettings { path: PathSettings { max_depth: 0, ..s.path }, ..s.clone() };
+    assert!(caps.check_settings("gpu", &unbounded).is_ok(), "an unbounded depth is traced, truncations counted");
+    // The same refusals through a device: before any upload or compilation.
+    let Some(ctx) = gpu::require_gpu() else { return };
+    let gpu = GpuBackend::with_context(ctx);
+    let err = tracer::Backend::prepare(&gpu, flake, &SceneOptions::default()).err().unwrap().to_string();
+    assert!(err.contains("does not support analytic shapes"), "{err}");
+    let scene = model_scene(Material::diffuse("grey", Colour::constant(0.5)).unwrap());
+    let prepared = gpu.prepare_gpu(scene, &SceneOptions::default()).unwrap();
+    for mode in [SpectralMode::Rgb, SpectralMode::Bins40] {
+        let err = tracer::render(&prepared, &RenderSettings { mode, ..s.clone() }, &|_| {}).unwrap_err().to_string();
+        assert!(err.contains(mode.name()) && err.contains("--backend cpu"), "{err}");
     }
 }
 
 #[test]
 fn buffers_beyond_the_limits_are_named() {
     let scene = model_scene(Material::diffuse("grey", Colour::constant(0.5)).unwrap());
-    let data = SceneData::new(&scene).unwrap();
+    let data = SceneData::new(&scene, kernel_options()).unwrap();
     assert!(data.check_limits(&wgpu::Limits::default()).is_ok());
     let tiny = wgpu::Limits { max_storage_buffer_binding_size: 4096, ..wgpu::Limits::default() };
     let err = data.check_limits(&tiny).unwrap_err();
@@ -402,4 +424,48 @@ fn merging_pass_statistics_equals_adding_every_sample() {
         assert!((merged.mean[c] - all.mean[c]).abs() < 1e-12);
         assert!((merged.m2[c] - all.m2[c]).abs() < 1e-9 * all.m2[c].max(1.0));
     }
+}
+
+/// `--triangle-test moller-trumbore` is honoured on the GPU: the kernel compiled with it
+/// matches the CPU's Möller–Trumbore render of the same seed.
+#[test]
+fn moller_trumbore_matches_the_cpu() {
+    let Some(ctx) = gpu::require_gpu() else { return };
+    let Some(scene) = cornell() else { return };
+    let options = SceneOptions { triangle_test: bvh::TriangleTest::MollerTrumbore };
+    let cpu = CpuBackend::new(2).unwrap().prepare_cpu(scene.clone(), &options).unwrap();
+    let gpu = GpuBackend::with_context(ctx).prepare_gpu(scene, &options).unwrap();
+    let s = settings(32, 32, 64);
+    let (a, _) = tracer::render(&cpu, &s, &|_| {}).unwrap();
+    let (b, _) = tracer::render(&gpu, &s, &|_| {}).unwrap();
+    let c = compare(&a, &b);
+    println!("Möller–Trumbore, same seed: {}", c.summary());
+    assert!(c.same_seed_failures().is_none(), "{}", c.summary());
+}
+
+/// An "unbounded" depth is never silently cut: in a closed white room without Russian
+/// roulette every GPU path reaches the bounce cap, and every one is counted; with
+/// roulette (the default) none does.
+#[test]
+fn paths_cut_by_the_bounce_cap_are_counted() {
+    let Some(ctx) = gpu::require_gpu() else { return };
+    let mut room = Scene::default();
+    let walls = Material::diffuse("walls", Colour::constant(0.9))
+        .unwrap()
+        .with_emission(Colour::illuminant_rgb([0.1; 3]).unwrap());
+    // A closed cube, faces inward (its quads' fronts face the centre).
+    for axis in [Vec3::X, Vec3::Y, Vec3::Z] {
+        for sign in [-1.0, 1.0] {
+            room.add(&quad(axis * sign, -axis * sign, 1.0), walls.clone());
+        }
+    }
+    room.camera = Some(Camera { eye: Vec3::ZERO, center: -Vec3::Z, up: Vec3::Y, fov_y_deg: 60.0 });
+    let gpu = GpuBackend::with_context(ctx).prepare_gpu(room, &SceneOptions::default()).unwrap();
+    let no_roulette = PathSettings { max_depth: 0, rr_depth: u32::MAX, ..PathSettings::default() };
+    let s = RenderSettings { path: no_roulette, ..settings(4, 4, 2) };
+    let (_, stats) = tracer::render(&gpu, &s, &|_| {}).unwrap();
+    assert_eq!(stats.truncated, stats.samples, "every path reaches the cap");
+    let s = RenderSettings { path: PathSettings::default(), ..settings(4, 4, 2) };
+    let (_, stats) = tracer::render(&gpu, &s, &|_| {}).unwrap();
+    assert_eq!(stats.truncated, 0);
 }

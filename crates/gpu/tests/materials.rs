@@ -27,6 +27,7 @@
 //! not count as an error in f. Flags, and whether a sample exists, must agree exactly.
 
 use brdf::Bsdf;
+use brdf::params::Resolved;
 use brdf::params::{ParamKind, ParamValue, ResolvedParams};
 use glam::{Vec2, Vec3};
 use gpu::materials::{self, MaterialKernel, generate};
@@ -34,7 +35,6 @@ use spectral::SampledWavelengths;
 use spectral::spectrum::{Colour, Spectrum, TabulatedSpectrum};
 use std::collections::BTreeMap;
 use std::time::Instant;
-use brdf::params::Resolved;
 use tracer::material::{Material, ModelId};
 use wgpu::util::DeviceExt;
 

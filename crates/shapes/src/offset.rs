@@ -2,14 +2,22 @@
 
 use glam::Vec3;
 
+/// Below this |coordinate| the origin moves by a fixed [`OFFSET_FLOAT_SCALE`]·n instead of
+/// by ulps (near zero, ulps are too small to escape the surface's rounding).
+pub const OFFSET_ORIGIN: f32 = 1.0 / 32.0;
+/// The fixed offset near the origin, per unit of normal.
+pub const OFFSET_FLOAT_SCALE: f32 = 1.0 / 65536.0;
+/// Ulps moved per unit of normal elsewhere.
+pub const OFFSET_INT_SCALE: f32 = 256.0;
+
 /// Moves a ray origin off a surface along the normal `n` (pointing to the side the ray
 /// leaves on) by a few ulps of the position — Wächter & Binder, "A Fast and Robust Method
 /// for Avoiding Self-Intersection", Ray Tracing Gems (2019), ch. 6.
 #[inline]
 pub fn offset_ray_origin(p: Vec3, n: Vec3) -> Vec3 {
-    const ORIGIN: f32 = 1.0 / 32.0;
-    const FLOAT_SCALE: f32 = 1.0 / 65536.0;
-    const INT_SCALE: f32 = 256.0;
+    const ORIGIN: f32 = OFFSET_ORIGIN;
+    const FLOAT_SCALE: f32 = OFFSET_FLOAT_SCALE;
+    const INT_SCALE: f32 = OFFSET_INT_SCALE;
     let shift = |p: f32, n: f32| -> f32 {
         let of = (INT_SCALE * n) as i32;
         let bits = p.to_bits() as i32;

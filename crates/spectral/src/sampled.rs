@@ -210,15 +210,17 @@ pub struct SampledWavelengths<const N: usize> {
     rgb: bool,
 }
 
-/// Normalisation constants of the visible-wavelength pdf p(λ) ∝ sech²(k(λ − 538 nm)),
-/// k = 0.0072 nm⁻¹, on [360, 830] nm (pbrt-v4 §4.6.5); derived here from k and the range.
-const VIS_K: f32 = 0.0072;
-const VIS_CENTRE: f32 = 538.0;
+/// The visible-wavelength pdf p(λ) ∝ sech²(k(λ − 538 nm)) on [360, 830] nm (pbrt-v4
+/// §4.6.5): its k, nm⁻¹.
+pub const VIS_K: f32 = 0.0072;
+/// The centre of the visible-wavelength pdf, nm.
+pub const VIS_CENTRE: f32 = 538.0;
 
-/// tanh(k·(360 − 538)) and tanh(k·(830 − 538)): the CDF's ends, precomputed (checked
+/// tanh(k·(360 − 538)): the visible-wavelength CDF's lower end, precomputed (checked
 /// against the formula by a test) because `tanh` is not `const`.
-const VIS_TANH_LO: f32 = -0.856_910_6;
-const VIS_TANH_HI: f32 = 0.970_591_35;
+pub const VIS_TANH_LO: f32 = -0.856_910_6;
+/// tanh(k·(830 − 538)): the CDF's upper end.
+pub const VIS_TANH_HI: f32 = 0.970_591_35;
 
 /// The pdf (per nm) of [`sample_visible_wavelength`]:
 /// p(λ) = k / ((tanh_hi − tanh_lo) · cosh²(k(λ − 538))).

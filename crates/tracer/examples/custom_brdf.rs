@@ -17,8 +17,7 @@ use std::f32::consts::{FRAC_1_PI, TAU};
 use std::sync::Arc;
 use tracer::material::Material;
 use tracer::output::write_image;
-use tracer::render::PreparedScene;
-use tracer::{CpuBackend, RenderSettings};
+use tracer::{Backend, CpuBackend, RenderSettings, SceneOptions};
 
 /// The modified Phong BRDF at one hit.
 struct Phong<const N: usize> {
@@ -108,9 +107,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             replaced += 1;
         }
     }
-    let prepared = PreparedScene::new(scene)?;
+    let prepared = CpuBackend::new(0)?.prepare(scene, &SceneOptions::default())?;
     let settings = RenderSettings { width: 256, height: 256, spp: 64, ..Default::default() };
-    let (film, stats) = tracer::render(&CpuBackend::new(0)?, &prepared, &settings, &|_| {})?;
+    let (film, stats) = tracer::render(prepared.as_ref(), &settings, &|_| {})?;
     write_image("custom-brdf.png".as_ref(), film.width(), film.height(), &film.mean_rgb())?;
     println!(
         "replaced {replaced} materials with the custom Phong BRDF; wrote custom-brdf.png ({:.3} M samples/s, {} NaN/Inf)",

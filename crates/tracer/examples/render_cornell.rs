@@ -7,17 +7,17 @@
 
 use std::path::PathBuf;
 use tracer::output::write_image;
-use tracer::render::PreparedScene;
-use tracer::{CpuBackend, RenderSettings, SpectralMode};
+use tracer::{Backend, CpuBackend, RenderSettings, SceneOptions, SpectralMode};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let path: PathBuf =
         std::env::args().nth(1).unwrap_or_else(|| "../shared/scenes/cornell-box/CornellBox-Original.obj".into()).into();
     let scene = tracer::obj::load_obj(&path)?;
-    let prepared = PreparedScene::new(scene)?;
-    let settings = RenderSettings { width: 256, height: 256, spp: 16, mode: SpectralMode::Hero, ..Default::default() };
+    // A backend prepares the scene its own way (the CPU builds its 4-wide BVH).
     let backend = CpuBackend::new(0)?;
-    let (film, stats) = tracer::render(&backend, &prepared, &settings, &|_| {})?;
+    let prepared = backend.prepare(scene, &SceneOptions::default())?;
+    let settings = RenderSettings { width: 256, height: 256, spp: 16, mode: SpectralMode::Hero, ..Default::default() };
+    let (film, stats) = tracer::render(prepared.as_ref(), &settings, &|_| {})?;
     write_image("cornell-example.png".as_ref(), film.width(), film.height(), &film.mean_rgb())?;
     write_image("cornell-example-stderr.exr".as_ref(), film.width(), film.height(), &film.std_error_rgb())?;
     println!(

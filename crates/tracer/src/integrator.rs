@@ -1,6 +1,8 @@
-//! Unidirectional path tracing with next-event estimation and multiple importance
-//! sampling (Veach 1997, ch. 9; the thesis's "explicit" and "implicit" paths, ch. 5),
-//! Russian roulette and spectral transport at N sampled wavelengths.
+//! Light transport: the [`Integrator`] trait (radiance along camera rays over the shared
+//! [`SceneView`]) and its first implementation, [`PathTracer`]: unidirectional path
+//! tracing with next-event estimation and multiple importance sampling (Veach 1997,
+//! ch. 9; the thesis's "explicit" and "implicit" paths, ch. 5), Russian roulette and
+//! spectral transport at N sampled wavelengths.
 
 use crate::geometry::{Geometry, HitSurface, SceneHit};
 use crate::lights::Lights;
@@ -10,6 +12,9 @@ use crate::scene::Scene;
 use brdf::{Bsdf, Frame, ScatterFlags};
 use bvh::Ray;
 use glam::Vec3;
+use shapes::offset::offset_ray_origin;
+
+pub use crate::shading::{ShadingNormals, adapt_shading_normal, shading_normals};
 use spectral::{SampledSpectrum, SampledWavelengths};
 
 /// Integrator settings.
@@ -33,74 +38,81 @@ impl Default for PathSettings {
     }
 }
 
-/// Which normal a BSDF sees — the lecture's question "which is the right normal?".
-///
-/// The geometric normal n_g (from the winding) decides on which side of the surface a
-/// direction lies: whether a path arrives from outside or inside glass, and whether a
-/// reflected direction stays above the surface. The interpolated shading normal n_s
-/// only orients the BSDF's local frame. Near silhouettes of smooth meshes the two
-/// disagree: the viewer may be above the surface but below the shading hemisphere.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
-pub enum ShadingNormals {
-    /// n_s, bent towards the outgoing direction where it disagrees with n_g about the side
-    /// of ω_o ([`adapt_shading_normal`]); the side itself always comes from n_g, so
-    /// glass knows when a path leaves it. No black silhouettes, exits kept.
-    #[default]
-    Adapted,
-    /// The thesis's workaround: both normals turned to face the incoming path. Opaque
-    /// surfaces look right, but every hit on glass becomes an entry — a path inside
-    /// glass refracts with the inverted index and Beer–Lambert absorption never applies.
-    FaceForward,
-    /// Ignore shading normals (flat shading): exact, but faceted.
-    Geometric,
-}
-
-impl ShadingNormals {
-    /// The name used on the command line.
-    pub fn name(self) -> &'static str {
-        match self {
-            Self::Adapted => "adapted",
-            Self::FaceForward => "face-forward",
-            Self::Geometric => "geometric",
-        }
-    }
-}
-
-/// The smallest |ω_o · n_s| an adapted shading normal keeps, so that the BSDF's frame is
-/// never edge-on to the outgoing direction.
-const MIN_SHADING_COSINE: f32 = 0.01;
-
-/// Bends the unit shading normal `ns` so that the outgoing direction `wo` lies on the same
-/// side of it as of the geometric normal `ng` (both unit, `ns` on `ng`'s side), with
-/// |ω_o · n_s| ≥ a small margin: n_s' = normalize(n_s + k·s·ω_o), s = sign(ω_o · n_g),
-/// with k the least that reaches the margin. It moves continuously with ω_o (no seams),
-/// changes nothing where the normals agree, and stays on n_g's side of the plane. Where
-/// ω_o is on the other side of n_s than of n_g, a BSDF in n_s's frame would see the
-/// viewer below its surface (black silhouettes on smooth meshes) or, for glass, mistake
-/// an exit for an entry.
-#[inline]
-pub fn adapt_shading_normal(ns: Vec3, ng: Vec3, wo: Vec3) -> Vec3 {
-    let side = if wo.dot(ng) >= 0.0 { 1.0 } else { -1.0 };
-    let a = side * wo.dot(ns);
-    if a >= MIN_SHADING_COSINE {
-        return ns;
-    }
-    let bent = ns + (MIN_SHADING_COSINE - a) * side * wo;
-    bent.try_normalize().unwrap_or(ng)
-}
-
 /// Counters a render reports.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct PathCounters {
     /// Rays traced (camera, extension and shadow).
     pub rays: u64,
+    /// Paths cut short by a backend's hard bounce cap (never on the CPU).
+    pub truncated: u64,
 }
 
 impl std::ops::AddAssign for PathCounters {
     fn add_assign(&mut self, o: Self) {
         self.rays += o.rays;
+        self.truncated += o.truncated;
     }
 }
+
+/// One camera sample on its way through an integrator: its ray, its wavelengths, its own
+/// random stream (already advanced past the camera's draws), and the radiance found.
+#[derive(Clone, Debug)]
+pub struct CameraSample<const N: usize> {
+    /// The camera ray.
+    pub ray: Ray,
+    /// The sampled wavelengths (a dispersive surface may collapse them: convert the
+    /// radiance with these, after the integrator has run).
+    pub wl: SampledWavelengths<N>,
+    /// The sample's random stream.
+    pub rng: Pcg32,
+    /// The estimate (zero until the integrator has run).
+    pub radiance: SampledSpectrum<N>,
+}
+
+/// An estimator of the radiance arriving along camera rays: the seam between a backend,
+/// which decides where and in what order samples are taken, and light transport.
+///
+/// Backends hand out blocks of camera samples ([`Integrator::radiance_block`]); the
+/// default traces them one at a time with [`Integrator::radiance`]. A wavefront or SIMD
+/// integrator overrides the block method to trace the block's rays together (bounce by
+/// bounce, sorted, packeted); since every sample carries its own random stream, results
+/// do not depend on how samples are blocked.
+pub trait Integrator: Send + Sync + 'static {
+    /// The name `--integrator` selects it by.
+    fn name(&self) -> &'static str;
+
+    /// Estimates the radiance arriving along `ray` at the sampled wavelengths, drawing
+    /// from `rng`. A dispersive surface may collapse `wl` to one wavelength
+    /// ([`SampledWavelengths::collapse_to`]): the caller converts the result with the
+    /// `wl` it gets back.
+    fn radiance<const N: usize>(
+        &self,
+        view: &SceneView,
+        ray: Ray,
+        wl: &mut SampledWavelengths<N>,
+        settings: &PathSettings,
+        rng: &mut Pcg32,
+        counters: &mut PathCounters,
+    ) -> SampledSpectrum<N>;
+
+    /// Fills in the radiance of every sample of `block`.
+    fn radiance_block<const N: usize>(
+        &self,
+        view: &SceneView,
+        settings: &PathSettings,
+        block: &mut [CameraSample<N>],
+        counters: &mut PathCounters,
+    ) {
+        for s in block {
+            s.radiance = self.radiance(view, s.ray, &mut s.wl, settings, &mut s.rng, counters);
+        }
+    }
+}
+
+/// Unidirectional path tracing with next-event estimation and MIS (see the module
+/// documentation): unbiased with an unbounded depth.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct PathTracer;
 
 /// Everything the integrator reads, prepared once per render.
 pub struct SceneView<'a> {
@@ -179,25 +191,13 @@ impl SceneView<'_> {
     }
 }
 
-pub use shapes::offset::offset_ray_origin;
+/// The smallest probability with which Russian roulette ends a path (so that paths of
+/// bright throughput end too).
+pub const RR_MIN_TERMINATION: f32 = 0.05;
 
-/// The geometric and shading normals a BSDF at a hit sees, from the surface's `ng` and
-/// `ns` (on the same side) and the outgoing direction `wo`: two-sided (opaque) BSDFs see
-/// the side the path arrived on as their front; transmissive ones keep the geometric
-/// orientation, which tells an entry from an exit. The shading normal is adapted per
-/// [`ShadingNormals`].
-#[inline]
-pub fn shading_normals(mode: ShadingNormals, ng: Vec3, ns: Vec3, wo: Vec3, two_sided: bool) -> (Vec3, Vec3) {
-    let front = wo.dot(ng) > 0.0;
-    match mode {
-        ShadingNormals::FaceForward if !front => (-ng, -ns),
-        ShadingNormals::FaceForward => (ng, ns),
-        _ => {
-            let ns = adapt_shading_normal(ns, ng, wo);
-            if two_sided && !front { (-ng, -ns) } else { (ng, ns) }
-        }
-    }
-}
+/// The end of a shadow segment towards a point on a light, as a fraction of the
+/// distance: short of the light, so that it does not hit the light itself.
+pub const SHADOW_T_MAX: f32 = 1.0 - 1e-4;
 
 /// Power heuristic with β = 2 (Veach 1997, eq. 9.13).
 #[inline]
@@ -206,10 +206,27 @@ fn power_heuristic(a: f32, b: f32) -> f32 {
     if a2 + b2 == 0.0 { 0.0 } else { a2 / (a2 + b2) }
 }
 
-/// Estimates the radiance arriving along `ray` at the sampled wavelengths. A dispersive
-/// surface collapses `wl` to a single wavelength ([`SampledWavelengths::collapse_to`]);
-/// the caller must convert the result with the `wl` it gets back.
-pub fn radiance<const N: usize>(
+impl Integrator for PathTracer {
+    fn name(&self) -> &'static str {
+        "path"
+    }
+
+    #[inline]
+    fn radiance<const N: usize>(
+        &self,
+        view: &SceneView,
+        ray: Ray,
+        wl: &mut SampledWavelengths<N>,
+        settings: &PathSettings,
+        rng: &mut Pcg32,
+        counters: &mut PathCounters,
+    ) -> SampledSpectrum<N> {
+        path_radiance(view, ray, wl, settings, rng, counters)
+    }
+}
+
+/// [`PathTracer`]'s estimate.
+fn path_radiance<const N: usize>(
     view: &SceneView,
     mut ray: Ray,
     wl: &mut SampledWavelengths<N>,
@@ -326,7 +343,7 @@ pub fn radiance<const N: usize>(
                 if !f.is_black() {
                     let origin = offset_ray_origin(it.p, if wi_world.dot(it.ng) > 0.0 { it.ng } else { -it.ng });
                     let shadow = if dist.is_finite() {
-                        Ray::segment(origin, ls.point - origin, 0.0, 1.0 - 1e-4)
+                        Ray::segment(origin, ls.point - origin, 0.0, SHADOW_T_MAX)
                     } else {
                         Ray::new(origin, wi_world)
                     };
@@ -369,7 +386,7 @@ pub fn radiance<const N: usize>(
 
         // Russian roulette (Arvo & Kirk 1990): unbiased termination of dim paths.
         if bounce >= settings.rr_depth {
-            let q = (1.0 - beta.max_component()).max(0.05);
+            let q = (1.0 - beta.max_component()).max(RR_MIN_TERMINATION);
             if rng.next_f32() < q {
                 break;
             }
@@ -380,101 +397,4 @@ pub fn radiance<const N: usize>(
         }
     }
     l
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::material::Material;
-    use spectral::SampledWavelengths;
-
-    fn unit(x: f32, y: f32, z: f32) -> Vec3 {
-        Vec3::new(x, y, z).normalize()
-    }
-
-    #[test]
-    fn adapted_normal_keeps_agreeing_normals_and_fixes_disagreeing_ones() {
-        let ng = Vec3::Z;
-        let ns = unit(0.5, 0.0, 1.0);
-        // Agreeing: unchanged.
-        let wo = unit(0.0, 0.3, 1.0);
-        assert_eq!(adapt_shading_normal(ns, ng, wo), ns);
-        // A grazing viewer above the geometry but below the shading hemisphere.
-        let wo = unit(-1.0, 0.0, 0.2);
-        assert!(wo.dot(ng) > 0.0 && wo.dot(ns) < 0.0);
-        let bent = adapt_shading_normal(ns, ng, wo);
-        assert!(bent.dot(wo) > 0.004 && bent.dot(ng) > 0.0, "{bent:?}");
-        assert!((bent.length() - 1.0).abs() < 1e-5);
-        // From inside (below the geometry) but above the shading normal: bent below.
-        let wo = unit(1.0, 0.0, -0.2);
-        assert!(wo.dot(ng) < 0.0 && wo.dot(ns) > 0.0);
-        let bent = adapt_shading_normal(ns, ng, wo);
-        assert!(bent.dot(wo) < -0.004 && bent.dot(ng) > 0.0, "{bent:?}");
-        // Continuous in ω_o: no seam where the bending starts.
-        let mut prev = adapt_shading_normal(ns, ng, unit(-1.0, 0.0, 1.0));
-        for k in 1..=400 {
-            let z = 1.0 - k as f32 / 400.0 * 0.99;
-            let n = adapt_shading_normal(ns, ng, unit(-1.0, 0.0, z));
-            assert!((n - prev).length() < 0.02, "jump at z = {z}: {prev:?} → {n:?}");
-            prev = n;
-        }
-    }
-
-    /// Refracts `wo` through glass (index 1.5 outside → in) with the frame the integrator
-    /// would build, and returns (sin θ_o, sin θ_t) about the geometric normal.
-    fn refract_through(mode: ShadingNormals, ng: Vec3, ns: Vec3, wo: Vec3) -> Option<(f32, f32)> {
-        let glass = Material::dielectric("glass", 1.5).unwrap();
-        let wl = SampledWavelengths::<4>::fixed_bins(550.0, 0.0);
-        let (_, ns) = shading_normals(mode, ng, ns, wo, glass.is_two_sided());
-        let frame = Frame::from_normal_tangent(ns, Vec3::ZERO);
-        let bsdf = glass.bsdf(&wl);
-        (0..100).find_map(|k| {
-            let s = bsdf.sample(frame.to_local(wo), k as f32 / 100.0, glam::Vec2::splat(0.5))?;
-            if !s.flags.contains(ScatterFlags::TRANSMISSION) {
-                return None;
-            }
-            let wi = frame.to_world(s.wi);
-            let sin = |w: Vec3| w.cross(ns).length();
-            Some((sin(wo), sin(wi)))
-        })
-    }
-
-    #[test]
-    fn glass_keeps_its_exits_with_adapted_normals_but_not_face_forward() {
-        // A path inside glass reaching its surface: ω_o points back inside (below n_g).
-        let ng = Vec3::Z;
-        let ns = unit(0.1, 0.0, 1.0);
-        let wo = unit(0.3, 0.2, -1.0);
-        // Leaving the dense medium, the ray bends away from the normal: sin θ_t = 1.5 sin θ_o.
-        let (so, st) = refract_through(ShadingNormals::Adapted, ng, ns, wo).expect("no TIR at this angle");
-        assert!((st - 1.5 * so).abs() < 1e-4, "exit: sin θ_o {so}, sin θ_t {st}");
-        // The thesis's workaround turns the normal to the viewer: the exit is taken for an
-        // entry and bends towards the normal — wrong.
-        let (so, st) = refract_through(ShadingNormals::FaceForward, ng, ns, wo).unwrap();
-        assert!((st - so / 1.5).abs() < 1e-4, "face-forward: sin θ_o {so}, sin θ_t {st}");
-        // Entering from outside, both agree: sin θ_t = sin θ_o / 1.5.
-        let wo = unit(0.3, 0.2, 1.0);
-        for mode in [ShadingNormals::Adapted, ShadingNormals::FaceForward] {
-            let (so, st) = refract_through(mode, ng, ns, wo).unwrap();
-            assert!((st - so / 1.5).abs() < 1e-4, "{mode:?} entry: {so} {st}");
-        }
-    }
-
-    #[test]
-    fn reflection_from_either_side_sees_the_viewer_above_its_surface() {
-        // Opaque (two-sided) surfaces: from the front and from the back, and at a
-        // silhouette where ω_o is below n_s, the BSDF's frame has ω_o above it.
-        let ng = Vec3::Z;
-        let ns = unit(0.6, 0.0, 1.0);
-        for wo in [unit(0.2, 0.1, 1.0), unit(0.2, 0.1, -1.0), unit(-1.0, 0.0, 0.1), unit(1.0, 0.0, -0.1)] {
-            let (g, n) = shading_normals(ShadingNormals::Adapted, ng, ns, wo, true);
-            assert!(wo.dot(g) > 0.0, "geometric side for {wo:?}");
-            assert!(wo.dot(n) > 0.0, "shading side for {wo:?}: {n:?}");
-            assert!(n.dot(g) > 0.0);
-        }
-        // Without adaptation the silhouette case is below the shading hemisphere: black.
-        let wo = unit(-1.0, 0.0, 0.1);
-        let (_, n) = shading_normals(ShadingNormals::FaceForward, ng, ns, wo, true);
-        assert!(wo.dot(n) < 0.0);
-    }
 }

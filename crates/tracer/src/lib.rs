@@ -4,10 +4,12 @@
 //! Data flows one way: a [`Scene`] (flat, `bytemuck`-friendly arrays of vertices,
 //! triangles and per-triangle material ids, plus materials, lights and a camera) →
 //! an accelerator from the `bvh` crate → the [`integrator`] → a [`Film`] → images.
-//! A [`Backend`] renders passes of samples into a film; [`CpuBackend`] does it with
-//! rayon, tile-parallel and bit-identical for a given seed whatever the thread count.
+//! A [`Backend`] prepares a scene its own way ([`PreparedScene`]), which then renders
+//! passes of samples into a film; [`CpuBackend`] runs an [`Integrator`] with rayon,
+//! tile-parallel and bit-identical for a given seed whatever the thread count.
 
 pub mod camera;
+pub mod cpu;
 pub mod film;
 pub mod geometry;
 pub mod integrator;
@@ -20,12 +22,15 @@ pub mod render;
 pub mod sampler;
 pub mod scene;
 pub mod scenes;
+pub mod shading;
 
 pub use camera::Camera;
+pub use cpu::{CpuBackend, CpuScene};
 pub use film::Film;
 pub use geometry::{Geometry, SceneShape, ShapeKind};
+pub use integrator::{Integrator, PathTracer};
 pub use material::Material;
-pub use render::{Backend, CpuBackend, RenderSettings, RenderStats, render};
+pub use render::{Backend, PreparedScene, RenderSettings, RenderStats, SceneOptions, render};
 pub use scene::{Environment, Scene};
 pub use spectral::SpectralMode;
 
@@ -69,6 +74,16 @@ pub enum Error {
     /// A render setting is out of range.
     #[error("invalid setting: {0}")]
     Setting(String),
+    /// A request outside what the chosen backend can do, found before any work.
+    #[error("the {backend} backend does not support {feature}: {way_out}")]
+    Unsupported {
+        /// The backend's name.
+        backend: String,
+        /// What it cannot do.
+        feature: String,
+        /// What the user can do instead.
+        way_out: String,
+    },
     /// A render backend (the GPU, say) failed or cannot render this scene; the message
     /// says why and what to do.
     #[error("{0}")]

@@ -18,7 +18,7 @@
 //! first malformed or non-finite `v`/`vn`/`vt`/`f` line and reports its line number,
 //! which `tobj`'s errors do not carry.
 
-use crate::material::{ModelId, Material};
+use crate::material::{Material, ModelId};
 use crate::mesh::Mesh;
 use crate::scene::Scene;
 use crate::{Error, Result};

@@ -1,17 +1,16 @@
-//! The backend-agnostic renderer API and the CPU backend.
+//! The backend-agnostic renderer API: a [`Backend`] turns a [`Scene`] into a
+//! [`PreparedScene`] — the structures it traverses, built its own way (the CPU's 4-wide
+//! BVH, the GPU's buffers and compiled kernel) — and a prepared scene renders passes of
+//! samples into a [`Film`]. Each backend declares its [`Capabilities`]; a request outside
+//! them fails before any work, naming the feature and the way out.
 
 use crate::camera::Camera;
-use crate::film::{Film, PixelStats};
-use crate::geometry::Geometry;
-use crate::integrator::{PathCounters, PathSettings, SceneView, radiance};
-use crate::lights::Lights;
-use crate::sampler::Pcg32;
+use crate::film::Film;
+use crate::integrator::{PathCounters, PathSettings};
 use crate::scene::Scene;
 use crate::{Error, Result};
 use bvh::TriangleTest;
-use glam::Vec2;
-use rayon::prelude::*;
-use spectral::{SampledWavelengths, SpectralMode};
+use spectral::SpectralMode;
 use std::time::{Duration, Instant};
 
 /// What to render and how.
@@ -27,7 +26,7 @@ pub struct RenderSettings {
     pub seed: u64,
     /// How the spectrum is sampled.
     pub mode: SpectralMode,
-    /// Path depth and Russian roulette.
+    /// Path depth, Russian roulette and shading normals, which every integrator reads.
     pub path: PathSettings,
     /// Camera to use instead of the scene's (or the default framing).
     pub camera: Option<Camera>,
@@ -69,42 +68,174 @@ impl RenderSettings {
     }
 }
 
-/// A scene made ready to render: validated, with its accelerator, lights and camera.
-pub struct PreparedScene {
-    /// The scene.
-    pub scene: Scene,
-    /// Its accelerators.
-    pub geometry: Geometry,
-    /// Its emitters.
-    pub lights: Lights,
-    /// Time spent building the BVH.
-    pub build_time: Duration,
+/// Scene-level choices a backend builds its structures for.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct SceneOptions {
+    /// The ray–triangle test compiled into the traversal.
+    pub triangle_test: TriangleTest,
 }
 
-impl PreparedScene {
-    /// Validates the scene and builds its accelerators (watertight triangle test) and
-    /// light distribution.
-    pub fn new(scene: Scene) -> Result<Self> {
-        Self::with_triangle_test(scene, TriangleTest::default())
+/// What a backend can render. [`Capabilities::check_scene`] and
+/// [`Capabilities::check_settings`] turn a request outside them into
+/// [`Error::Unsupported`] before any work is done.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Capabilities {
+    /// Spectral modes it traces.
+    pub spectral_modes: Vec<SpectralMode>,
+    /// Whether it intersects analytic shapes (spheres, boxes, polygons, implicit surfaces).
+    pub analytic_shapes: bool,
+    /// Whether it runs BSDFs written outside the workspace ([`brdf::DynBsdfBuilder`]).
+    pub custom_bsdfs: bool,
+    /// Ray–triangle tests it implements.
+    pub triangle_tests: Vec<TriangleTest>,
+    /// The integrator it runs (`--integrator` name).
+    pub integrator: &'static str,
+    /// The most scattering events a path may have, if the backend has a hard cap (paths
+    /// that reach it with an unbounded `max_depth` are counted as truncated); `None` if
+    /// paths end only by the depth limit and Russian roulette.
+    pub max_bounces: Option<u32>,
+}
+
+impl Capabilities {
+    /// Everything the scene and its options need, against what the backend `backend` can
+    /// do.
+    pub fn check_scene(&self, backend: &str, scene: &Scene, options: &SceneOptions) -> Result<()> {
+        let unsupported = |feature: String, way_out: &str| Error::Unsupported {
+            backend: backend.to_string(),
+            feature,
+            way_out: way_out.to_string(),
+        };
+        if !self.analytic_shapes && !scene.shapes.is_empty() {
+            let kinds: Vec<&str> = scene.shapes.iter().map(|s| s.shape.name()).collect();
+            let mut kinds = kinds;
+            kinds.dedup();
+            return Err(unsupported(
+                format!("analytic shapes ({} in this scene: {})", scene.shapes.len(), kinds.join(", ")),
+                "tessellate them into triangles, or use --backend cpu",
+            ));
+        }
+        if !self.custom_bsdfs
+            && let Some(m) = scene.materials.iter().find(|m| m.params().is_none())
+        {
+            return Err(unsupported(
+                format!("custom BSDFs (material '{}')", m.name),
+                "register the model in brdf's registry with its WGSL twin, or use --backend cpu",
+            ));
+        }
+        if !self.triangle_tests.contains(&options.triangle_test) {
+            let known: Vec<&str> = self.triangle_tests.iter().map(|t| t.name()).collect();
+            return Err(unsupported(
+                format!("the '{}' triangle test", options.triangle_test.name()),
+                &format!("use --triangle-test {}, or --backend cpu", known.join(" or ")),
+            ));
+        }
+        Ok(())
     }
 
-    /// As [`PreparedScene::new`], with the given ray–triangle test.
-    pub fn with_triangle_test(scene: Scene, test: TriangleTest) -> Result<Self> {
-        scene.validate()?;
-        let start = Instant::now();
-        let geometry = Geometry::build(&scene, test)?;
-        let build_time = start.elapsed();
-        let lights = Lights::new(&scene);
-        Ok(Self { scene, geometry, lights, build_time })
+    /// Everything a render's settings need.
+    pub fn check_settings(&self, backend: &str, settings: &RenderSettings) -> Result<()> {
+        let unsupported =
+            |feature: String, way_out: String| Error::Unsupported { backend: backend.to_string(), feature, way_out };
+        if !self.spectral_modes.contains(&settings.mode) {
+            let known: Vec<&str> = self.spectral_modes.iter().map(|m| m.name()).collect();
+            return Err(unsupported(
+                format!("the '{}' spectral mode", settings.mode.name()),
+                format!("use --spectral {}, or --backend cpu", known.join(" or ")),
+            ));
+        }
+        if let Some(cap) = self.max_bounces {
+            let depth = settings.path.max_depth.saturating_add(settings.path.specular_extension);
+            if settings.path.max_depth > 0 && depth > cap {
+                return Err(unsupported(
+                    format!("paths of {depth} bounces (--max-depth plus --extension; it traces at most {cap})"),
+                    format!("use --max-depth and --extension summing to at most {cap}, or --backend cpu"),
+                ));
+            }
+        }
+        Ok(())
     }
+}
 
-    /// The camera a render uses: the settings', else the scene's, else the default framing.
-    pub fn camera(&self, settings: &RenderSettings) -> Camera {
-        settings
-            .camera
-            .or(self.scene.camera)
-            .unwrap_or_else(|| Camera::framing(&self.scene.bounds(), settings.width as f32 / settings.height as f32))
+/// Figures from preparing a scene.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PrepareStats {
+    /// Building the acceleration structure.
+    pub build: Duration,
+    /// Compiling kernels, where the backend compiles any.
+    pub compile: Option<Duration>,
+    /// All of the preparation.
+    pub total: Duration,
+    /// Primitives that emit light.
+    pub emitters: usize,
+}
+
+/// A way of executing an integrator (CPU with rayon, GPU with wgpu): it prepares scenes,
+/// and the prepared scenes render.
+pub trait Backend: Send + Sync {
+    /// A short name for messages (`cpu`, `gpu`).
+    fn name(&self) -> &str;
+
+    /// What it can render.
+    fn capabilities(&self) -> Capabilities;
+
+    /// Builds what this backend traverses from `scene`. Fails with
+    /// [`Error::Unsupported`] for a scene outside its capabilities, before building
+    /// anything.
+    fn prepare(&self, scene: Scene, options: &SceneOptions) -> Result<Box<dyn PreparedScene>>;
+}
+
+/// A scene made ready by a [`Backend`]: it renders passes of samples. Sample `k` of pixel
+/// `p` always uses the same random stream, so passes may split the samples any way.
+pub trait PreparedScene: Send + Sync {
+    /// The backend's name.
+    fn backend(&self) -> &str;
+
+    /// The backend's capabilities (for checking settings before a render).
+    fn capabilities(&self) -> Capabilities;
+
+    /// The scene.
+    fn scene(&self) -> &Scene;
+
+    /// What preparing it took.
+    fn stats(&self) -> PrepareStats;
+
+    /// Adds samples `first_sample .. first_sample + spp` of every pixel to `film` (which
+    /// must have the settings' size); `progress` is told how many samples each finished
+    /// piece of work took.
+    fn render_pass(
+        &self,
+        settings: &RenderSettings,
+        film: &mut Film,
+        first_sample: u32,
+        spp: u32,
+        progress: &(dyn Fn(u64) + Sync),
+    ) -> Result<PathCounters>;
+
+    /// The camera a render uses: the settings', else the scene's, else the default
+    /// framing of the scene's bounds.
+    fn camera(&self, settings: &RenderSettings) -> Camera {
+        camera_for(self.scene(), settings)
     }
+}
+
+/// The camera a render of `scene` uses: the settings', else the scene's, else the
+/// default framing.
+pub fn camera_for(scene: &Scene, settings: &RenderSettings) -> Camera {
+    settings
+        .camera
+        .or(scene.camera)
+        .unwrap_or_else(|| Camera::framing(&scene.bounds(), settings.width as f32 / settings.height as f32))
+}
+
+/// Checks `settings` and the film against a prepared scene's backend; every backend's
+/// `render_pass` starts with it.
+pub fn check_pass(prepared: &dyn PreparedScene, settings: &RenderSettings, film: &Film) -> Result<()> {
+    settings.validate()?;
+    prepared.capabilities().check_settings(prepared.backend(), settings)?;
+    if film.width() != settings.width || film.height() != settings.height {
+        return Err(Error::Setting("film size differs from the settings' image size".into()));
+    }
+    Ok(())
 }
 
 /// Figures from a finished render.
@@ -118,6 +249,8 @@ pub struct RenderStats {
     pub rays: u64,
     /// Samples dropped because they were NaN or infinite.
     pub non_finite: u64,
+    /// Paths cut short by the backend's bounce cap ([`Capabilities::max_bounces`]).
+    pub truncated: u64,
 }
 
 impl RenderStats {
@@ -127,178 +260,23 @@ impl RenderStats {
     }
 }
 
-/// A way of executing the integrator (CPU now, GPU later). Backends add samples to a
-/// film; sample `k` of pixel `p` always uses the same random stream, so a backend may
-/// split the work any way it likes.
-pub trait Backend {
-    /// A short name for messages.
-    fn name(&self) -> &str;
-
-    /// Adds samples `first_sample .. first_sample + spp` of every pixel to `film`;
-    /// `progress` is told how many samples each finished piece of work took.
-    fn render_pass(
-        &self,
-        scene: &PreparedScene,
-        settings: &RenderSettings,
-        film: &mut Film,
-        first_sample: u32,
-        spp: u32,
-        progress: &(dyn Fn(u64) + Sync),
-    ) -> Result<PathCounters>;
-}
-
 /// Renders `settings.spp` samples per pixel in one pass.
 pub fn render(
-    backend: &dyn Backend,
-    scene: &PreparedScene,
+    scene: &dyn PreparedScene,
     settings: &RenderSettings,
     progress: &(dyn Fn(u64) + Sync),
 ) -> Result<(Film, RenderStats)> {
     settings.validate()?;
+    scene.capabilities().check_settings(scene.backend(), settings)?;
     let mut film = Film::new(settings.width, settings.height);
     let start = Instant::now();
-    let counters = backend.render_pass(scene, settings, &mut film, 0, settings.spp, progress)?;
+    let counters = scene.render_pass(settings, &mut film, 0, settings.spp, progress)?;
     let stats = RenderStats {
         wall: start.elapsed(),
         samples: settings.width as u64 * settings.height as u64 * settings.spp as u64,
         rays: counters.rays,
         non_finite: film.non_finite,
+        truncated: counters.truncated,
     };
     Ok((film, stats))
-}
-
-/// The CPU backend: 16×16 tiles rendered in parallel by rayon.
-pub struct CpuBackend {
-    pool: rayon::ThreadPool,
-}
-
-/// Tile side in pixels.
-pub const TILE: u32 = 16;
-
-impl CpuBackend {
-    /// A backend with `threads` worker threads (0 = one per core).
-    pub fn new(threads: usize) -> Result<Self> {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .map_err(|e| Error::Setting(format!("cannot start {threads} threads: {e}")))?;
-        Ok(Self { pool })
-    }
-
-    /// Worker threads in use.
-    pub fn threads(&self) -> usize {
-        self.pool.current_num_threads()
-    }
-}
-
-struct TileResult {
-    x0: u32,
-    y0: u32,
-    w: u32,
-    pixels: Vec<PixelStats>,
-    non_finite: u64,
-    counters: PathCounters,
-}
-
-fn render_tiles<const N: usize>(
-    scene: &PreparedScene,
-    settings: &RenderSettings,
-    film: &mut Film,
-    first_sample: u32,
-    spp: u32,
-    wavelengths: impl Fn(&mut Pcg32) -> SampledWavelengths<N> + Sync,
-    progress: &(dyn Fn(u64) + Sync),
-) -> PathCounters {
-    let (width, height) = (film.width(), film.height());
-    let camera = scene.camera(settings).rays(width, height);
-    let view = SceneView { scene: &scene.scene, geometry: &scene.geometry, lights: &scene.lights };
-    let tiles_x = width.div_ceil(TILE);
-    let tiles: Vec<(u32, u32)> =
-        (0..height.div_ceil(TILE)).flat_map(|ty| (0..tiles_x).map(move |tx| (tx * TILE, ty * TILE))).collect();
-    let existing: &Film = film;
-    let results: Vec<TileResult> = tiles
-        .par_iter()
-        .map(|&(x0, y0)| {
-            let (w, h) = (TILE.min(width - x0), TILE.min(height - y0));
-            let mut pixels = Vec::with_capacity((w * h) as usize);
-            let mut non_finite = 0;
-            let mut counters = PathCounters::default();
-            for y in y0..y0 + h {
-                for x in x0..x0 + w {
-                    let mut stats = *existing.pixel(x, y);
-                    let pixel_index = y * width + x;
-                    for s in first_sample..first_sample + spp {
-                        let mut rng = Pcg32::for_sample(settings.seed, pixel_index, s);
-                        let mut wl = wavelengths(&mut rng);
-                        let jitter = rng.next_2d();
-                        let ray = camera.ray(Vec2::new(x as f32, y as f32) + jitter);
-                        let l = radiance(&view, ray, &mut wl, &settings.path, &mut rng, &mut counters);
-                        let rgb = wl.to_linear_srgb(&l);
-                        if rgb.iter().all(|v| v.is_finite()) {
-                            stats.add(rgb);
-                        } else {
-                            non_finite += 1;
-                        }
-                    }
-                    pixels.push(stats);
-                }
-            }
-            progress((w * h) as u64 * spp as u64);
-            TileResult { x0, y0, w, pixels, non_finite, counters }
-        })
-        .collect();
-    let mut total = PathCounters::default();
-    for t in results {
-        for (i, p) in t.pixels.iter().enumerate() {
-            let (x, y) = (t.x0 + i as u32 % t.w, t.y0 + i as u32 / t.w);
-            film.pixels_mut()[(y * width + x) as usize] = *p;
-        }
-        film.non_finite += t.non_finite;
-        total += t.counters;
-    }
-    total
-}
-
-impl Backend for CpuBackend {
-    fn name(&self) -> &str {
-        "cpu"
-    }
-
-    fn render_pass(
-        &self,
-        scene: &PreparedScene,
-        settings: &RenderSettings,
-        film: &mut Film,
-        first_sample: u32,
-        spp: u32,
-        progress: &(dyn Fn(u64) + Sync),
-    ) -> Result<PathCounters> {
-        settings.validate()?;
-        if film.width() != settings.width || film.height() != settings.height {
-            return Err(Error::Setting("film size differs from the settings' image size".into()));
-        }
-        Ok(self.pool.install(|| match settings.mode {
-            SpectralMode::Hero => render_tiles::<4>(
-                scene,
-                settings,
-                film,
-                first_sample,
-                spp,
-                |rng| SampledWavelengths::sample_hero(rng.next_f32()),
-                progress,
-            ),
-            SpectralMode::Bins40 => render_tiles::<40>(
-                scene,
-                settings,
-                film,
-                first_sample,
-                spp,
-                |_| SampledWavelengths::fixed_bins(380.0, 10.0),
-                progress,
-            ),
-            SpectralMode::Rgb => {
-                render_tiles::<3>(scene, settings, film, first_sample, spp, |_| SampledWavelengths::rgb(), progress)
-            }
-        }))
-    }
 }

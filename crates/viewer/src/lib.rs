@@ -2,7 +2,7 @@
 //! as the thesis's running mean, with a mouse and keyboard camera.
 //!
 //! [`run`] opens a window (winit) the size of the image and, every frame, asks the given
-//! [`Backend`] for `spp_per_frame` more samples of every pixel into one [`Film`], whose
+//! [`PreparedScene`] (prepared by any backend) for `spp_per_frame` more samples of every pixel into one [`Film`], whose
 //! per-pixel running mean g_i = g_{i−1} + (f_i − g_{i−1})/i is shown through a CPU
 //! framebuffer (softbuffer, so it works under Xvfb and needs no GPU surface). Any camera
 //! move or window resize starts the accumulation again.
@@ -39,9 +39,9 @@ use std::num::NonZeroU32;
 use std::path::{Path, PathBuf};
 use std::rc::Rc;
 use std::time::{Duration, Instant};
+use tracer::RenderSettings;
 use tracer::film::Film;
 use tracer::render::{MAX_IMAGE_SIDE, PreparedScene};
-use tracer::{Backend, RenderSettings};
 use winit::application::ApplicationHandler;
 use winit::dpi::{PhysicalPosition, PhysicalSize};
 use winit::event::{ElementState, KeyEvent, MouseButton, MouseScrollDelta, WindowEvent};
@@ -126,9 +126,8 @@ pub struct ViewStats {
 /// is no display, and with the backend's error if a render pass fails. On Linux it may be
 /// called from any thread, once per process (winit allows one event loop per process).
 pub fn run(
-    scene: PreparedScene,
+    scene: Box<dyn PreparedScene>,
     settings: RenderSettings,
-    backend: Box<dyn Backend>,
     options: ViewerOptions,
 ) -> anyhow::Result<ViewStats> {
     options.validate()?;
@@ -137,7 +136,8 @@ pub fn run(
     let camera = scene.camera(&settings);
     settings.validate().context("render settings")?;
     camera.validate().map_err(|e| anyhow!("camera: {e}"))?;
-    let bounds = scene.scene.bounds();
+    scene.capabilities().check_settings(scene.backend(), &settings).context("render settings")?;
+    let bounds = scene.scene().bounds();
     let scene_size = if bounds.is_empty() { 1.0 } else { bounds.extent().length() };
 
     let mut builder = EventLoop::builder();
@@ -151,7 +151,6 @@ pub fn run(
         control: CameraControl::new(camera, scene_size),
         scene,
         settings,
-        backend,
         options,
         spp: 0,
         dirty: false,
@@ -219,9 +218,8 @@ impl Counters {
 const TITLE_INTERVAL: Duration = Duration::from_millis(250);
 
 struct App {
-    scene: PreparedScene,
+    scene: Box<dyn PreparedScene>,
     settings: RenderSettings,
-    backend: Box<dyn Backend>,
     options: ViewerOptions,
     control: CameraControl,
     film: Film,
@@ -303,9 +301,9 @@ impl App {
         }
         let settings = RenderSettings { spp, camera: Some(self.control.camera()), ..self.settings.clone() };
         let start = Instant::now();
-        self.backend
-            .render_pass(&self.scene, &settings, &mut self.film, self.spp, spp, &|_| {})
-            .with_context(|| format!("{} backend", self.backend.name()))?;
+        self.scene
+            .render_pass(&settings, &mut self.film, self.spp, spp, &|_| {})
+            .with_context(|| format!("{} backend", self.scene.backend()))?;
         let elapsed = start.elapsed();
         let samples = settings.width as u64 * settings.height as u64 * spp as u64;
         self.spp += spp;
@@ -335,7 +333,7 @@ impl App {
             self.options.title,
             self.spp,
             self.title_rate / 1e6,
-            self.backend.name()
+            self.scene.backend()
         );
         if let Some(w) = &self.window {
             w.set_title(&title);

@@ -17,7 +17,8 @@ crate::model_params! {
 
 impl Model for LambertParams {
     type Bsdf<const N: usize> = Lambert<N>;
-    const WGSL: ModelWgsl = ModelWgsl { source: include_str!("lambert.wgsl"), needs: &[WgslPiece::Sampling], constants: &[] };
+    const WGSL: ModelWgsl =
+        ModelWgsl { source: include_str!("lambert.wgsl"), needs: &[WgslPiece::Sampling], constants: &[] };
 
     #[inline]
     fn bsdf<const N: usize>(&self, wl: &SampledWavelengths<N>) -> Lambert<N> {

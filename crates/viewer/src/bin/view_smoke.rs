@@ -8,8 +8,7 @@
 use anyhow::{Context, anyhow};
 use spectral::spectrum::Colour;
 use std::path::PathBuf;
-use tracer::render::PreparedScene;
-use tracer::{CpuBackend, Material, RenderSettings};
+use tracer::{Backend, CpuBackend, Material, RenderSettings, SceneOptions};
 use viewer::ViewerOptions;
 
 fn main() -> anyhow::Result<()> {
@@ -21,7 +20,7 @@ fn main() -> anyhow::Result<()> {
         args.get(i).map_or(Ok(default), |s| s.parse().with_context(|| format!("argument {i}: {s:?}")))
     };
     let sphere = Material::diffuse("sphere", Colour::reflectance_rgb([0.8, 0.35, 0.1])?)?;
-    let scene = PreparedScene::new(tracer::scenes::material_sphere(sphere))?;
+    let scene = CpuBackend::new(0)?.prepare(tracer::scenes::material_sphere(sphere), &SceneOptions::default())?;
     let options = ViewerOptions {
         width: number(2, 64)?,
         height: number(3, 48)?,
@@ -31,7 +30,7 @@ fn main() -> anyhow::Result<()> {
         save_on_exit: Some(PathBuf::from(out)),
         title: "material sphere".into(),
     };
-    let stats = viewer::run(scene, RenderSettings::default(), Box::new(CpuBackend::new(0)?), options)?;
+    let stats = viewer::run(scene, RenderSettings::default(), options)?;
     println!("frames {} spp {} samples/s {:.0}", stats.frames, stats.spp, stats.samples_per_second);
     Ok(())
 }

@@ -1,0 +1,302 @@
+//! The path-tracing kernel's WGSL: what it shares with Rust is generated here, the rest is
+//! hand-written, one file per Rust file it mirrors (`src/wgsl/*.wgsl`, each naming its
+//! Rust twin in its header).
+//!
+//! Generated from the Rust definitions, so that nothing is mirrored by hand:
+//!
+//! * the structs the host and the kernel exchange — the uniform block [`Params`]
+//!   (`PtParams`), the BVH node ([`bvh::BvhNode`], `PtNode`) and the per-pixel accumulator
+//!   [`PixelAccum`] (`PtPixel`) — declared once with [`wgsl_struct!`] or
+//!   [`wgsl_layout!`], whose field offsets a test checks against naga's layout of the
+//!   generated WGSL;
+//! * the constants the kernel shares with the CPU code: shading-normal codes
+//!   ([`ShadingNormals::code`]), scene flags, the visible-wavelength pdf, the CIE tables'
+//!   range, XYZ → sRGB, the shading-normal margin, Russian roulette's floor, the shadow
+//!   segment's end, the ray-offset scales, the light table's layout and the bounce cap;
+//! * the choice of triangle test (only the one a scene asks for is compiled in).
+
+use bvh::{BvhNode, TriangleTest};
+use spectral::colour::XYZ_TO_SRGB;
+use spectral::sampled::{LAMBDA_MAX, LAMBDA_MIN, VIS_CENTRE, VIS_K, VIS_TANH_HI, VIS_TANH_LO};
+use spectral::tables::{CIE_LAMBDA_MIN, CIE_SAMPLES, CIE_Y_INTEGRAL};
+use std::fmt::Write as _;
+use tracer::integrator::{RR_MIN_TERMINATION, SHADOW_T_MAX};
+use tracer::shading::{MIN_SHADING_COSINE, ShadingNormals};
+
+/// A Rust type whose layout a WGSL struct mirrors.
+pub trait WgslStruct {
+    /// The WGSL struct's name.
+    const NAME: &'static str;
+    /// Its fields: (name, WGSL type, byte offset in the Rust type).
+    const FIELDS: &'static [(&'static str, &'static str, usize)];
+    /// The Rust type's size in bytes.
+    const SIZE: usize;
+
+    /// The WGSL declaration.
+    fn declaration() -> String {
+        let mut out = format!("struct {} {{\n", Self::NAME);
+        for (name, ty, _) in Self::FIELDS {
+            let _ = writeln!(out, "    {name}: {ty},");
+        }
+        out.push_str("}\n");
+        out
+    }
+}
+
+/// The WGSL type of a Rust field type.
+macro_rules! wgsl_type {
+    (u32) => {
+        "u32"
+    };
+    (f32) => {
+        "f32"
+    };
+    ([f32; 2]) => {
+        "vec2f"
+    };
+    ([f32; 3]) => {
+        "vec3f"
+    };
+    ([f32; 4]) => {
+        "vec4f"
+    };
+}
+
+/// Declares a `#[repr(C)]`, `Pod` Rust struct and the WGSL struct that mirrors it.
+macro_rules! wgsl_struct {
+    (
+        $(#[$meta:meta])*
+        $vis:vis struct $Name:ident as $wgsl:literal {
+            $( $(#[$fmeta:meta])* $field:ident : $ty:tt ),+ $(,)?
+        }
+    ) => {
+        $(#[$meta])*
+        #[repr(C)]
+        #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+        $vis struct $Name {
+            $( $(#[$fmeta])* pub $field: $ty, )+
+        }
+        wgsl_layout!($Name as $wgsl { $($field: $ty),+ });
+    };
+}
+
+/// Implements [`WgslStruct`] for an existing `#[repr(C)]` type (fields named and typed
+/// as given; a test compares the offsets with naga's).
+macro_rules! wgsl_layout {
+    ($Name:ty as $wgsl:literal { $($field:ident : $ty:tt),+ $(,)? }) => {
+        impl WgslStruct for $Name {
+            const NAME: &'static str = $wgsl;
+            const FIELDS: &'static [(&'static str, &'static str, usize)] =
+                &[$((stringify!($field), wgsl_type!($ty), std::mem::offset_of!($Name, $field))),+];
+            const SIZE: usize = std::mem::size_of::<$Name>();
+        }
+    };
+}
+
+wgsl_struct! {
+    /// The kernel's uniform block: the pass (band, samples), the settings and the camera.
+    pub struct Params as "PtParams" {
+        /// Image width.
+        width: u32,
+        /// Image height.
+        height: u32,
+        /// First row of the band.
+        band_y0: u32,
+        /// Rows in the band.
+        band_rows: u32,
+        /// Index of the dispatch's first sample.
+        first_sample: u32,
+        /// Samples per pixel in the dispatch.
+        samples: u32,
+        /// Seed, low word.
+        seed_lo: u32,
+        /// Seed, high word.
+        seed_hi: u32,
+        /// `PathSettings::max_depth` (0 = unbounded).
+        max_depth: u32,
+        /// `PathSettings::rr_depth`.
+        rr_depth: u32,
+        /// `PathSettings::specular_extension`.
+        specular_extension: u32,
+        /// [`ShadingNormals::code`].
+        shading: u32,
+        /// [`HAS_NORMALS`] | [`HAS_TANGENTS`] | [`HAS_ENVIRONMENT`].
+        scene_flags: u32,
+        /// BVH nodes.
+        node_count: u32,
+        /// Emissive triangles.
+        light_count: u32,
+        /// Probability of sampling the environment in next-event estimation.
+        env_pmf: f32,
+        /// Camera position.
+        eye: [f32; 4],
+        /// Camera forward vector (to the image centre).
+        forward: [f32; 4],
+        /// Camera right vector (half the image width).
+        right: [f32; 4],
+        /// Camera up vector (half the image height).
+        up: [f32; 4],
+        /// 1 / width, 1 / height.
+        inv_size: [f32; 2],
+        /// Offset of the light table in `pt_tables`.
+        lights_offset: u32,
+        /// Offset of the environment's spectrum in `pt_tables`.
+        env_offset: u32,
+    }
+}
+
+wgsl_struct! {
+    /// One pixel's accumulator on the device (f32 Welford over one read-back interval).
+    pub struct PixelAccum as "PtPixel" {
+        /// Running mean, linear sRGB.
+        mean: [f32; 3],
+        /// Samples added.
+        count: u32,
+        /// Sum of squared deviations.
+        m2: [f32; 3],
+        /// Samples dropped as NaN or infinite.
+        non_finite: u32,
+    }
+}
+
+wgsl_layout!(BvhNode as "PtNode" { min: [f32; 3], index: u32, max: [f32; 3], count: u32 });
+
+/// Bytes of the film buffer before the accumulators: the 64-bit ray counter (two words),
+/// the truncated-path counter and a pad word (`PtFilm`'s header).
+pub const FILM_HEADER_BYTES: u64 = 16;
+
+/// Scene flag: vertices have shading normals.
+pub const HAS_NORMALS: u32 = 1;
+/// Scene flag: vertices have tangents.
+pub const HAS_TANGENTS: u32 = 2;
+/// Scene flag: the scene has an environment light.
+pub const HAS_ENVIRONMENT: u32 = 4;
+
+/// Floats per light in the light table: three vertices, cdf, pmf, material id (bits).
+pub const LIGHT_FLOATS: usize = 12;
+/// Index of the cdf within a light's floats.
+const LIGHT_CDF: u32 = 9;
+/// Index of the pmf within a light's floats.
+const LIGHT_PMF: u32 = 10;
+/// Index of the material id (bits) within a light's floats.
+const LIGHT_MATERIAL: u32 = 11;
+
+/// Entries of the traversal stack (the BVH builders' depth limit is 62).
+const STACK_ENTRIES: u32 = 64;
+
+/// What a kernel is specialised for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct KernelOptions {
+    /// The triangle test compiled in.
+    pub triangle_test: TriangleTest,
+    /// The most scattering events a path may have.
+    pub max_bounces: u32,
+}
+
+/// An f32 as a WGSL literal that parses back to the same value.
+fn f(v: f32) -> String {
+    assert!(v.is_finite(), "WGSL has no literal for {v}");
+    format!("{v:?}f")
+}
+
+/// The generated part: structs, bindings, constants.
+pub fn header(options: &KernelOptions) -> String {
+    let mut out = String::from("// ---- Generated by gpu::kernel from the Rust definitions.\n\n");
+    out.push_str(&Params::declaration());
+    out.push('\n');
+    out.push_str(&BvhNode::declaration());
+    out.push('\n');
+    out.push_str(&PixelAccum::declaration());
+    out.push_str(
+        "\nstruct PtFilm {\n    rays_lo: atomic<u32>,\n    rays_hi: atomic<u32>,\n    truncated: atomic<u32>,\n    \
+         pad: u32,\n    pixels: array<PtPixel>,\n}\n\n",
+    );
+    out.push_str(
+        "@group(0) @binding(0) var<uniform> pt_params: PtParams;\n\
+         @group(0) @binding(1) var<storage, read> pt_nodes: array<PtNode>;\n\
+         @group(0) @binding(2) var<storage, read> pt_tri_verts: array<vec4f>;\n\
+         @group(0) @binding(3) var<storage, read> pt_tri_vidx: array<vec4u>;\n\
+         @group(0) @binding(4) var<storage, read> pt_attrs: array<vec4f>;\n\
+         @group(0) @binding(5) var<storage, read> pt_tables: array<f32>;\n\
+         @group(0) @binding(6) var<storage, read_write> pt_film: PtFilm;\n\n",
+    );
+    let mut u = |name: &str, v: u32| {
+        let _ = writeln!(out, "const {name}: u32 = {v}u;");
+    };
+    for mode in ShadingNormals::ALL {
+        u(&format!("PT_SHADING_{}", mode.name().to_ascii_uppercase().replace('-', "_")), mode.code());
+    }
+    u("PT_HAS_NORMALS", HAS_NORMALS);
+    u("PT_HAS_TANGENTS", HAS_TANGENTS);
+    u("PT_HAS_ENVIRONMENT", HAS_ENVIRONMENT);
+    u("PT_CIE_SAMPLES", CIE_SAMPLES as u32);
+    u("PT_LIGHT_FLOATS", LIGHT_FLOATS as u32);
+    u("PT_LIGHT_CDF", LIGHT_CDF);
+    u("PT_LIGHT_PMF", LIGHT_PMF);
+    u("PT_LIGHT_MATERIAL", LIGHT_MATERIAL);
+    u("PT_STACK", STACK_ENTRIES);
+    u("PT_MAX_BOUNCES", options.max_bounces);
+    for (name, v) in [
+        ("PT_LAMBDA_MIN", LAMBDA_MIN),
+        ("PT_LAMBDA_MAX", LAMBDA_MAX),
+        ("PT_VIS_K", VIS_K),
+        ("PT_VIS_CENTRE", VIS_CENTRE),
+        ("PT_VIS_TANH_LO", VIS_TANH_LO),
+        ("PT_VIS_TANH_HI", VIS_TANH_HI),
+        ("PT_CIE_LAMBDA_MIN", CIE_LAMBDA_MIN),
+        ("PT_CIE_Y_INTEGRAL", CIE_Y_INTEGRAL),
+        ("PT_MIN_SHADING_COSINE", MIN_SHADING_COSINE),
+        ("PT_RR_MIN_TERMINATION", RR_MIN_TERMINATION),
+        ("PT_SHADOW_T_MAX", SHADOW_T_MAX),
+        ("PT_OFFSET_ORIGIN", shapes::offset::OFFSET_ORIGIN),
+        ("PT_OFFSET_FLOAT_SCALE", shapes::offset::OFFSET_FLOAT_SCALE),
+        ("PT_OFFSET_INT_SCALE", shapes::offset::OFFSET_INT_SCALE),
+    ] {
+        let _ = writeln!(out, "const {name}: f32 = {};", f(v));
+    }
+    for (row, name) in XYZ_TO_SRGB.iter().zip(["R", "G", "B"]) {
+        let _ =
+            writeln!(out, "const PT_XYZ_TO_SRGB_{name}: vec3f = vec3f({}, {}, {});", f(row[0]), f(row[1]), f(row[2]));
+    }
+    out.push('\n');
+    out
+}
+
+/// The hand-written files, in the order they are concatenated.
+const FILES: [(&str, &str); 8] = [
+    ("rng.wgsl", include_str!("wgsl/rng.wgsl")),
+    ("spectral.wgsl", include_str!("wgsl/spectral.wgsl")),
+    ("frame.wgsl", include_str!("wgsl/frame.wgsl")),
+    ("offset.wgsl", include_str!("wgsl/offset.wgsl")),
+    ("shading.wgsl", include_str!("wgsl/shading.wgsl")),
+    ("traversal.wgsl", include_str!("wgsl/traversal.wgsl")),
+    ("lights.wgsl", include_str!("wgsl/lights.wgsl")),
+    ("path.wgsl", include_str!("wgsl/path.wgsl")),
+];
+
+/// The kernel's entry point, last.
+const MAIN: &str = include_str!("wgsl/main.wgsl");
+
+/// The whole kernel: the material WGSL (from [`crate::materials`]), the generated
+/// header, the hand-written files and the chosen triangle test.
+pub fn source(material_wgsl: &str, options: &KernelOptions) -> String {
+    let triangle = match options.triangle_test {
+        TriangleTest::Watertight => include_str!("wgsl/triangle_watertight.wgsl"),
+        TriangleTest::MollerTrumbore => include_str!("wgsl/triangle_moller_trumbore.wgsl"),
+    };
+    let mut out = String::with_capacity(material_wgsl.len() + 64 * 1024);
+    out.push_str(material_wgsl);
+    out.push('\n');
+    out.push_str(&header(options));
+    out.push_str("\nconst PT_PI: f32 = 3.14159265358979323846;\nconst PT_INV_4PI: f32 = 0.07957747154594767;\n");
+    out.push_str(
+        "// \"Infinity\" for ray extents (WGSL has no infinite literal) and the slab test's miss marker,\n\
+         // larger than any extent.\nconst PT_FAR: f32 = 3.0e38;\nconst PT_MISS: f32 = 3.4e38;\n\
+         const PT_NO_HIT: u32 = 0xffffffffu;\n",
+    );
+    for (name, text) in FILES {
+        let _ = write!(out, "\n// ---- {name}\n{text}");
+    }
+    let _ = write!(out, "\n// ---- triangle test\n{triangle}\n// ---- main.wgsl\n{MAIN}");
+    out
+}

@@ -1,0 +1,137 @@
+// Ray casting: ordered stack traversal of the binary BVH, mirroring crates/bvh/src/build.rs
+// (`Bvh::traverse`): nearer child first, the farther pushed with its entry distance, and
+// nodes beyond the closest hit culled on the way back. The triangle test
+// (`pt_intersect_triangle`, from triangle_*.wgsl) is chosen when the kernel is generated.
+
+struct PtHit {
+    t: f32,
+    u: f32,
+    v: f32,
+    prim: u32,
+}
+
+struct PtRay {
+    o: vec3f,
+    d: vec3f,
+    inv: vec3f,
+    // Watertight test: permutation (kz = the direction's largest axis) and shear.
+    kx: u32,
+    ky: u32,
+    kz: u32,
+    shear: vec3f,
+    t_min: f32,
+}
+
+fn pt_make_ray(o: vec3f, d: vec3f, t_min: f32) -> PtRay {
+    // Zero direction components get a tiny finite stand-in (WGSL promises no infinities):
+    // the slab test then behaves as the CPU's on-plane rule.
+    let tiny = select(vec3f(1e-30), vec3f(-1e-30), d < vec3f(0.0));
+    let dd = select(d, tiny, abs(d) < vec3f(1e-30));
+    let a = abs(d);
+    var kz = 2u;
+    if a.x >= a.y && a.x >= a.z {
+        kz = 0u;
+    } else if a.y >= a.z {
+        kz = 1u;
+    }
+    var kx = (kz + 1u) % 3u;
+    var ky = (kx + 1u) % 3u;
+    if d[kz] < 0.0 {
+        let t = kx;
+        kx = ky;
+        ky = t;
+    }
+    let shear = vec3f(d[kx] / d[kz], d[ky] / d[kz], 1.0 / d[kz]);
+    return PtRay(o, d, 1.0 / dd, kx, ky, kz, shear, t_min);
+}
+
+// Entry distance into a node's box within (t_min, t_max], or PT_MISS.
+fn pt_slab_enter(node: PtNode, r: PtRay, t_max: f32) -> f32 {
+    let t0 = (node.min - r.o) * r.inv;
+    let t1 = (node.max - r.o) * r.inv;
+    let near = min(t0, t1);
+    let far = max(t0, t1);
+    let t_enter = max(max(max(near.x, near.y), near.z), r.t_min);
+    let t_exit = min(min(min(far.x, far.y), far.z), t_max);
+    if t_enter <= t_exit {
+        return t_enter;
+    }
+    return PT_MISS;
+}
+
+// The closest hit in (t_min, t_max), or with `any_hit` the first found.
+fn pt_trace(o: vec3f, d: vec3f, t_min: f32, t_max_in: f32, any_hit: bool) -> PtHit {
+    var best = PtHit(t_max_in, 0.0, 0.0, PT_NO_HIT);
+    if pt_params.node_count == 0u {
+        return best;
+    }
+    let r = pt_make_ray(o, d, t_min);
+    var t_max = t_max_in;
+    if pt_slab_enter(pt_nodes[0], r, t_max) >= PT_MISS {
+        return best;
+    }
+    var stack_node: array<u32, PT_STACK>;
+    var stack_t: array<f32, PT_STACK>;
+    var sp = 0u;
+    var node = 0u;
+    loop {
+        let n = pt_nodes[node];
+        var descended = false;
+        if n.count > 0u {
+            for (var i = n.index; i < n.index + n.count; i++) {
+                let h = pt_intersect_triangle(i, r, t_max);
+                if h.x > 0.0 {
+                    t_max = h.x;
+                    best = PtHit(h.x, h.y, h.z, i);
+                    if any_hit {
+                        return best;
+                    }
+                }
+            }
+        } else {
+            // Nearer child first; push the farther with its entry distance.
+            let l = node + 1u;
+            let rr = n.index;
+            let tl = pt_slab_enter(pt_nodes[l], r, t_max);
+            let tr = pt_slab_enter(pt_nodes[rr], r, t_max);
+            var near = l;
+            var t_near = tl;
+            var far = rr;
+            var t_far = tr;
+            if tr < tl {
+                near = rr;
+                t_near = tr;
+                far = l;
+                t_far = tl;
+            }
+            if t_near < PT_MISS {
+                if t_far < PT_MISS && sp < PT_STACK {
+                    stack_node[sp] = far;
+                    stack_t[sp] = t_far;
+                    sp += 1u;
+                }
+                node = near;
+                descended = true;
+            }
+        }
+        if !descended {
+            // Pop until a node that may still hold a closer hit.
+            var found = false;
+            loop {
+                if sp == 0u {
+                    break;
+                }
+                sp -= 1u;
+                if stack_t[sp] <= t_max {
+                    node = stack_node[sp];
+                    found = true;
+                    break;
+                }
+            }
+            if !found {
+                return best;
+            }
+        }
+    }
+    return best;
+}

@@ -1,0 +1,163 @@
+//! The path-tracing kernel's generated parts against the Rust definitions (no device):
+//! struct layouts as naga lays them out, the shared constants' values, the triangle test
+//! compiled in, and every hand-written WGSL file naming a Rust file that exists.
+
+use gpu::kernel::{self, FILM_HEADER_BYTES, KernelOptions, Params, PixelAccum, WgslStruct};
+use gpu::materials::generate;
+use naga::{Literal, TypeInner};
+use spectral::spectrum::Colour;
+use tracer::material::Material;
+
+fn options(triangle_test: bvh::TriangleTest) -> KernelOptions {
+    KernelOptions { triangle_test, max_bounces: gpu::backend::MAX_BOUNCES }
+}
+
+/// The whole kernel for a one-material scene, parsed and validated by naga.
+fn kernel_module(options: &KernelOptions) -> (String, naga::Module) {
+    let materials = [Material::diffuse("grey", Colour::constant(0.5)).unwrap()];
+    let src = kernel::source(&generate(&materials, true).unwrap().wgsl, options);
+    let module = naga::front::wgsl::parse_str(&src).unwrap_or_else(|e| panic!("{}", e.emit_to_string(&src)));
+    naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::default())
+        .validate(&module)
+        .unwrap_or_else(|e| panic!("{}", e.emit_to_string(&src)));
+    (src, module)
+}
+
+/// (member name, offset) of the WGSL struct `name`, and its size.
+fn wgsl_layout(module: &naga::Module, name: &str) -> (Vec<(String, u32)>, u32) {
+    let (_, ty) =
+        module.types.iter().find(|(_, t)| t.name.as_deref() == Some(name)).unwrap_or_else(|| panic!("{name}"));
+    let TypeInner::Struct { members, span } = &ty.inner else { panic!("{name} is not a struct") };
+    (members.iter().map(|m| (m.name.clone().unwrap_or_default(), m.offset)).collect(), *span)
+}
+
+/// Where the Rust type `T` and its WGSL declaration disagree: none for a mirror.
+fn mismatches<T: WgslStruct>(module: &naga::Module) -> Vec<String> {
+    let (members, span) = wgsl_layout(module, T::NAME);
+    let mut out = Vec::new();
+    if members.len() != T::FIELDS.len() {
+        out.push(format!("{}: {} WGSL members, {} Rust fields", T::NAME, members.len(), T::FIELDS.len()));
+    }
+    for ((wname, woff), (rname, _, roff)) in members.iter().zip(T::FIELDS) {
+        if wname != rname || *woff as usize != *roff {
+            out.push(format!("{}: WGSL {wname} at {woff}, Rust {rname} at {roff}", T::NAME));
+        }
+    }
+    if span as usize != T::SIZE {
+        out.push(format!("{}: WGSL size {span}, Rust size {}", T::NAME, T::SIZE));
+    }
+    out
+}
+
+#[test]
+fn generated_structs_have_the_host_layout() {
+    let (_, module) = kernel_module(&options(bvh::TriangleTest::Watertight));
+    let mut problems = mismatches::<Params>(&module);
+    problems.extend(mismatches::<bvh::BvhNode>(&module));
+    problems.extend(mismatches::<PixelAccum>(&module));
+    assert!(problems.is_empty(), "{problems:#?}");
+    // The film: header words, then the accumulators at the stride the host reads.
+    let (members, _) = wgsl_layout(&module, "PtFilm");
+    assert_eq!(members.last().unwrap(), &("pixels".to_string(), FILM_HEADER_BYTES as u32));
+    println!("PtParams {} bytes, PtNode {}, PtPixel {}", Params::SIZE, bvh::BvhNode::SIZE, PixelAccum::SIZE);
+}
+
+/// The layout check can fail: a Rust struct whose second `[f32; 3]` follows the first at
+/// byte 12, where WGSL's vec3f alignment puts it at 16.
+#[test]
+fn a_struct_with_another_layout_is_caught() {
+    #[repr(C)]
+    struct Packed {
+        a: [f32; 3],
+        b: [f32; 3],
+    }
+    impl WgslStruct for Packed {
+        const NAME: &'static str = "Packed";
+        const FIELDS: &'static [(&'static str, &'static str, usize)] =
+            &[("a", "vec3f", std::mem::offset_of!(Packed, a)), ("b", "vec3f", std::mem::offset_of!(Packed, b))];
+        const SIZE: usize = std::mem::size_of::<Packed>();
+    }
+    let src = format!("{}\n@group(0) @binding(0) var<storage, read> p: Packed;\n", Packed::declaration());
+    let module = naga::front::wgsl::parse_str(&src).unwrap();
+    let problems = mismatches::<Packed>(&module);
+    assert!(problems.iter().any(|p| p.contains("b at 16, Rust b at 12")), "{problems:#?}");
+    let _ = Packed { a: [0.0; 3], b: [0.0; 3] }.a;
+}
+
+/// The value of a module-scope `const` with a scalar or vector initialiser.
+fn constant(module: &naga::Module, name: &str) -> Vec<f64> {
+    let (_, c) =
+        module.constants.iter().find(|(_, c)| c.name.as_deref() == Some(name)).unwrap_or_else(|| panic!("{name}"));
+    let literal = |h: naga::Handle<naga::Expression>| match module.global_expressions[h] {
+        naga::Expression::Literal(Literal::F32(v)) => v as f64,
+        naga::Expression::Literal(Literal::U32(v)) => v as f64,
+        ref other => panic!("{name}: {other:?}"),
+    };
+    match &module.global_expressions[c.init] {
+        naga::Expression::Compose { components, .. } => components.iter().map(|&h| literal(h)).collect(),
+        _ => vec![literal(c.init)],
+    }
+}
+
+#[test]
+fn shared_constants_are_the_rust_values() {
+    let (_, module) = kernel_module(&options(bvh::TriangleTest::Watertight));
+    let f = |v: f32| vec![v as f64];
+    assert_eq!(constant(&module, "PT_MIN_SHADING_COSINE"), f(tracer::shading::MIN_SHADING_COSINE));
+    assert_eq!(constant(&module, "PT_RR_MIN_TERMINATION"), f(tracer::integrator::RR_MIN_TERMINATION));
+    assert_eq!(constant(&module, "PT_SHADOW_T_MAX"), f(tracer::integrator::SHADOW_T_MAX));
+    assert_eq!(constant(&module, "PT_VIS_K"), f(spectral::sampled::VIS_K));
+    assert_eq!(constant(&module, "PT_VIS_TANH_HI"), f(spectral::sampled::VIS_TANH_HI));
+    assert_eq!(constant(&module, "PT_OFFSET_INT_SCALE"), f(shapes::offset::OFFSET_INT_SCALE));
+    assert_eq!(constant(&module, "PT_MAX_BOUNCES"), vec![gpu::backend::MAX_BOUNCES as f64]);
+    let row = spectral::colour::XYZ_TO_SRGB[1];
+    assert_eq!(constant(&module, "PT_XYZ_TO_SRGB_G"), row.map(|v| v as f64).to_vec());
+    for mode in tracer::shading::ShadingNormals::ALL {
+        let name = format!("PT_SHADING_{}", mode.name().to_ascii_uppercase().replace('-', "_"));
+        assert_eq!(constant(&module, &name), vec![mode.code() as f64], "{name}");
+    }
+}
+
+#[test]
+fn only_the_chosen_triangle_test_is_compiled_in() {
+    let (wt, _) = kernel_module(&options(bvh::TriangleTest::Watertight));
+    let (mt, _) = kernel_module(&options(bvh::TriangleTest::MollerTrumbore));
+    assert!(wt.contains("The watertight test against") && !wt.contains("Möller–Trumbore against"));
+    assert!(mt.contains("Möller–Trumbore against") && !mt.contains("The watertight test against"));
+}
+
+/// Every hand-written WGSL file (the kernel's and the BSDF models') says in its first
+/// lines which Rust file it mirrors, and that file exists.
+#[test]
+fn every_wgsl_file_names_the_rust_file_it_mirrors() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let mut files = Vec::new();
+    for dir in ["crates/gpu/src/wgsl", "crates/brdf/src", "crates/brdf/src/models"] {
+        for e in std::fs::read_dir(root.join(dir)).unwrap() {
+            let p = e.unwrap().path();
+            if p.extension().is_some_and(|x| x == "wgsl") {
+                files.push(p);
+            }
+        }
+    }
+    assert!(files.len() >= 20, "{} WGSL files", files.len());
+    let mut problems = Vec::new();
+    for p in &files {
+        let text = std::fs::read_to_string(p).unwrap();
+        let header: String = text.lines().take_while(|l| l.starts_with("//")).collect::<Vec<_>>().join(" ");
+        let named: Vec<&str> = header
+            .split(|c: char| c.is_whitespace() || "(),`;".contains(c))
+            .map(|w| w.trim_end_matches(['.', ':']))
+            .filter(|w| w.starts_with("crates/") && w.ends_with(".rs"))
+            .collect();
+        if named.is_empty() {
+            problems.push(format!("{}: no crates/…/*.rs named in its header", p.display()));
+        }
+        for n in named {
+            if !root.join(n).exists() {
+                problems.push(format!("{}: names {n}, which does not exist", p.display()));
+            }
+        }
+    }
+    assert!(problems.is_empty(), "{problems:#?}");
+}

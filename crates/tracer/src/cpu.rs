@@ -1,0 +1,254 @@
+//! The CPU backend: an [`Integrator`] run by rayon over 16×16 tiles, bit-identical for
+//! a given seed whatever the thread count.
+
+use crate::film::{Film, PixelStats};
+use crate::geometry::Geometry;
+use crate::integrator::{CameraSample, Integrator, PathCounters, PathTracer, SceneView};
+use crate::lights::Lights;
+use crate::render::{Backend, Capabilities, PrepareStats, PreparedScene, RenderSettings, SceneOptions, check_pass};
+use crate::sampler::Pcg32;
+use crate::scene::Scene;
+use crate::{Error, Result};
+use bvh::TriangleTest;
+use glam::Vec2;
+use rayon::prelude::*;
+use spectral::{SampledSpectrum, SampledWavelengths, SpectralMode};
+use std::sync::Arc;
+use std::time::Instant;
+
+/// Tile side in pixels.
+pub const TILE: u32 = 16;
+
+/// The most camera samples handed to the integrator at once (a tile's pixels × samples
+/// are split into blocks of at most this many, in pixel-major order).
+pub const BLOCK: usize = 256;
+
+/// The CPU backend, generic over the integrator it runs.
+pub struct CpuBackend<I: Integrator = PathTracer> {
+    pool: Arc<rayon::ThreadPool>,
+    integrator: Arc<I>,
+}
+
+impl CpuBackend<PathTracer> {
+    /// A path-tracing backend with `threads` worker threads (0 = one per core).
+    pub fn new(threads: usize) -> Result<Self> {
+        Self::with_integrator(threads, PathTracer)
+    }
+}
+
+impl<I: Integrator> CpuBackend<I> {
+    /// A backend running `integrator` on `threads` worker threads (0 = one per core).
+    pub fn with_integrator(threads: usize, integrator: I) -> Result<Self> {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .map_err(|e| Error::Setting(format!("cannot start {threads} threads: {e}")))?;
+        Ok(Self { pool: Arc::new(pool), integrator: Arc::new(integrator) })
+    }
+
+    /// Worker threads in use.
+    pub fn threads(&self) -> usize {
+        self.pool.current_num_threads()
+    }
+
+    /// Prepares `scene` (validates it, builds the triangles' 4-wide BVH with the given
+    /// test, the shapes' BVH and the light distribution), with the concrete type.
+    pub fn prepare_cpu(&self, scene: Scene, options: &SceneOptions) -> Result<CpuScene<I>> {
+        self.capabilities().check_scene(self.name(), &scene, options)?;
+        scene.validate()?;
+        let start = Instant::now();
+        let geometry = Geometry::build(&scene, options.triangle_test)?;
+        let build = start.elapsed();
+        let lights = Lights::new(&scene);
+        let stats = PrepareStats { build, compile: None, total: start.elapsed(), emitters: lights.emitter_count() };
+        Ok(CpuScene {
+            scene,
+            geometry,
+            lights,
+            stats,
+            pool: Arc::clone(&self.pool),
+            integrator: Arc::clone(&self.integrator),
+        })
+    }
+}
+
+fn cpu_capabilities(integrator: &'static str) -> Capabilities {
+    Capabilities {
+        spectral_modes: vec![SpectralMode::Hero, SpectralMode::Bins40, SpectralMode::Rgb],
+        analytic_shapes: true,
+        custom_bsdfs: true,
+        triangle_tests: vec![TriangleTest::Watertight, TriangleTest::MollerTrumbore],
+        integrator,
+        max_bounces: None,
+    }
+}
+
+impl<I: Integrator> Backend for CpuBackend<I> {
+    fn name(&self) -> &str {
+        "cpu"
+    }
+
+    fn capabilities(&self) -> Capabilities {
+        cpu_capabilities(self.integrator.name())
+    }
+
+    fn prepare(&self, scene: Scene, options: &SceneOptions) -> Result<Box<dyn PreparedScene>> {
+        Ok(Box::new(self.prepare_cpu(scene, options)?))
+    }
+}
+
+/// A scene prepared for the CPU: the scene, its accelerators and lights, and the
+/// backend's threads and integrator.
+pub struct CpuScene<I: Integrator = PathTracer> {
+    scene: Scene,
+    geometry: Geometry,
+    lights: Lights,
+    stats: PrepareStats,
+    pool: Arc<rayon::ThreadPool>,
+    integrator: Arc<I>,
+}
+
+impl<I: Integrator> CpuScene<I> {
+    /// Everything the integrator reads.
+    pub fn view(&self) -> SceneView<'_> {
+        SceneView { scene: &self.scene, geometry: &self.geometry, lights: &self.lights }
+    }
+
+    /// The scene's accelerators.
+    pub fn geometry(&self) -> &Geometry {
+        &self.geometry
+    }
+
+    /// The scene's emitters.
+    pub fn lights(&self) -> &Lights {
+        &self.lights
+    }
+}
+
+impl<I: Integrator> PreparedScene for CpuScene<I> {
+    fn backend(&self) -> &str {
+        "cpu"
+    }
+
+    fn capabilities(&self) -> Capabilities {
+        cpu_capabilities(self.integrator.name())
+    }
+
+    fn scene(&self) -> &Scene {
+        &self.scene
+    }
+
+    fn stats(&self) -> PrepareStats {
+        self.stats
+    }
+
+    fn render_pass(
+        &self,
+        settings: &RenderSettings,
+        film: &mut Film,
+        first_sample: u32,
+        spp: u32,
+        progress: &(dyn Fn(u64) + Sync),
+    ) -> Result<PathCounters> {
+        check_pass(self, settings, film)?;
+        let pass = Pass { scene: self, settings, first_sample, spp, progress };
+        Ok(self.pool.install(|| match settings.mode {
+            SpectralMode::Hero => pass.tiles::<4>(film, |rng| SampledWavelengths::sample_hero(rng.next_f32())),
+            SpectralMode::Bins40 => pass.tiles::<40>(film, |_| SampledWavelengths::fixed_bins(380.0, 10.0)),
+            SpectralMode::Rgb => pass.tiles::<3>(film, |_| SampledWavelengths::rgb()),
+        }))
+    }
+}
+
+/// One render pass over a CPU scene.
+struct Pass<'a, I: Integrator> {
+    scene: &'a CpuScene<I>,
+    settings: &'a RenderSettings,
+    first_sample: u32,
+    spp: u32,
+    progress: &'a (dyn Fn(u64) + Sync),
+}
+
+struct TileResult {
+    x0: u32,
+    y0: u32,
+    w: u32,
+    pixels: Vec<PixelStats>,
+    non_finite: u64,
+    counters: PathCounters,
+}
+
+impl<I: Integrator> Pass<'_, I> {
+    /// Renders every tile in parallel and writes the results into `film`.
+    fn tiles<const N: usize>(
+        &self,
+        film: &mut Film,
+        wavelengths: impl Fn(&mut Pcg32) -> SampledWavelengths<N> + Sync,
+    ) -> PathCounters {
+        let (width, height) = (film.width(), film.height());
+        let tiles_x = width.div_ceil(TILE);
+        let tiles: Vec<(u32, u32)> =
+            (0..height.div_ceil(TILE)).flat_map(|ty| (0..tiles_x).map(move |tx| (tx * TILE, ty * TILE))).collect();
+        let existing: &Film = film;
+        let results: Vec<TileResult> =
+            tiles.par_iter().map(|&(x0, y0)| self.tile(existing, x0, y0, &wavelengths)).collect();
+        let mut total = PathCounters::default();
+        for t in results {
+            for (i, p) in t.pixels.iter().enumerate() {
+                let (x, y) = (t.x0 + i as u32 % t.w, t.y0 + i as u32 / t.w);
+                film.pixels_mut()[(y * width + x) as usize] = *p;
+            }
+            film.non_finite += t.non_finite;
+            total += t.counters;
+        }
+        total
+    }
+
+    /// One tile: its pixel samples in pixel-major order, in blocks of at most [`BLOCK`]
+    /// handed to the integrator, accumulated in the same order.
+    fn tile<const N: usize>(
+        &self,
+        film: &Film,
+        x0: u32,
+        y0: u32,
+        wavelengths: &(impl Fn(&mut Pcg32) -> SampledWavelengths<N> + Sync),
+    ) -> TileResult {
+        let (width, height) = (film.width(), film.height());
+        let (w, h) = (TILE.min(width - x0), TILE.min(height - y0));
+        let camera = self.scene.camera(self.settings).rays(width, height);
+        let view = self.scene.view();
+        let mut pixels: Vec<PixelStats> =
+            (y0..y0 + h).flat_map(|y| (x0..x0 + w).map(move |x| (x, y))).map(|(x, y)| *film.pixel(x, y)).collect();
+        let mut non_finite = 0;
+        let mut counters = PathCounters::default();
+        let samples = (0..w * h).flat_map(|i| (0..self.spp).map(move |s| (i, self.first_sample + s)));
+        // The block's samples and, for each, its pixel's index in the tile.
+        let mut block: Vec<CameraSample<N>> = Vec::with_capacity(BLOCK);
+        let mut owners: Vec<u32> = Vec::with_capacity(BLOCK);
+        let mut samples = samples.peekable();
+        while samples.peek().is_some() {
+            block.clear();
+            owners.clear();
+            for (i, s) in samples.by_ref().take(BLOCK) {
+                let (x, y) = (x0 + i % w, y0 + i / w);
+                let mut rng = Pcg32::for_sample(self.settings.seed, y * width + x, s);
+                let wl = wavelengths(&mut rng);
+                let jitter = rng.next_2d();
+                let ray = camera.ray(Vec2::new(x as f32, y as f32) + jitter);
+                block.push(CameraSample { ray, wl, rng, radiance: SampledSpectrum::zero() });
+                owners.push(i);
+            }
+            self.scene.integrator.radiance_block(&view, &self.settings.path, &mut block, &mut counters);
+            for (&i, s) in owners.iter().zip(&block) {
+                let rgb = s.wl.to_linear_srgb(&s.radiance);
+                if rgb.iter().all(|v| v.is_finite()) {
+                    pixels[i as usize].add(rgb);
+                } else {
+                    non_finite += 1;
+                }
+            }
+        }
+        (self.progress)((w * h) as u64 * self.spp as u64);
+        TileResult { x0, y0, w, pixels, non_finite, counters }
+    }
+}
