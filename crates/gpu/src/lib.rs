@@ -6,6 +6,8 @@
 //!   per-model `eval`/`pdf`/`sample` dispatch, generated from the `brdf` crate's
 //!   parameter definitions (`ModelDef`) for exactly the models a scene uses;
 //! * [`backend`]: [`GpuBackend`], the tracer's [`tracer::Backend`] on the GPU.
+//!
+//! Citations: "the thesis", "the lecture" and the papers named in comments are listed in `docs/references.md`.
 
 pub mod backend;
 pub mod context;

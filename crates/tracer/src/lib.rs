@@ -6,6 +6,8 @@
 //! an accelerator from the `bvh` crate → the [`integrator`] → a [`Film`] → images.
 //! A [`Backend`] renders passes of samples into a film; [`CpuBackend`] does it with
 //! rayon, tile-parallel and bit-identical for a given seed whatever the thread count.
+//!
+//! Citations: "the thesis", "the lecture" and the papers named in comments are listed in `docs/references.md`.
 
 pub mod camera;
 pub mod film;
