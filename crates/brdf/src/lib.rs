@@ -7,6 +7,8 @@
 //! mode is rendering.
 //!
 //! This crate knows spectra and directions, nothing of rays or scenes.
+//!
+//! Citations: "the thesis", "the lecture" and the papers named in comments are listed in `docs/references.md`.
 
 pub mod frame;
 pub mod fresnel;

@@ -16,6 +16,8 @@
 //! * [`make_ray_sets`]: primary, diffuse-bounce and shadow ray sets for benchmarks.
 //!
 //! This crate knows boxes, rays and triangles, nothing of materials.
+//!
+//! Citations: "the thesis", "the lecture" and the papers named in comments are listed in `docs/references.md`.
 
 mod aabb;
 mod boxes;

@@ -9,6 +9,8 @@
 //!   the Rust definitions, the rest one hand-written file per Rust file it mirrors;
 //! * [`backend`]: [`GpuBackend`], the tracer's [`tracer::Backend`] on the GPU, and
 //!   [`GpuScene`], a scene prepared on the device.
+//!
+//! Citations: "the thesis", "the lecture" and the papers named in comments are listed in `docs/references.md`.
 
 pub mod backend;
 pub mod context;

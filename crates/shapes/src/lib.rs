@@ -17,6 +17,8 @@
 //!
 //! Every shape implements [`Shape`]: closest hit with its geometric normal, bounds for
 //! the BVH, and uniform area sampling where it can be a light.
+//!
+//! Citations: "the thesis", "the lecture" and the papers named in comments are listed in `docs/references.md`.
 
 pub mod boxes;
 pub mod implicit;

@@ -11,6 +11,8 @@
 //!   it goes wrong.
 //!
 //! This crate knows nothing of rays or scenes.
+//!
+//! Citations: "the thesis", "the lecture" and the papers named in comments are listed in `docs/references.md`.
 
 pub mod colour;
 pub mod sampled;

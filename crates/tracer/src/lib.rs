@@ -7,6 +7,8 @@
 //! A [`Backend`] prepares a scene its own way ([`PreparedScene`]), which then renders
 //! passes of samples into a film; [`CpuBackend`] runs an [`Integrator`] with rayon,
 //! tile-parallel and bit-identical for a given seed whatever the thread count.
+//!
+//! Citations: "the thesis", "the lecture" and the papers named in comments are listed in `docs/references.md`.
 
 pub mod camera;
 pub mod cpu;

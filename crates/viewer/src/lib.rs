@@ -30,6 +30,8 @@
 //! and libxkbcommon-x11 at run time (loaded when the window opens); on Debian
 //! `apt-get install libx11-6 libx11-xcb1 libxcb1 libxcursor1 libxrandr2 libxi6
 //! libxkbcommon0 libxkbcommon-x11-0` (plus `xvfb xauth` for `xvfb-run`).
+//!
+//! Citations: "the thesis", "the lecture" and the papers named in comments are listed in `docs/references.md`.
 
 pub mod camera_control;
 
