@@ -1,7 +1,7 @@
 //! Tabulated colorimetric data (facts from the CIE standards, not code).
 //!
 //! * CIE 1931 2° standard observer colour-matching functions x̄, ȳ, z̄ at 1 nm from
-//!   360 to 830 nm (CIE 018:2019 / ISO 11664-1), as distributed by colour-science 0.4.
+//!   360 to 830 nm (ISO/CIE 11664-1:2019), as distributed by colour-science 0.4.
 //! * CIE standard illuminant D65 relative spectral power at 5 nm from 300 to 830 nm
 //!   (CIE S 014-2 / ISO 11664-2), normalised to 100 at 560 nm.
 

@@ -24,7 +24,7 @@ pub struct PathSettings {
     pub max_depth: u32,
     /// Russian roulette starts after this many bounces.
     pub rr_depth: u32,
-    /// Path extension (thesis ch. 8.2): up to this many extra bounces beyond
+    /// Path extension (thesis ch. 9, tables 9.2–9.3): up to this many extra bounces beyond
     /// `max_depth` while the path keeps hitting purely specular surfaces (mirrors,
     /// glass), so that a depth limit does not blacken what is seen through glass.
     pub specular_extension: u32,
