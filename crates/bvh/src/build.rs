@@ -372,17 +372,32 @@ mod tests {
     fn sah_builders_beat_midpoint_and_binned_is_close_to_sweep() {
         // Small triangles among a few huge ones: the midpoint splits by centroid alone and
         // drags the huge triangles' bounds into both children; the SAH isolates them.
-        let mut tris = soup(31, 3000, 10.0, 0.1);
-        tris.extend(soup(32, 40, 10.0, 12.0));
-        let cost = |method| {
-            Bvh::build(&tris, BuildConfig { method, max_leaf_size: 4, ..Default::default() }).unwrap().stats().sah_cost
+        // Binned over sweep varies from scene to scene (measured over 60 random scenes:
+        // 1.005 to 1.13, mean 1.065; midpoint over sweep 1.33 to 1.64), so the bound on
+        // binned is on the mean of four scenes, not on one.
+        let scene = |seed: u64| {
+            let mut tris = soup(seed, 3000, 10.0, 0.1);
+            tris.extend(soup(seed + 1, 40, 10.0, 12.0));
+            tris
         };
-        let (sweep, binned, mid) =
-            (cost(SplitMethod::SweepSah), cost(SplitMethod::BinnedSah), cost(SplitMethod::Midpoint));
-        assert!(sweep <= binned * 1.001, "sweep {sweep} binned {binned}");
-        assert!(binned <= sweep * 1.10, "binned {binned} should be within 10 % of sweep {sweep}");
-        eprintln!("SAH cost: sweep {sweep}, binned {binned}, midpoint {mid}");
-        assert!(mid > sweep * 1.05, "midpoint {mid} should be worse than sweep {sweep}");
+        let mut binned_over_sweep = 0.0;
+        for seed in [31, 33, 35, 37] {
+            let tris = scene(seed);
+            let cost = |method| {
+                Bvh::build(&tris, BuildConfig { method, max_leaf_size: 4, ..Default::default() })
+                    .unwrap()
+                    .stats()
+                    .sah_cost
+            };
+            let (sweep, binned, mid) =
+                (cost(SplitMethod::SweepSah), cost(SplitMethod::BinnedSah), cost(SplitMethod::Midpoint));
+            eprintln!("scene {seed}: SAH cost sweep {sweep}, binned {binned}, midpoint {mid}");
+            assert!(sweep <= binned * 1.001, "sweep {sweep} binned {binned}");
+            assert!(mid > sweep * 1.05, "midpoint {mid} should be worse than sweep {sweep}");
+            binned_over_sweep += binned / sweep / 4.0;
+        }
+        assert!(binned_over_sweep <= 1.10, "binned should be within 10 % of sweep on average: {binned_over_sweep}");
+        let tris = scene(31);
         // The hybrid is the sweep below its threshold.
         let hybrid = Bvh::build(
             &tris,

@@ -487,47 +487,30 @@ impl Accelerator for ObvhsCwBvh {
 mod tests {
     use super::*;
     use crate::BruteForce;
+    use crate::test_util::soup;
+    use rng::Pcg32;
 
-    /// xorshift64 in [0, 1).
-    struct Rng(u64);
-    impl Rng {
-        fn f(&mut self) -> f32 {
-            self.0 ^= self.0 << 13;
-            self.0 ^= self.0 >> 7;
-            self.0 ^= self.0 << 17;
-            (self.0 >> 40) as f32 / (1u64 << 24) as f32
-        }
-        fn v(&mut self) -> Vec3 {
-            Vec3::new(self.f(), self.f(), self.f())
-        }
-    }
-
-    fn soup(seed: u64, n: usize, spread: f32, size: f32) -> Vec<[Vec3; 3]> {
-        let mut r = Rng(seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1);
-        (0..n)
-            .map(|_| {
-                let c = r.v() * spread;
-                std::array::from_fn(|_| c + (r.v() - 0.5) * size)
-            })
-            .collect()
+    /// A uniform point in [0, 1)³.
+    fn point(r: &mut Pcg32) -> Vec3 {
+        Vec3::new(r.next_f32(), r.next_f32(), r.next_f32())
     }
 
     /// Rays from around and inside the soup, some infinite, some finite segments; every
     /// other one aimed at a point inside a random triangle, so that many hit.
     fn rays(seed: u64, n: usize, spread: f32, tris: &[[Vec3; 3]]) -> Vec<Ray> {
-        let mut r = Rng(seed.wrapping_mul(0xD1B5_4A32_D192_ED03) | 1);
+        let mut r = Pcg32::seed_from_u64(seed);
         (0..n)
             .map(|i| {
-                let o = r.v() * spread * 1.6 - 0.3 * spread;
+                let o = point(&mut r) * spread * 1.6 - 0.3 * spread;
                 let target = match tris.len() {
-                    0 => r.v() * spread,
+                    0 => point(&mut r) * spread,
                     len if i % 2 == 0 => {
-                        let t = tris[(r.f() * len as f32) as usize % len];
-                        let (a, b) = (r.f(), r.f());
+                        let t = tris[(r.next_f32() * len as f32) as usize % len];
+                        let (a, b) = (r.next_f32(), r.next_f32());
                         let (a, b) = if a + b > 1.0 { (1.0 - a, 1.0 - b) } else { (a, b) };
                         t[0] + (t[1] - t[0]) * a + (t[2] - t[0]) * b
                     }
-                    _ => r.v() * spread,
+                    _ => point(&mut r) * spread,
                 };
                 let d = (target - o).normalize_or(Vec3::X);
                 match i % 3 {

@@ -745,13 +745,13 @@ impl Shape for Implicit {
 mod tests {
     use super::*;
     use crate::roots::eval_poly;
-    use crate::roots::tests::Rng;
+    use rng::Pcg32;
 
     const LAG: RootSolver = RootSolver::Laguerre { polish: true };
     const SOLVERS: [RootSolver; 3] =
         [RootSolver::ClosedForm, RootSolver::Laguerre { polish: true }, RootSolver::Laguerre { polish: false }];
 
-    fn rand_point(rng: &mut Rng, s: f64) -> DVec3 {
+    fn rand_point(rng: &mut Pcg32, s: f64) -> DVec3 {
         DVec3::new(rng.range(-s, s), rng.range(-s, s), rng.range(-s, s))
     }
 
@@ -769,7 +769,7 @@ mod tests {
 
     #[test]
     fn along_ray_agrees_with_eval() {
-        let mut rng = Rng::new(10);
+        let mut rng = Pcg32::seed_from_u64(10);
         for poly in sample_polys() {
             for _ in 0..50 {
                 let o = rand_point(&mut rng, 3.0);
@@ -788,7 +788,7 @@ mod tests {
 
     #[test]
     fn gradient_agrees_with_finite_differences() {
-        let mut rng = Rng::new(11);
+        let mut rng = Pcg32::seed_from_u64(11);
         let h = 1e-5;
         for poly in sample_polys() {
             for _ in 0..50 {
@@ -840,7 +840,7 @@ mod tests {
 
     #[test]
     fn parse_round_trips_the_builders() {
-        let mut rng = Rng::new(12);
+        let mut rng = Pcg32::seed_from_u64(12);
         let cases = [
             ("(x^2 + y^2 + z^2 + 2^2 - 0.5^2)^2 - 4*2^2 (x^2 + y^2)", Poly3::torus(2.0, 0.5)),
             ("(x^2+y^2+z^2 + 3.75)^2 - 16x^2 - 16 y^2", Poly3::torus(2.0, 0.5)),
@@ -909,7 +909,7 @@ mod tests {
 
     #[test]
     fn sphere_matches_the_analytic_solution() {
-        let mut rng = Rng::new(13);
+        let mut rng = Pcg32::seed_from_u64(13);
         let r = 1.5f32;
         for solver in SOLVERS {
             let s = Implicit::sphere(r, solver).unwrap();
@@ -1037,7 +1037,7 @@ mod tests {
 
     #[test]
     fn heart_hits_lie_on_the_surface_with_true_normals() {
-        let mut rng = Rng::new(14);
+        let mut rng = Pcg32::seed_from_u64(14);
         for solver in [RootSolver::ClosedForm, LAG] {
             let s = Implicit::heart(solver).unwrap();
             let mut hits = 0;
@@ -1087,7 +1087,7 @@ mod tests {
     /// returns (hits, disagreements, non-converged roots of `b`). A disagreement is a
     /// hit/miss mismatch, a t differing by more than 1e-4 relative, or normals apart.
     fn compare(a: &Implicit, b: &Implicit, n: usize, seed: u64) -> (usize, usize, u32) {
-        let mut rng = Rng::new(seed);
+        let mut rng = Pcg32::seed_from_u64(seed);
         let (mut disagree, mut hits, mut not_converged) = (0, 0, 0);
         let (lo, hi) = (a.bounds.min.as_dvec3(), a.bounds.max.as_dvec3());
         for _ in 0..n {

@@ -22,7 +22,6 @@ pub mod boxes;
 pub mod implicit;
 pub mod offset;
 pub mod polygon;
-mod rng;
 pub mod roots;
 pub mod sphere;
 pub mod stability;

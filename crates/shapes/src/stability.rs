@@ -17,10 +17,10 @@
 //! * [`self_intersection`]: secondary rays spawned from f32 hit points with a fixed ε
 //!   against the robust offset of Wächter & Binder, across scene scales.
 //!
-//! Every case set is generated deterministically (fixed seeds, a SplitMix64 generator),
-//! so failure counts are reproducible; the times (`ns_per_test`, best of a few passes
-//! measured with [`std::time::Instant`], inputs passed through [`black_box`]) depend on
-//! the machine and are never asserted. The tests at the bottom assert failure bounds for
+//! Every case set is generated deterministically (fixed seeds, the workspace's PCG32
+//! from the `rng` crate), so failure counts are reproducible; the times (`ns_per_test`,
+//! best of a few passes measured with [`std::time::Instant`], inputs passed through
+//! [`black_box`]) depend on the machine and are never asserted. The tests at the bottom assert failure bounds for
 //! the defaults (robust geometric sphere, stable quadratic, polished Laguerre, watertight
 //! triangles, robust offsets) and that every baseline does fail somewhere, which shows
 //! the suite can detect failures.
@@ -29,12 +29,12 @@ use crate::boxes::slab;
 use crate::implicit::{Implicit, Poly3};
 use crate::offset::{offset_fixed_epsilon, offset_ray_origin};
 use crate::polygon::{InsideTest, Polygon};
-use crate::rng::Rng;
 use crate::roots::{RootSolver, real_roots_in};
 use crate::sphere::{Sphere, SphereMethod, reference_roots_f64};
 use crate::triangle::{Triangle, WatertightRay, icosphere, intersect_triangle, intersect_triangle_watertight};
 use crate::{Aabb, Ray, Shape};
 use glam::{DVec3, Vec3};
+use rng::Pcg32;
 use std::hint::black_box;
 use std::time::Instant;
 
@@ -139,6 +139,11 @@ fn timed<I, T>(scale: Scale, inputs: &[I], mut f: impl FnMut(&I) -> T) -> (Vec<T
     (out, best / inputs.len().max(1) as f64)
 }
 
+/// Log-uniform in [lo, hi) (0 < lo < hi): scales spread evenly over the decades.
+fn log_uniform(rng: &mut Pcg32, lo: f64, hi: f64) -> f64 {
+    (lo.ln() + rng.next_f64() * (hi.ln() - lo.ln())).exp()
+}
+
 fn row(family: &'static str, method: &str, case: &str, tests: u64, failures: u64, not_converged: u64, ns: f64) -> Row {
     Row { family, method: method.into(), case: case.into(), tests, failures, not_converged, ns_per_test: ns }
 }
@@ -203,31 +208,31 @@ pub const SPHERE_TANGENT_BAND: f64 = 4.0;
 /// about ε₃₂·|o − c|, so there the f32 input itself cannot say whether the ray hits.
 /// One test = one ray; the time is per ray.
 pub fn spheres(scale: Scale) -> Vec<Row> {
-    let mut rng = Rng(0x5EED_0001);
+    let mut rng = Pcg32::seed_from_u64(0x5EED_0001);
     let n = scale.n(500);
     let c0 = DVec3::new(0.3, -0.2, 0.5);
     let c1 = DVec3::new(1.0, 2.0, 3.0);
     let mut cases: Vec<(String, DVec3, f64, Vec<Ray>)> = Vec::new();
 
-    let random_dir = |rng: &mut Rng, o: DVec3, target: DVec3| {
+    let random_dir = |rng: &mut Pcg32, o: DVec3, target: DVec3| {
         let d = target - o;
-        if rng.coin() { d.normalize() } else { d * rng.log_uniform(0.1, 10.0) / d.length() }
+        if rng.coin() { d.normalize() } else { d * log_uniform(rng, 0.1, 10.0) / d.length() }
     };
 
     let rays = (0..n)
         .map(|_| {
-            let o = c0 + rng.unit() * rng.range(1.5, 4.0);
-            let target = c0 + rng.unit() * rng.range(0.0, 1.3);
+            let o = c0 + rng.unit_vector() * rng.range(1.5, 4.0);
+            let target = c0 + rng.unit_vector() * rng.range(0.0, 1.3);
             Ray::new(o.as_vec3(), random_dir(&mut rng, o, target).as_vec3())
         })
         .collect();
     cases.push(("unit random".into(), c0, 1.0, rays));
 
-    let far_or_tiny = |rng: &mut Rng, c: DVec3, r: f64, dist: f64| -> Vec<Ray> {
+    let far_or_tiny = |rng: &mut Pcg32, c: DVec3, r: f64, dist: f64| -> Vec<Ray> {
         (0..n)
             .map(|_| {
-                let o = c + rng.unit() * dist;
-                let target = c + rng.unit() * rng.f64().sqrt() * 1.2 * r;
+                let o = c + rng.unit_vector() * dist;
+                let target = c + rng.unit_vector() * rng.next_f64().sqrt() * 1.2 * r;
                 Ray::new(o.as_vec3(), random_dir(rng, o, target).as_vec3())
             })
             .collect()
@@ -243,12 +248,12 @@ pub fn spheres(scale: Scale) -> Vec<Row> {
 
     let rays = (0..n)
         .map(|_| {
-            let o = c0 + rng.unit() * rng.range(3.0, 5.0);
+            let o = c0 + rng.unit_vector() * rng.range(3.0, 5.0);
             let l = (c0 - o).length();
             let w = (c0 - o) / l;
-            let u = rng.unit();
+            let u = rng.unit_vector();
             let p = (u - u.dot(w) * w).normalize();
-            let delta = rng.log_uniform(1e-7, 1e-2);
+            let delta = log_uniform(&mut rng, 1e-7, 1e-2);
             let h = if rng.coin() { 1.0 + delta } else { 1.0 - delta };
             // The line from o at distance h from the centre: sin α = h / l.
             let sin = h / l;
@@ -434,14 +439,14 @@ fn root_tolerances(ks: &[i64], c: &[f64]) -> Vec<(f64, f64)> {
 }
 
 /// Numerators for `count` well-separated roots in [−3, 3] (gaps ≥ 64/256 = 0.25).
-fn separated_roots(rng: &mut Rng, count: usize) -> Vec<i64> {
+fn separated_roots(rng: &mut Pcg32, count: usize) -> Vec<i64> {
     let width = 1536 / count as i64;
     (0..count as i64).map(|i| -768 + i * width + rng.below((width - 64) as u64) as i64).collect()
 }
 
 /// Root numerators: `others` separated roots with one of them replaced by a cluster of
 /// `size` roots spaced `gap`/256 apart.
-fn clustered_roots(rng: &mut Rng, others: usize, size: usize, gap: i64) -> Vec<i64> {
+fn clustered_roots(rng: &mut Pcg32, others: usize, size: usize, gap: i64) -> Vec<i64> {
     let mut ks = separated_roots(rng, others);
     let i = rng.below(others as u64) as usize;
     let k0 = ks.remove(i);
@@ -481,7 +486,7 @@ fn clustered_roots(rng: &mut Rng, others: usize, size: usize, gap: i64) -> Vec<i
 /// `not_converged` counts tests in which some Laguerre search hit its iteration limit
 /// ([`crate::roots::SolveReport::not_converged`] > 0).
 pub fn polynomials(scale: Scale) -> Vec<Row> {
-    let mut rng = Rng(0x5EED_0002);
+    let mut rng = Pcg32::seed_from_u64(0x5EED_0002);
     let mut rows = Vec::new();
     let solvers = [
         ("closed-form", RootSolver::ClosedForm),
@@ -496,7 +501,7 @@ pub fn polynomials(scale: Scale) -> Vec<Row> {
     let n = scale.n(150);
     let rays: Vec<Ray> = (0..n)
         .map(|_| {
-            let o = rng.unit() * rng.range(2.5, 4.0);
+            let o = rng.unit_vector() * rng.range(2.5, 4.0);
             let (rho, phi) = (rng.range(0.6, 1.4), rng.range(0.0, std::f64::consts::TAU));
             let target = DVec3::new(rho * phi.cos(), rho * phi.sin(), rng.range(-0.35, 0.35));
             Ray::new(o.as_vec3(), (target - o).as_vec3())
@@ -540,7 +545,7 @@ pub fn polynomials(scale: Scale) -> Vec<Row> {
     let centre = DVec3::new(0.0, 0.0, 0.1);
     let rays: Vec<Ray> = (0..n)
         .map(|_| {
-            let o = centre + rng.unit() * 3.0;
+            let o = centre + rng.unit_vector() * 3.0;
             let target = DVec3::new(rng.range(-0.9, 0.9), rng.range(-0.5, 0.5), rng.range(-0.8, 1.0));
             Ray::new(o.as_vec3(), (target - o).as_vec3())
         })
@@ -666,7 +671,7 @@ pub fn polynomials(scale: Scale) -> Vec<Row> {
 /// test = one ray; the time is per ray–triangle test (the brute-force loop's time over
 /// rays × triangles).
 pub fn triangles(scale: Scale) -> Vec<Row> {
-    let mut rng = Rng(0x5EED_0003);
+    let mut rng = Pcg32::seed_from_u64(0x5EED_0003);
     let mut rows = Vec::new();
     let transforms: [(&str, f64, DVec3); 4] = [
         ("x1", 1.0, DVec3::ZERO),
@@ -695,7 +700,7 @@ pub fn triangles(scale: Scale) -> Vec<Row> {
                             a.lerp(b, rng.range(0.05, 0.95) as f32)
                         }
                         _ => {
-                            let (mut u, mut v) = (rng.f64(), rng.f64());
+                            let (mut u, mut v) = (rng.next_f64(), rng.next_f64());
                             if u + v > 1.0 {
                                 (u, v) = (1.0 - u, 1.0 - v);
                             }
@@ -719,7 +724,7 @@ pub fn triangles(scale: Scale) -> Vec<Row> {
                         (o, d)
                     } else {
                         let w = loop {
-                            let w = (nrm + 0.9 * rng.unit()).normalize();
+                            let w = (nrm + 0.9 * rng.unit_vector()).normalize();
                             if w.dot(nrm) >= 0.5 {
                                 break w;
                             }
@@ -796,16 +801,16 @@ pub const SLAB_ULPS: f64 = 4.0;
 /// 8 ulps without being equal graze an edge within rounding and are skipped. One test =
 /// one ray–box test.
 pub fn slabs(scale: Scale) -> Vec<Row> {
-    let mut rng = Rng(0x5EED_0004);
+    let mut rng = Pcg32::seed_from_u64(0x5EED_0004);
     let n = scale.n(1000);
     let mut rows = Vec::new();
-    let signed_zero = |rng: &mut Rng| if rng.coin() { 0.0f32 } else { -0.0 };
-    let component = |rng: &mut Rng| (rng.range(0.05, 1.0) * if rng.coin() { 1.0 } else { -1.0 }) as f32;
+    let signed_zero = |rng: &mut Pcg32| if rng.coin() { 0.0f32 } else { -0.0 };
+    let component = |rng: &mut Pcg32| (rng.range(0.05, 1.0) * if rng.coin() { 1.0 } else { -1.0 }) as f32;
 
     let mut cases: Vec<(String, f64, Vec<Ray>)> = Vec::new();
     // Rays aimed at a target in the box grown by 30 %, `zeros` direction components
     // forced to ±0, the origin 1 to 4 box sizes back.
-    let aimed = |rng: &mut Rng, s: f64, zeros: usize| {
+    let aimed = |rng: &mut Pcg32, s: f64, zeros: usize| {
         let h = DVec3::new(1.0, 0.5, 2.0) * s;
         let target = DVec3::new(rng.range(-1.3, 1.3), rng.range(-1.3, 1.3), rng.range(-1.3, 1.3)) * h;
         let mut d = Vec3::new(component(rng), component(rng), component(rng));
@@ -971,7 +976,7 @@ impl Surface {
 /// the 10⁻³ sphere) jumps over thin features rather than re-hitting its own surface, so
 /// it shows no failure here at small scales.
 pub fn self_intersection(scale: Scale) -> Vec<Row> {
-    let mut rng = Rng(0x5EED_0005);
+    let mut rng = Pcg32::seed_from_u64(0x5EED_0005);
     let n = scale.n(400);
     let mut rows = Vec::new();
     type OffsetFn = fn(Vec3, Vec3) -> Vec3;
@@ -1010,9 +1015,9 @@ pub fn self_intersection(scale: Scale) -> Vec<Row> {
             let mut points: Vec<(Vec3, Vec3)> = Vec::with_capacity(n);
             while points.len() < n {
                 let target = match surface {
-                    Surface::Sphere(_) => c + rng.unit() * s,
+                    Surface::Sphere(_) => c + rng.unit_vector() * s,
                     Surface::Triangle(v) => {
-                        let (mut u, mut w) = (rng.f64(), rng.f64());
+                        let (mut u, mut w) = (rng.next_f64(), rng.next_f64());
                         if u + w > 1.0 {
                             (u, w) = (1.0 - u, 1.0 - w);
                         }
@@ -1029,7 +1034,7 @@ pub fn self_intersection(scale: Scale) -> Vec<Row> {
                     }
                 };
                 let w = loop {
-                    let w = (outward + 0.8 * rng.unit()).normalize();
+                    let w = (outward + 0.8 * rng.unit_vector()).normalize();
                     if w.dot(outward) > 0.3 {
                         break w;
                     }
@@ -1045,8 +1050,8 @@ pub fn self_intersection(scale: Scale) -> Vec<Row> {
                 .iter()
                 .map(|&(_, nrm)| {
                     let nd = nrm.as_dvec3();
-                    let out = (nd + rng.unit()).normalize_or(nd).as_vec3();
-                    let inward = (-nd + 0.7 * rng.unit()).normalize_or(-nd).as_vec3();
+                    let out = (nd + rng.unit_vector()).normalize_or(nd).as_vec3();
+                    let inward = (-nd + 0.7 * rng.unit_vector()).normalize_or(-nd).as_vec3();
                     (out, inward)
                 })
                 .collect();

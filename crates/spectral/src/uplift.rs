@@ -636,15 +636,10 @@ mod tests {
 
     #[test]
     fn random_and_edge_colours_all_converge() {
-        // Deterministic xorshift: random colours, some with a channel at 0 or 1, some
-        // very dark, some near white and some a hair away from grey.
-        let mut state = 0x9e37_79b9_7f4a_7c15u64;
-        let mut rnd = || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state >> 40) as f32 / (1u64 << 24) as f32
-        };
+        // Deterministic random colours, some with a channel at 0 or 1, some very dark,
+        // some near white and some a hair away from grey.
+        let mut rng = rng::Pcg32::seed_from_u64(1);
+        let mut rnd = || rng.next_f32();
         let mut colours = Vec::new();
         for i in 0..1500 {
             let mut c = [rnd(), rnd(), rnd()];
