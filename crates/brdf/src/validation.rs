@@ -8,34 +8,9 @@
 
 use crate::{Bsdf, BsdfSample, ScatterFlags};
 use glam::{DVec3, Vec2, Vec3};
+use rng::Pcg32;
 use spectral::SampledSpectrum;
 use std::f64::consts::{PI, TAU};
-
-/// A small deterministic generator (PCG32) for the tests' random numbers.
-#[derive(Clone, Debug)]
-pub struct TestRng(u64);
-
-impl TestRng {
-    /// A generator for `seed`.
-    pub fn new(seed: u64) -> Self {
-        let mut r = Self(seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ 0xD1B5_4A32_D192_ED03);
-        r.next_u32();
-        r
-    }
-
-    /// 32 random bits.
-    pub fn next_u32(&mut self) -> u32 {
-        let old = self.0;
-        self.0 = old.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1_442_695_040_888_963_407);
-        let x = (((old >> 18) ^ old) >> 27) as u32;
-        x.rotate_right((old >> 59) as u32)
-    }
-
-    /// A float in [0, 1).
-    pub fn next_f32(&mut self) -> f32 {
-        (self.next_u32() >> 8) as f32 / (1u32 << 24) as f32
-    }
-}
 
 /// Settings of [`chi2_test`].
 #[derive(Clone, Copy, Debug)]
@@ -85,7 +60,7 @@ pub fn chi2_test(bsdf: &impl Bsdf<1>, wo: Vec3, config: &Chi2Config, seed: u64) 
         i.min(nt - 1) * np + j.min(np - 1)
     };
     let mut observed = vec![0.0f64; nt * np];
-    let mut rng = TestRng::new(seed);
+    let mut rng = Pcg32::seed_from_u64(seed);
     let mut inconsistent = 0;
     for _ in 0..config.samples {
         let uc = rng.next_f32();
@@ -144,7 +119,7 @@ pub fn chi2_test(bsdf: &impl Bsdf<1>, wo: Vec3, config: &Chi2Config, seed: u64) 
 /// Checks that `sample` returns exactly what `eval` and `pdf` give for its direction
 /// (relative tolerance `tol`), over `samples` non-delta samples; the first mismatch, if any.
 pub fn sample_consistency(bsdf: &impl Bsdf<1>, wo: Vec3, samples: usize, seed: u64, tol: f32) -> Option<String> {
-    let mut rng = TestRng::new(seed);
+    let mut rng = Pcg32::seed_from_u64(seed);
     for _ in 0..samples {
         let (uc, u) = (rng.next_f32(), Vec2::new(rng.next_f32(), rng.next_f32()));
         let Some(s) = bsdf.sample(wo, uc, u) else { continue };
@@ -304,7 +279,7 @@ pub fn pdf_integral(bsdf: &impl Bsdf<1>, wo: Vec3, n: usize) -> f64 {
 /// Directional albedo ∫ f·|cos θi| dωi by importance sampling (delta lobes included):
 /// (mean, standard error) over `samples` samples.
 pub fn directional_albedo(bsdf: &impl Bsdf<1>, wo: Vec3, samples: usize, seed: u64) -> (f64, f64) {
-    let mut rng = TestRng::new(seed);
+    let mut rng = Pcg32::seed_from_u64(seed);
     let (mut sum, mut sum2) = (0.0f64, 0.0f64);
     for _ in 0..samples {
         let uc = rng.next_f32();
@@ -324,7 +299,7 @@ pub fn directional_albedo(bsdf: &impl Bsdf<1>, wo: Vec3, samples: usize, seed: u
 /// Worst relative asymmetry |f(a, b) − f(b, a)| / max(f) over `pairs` random direction
 /// pairs in the upper hemisphere.
 pub fn reciprocity_error(bsdf: &impl Bsdf<1>, pairs: usize, seed: u64) -> f32 {
-    let mut rng = TestRng::new(seed);
+    let mut rng = Pcg32::seed_from_u64(seed);
     let mut hemi = || {
         let z = rng.next_f32().max(1e-3);
         let r = (1.0 - z * z).sqrt();

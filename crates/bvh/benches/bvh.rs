@@ -8,18 +8,17 @@
 //! Builders: ours (`sweep_sah`, `binned_sah`, `midpoint`, `hybrid` with the thesis's
 //! threshold of 1000 faces; leaves of at most 4 triangles chosen by the SAH), the binned and
 //! sweep SAH trees collapsed to our 4-wide BVH (`bvh4_binned_sah`, `bvh4_sweep_sah`) and obvhs's
-//! BVH2 and CWBVH (`obvhs_bvh2`, `obvhs_cwbvh`, medium-quality preset). Scenes: the
-//! Cornell box, the Stanford bunny and Crytek Sponza from `../shared/scenes`; absent ones
-//! are skipped. `BVH_BENCH_SCENES=cornell,bunny` restricts the scenes loaded, e.g.
+//! BVH2 and CWBVH (`obvhs_bvh2`, `obvhs_cwbvh`, medium-quality preset; only with the default
+//! cargo feature `obvhs`). Scenes: the Cornell box, the Stanford bunny and Crytek Sponza from
+//! `../shared/scenes`; absent ones are skipped. `BVH_BENCH_SCENES=cornell,bunny` restricts the scenes loaded, e.g.
 //!
 //! ```sh
 //! BVH_BENCH_SCENES=cornell,bunny cargo bench -p bvh --bench bvh -- --quick bvh_traverse
 //! ```
 
-use bvh::{
-    Accelerator, BuildConfig, Bvh, Bvh4, ObvhsBvh2, ObvhsCwBvh, ObvhsQuality, Ray, SplitMethod, TriangleTest,
-    make_ray_sets,
-};
+use bvh::{Accelerator, BuildConfig, Bvh, Bvh4, Ray, SplitMethod, TriangleTest, make_ray_sets};
+#[cfg(feature = "obvhs")]
+use bvh::{ObvhsBvh2, ObvhsCwBvh, ObvhsQuality};
 use criterion::{BenchmarkId, Criterion, Throughput};
 use glam::Vec3;
 use std::hint::black_box;
@@ -45,18 +44,25 @@ enum Builder {
     Wide(SplitMethod),
     /// The same with the Möller–Trumbore triangle test: the price of watertightness.
     WideMollerTrumbore,
+    #[cfg(feature = "obvhs")]
     ObvhsBvh2,
+    #[cfg(feature = "obvhs")]
     ObvhsCwBvh,
 }
 
 impl Builder {
     fn all() -> Vec<Builder> {
         let wide = [SplitMethod::BinnedSah, SplitMethod::SweepSah].map(Builder::Wide);
+        #[cfg(feature = "obvhs")]
+        let obvhs = [Builder::ObvhsBvh2, Builder::ObvhsCwBvh];
+        #[cfg(not(feature = "obvhs"))]
+        let obvhs = [];
         SplitMethod::ALL
             .into_iter()
             .map(Builder::Ours)
             .chain(wide)
-            .chain([Builder::WideMollerTrumbore, Builder::ObvhsBvh2, Builder::ObvhsCwBvh])
+            .chain([Builder::WideMollerTrumbore])
+            .chain(obvhs)
             .collect()
     }
 
@@ -66,7 +72,9 @@ impl Builder {
             Builder::Wide(SplitMethod::SweepSah) => "bvh4_sweep_sah",
             Builder::Wide(_) => "bvh4_binned_sah",
             Builder::WideMollerTrumbore => "bvh4_binned_sah_mt",
+            #[cfg(feature = "obvhs")]
             Builder::ObvhsBvh2 => "obvhs_bvh2",
+            #[cfg(feature = "obvhs")]
             Builder::ObvhsCwBvh => "obvhs_cwbvh",
         }
     }
@@ -87,7 +95,9 @@ impl Builder {
                     Bvh4::build(tris, config).expect("finite scene").with_triangle_test(TriangleTest::MollerTrumbore),
                 )
             }
+            #[cfg(feature = "obvhs")]
             Builder::ObvhsBvh2 => Box::new(ObvhsBvh2::build(tris, ObvhsQuality::Medium).expect("finite scene")),
+            #[cfg(feature = "obvhs")]
             Builder::ObvhsCwBvh => Box::new(ObvhsCwBvh::build(tris, ObvhsQuality::Medium).expect("finite scene")),
         }
     }

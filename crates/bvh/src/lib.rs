@@ -11,8 +11,9 @@
 //! * [`BoxBvh`]: a BVH over the boxes of primitives the crate does not know (analytic
 //!   shapes), intersected through a callback;
 //! * [`BruteForce`]: tests every triangle; the oracle the tests compare against;
-//! * [`ObvhsBvh2`], [`ObvhsCwBvh`]: the obvhs crate's BVH2 and compressed wide BVH8
-//!   behind the same trait, so that benchmarks compare them with ours in the same run;
+//! * `ObvhsBvh2`, `ObvhsCwBvh`: the obvhs crate's BVH2 and compressed wide BVH8 behind
+//!   the same trait, so that benchmarks compare them with ours in the same run (cargo
+//!   feature `obvhs`, on by default);
 //! * [`make_ray_sets`]: primary, diffuse-bounce and shadow ray sets for benchmarks.
 //!
 //! This crate knows boxes, rays and triangles, nothing of materials.
@@ -25,6 +26,7 @@ mod brute;
 mod build;
 mod builders;
 mod instance;
+#[cfg(feature = "obvhs")]
 mod obvhs_adapter;
 mod ray;
 mod raysets;
@@ -38,6 +40,7 @@ pub use boxes::BoxBvh;
 pub use brute::BruteForce;
 pub use build::{BuildConfig, Bvh, BvhNode, BvhStats, SplitMethod};
 pub use instance::{Instance, TwoLevel};
+#[cfg(feature = "obvhs")]
 pub use obvhs_adapter::{ObvhsBvh2, ObvhsCwBvh, ObvhsQuality};
 pub use ray::{Hit, Ray};
 pub use raysets::{RaySets, make_ray_sets, make_ray_sets_from};

@@ -2,11 +2,12 @@
 //! bounces and shadow segments, made without any camera or material of a scene — only
 //! its bounding box and its triangles' geometric normals.
 //!
-//! Every set is deterministic for a seed (a private PCG32 stream), so timings of
-//! different accelerators trace exactly the same rays.
+//! Every set is deterministic for a seed (the workspace's PCG32, [`rng::Pcg32`]), so
+//! timings of different accelerators trace exactly the same rays.
 
 use crate::{Aabb, Accelerator, Ray, Triangle};
 use glam::Vec3;
+use rng::Pcg32;
 
 /// The three kinds of benchmark rays for one scene and image size.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -45,39 +46,6 @@ impl RaySets {
     /// True if there are no rays at all.
     pub fn is_empty(&self) -> bool {
         self.len() == 0
-    }
-}
-
-/// PCG32 (O'Neill 2014, XSH-RR), seeded through SplitMix64.
-struct Pcg32 {
-    state: u64,
-    inc: u64,
-}
-
-impl Pcg32 {
-    const MULT: u64 = 6_364_136_223_846_793_005;
-
-    fn new(seed: u64, stream: u64) -> Self {
-        let mut z = seed.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        let mut rng = Self { state: 0, inc: (stream << 1) | 1 };
-        rng.next_u32();
-        rng.state = rng.state.wrapping_add(z ^ (z >> 31));
-        rng.next_u32();
-        rng
-    }
-
-    fn next_u32(&mut self) -> u32 {
-        let old = self.state;
-        self.state = old.wrapping_mul(Self::MULT).wrapping_add(self.inc);
-        let xorshifted = (((old >> 18) ^ old) >> 27) as u32;
-        xorshifted.rotate_right((old >> 59) as u32)
-    }
-
-    /// Uniform in [0, 1).
-    fn next_f32(&mut self) -> f32 {
-        (self.next_u32() >> 8) as f32 * (1.0 / (1u32 << 24) as f32)
     }
 }
 
@@ -144,7 +112,7 @@ pub fn make_ray_sets_from(
     let primary = primary_rays(&bounds, camera, width, height);
     let offset = RaySets::OFFSET_SCALE * bounds.extent().max_element();
     let (upper_min, upper_max) = (Vec3::new(bounds.min.x, bounds.centre().y, bounds.min.z), bounds.max);
-    let mut rng = Pcg32::new(seed, 0x005E_ED0F_BA45);
+    let mut rng = Pcg32::seed_from_u64(seed);
     let mut diffuse = Vec::with_capacity(primary.len());
     let mut shadow = Vec::with_capacity(primary.len());
     for ray in &primary {
@@ -232,7 +200,7 @@ mod tests {
     #[test]
     fn cosine_directions_are_cosine_distributed() {
         let n = Vec3::new(0.3, -0.8, 0.2).normalize();
-        let mut rng = Pcg32::new(3, 1);
+        let mut rng = Pcg32::seed_from_u64(3);
         let k = 200_000;
         let mean_cos: f64 =
             (0..k).map(|_| cosine_direction(n, rng.next_f32(), rng.next_f32()).dot(n) as f64).sum::<f64>() / k as f64;

@@ -2,20 +2,16 @@
 
 use crate::Ray;
 use glam::Vec3;
+use rng::Pcg32;
 
-/// `n` triangles of about `size` scattered over a cube of side `spread` (xorshift64).
+/// `n` triangles of about `size` scattered over a cube of side `spread`.
 pub(crate) fn soup(seed: u64, n: usize, spread: f32, size: f32) -> Vec<[Vec3; 3]> {
-    let mut s = seed.wrapping_add(0x9E37_79B9_7F4A_7C15);
-    let mut next = move || {
-        s ^= s << 13;
-        s ^= s >> 7;
-        s ^= s << 17;
-        (s >> 40) as f32 / (1u64 << 24) as f32
-    };
+    let mut rng = Pcg32::seed_from_u64(seed);
+    let mut point = move || Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32());
     (0..n)
         .map(|_| {
-            let c = Vec3::new(next(), next(), next()) * spread;
-            std::array::from_fn(|_| c + (Vec3::new(next(), next(), next()) - 0.5) * size)
+            let c = point() * spread;
+            std::array::from_fn(|_| c + (point() - 0.5) * size)
         })
         .collect()
 }

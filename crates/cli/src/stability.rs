@@ -1,15 +1,17 @@
-//! `spt stability`: the adversarial accuracy/speed suite of [`shapes::stability`] as a
-//! table on stdout, a CSV file and one scatter plot per family (speed against failure
-//! rate, one point per method).
+//! `spt stability`: the adversarial accuracy/speed suite of the `shapes` routines
+//! ([`suite`]) as a table on stdout, a CSV file and one scatter plot per family (speed
+//! against failure rate, one point per method).
+
+mod suite;
 
 use anyhow::{Context, Result, anyhow, bail};
 use plotters::coord::ranged1d::{AsRangedCoord, ValueFormatter};
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 use plotters::style::{FontStyle, register_font};
-use shapes::stability::{FAMILIES, Row, Scale, run_family};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
+use suite::{FAMILIES, Row, Scale, run_family};
 
 /// The font the plots' text is drawn with, unless `SPT_FONT` names another TrueType file.
 const DEFAULT_FONT: &str = "/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf";

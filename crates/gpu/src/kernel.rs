@@ -11,7 +11,7 @@
 //!   generated WGSL;
 //! * the constants the kernel shares with the CPU code: shading-normal codes
 //!   ([`ShadingNormals::code`]), scene flags, the visible-wavelength pdf, the CIE tables'
-//!   range, XYZ → sRGB, the shading-normal margin, Russian roulette's floor, the shadow
+//!   range, XYZ → sRGB, PCG32's and splitmix64's multipliers, the shading-normal margin, Russian roulette's floor, the shadow
 //!   segment's end, the ray-offset scales, the light table's layout and the bounce cap;
 //! * the choice of triangle test (only the one a scene asks for is compiled in).
 
@@ -253,6 +253,14 @@ pub fn header(options: &KernelOptions) -> String {
         ("PT_OFFSET_INT_SCALE", shapes::offset::OFFSET_INT_SCALE),
     ] {
         let _ = writeln!(out, "const {name}: f32 = {};", f(v));
+    }
+    for (name, v) in [
+        ("PT_PCG_MULT", rng::MULT),
+        ("PT_PCG_SAMPLE_STREAM_KEY", rng::SAMPLE_STREAM_KEY),
+        ("PT_MIX64_MUL1", rng::MIX64_MUL1),
+        ("PT_MIX64_MUL2", rng::MIX64_MUL2),
+    ] {
+        let _ = writeln!(out, "const {name}: vec2u = vec2u({:#010x}u, {:#010x}u);", v as u32, (v >> 32) as u32);
     }
     for (row, name) in XYZ_TO_SRGB.iter().zip(["R", "G", "B"]) {
         let _ =

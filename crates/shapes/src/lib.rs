@@ -12,11 +12,13 @@
 //!   Laguerre's method, normals from ∇F;
 //! * [`offset`]: robust ray origins off a surface (Wächter & Binder 2019);
 //! * [`triangle`]: Möller–Trumbore and the watertight test of Woop, Benthin & Wald (2013).
-//! * [`stability`]: adversarial accuracy/speed measurements of all of the above (failure
-//!   rates against f64 references, ns per test), by which the defaults are chosen.
 //!
 //! Every shape implements [`Shape`]: closest hit with its geometric normal, bounds for
 //! the BVH, and uniform area sampling where it can be a light.
+//!
+//! The adversarial accuracy/speed measurements of all of the above (failure rates against
+//! f64 references, ns per test), by which the defaults are chosen, are timed and so live
+//! outside this library: `spt stability` (the `cli` crate's `stability` module).
 //!
 //! Citations: "the thesis", "the lecture" and the papers named in comments are listed in `docs/references.md`.
 
@@ -24,10 +26,8 @@ pub mod boxes;
 pub mod implicit;
 pub mod offset;
 pub mod polygon;
-mod rng;
 pub mod roots;
 pub mod sphere;
-pub mod stability;
 pub mod triangle;
 
 pub use bvh::{Aabb, Ray};

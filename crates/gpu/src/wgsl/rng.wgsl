@@ -1,9 +1,10 @@
-// PCG32 (O'Neill 2014) seeded per pixel sample, mirroring `Pcg32` (crates/tracer/src/sampler.rs):
+// PCG32 (O'Neill 2014) seeded per pixel sample, mirroring `Pcg32` (crates/rng/src/lib.rs):
 // `Pcg32::for_sample(seed, pixel, sample)` — seeded through splitmix64's finaliser —
 // with the 64-bit arithmetic done on (lo, hi) word pairs, since WGSL has no 64-bit
 // integers. The integrator draws in the CPU's order, so a GPU path starts with the CPU's
 // random numbers (and usually follows the same route until rounding sends it elsewhere).
-// PT_PCG_MULT, PT_PCG_INIT_STREAM and PT_MIX64_* are generated from the Rust constants.
+// PT_PCG_MULT, PT_PCG_SAMPLE_STREAM_KEY and PT_MIX64_MUL* (as (lo, hi) word pairs) are
+// generated from the Rust constants.
 
 struct PtRng {
     state: vec2u,
@@ -40,17 +41,17 @@ fn pt_shr64(a: vec2u, n: u32) -> vec2u {
     return vec2u((a.x >> n) | (a.y << (32u - n)), a.y >> n);
 }
 
-// `tracer::sampler::mix64` (splitmix64's finaliser).
+// `rng::mix64` (splitmix64's finaliser).
 fn pt_mix64(z0: vec2u) -> vec2u {
     var z = z0;
-    z = pt_mul64(z ^ pt_shr64(z, 30u), vec2u(0x1ce4e5b9u, 0xbf58476du));
-    z = pt_mul64(z ^ pt_shr64(z, 27u), vec2u(0x133111ebu, 0x94d049bbu));
+    z = pt_mul64(z ^ pt_shr64(z, 30u), PT_MIX64_MUL1);
+    z = pt_mul64(z ^ pt_shr64(z, 27u), PT_MIX64_MUL2);
     return z ^ pt_shr64(z, 31u);
 }
 
 fn pt_rng_next(r: ptr<function, PtRng>) -> u32 {
     let old = (*r).state;
-    (*r).state = pt_add64(pt_mul64(old, vec2u(0x4c957f2du, 0x5851f42du)), (*r).inc);
+    (*r).state = pt_add64(pt_mul64(old, PT_PCG_MULT), (*r).inc);
     // ((old >> 18) ^ old) >> 27, truncated to 32 bits; rotation by old >> 59.
     let x = pt_shr64(pt_shr64(old, 18u) ^ old, 27u).x;
     let rot = old.y >> 27u;
@@ -73,7 +74,7 @@ fn pt_rng_2d(r: ptr<function, PtRng>) -> vec2f {
 fn pt_rng_for_sample(pixel: u32, sample: u32) -> PtRng {
     let seed = vec2u(pt_params.seed_lo, pt_params.seed_hi);
     let key = pt_mix64(seed ^ pt_mix64(vec2u(sample, pixel)));
-    let stream = pt_mix64(key ^ vec2u(0xe4dd58b5u, 0xda942042u));
+    let stream = pt_mix64(key ^ PT_PCG_SAMPLE_STREAM_KEY);
     var r = PtRng(vec2u(0u), vec2u((stream.x << 1u) | 1u, (stream.y << 1u) | (stream.x >> 31u)));
     _ = pt_rng_next(&r);
     r.state = pt_add64(r.state, key);

@@ -1,0 +1,160 @@
+//! The collapse of a binary [`Bvh`] into a [`Bvh4`]: greedy by surface area, with small
+//! subtrees merged into one leaf where an SAH with 4-wide triangle tests says so, and the
+//! leaves' triangles copied into structure-of-arrays form.
+
+use super::{Bvh4, Bvh4Node, STACK_DEPTH, WIDTH};
+use crate::{Aabb, Bvh, BvhNode, TriangleTest};
+use glam::Vec3;
+
+impl Bvh4 {
+    /// Collapses a binary tree into a 4-wide one (greedy by surface area), copying its
+    /// leaf-ordered triangles. A binary subtree of at most four triangles becomes a single
+    /// leaf when that lowers an SAH in which a leaf costs one 4-wide triangle test and a
+    /// binary interior node 0.3 of one; trees whose leaves were split down to at most four
+    /// triangles regardless of the SAH (`leaf_by_sah: false`, `max_leaf_size ≤ 4`) keep
+    /// their leaves exactly.
+    ///
+    /// # Panics
+    ///
+    /// If the tree is deeper than the traversal stack allows, which our builders never
+    /// produce (they stop at 62 levels).
+    ///
+    /// The binary tree keeps vertex 0 and two edges; the vertices are rebuilt as v0 + e,
+    /// which may differ from the mesh's in the last bit, so that the watertight guarantee
+    /// holds only for trees made by [`Bvh4::build`].
+    pub fn from_bvh(bvh: &Bvh) -> Self {
+        Self::collapse(bvh, |i| {
+            let t = &bvh.triangles()[i];
+            let v0 = Vec3::from_array(t.v0);
+            [v0, v0 + Vec3::from_array(t.e1), v0 + Vec3::from_array(t.e2)]
+        })
+    }
+
+    /// Collapses `bvh`, taking the vertices of its `i`-th leaf-ordered triangle from
+    /// `vertices(i)`.
+    pub(super) fn collapse(bvh: &Bvh, vertices: impl Fn(usize) -> [Vec3; 3]) -> Self {
+        let mut collapse = Collapse::new(bvh.nodes());
+        if !bvh.nodes().is_empty() {
+            collapse.node(0);
+        }
+        let nodes = collapse.out;
+        let config = bvh.config();
+        let mut soa = vec![0.0; 9 * bvh.triangles().len() + 3];
+        for n in &nodes {
+            for (&first, &count) in n.child.iter().zip(&n.count).filter(|(_, c)| **c > 0) {
+                let (first, count) = (first as usize, count as usize);
+                for i in 0..count {
+                    for (k, x) in vertices(first + i).iter().flat_map(|v| v.to_array()).enumerate() {
+                        soa[9 * first + k * count + i] = x;
+                    }
+                }
+            }
+        }
+        let wide = Self {
+            nodes,
+            soa,
+            prim_ids: bvh.prim_ids().to_vec(),
+            costs: (config.traversal_cost, config.intersection_cost),
+            test: TriangleTest::default(),
+        };
+        let depth = wide.stats().depth;
+        assert!(
+            depth.saturating_sub(1) * (WIDTH - 1) <= STACK_DEPTH,
+            "BVH4 of depth {depth} overflows the traversal stack"
+        );
+        wide
+    }
+}
+
+/// Subtrees of at most this many triangles may become one leaf: the SIMD triangle test
+/// costs about the same for one to four triangles.
+const MERGE: u32 = 4;
+
+/// Cost of a binary interior node, relative to one 4-wide triangle test, in the SAH that
+/// decides whether to merge a small subtree into one leaf (a wide node tests up to three
+/// binary nodes' children at once).
+const MERGE_NODE_COST: f32 = 0.3;
+
+/// The greedy collapse of a binary tree.
+struct Collapse<'a> {
+    src: &'a [BvhNode],
+    /// Per binary node: the first triangle and the number of triangles of its subtree
+    /// (a contiguous range, as the builders append leaves depth-first; only used for
+    /// leaves, where it is checked).
+    range: Vec<(u32, u32)>,
+    /// Per binary node: true if its subtree becomes one leaf of the wide tree.
+    leaf: Vec<bool>,
+    out: Vec<Bvh4Node>,
+}
+
+impl<'a> Collapse<'a> {
+    fn new(src: &'a [BvhNode]) -> Self {
+        // Children follow their parents, so one backward pass sees them first.
+        let mut range = vec![(0u32, 0u32); src.len()];
+        let mut leaf = vec![false; src.len()];
+        // SAH cost (times the root's area) of each subtree with leaves tested 4 at a time.
+        let mut cost = vec![0.0f32; src.len()];
+        for (i, n) in src.iter().enumerate().rev() {
+            let area = binary_bounds(n).surface_area();
+            if n.count > 0 {
+                range[i] = (n.index, n.count);
+                leaf[i] = true;
+                cost[i] = area * n.count.div_ceil(4) as f32;
+            } else {
+                let (l, r) = (i + 1, n.index as usize);
+                let contiguous = range[l].0 + range[l].1 == range[r].0;
+                range[i] = (range[l].0, range[l].1 + range[r].1);
+                let split = MERGE_NODE_COST * area + cost[l] + cost[r];
+                leaf[i] = contiguous && range[i].1 <= MERGE && area <= split;
+                cost[i] = if leaf[i] { area } else { split };
+            }
+        }
+        Self { src, range, leaf, out: Vec::with_capacity(src.len() / 2 + 1) }
+    }
+
+    /// True if binary node `i` becomes a leaf of the wide tree.
+    fn is_leaf(&self, i: usize) -> bool {
+        self.leaf[i]
+    }
+
+    /// Collapses the binary subtree at `root` (an interior node, or a root that is a leaf)
+    /// into wide node(s) appended depth-first; returns the wide node's index.
+    fn node(&mut self, root: usize) -> u32 {
+        let src = self.src;
+        let index = self.out.len();
+        self.out.push(Bvh4Node::EMPTY);
+        let area = |i: usize| binary_bounds(&src[i]).surface_area();
+        let mut slots = [0usize; WIDTH];
+        let mut n = if self.is_leaf(root) {
+            slots[0] = root;
+            1
+        } else {
+            slots[0] = root + 1;
+            slots[1] = src[root].index as usize;
+            2
+        };
+        while n < WIDTH {
+            // Open the interior child with the largest surface area.
+            let Some(open) =
+                (0..n).filter(|&i| !self.is_leaf(slots[i])).max_by(|&a, &b| area(slots[a]).total_cmp(&area(slots[b])))
+            else {
+                break;
+            };
+            let opened = slots[open];
+            slots[open] = opened + 1;
+            slots[n] = src[opened].index as usize;
+            n += 1;
+        }
+        let mut node = Bvh4Node::EMPTY;
+        for (i, &s) in slots[..n].iter().enumerate() {
+            let (child, count) = if self.is_leaf(s) { self.range[s] } else { (self.node(s), 0) };
+            node.set_child(i, &binary_bounds(&src[s]), child, count);
+        }
+        self.out[index] = node;
+        index as u32
+    }
+}
+
+fn binary_bounds(n: &BvhNode) -> Aabb {
+    Aabb { min: Vec3::from_array(n.min), max: Vec3::from_array(n.max) }
+}

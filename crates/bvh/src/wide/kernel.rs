@@ -1,0 +1,139 @@
+//! The ray kernels: a ray prepared for testing a wide node's four boxes at once and a
+//! leaf's triangles ([`RayKernel`]), the portable [`ScalarKernel`], and [`Kernel`], the
+//! one the traversal uses (the SSE kernel on x86_64).
+
+use super::{Bvh4Node, WIDTH};
+use crate::{Hit, Ray, Triangle, WatertightRay, intersect_triangle, intersect_triangle_watertight};
+use glam::Vec3;
+
+/// A ray prepared for testing the four boxes of a [`Bvh4Node`] at once, and a leaf's
+/// triangles.
+///
+/// Box conventions as in `SlabRay::enter` and [`Aabb::hit`](crate::Aabb::hit): closed boxes, entry in
+/// (t_min, ∞) ∩ (−∞, t_max], and an origin on a slab plane with a zero direction component
+/// (0·∞ = NaN) counts as inside that slab. The near and far planes are picked per axis by
+/// the sign of the reciprocal direction (so −0 picks the max plane first), and every
+/// slab distance is folded into an accumulator that starts at t_min or t_max with an
+/// operation that keeps the accumulator when the distance is NaN, which ignores
+/// exactly the on-plane slabs. Picking planes by sign also makes an unused slot's
+/// inverted box (+∞, −∞) give an entry of +∞ and an exit of −∞ on every axis.
+pub(super) trait RayKernel {
+    fn new(ray: &Ray) -> Self;
+    /// Bit `i` set if the ray enters child `i`'s box within (t_min, t_max]; lane `i` of
+    /// the array is then its entry distance.
+    fn enter(&self, node: &Bvh4Node, t_max: f32) -> (u32, [f32; 4]);
+
+    /// Tests a leaf's triangles in order as [`intersect_triangle`] would, lowering
+    /// `t_max` and setting `best` at each closer hit; with `ANY_HIT`, returns true at the
+    /// first hit.
+    fn triangles<const ANY_HIT: bool>(&self, ray: &Ray, leaf: Leaf, t_max: &mut f32, best: &mut Option<Hit>) -> bool {
+        let n = leaf.ids.len();
+        for (i, &prim) in leaf.ids.iter().enumerate() {
+            let row =
+                |k: usize| [leaf.soa[3 * k * n + i], leaf.soa[(3 * k + 1) * n + i], leaf.soa[(3 * k + 2) * n + i]];
+            let tri = Triangle::new(&[0, 1, 2].map(|k| Vec3::from_array(row(k))));
+            if let Some((t, u, v)) = intersect_triangle(&tri, ray, *t_max) {
+                *t_max = t;
+                *best = Some(Hit { prim, t, u, v });
+                if ANY_HIT {
+                    return true;
+                }
+            }
+        }
+        false
+    }
+
+    /// As [`RayKernel::triangles`] with the watertight test.
+    #[inline(always)]
+    fn watertight<const ANY_HIT: bool>(
+        &self,
+        ray: &WatertightRay,
+        leaf: Leaf,
+        t_max: &mut f32,
+        best: &mut Option<Hit>,
+    ) -> bool {
+        for (i, &prim) in leaf.ids.iter().enumerate() {
+            if let Some((t, u, v)) = intersect_triangle_watertight(&leaf.vertices(i), ray, *t_max) {
+                *t_max = t;
+                *best = Some(Hit { prim, t, u, v });
+                if ANY_HIT {
+                    return true;
+                }
+            }
+        }
+        false
+    }
+}
+
+impl Leaf<'_> {
+    /// The vertices of the leaf's `i`-th triangle.
+    #[inline(always)]
+    pub(super) fn vertices(&self, i: usize) -> [Vec3; 3] {
+        let n = self.ids.len();
+        let c = |row: usize| self.soa[row * n + i];
+        [0, 1, 2].map(|k| Vec3::new(c(3 * k), c(3 * k + 1), c(3 * k + 2)))
+    }
+}
+
+/// A leaf's triangles as [`RayKernel::triangles`] sees them: `soa` from the leaf's first
+/// float to the end of the array, `ids` the triangles' input indices.
+pub(super) struct Leaf<'a> {
+    pub(super) soa: &'a [f32],
+    pub(super) ids: &'a [u32],
+}
+
+/// Plane rows of [`Bvh4Node::planes`] to use for the near and far planes on each axis.
+#[inline(always)]
+pub(super) fn plane_rows(inv_dir: Vec3) -> ([usize; 3], [usize; 3]) {
+    let neg = inv_dir.is_negative_bitmask() as usize;
+    let near = std::array::from_fn(|a| a + 3 * ((neg >> a) & 1));
+    let far = std::array::from_fn(|a| a + 3 * (1 - ((neg >> a) & 1)));
+    (near, far)
+}
+
+/// The portable [`RayKernel`]: four lanes in scalar code.
+#[cfg_attr(target_arch = "x86_64", allow(dead_code))]
+pub(super) struct ScalarKernel {
+    origin: [f32; 3],
+    inv_dir: [f32; 3],
+    near: [usize; 3],
+    far: [usize; 3],
+    t_min: f32,
+}
+
+impl RayKernel for ScalarKernel {
+    #[inline(always)]
+    fn new(ray: &Ray) -> Self {
+        let (near, far) = plane_rows(ray.inv_dir);
+        Self { origin: ray.origin.to_array(), inv_dir: ray.inv_dir.to_array(), near, far, t_min: ray.t_min }
+    }
+
+    #[inline(always)]
+    fn enter(&self, node: &Bvh4Node, t_max: f32) -> (u32, [f32; 4]) {
+        // SSE's maxps/minps: the second operand unless the first is strictly greater
+        // (smaller), so a NaN first operand yields the second.
+        let max = |a: f32, acc: f32| if a > acc { a } else { acc };
+        let min = |a: f32, acc: f32| if a < acc { a } else { acc };
+        let planes = node.planes();
+        let mut mask = 0;
+        let mut t = [0.0; 4];
+        for lane in 0..WIDTH {
+            let (mut enter, mut exit) = (self.t_min, t_max);
+            for axis in (0..3).rev() {
+                let near = (planes[self.near[axis] & 7][lane] - self.origin[axis]) * self.inv_dir[axis];
+                let far = (planes[self.far[axis] & 7][lane] - self.origin[axis]) * self.inv_dir[axis];
+                enter = max(near, enter);
+                exit = min(far, exit);
+            }
+            t[lane] = enter;
+            mask |= ((enter <= exit) as u32) << lane;
+        }
+        (mask, t)
+    }
+}
+
+/// The kernel the traversal uses: SSE on x86_64, else the portable one.
+#[cfg(target_arch = "x86_64")]
+pub(super) type Kernel = super::sse::SseKernel;
+#[cfg(not(target_arch = "x86_64"))]
+pub(super) type Kernel = ScalarKernel;

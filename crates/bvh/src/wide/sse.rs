@@ -1,0 +1,212 @@
+//! The SSE [`RayKernel`]: four boxes per `enter`, four triangles per step of a leaf, each
+//! lane computing exactly what the scalar tests compute.
+
+use super::Bvh4Node;
+use super::kernel::{Leaf, RayKernel, plane_rows};
+use crate::{Hit, Ray, WatertightRay, intersect_triangle_watertight};
+use std::arch::x86_64::*;
+
+/// The SSE [`RayKernel`] (SSE2 is part of the x86_64 baseline).
+pub(super) struct SseKernel {
+    origin: [__m128; 3],
+    dir: [__m128; 3],
+    inv_dir: [__m128; 3],
+    near: [usize; 3],
+    far: [usize; 3],
+    t_min: __m128,
+}
+
+impl RayKernel for SseKernel {
+    #[inline(always)]
+    fn new(ray: &Ray) -> Self {
+        let (near, far) = plane_rows(ray.inv_dir);
+        // SAFETY (all `unsafe` blocks here): SSE and SSE2 are part of the x86_64
+        // baseline, so the intrinsics are always available.
+        let splat = |v: glam::Vec3| unsafe { [_mm_set1_ps(v.x), _mm_set1_ps(v.y), _mm_set1_ps(v.z)] };
+        Self {
+            origin: splat(ray.origin),
+            dir: splat(ray.dir),
+            inv_dir: splat(ray.inv_dir),
+            near: near.map(|r| r * 4),
+            far: far.map(|r| r * 4),
+            t_min: unsafe { _mm_set1_ps(ray.t_min) },
+        }
+    }
+
+    #[inline(always)]
+    fn enter(&self, node: &Bvh4Node, t_max: f32) -> (u32, [f32; 4]) {
+        let base = node.planes().as_ptr().cast::<f32>();
+        let mut t = [0.0f32; 4];
+        // SAFETY: the intrinsics are baseline (see `new`); a plane row is a multiple of
+        // 4 below 24, i.e. a 16-byte-aligned row of the 64-byte-aligned node's six
+        // plane rows; `t` has room for four floats.
+        let mask = unsafe {
+            let slab = |row: usize, axis: usize| {
+                let plane = _mm_load_ps(base.add(row));
+                _mm_mul_ps(_mm_sub_ps(plane, self.origin[axis]), self.inv_dir[axis])
+            };
+            // maxps/minps return their second operand when either is NaN: the
+            // accumulator, which is never NaN for a non-NaN t_min / t_max.
+            let mut enter = self.t_min;
+            let mut exit = _mm_set1_ps(t_max);
+            for axis in (0..3).rev() {
+                enter = _mm_max_ps(slab(self.near[axis], axis), enter);
+                exit = _mm_min_ps(slab(self.far[axis], axis), exit);
+            }
+            _mm_storeu_ps(t.as_mut_ptr(), enter);
+            _mm_movemask_ps(_mm_cmple_ps(enter, exit)) as u32
+        };
+        (mask, t)
+    }
+
+    #[inline(always)]
+    fn triangles<const ANY_HIT: bool>(&self, _ray: &Ray, leaf: Leaf, t_max: &mut f32, best: &mut Option<Hit>) -> bool {
+        let n = leaf.ids.len();
+        // Four triangles at a time, lane by lane the operations of `intersect_triangle`
+        // (bit-identical: no fused multiply-adds), then the lanes' hits in order.
+        for j in (0..n).step_by(4) {
+            let mut t = [0.0f32; 4];
+            let mut u = [0.0f32; 4];
+            let mut v = [0.0f32; 4];
+            // SAFETY: intrinsics as in `new`; row k of this group starts at float
+            // k·n + j ≤ 9n − 1 of `leaf.soa`, and the array has three floats of padding
+            // after the last leaf, so every 4-wide load stays inside it.
+            let mask = unsafe {
+                debug_assert!(leaf.soa.len() >= 9 * n + 3);
+                let ld = |k: usize| _mm_loadu_ps(leaf.soa.as_ptr().add(k * n + j));
+                let [dx, dy, dz] = self.dir;
+                let [ox, oy, oz] = self.origin;
+                let (add, sub, mul) = (_mm_add_ps, _mm_sub_ps, _mm_mul_ps);
+                // The edges as `Triangle::new` computes them.
+                let (v0x, v0y, v0z) = (ld(0), ld(1), ld(2));
+                let (e1x, e1y, e1z) = (sub(ld(3), v0x), sub(ld(4), v0y), sub(ld(5), v0z));
+                let (e2x, e2y, e2z) = (sub(ld(6), v0x), sub(ld(7), v0y), sub(ld(8), v0z));
+                let dot = |ax, ay, az, bx, by, bz| add(add(mul(ax, bx), mul(ay, by)), mul(az, bz));
+                // p = dir × e2, det = e1 · p.
+                let px = sub(mul(dy, e2z), mul(e2y, dz));
+                let py = sub(mul(dz, e2x), mul(e2z, dx));
+                let pz = sub(mul(dx, e2y), mul(e2x, dy));
+                let det = dot(e1x, e1y, e1z, px, py, pz);
+                let inv_det = _mm_div_ps(_mm_set1_ps(1.0), det);
+                let (sx, sy, sz) = (sub(ox, v0x), sub(oy, v0y), sub(oz, v0z));
+                let uu = mul(dot(sx, sy, sz, px, py, pz), inv_det);
+                // q = s × e1.
+                let qx = sub(mul(sy, e1z), mul(e1y, sz));
+                let qy = sub(mul(sz, e1x), mul(e1z, sx));
+                let qz = sub(mul(sx, e1y), mul(e1x, sy));
+                let vv = mul(dot(dx, dy, dz, qx, qy, qz), inv_det);
+                let tt = mul(dot(e2x, e2y, e2z, qx, qy, qz), inv_det);
+                let abs_det = _mm_andnot_ps(_mm_set1_ps(-0.0), det);
+                let zero = _mm_setzero_ps();
+                let one = _mm_set1_ps(1.0);
+                let and = _mm_and_ps;
+                let ok = and(
+                    and(_mm_cmpneq_ps(det, zero), _mm_cmplt_ps(abs_det, _mm_set1_ps(f32::INFINITY))),
+                    and(_mm_cmpge_ps(uu, zero), _mm_cmple_ps(uu, one)),
+                );
+                let ok = and(ok, and(_mm_cmpnlt_ps(vv, zero), _mm_cmpngt_ps(add(uu, vv), one)));
+                let ok = and(ok, and(_mm_cmpgt_ps(tt, self.t_min), _mm_cmplt_ps(tt, _mm_set1_ps(*t_max))));
+                _mm_storeu_ps(t.as_mut_ptr(), tt);
+                _mm_storeu_ps(u.as_mut_ptr(), uu);
+                _mm_storeu_ps(v.as_mut_ptr(), vv);
+                _mm_movemask_ps(ok) as u32 & (0b1111 >> 4usize.saturating_sub(n - j))
+            };
+            let mut m = mask;
+            while m != 0 {
+                let i = m.trailing_zeros() as usize;
+                m &= m - 1;
+                if t[i] < *t_max {
+                    *t_max = t[i];
+                    *best = Some(Hit { prim: leaf.ids[j + i], t: t[i], u: u[i], v: v[i] });
+                    if ANY_HIT {
+                        return true;
+                    }
+                }
+            }
+        }
+        false
+    }
+
+    #[inline(always)]
+    fn watertight<const ANY_HIT: bool>(
+        &self,
+        ray: &WatertightRay,
+        leaf: Leaf,
+        t_max: &mut f32,
+        best: &mut Option<Hit>,
+    ) -> bool {
+        let n = leaf.ids.len();
+        let [kx, ky, kz] = ray.k;
+        let o = ray.origin.to_array();
+        // Four triangles at a time, lane by lane the operations of
+        // `intersect_triangle_watertight` (bit-identical: no fused multiply-adds); a lane
+        // with an edge function of exactly zero is redone by the scalar test, which
+        // falls back to double precision.
+        for j in (0..n).step_by(4) {
+            let lanes = 0b1111u32 >> 4usize.saturating_sub(n - j);
+            let mut t = [0.0f32; 4];
+            let mut u = [0.0f32; 4];
+            let mut v = [0.0f32; 4];
+            // SAFETY: intrinsics as in `new`; loads as in `triangles`.
+            let (mask, zero_lanes) = unsafe {
+                debug_assert!(leaf.soa.len() >= 9 * n + 3);
+                let ld = |k: usize| _mm_loadu_ps(leaf.soa.as_ptr().add(k * n + j));
+                let (add, sub, mul) = (_mm_add_ps, _mm_sub_ps, _mm_mul_ps);
+                let (sx, sy, sz) = (_mm_set1_ps(ray.shear[0]), _mm_set1_ps(ray.shear[1]), _mm_set1_ps(ray.shear[2]));
+                let (ox, oy, oz) = (_mm_set1_ps(o[kx]), _mm_set1_ps(o[ky]), _mm_set1_ps(o[kz]));
+                // Vertex `v` relative to the origin, permuted and sheared.
+                let rel = |v: usize| {
+                    let px = sub(ld(3 * v + kx), ox);
+                    let py = sub(ld(3 * v + ky), oy);
+                    let pz = sub(ld(3 * v + kz), oz);
+                    (sub(px, mul(sx, pz)), sub(py, mul(sy, pz)), mul(sz, pz))
+                };
+                let (ax, ay, az) = rel(0);
+                let (bx, by, bz) = rel(1);
+                let (cx, cy, cz) = rel(2);
+                let e0 = sub(mul(cx, by), mul(cy, bx));
+                let e1 = sub(mul(ax, cy), mul(ay, cx));
+                let e2 = sub(mul(bx, ay), mul(by, ax));
+                let zero = _mm_setzero_ps();
+                let any_zero =
+                    _mm_or_ps(_mm_or_ps(_mm_cmpeq_ps(e0, zero), _mm_cmpeq_ps(e1, zero)), _mm_cmpeq_ps(e2, zero));
+                let neg = _mm_or_ps(_mm_or_ps(_mm_cmplt_ps(e0, zero), _mm_cmplt_ps(e1, zero)), _mm_cmplt_ps(e2, zero));
+                let pos = _mm_or_ps(_mm_or_ps(_mm_cmpgt_ps(e0, zero), _mm_cmpgt_ps(e1, zero)), _mm_cmpgt_ps(e2, zero));
+                let det = add(add(e0, e1), e2);
+                let inv_det = _mm_div_ps(_mm_set1_ps(1.0), det);
+                let tt = mul(add(add(mul(e0, az), mul(e1, bz)), mul(e2, cz)), inv_det);
+                let uu = mul(e1, inv_det);
+                let vv = mul(e2, inv_det);
+                let abs_t = _mm_andnot_ps(_mm_set1_ps(-0.0), tt);
+                let ok = _mm_andnot_ps(_mm_and_ps(neg, pos), _mm_cmpneq_ps(det, zero));
+                let ok = _mm_and_ps(ok, _mm_cmplt_ps(abs_t, _mm_set1_ps(f32::INFINITY)));
+                let ok = _mm_and_ps(
+                    ok,
+                    _mm_and_ps(_mm_cmpgt_ps(tt, _mm_set1_ps(ray.t_min)), _mm_cmplt_ps(tt, _mm_set1_ps(*t_max))),
+                );
+                _mm_storeu_ps(t.as_mut_ptr(), tt);
+                _mm_storeu_ps(u.as_mut_ptr(), uu);
+                _mm_storeu_ps(v.as_mut_ptr(), vv);
+                (_mm_movemask_ps(ok) as u32 & lanes, _mm_movemask_ps(any_zero) as u32 & lanes)
+            };
+            let mut m = mask | zero_lanes;
+            while m != 0 {
+                let i = m.trailing_zeros() as usize;
+                m &= m - 1;
+                let hit = if zero_lanes & (1 << i) != 0 {
+                    intersect_triangle_watertight(&leaf.vertices(j + i), ray, *t_max)
+                } else {
+                    (t[i] < *t_max).then_some((t[i], u[i], v[i]))
+                };
+                if let Some((t, u, v)) = hit {
+                    *t_max = t;
+                    *best = Some(Hit { prim: leaf.ids[j + i], t, u, v });
+                    if ANY_HIT {
+                        return true;
+                    }
+                }
+            }
+        }
+        false
+    }
+}

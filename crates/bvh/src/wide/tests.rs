@@ -1,0 +1,430 @@
+use super::kernel::{Kernel, Leaf, RayKernel, ScalarKernel};
+use super::*;
+use crate::test_util::{rays, soup};
+use crate::{
+    Aabb, Accelerator, Hit, Ray, RayStats, Triangle, WatertightRay, intersect_triangle, intersect_triangle_watertight,
+};
+use crate::{BruteForce, SplitMethod};
+use proptest::prelude::*;
+
+/// The scalar box test, so that the portable path is exercised on x86_64 too.
+fn intersect_scalar(bvh: &Bvh4, ray: &Ray) -> Option<Hit> {
+    bvh.traverse::<ScalarKernel, false, false>(ray, &mut RayStats::default())
+}
+
+fn occluded_scalar(bvh: &Bvh4, ray: &Ray) -> bool {
+    bvh.traverse::<ScalarKernel, false, true>(ray, &mut RayStats::default()).is_some()
+}
+
+/// How far two correct f32 ray–triangle tests (the tree's watertight one, the oracle's
+/// Möller–Trumbore) may put a hit on `tri` apart in t: 10⁻⁵ relative, plus the rounding
+/// of the plane distance (a few ulps of the coordinates) divided by |n̂·d|, since a
+/// grazing hit's t is ill-conditioned (a ray 89.7° off the normal moved t by 2·10⁻⁵
+/// relative between the two tests).
+fn t_tolerance(tri: &[Vec3; 3], r: &Ray, t: f32) -> f32 {
+    let n = (tri[1] - tri[0]).cross(tri[2] - tri[0]).normalize_or_zero();
+    let scale = tri.iter().chain([&r.origin]).map(|v| v.abs().max_element()).fold(0.0, f32::max);
+    1e-5 * t.abs().max(1.0) + 4.0 * f32::EPSILON * scale / n.dot(r.dir).abs()
+}
+
+fn same_hit(a: Option<Hit>, b: Option<Hit>, r: &Ray, tris: &[[Vec3; 3]]) {
+    match (a, b) {
+        (None, None) => {}
+        (Some(a), Some(b)) => {
+            let tol = t_tolerance(&tris[b.prim as usize], r, b.t);
+            assert!((a.t - b.t).abs() <= tol, "t {} vs {} (tolerance {tol}) for {r:?}", a.t, b.t);
+            if a.prim != b.prim {
+                assert_eq!(a.t, b.t, "different triangle at different t for {r:?}");
+            }
+        }
+        _ => panic!("bvh4 {a:?} vs brute force {b:?} for {r:?}"),
+    }
+}
+
+fn agree_with(bvh: &Bvh4, oracle: &BruteForce, tris: &[[Vec3; 3]], rays: &[Ray]) {
+    for r in rays {
+        let expected = oracle.intersect(r);
+        let hit = bvh.intersect(r);
+        same_hit(hit, expected, r, tris);
+        assert_eq!(intersect_scalar(bvh, r), hit, "scalar and SIMD box tests for {r:?}");
+        let blocked = oracle.occluded(r);
+        assert_eq!(bvh.occluded(r), blocked, "occlusion for {r:?}");
+        assert_eq!(occluded_scalar(bvh, r), blocked, "scalar occlusion for {r:?}");
+    }
+}
+
+fn agree(tris: &[[Vec3; 3]], config: BuildConfig, rays: &[Ray]) {
+    agree_with(&Bvh4::build(tris, config).unwrap(), &BruteForce::new(tris).unwrap(), tris, rays);
+}
+
+fn every_config() -> Vec<BuildConfig> {
+    let mut v = Vec::new();
+    for method in SplitMethod::ALL.into_iter().chain([SplitMethod::Hybrid { threshold: 64 }]) {
+        for leaf_by_sah in [true, false] {
+            for max_leaf_size in 1..=8 {
+                v.push(BuildConfig { method, leaf_by_sah, max_leaf_size, ..Default::default() });
+            }
+        }
+    }
+    v
+}
+
+/// Checks the tree's structure: every triangle in exactly one leaf, children's boxes
+/// inside the parent's, unused slots empty.
+fn check_structure(bvh: &Bvh4, n_tris: usize) {
+    let mut seen = vec![false; n_tris];
+    let mut reached = vec![false; bvh.nodes().len()];
+    let mut stack = if bvh.nodes().is_empty() { vec![] } else { vec![0usize] };
+    while let Some(i) = stack.pop() {
+        assert!(!reached[i], "node {i} reached twice");
+        reached[i] = true;
+        let n = &bvh.nodes()[i];
+        let used = (0..WIDTH).filter(|&s| !n.child_bounds(s).is_empty()).count();
+        assert!(used >= 1 && (i == 0 || used >= 2), "node {i} has {used} children");
+        for s in 0..WIDTH {
+            let b = n.child_bounds(s);
+            if b.is_empty() {
+                assert_eq!((n.child[s], n.count[s]), (0, 0));
+                assert_eq!(b, Aabb::EMPTY, "unused slot must be +inf/-inf");
+                continue;
+            }
+            if n.count[s] > 0 {
+                for t in n.child[s]..n.child[s] + n.count[s] {
+                    let id = bvh.prim_ids()[t as usize] as usize;
+                    assert!(!seen[id], "triangle {id} twice");
+                    seen[id] = true;
+                }
+            } else {
+                let c = n.child[s] as usize;
+                assert!(c > i, "children follow their parent");
+                let cb = bvh.nodes()[c].bounds();
+                assert!(b.min.cmple(cb.min).all() && cb.max.cmple(b.max).all(), "child box escapes");
+                stack.push(c);
+            }
+        }
+    }
+    assert!(seen.iter().all(|&s| s), "every triangle in a leaf");
+    assert!(reached.iter().all(|&r| r), "every node reachable");
+}
+
+#[test]
+fn node_layout() {
+    assert_eq!(std::mem::size_of::<Bvh4Node>(), 128);
+    assert_eq!(std::mem::align_of::<Bvh4Node>(), 64);
+    let n = Bvh4Node::EMPTY;
+    assert_eq!(n.planes()[3], [f32::NEG_INFINITY; 4], "row 3 is max_x");
+}
+
+#[test]
+fn matches_brute_force_for_every_builder_and_leaf_size() {
+    let tris = soup(1, 2000, 10.0, 1.0);
+    let rs = rays(2, 600, 10.0);
+    let oracle = BruteForce::new(&tris).unwrap();
+    for config in every_config() {
+        let bvh = Bvh4::build(&tris, config).unwrap();
+        check_structure(&bvh, tris.len());
+        agree_with(&bvh, &oracle, &tris, &rs);
+    }
+}
+
+#[test]
+fn parallel_build_collapses_and_matches_brute_force() {
+    let tris = soup(21, 20_000, 50.0, 1.0);
+    let bvh = Bvh4::build(&tris, BuildConfig::default()).unwrap();
+    check_structure(&bvh, tris.len());
+    agree_with(&bvh, &BruteForce::new(&tris).unwrap(), &tris, &rays(22, 500, 50.0));
+}
+
+#[test]
+fn collapse_is_wide_and_shallow() {
+    let tris = soup(8, 5000, 20.0, 1.0);
+    let bin = Bvh::build(&tris, BuildConfig { max_leaf_size: 4, ..Default::default() }).unwrap();
+    let wide = Bvh4::from_bvh(&bin);
+    let (b, w) = (bin.stats(), wide.stats());
+    assert!(w.leaves <= b.leaves && w.leaves * 2 > b.leaves, "some leaves merged: {w:?} from {b:?}");
+    assert_eq!(w.nodes, wide.nodes().len());
+    assert!(w.nodes < b.nodes - b.leaves, "{w:?} from {b:?}");
+    assert!(w.depth < b.depth, "{w:?} from {b:?}");
+    assert!(w.sah_cost < b.sah_cost, "{w:?} from {b:?}");
+    assert_eq!(wide.bounds(), Accelerator::bounds(&bin));
+    // Leaves split down to four triangles regardless of the SAH are kept as they are,
+    // and each wide node absorbs one to three binary interior nodes.
+    let forced = BuildConfig { max_leaf_size: 4, leaf_by_sah: false, ..Default::default() };
+    let bin = Bvh::build(&tris, forced).unwrap();
+    let wide = Bvh4::from_bvh(&bin);
+    let (b, w) = (bin.stats(), wide.stats());
+    let mut leaves: Vec<(u32, u32)> = bin.nodes().iter().filter(|n| n.count > 0).map(|n| (n.index, n.count)).collect();
+    let mut wide_leaves: Vec<(u32, u32)> =
+        wide.nodes().iter().flat_map(|n| n.child.into_iter().zip(n.count).filter(|(_, c)| *c > 0)).collect();
+    leaves.sort_unstable();
+    wide_leaves.sort_unstable();
+    assert_eq!(leaves, wide_leaves);
+    assert_eq!(w.leaves, b.leaves);
+    assert!(w.nodes * 3 >= b.nodes - b.leaves && w.nodes < b.nodes - b.leaves, "{w:?} from {b:?}");
+}
+
+#[test]
+fn counted_traversal_reports_work() {
+    let tris = soup(51, 2000, 10.0, 1.0);
+    let bvh = Bvh4::build(&tris, BuildConfig::default()).unwrap();
+    let bin = Bvh::build(&tris, BuildConfig::default()).unwrap();
+    let (mut stats, mut bin_stats) = (RayStats::default(), RayStats::default());
+    let rs = rays(52, 300, 10.0);
+    for r in &rs {
+        assert_eq!(bvh.intersect_counted(r, &mut stats), bvh.intersect(r));
+        bin.intersect_counted(r, &mut bin_stats);
+    }
+    assert_eq!(stats.rays, 300);
+    assert!(stats.nodes_visited >= stats.rays && stats.triangles_tested > 0);
+    assert!(stats.nodes_visited < bin_stats.nodes_visited, "{stats:?} vs binary {bin_stats:?}");
+    assert!(stats.triangles_tested < 300 * 2000 / 20, "{stats:?}");
+}
+
+#[test]
+fn axis_parallel_rays_and_origins_on_slab_planes() {
+    // A grid of unit squares in z = 0, z = 1 and z = 2 (split into triangles), so that box
+    // planes at x, y ∈ {0, 1, 2, …} and z ∈ {0, 1, 2} are shared by many nodes.
+    let mut tris = Vec::new();
+    for z in 0..3 {
+        for i in 0..6 {
+            for j in 0..6 {
+                let (x, y, z) = (i as f32, j as f32, z as f32);
+                let [a, b, c, d] = [
+                    Vec3::new(x, y, z),
+                    Vec3::new(x + 1.0, y, z),
+                    Vec3::new(x + 1.0, y + 1.0, z),
+                    Vec3::new(x, y + 1.0, z),
+                ];
+                tris.push([a, b, c]);
+                tris.push([a, c, d]);
+            }
+        }
+    }
+    let oracle = BruteForce::new(&tris).unwrap();
+    let mut rs = Vec::new();
+    for zero in [0.0f32, -0.0] {
+        for &x in &[0.0f32, 0.5, 1.0, 3.0, 6.0, -0.0] {
+            for &y in &[0.0f32, 0.25, 2.0, 6.0] {
+                // Along ±z with ±0 x and y components, from outside and from on a plane.
+                for (oz, dz) in [(-1.0, 1.0), (3.0, -1.0), (0.0, 1.0), (1.0, -1.0), (2.0, 1.0)] {
+                    rs.push(Ray::new(Vec3::new(x, y, oz), Vec3::new(zero, zero, dz)));
+                }
+                // Along ±x and ±y inside the planes z = 0 / 1 (the triangles are edge-on and
+                // never hit) and between them.
+                for z in [0.0f32, 1.0, 0.5] {
+                    rs.push(Ray::new(Vec3::new(-1.0, y, z), Vec3::new(1.0, zero, zero)));
+                    rs.push(Ray::new(Vec3::new(7.0, y, z), Vec3::new(-1.0, zero, zero)));
+                    rs.push(Ray::new(Vec3::new(x, -1.0, z), Vec3::new(zero, 1.0, zero)));
+                }
+                // Oblique in x and z with a zero y, the origin on a y plane.
+                rs.push(Ray::new(Vec3::new(x, y, -0.5), Vec3::new(0.3, zero, 1.0)));
+            }
+        }
+    }
+    for config in every_config() {
+        let bvh = Bvh4::build(&tris, config).unwrap();
+        agree_with(&bvh, &oracle, &tris, &rs);
+    }
+    // By hand: a ray in the plane y = 0 (the min plane of the front boxes) with a zero y
+    // component hits the edge of the first square at t = 1.
+    let bvh = Bvh4::build(&tris, BuildConfig::default()).unwrap();
+    let r = Ray::new(Vec3::new(0.5, 0.0, -1.0), Vec3::new(0.0, 0.0, 1.0));
+    let (a, b) = (bvh.intersect(&r), oracle.intersect(&r));
+    assert_eq!(a.map(|h| h.t), b.map(|h| h.t));
+    assert_eq!(a.map(|h| h.t), Some(1.0));
+}
+
+/// A leaf of `n` triangles (from the third on, with a degenerate one and one sharing
+/// an edge), its SoA floats and ids, and random rays plus rays exactly through
+/// vertices and edge points, oblique and axis-aligned (the latter give edge functions
+/// of exactly zero: the watertight test's double-precision path).
+#[allow(clippy::type_complexity)]
+fn leaf_fixture(n: usize, seed: u64, ray_seed: u64) -> (Vec<[Vec3; 3]>, Vec<f32>, Vec<u32>, Vec<Ray>) {
+    let mut tris = soup(seed, n, 1.0, 1.5);
+    if n > 2 {
+        tris[1] = [Vec3::ZERO, Vec3::X, Vec3::X * 2.0];
+        tris[2] = [tris[0][0], tris[0][2], tris[0][0] + Vec3::Y];
+    }
+    let mut soa: Vec<f32> =
+        (0..9).flat_map(|k| tris.iter().map(move |t| t[k / 3][k % 3]).collect::<Vec<_>>()).collect();
+    soa.extend([f32::NAN; 3]);
+    let ids: Vec<u32> = (0..n as u32).map(|i| 100 + i).collect();
+    let mut rs = rays(ray_seed, 400, 1.0);
+    for t in &tris {
+        for p in [t[0], t[1], 0.5 * (t[0] + t[2])] {
+            rs.push(Ray::new(p + Vec3::new(0.1, 0.2, 1.0), -Vec3::new(0.1, 0.2, 1.0)));
+            rs.push(Ray::new(p + Vec3::Z, -Vec3::Z));
+        }
+    }
+    (tris, soa, ids, rs)
+}
+
+/// Checks the SIMD leaf kernel for `test` against the scalar test applied to each
+/// triangle in order, on leaves of 1 to 9 triangles (1 to 3 groups of four, partial
+/// groups included) with degenerate and edge-sharing triangles: same hit, same
+/// shrunk t_max, any-hit stopping at the first.
+fn leaf_kernel_matches_the_scalar_test(test: TriangleTest, seed: u64) {
+    let mut hits = 0;
+    for n in 1..=9usize {
+        let (tris, soa, ids, rs) = leaf_fixture(n, n as u64 + seed, n as u64 ^ (5 + seed));
+        for r in &rs {
+            let w = WatertightRay::new(r);
+            let scalar = |t: &[Vec3; 3], limit: f32| match test {
+                TriangleTest::MollerTrumbore => intersect_triangle(&Triangle::new(t), r, limit),
+                TriangleTest::Watertight => intersect_triangle_watertight(t, &w, limit),
+            };
+            for t_max in [r.t_max, 0.7] {
+                for any_hit in [false, true] {
+                    let mut expected = None;
+                    let mut limit = t_max;
+                    for (i, t) in tris.iter().enumerate() {
+                        if let Some((t, u, v)) = scalar(t, limit) {
+                            limit = t;
+                            expected = Some(Hit { prim: 100 + i as u32, t, u, v });
+                            if any_hit {
+                                break;
+                            }
+                        }
+                    }
+                    let (mut got, mut got_t_max) = (None, t_max);
+                    let leaf = Leaf { soa: &soa, ids: &ids };
+                    let k = Kernel::new(r);
+                    let found = match (test, any_hit) {
+                        (TriangleTest::MollerTrumbore, true) => k.triangles::<true>(r, leaf, &mut got_t_max, &mut got),
+                        (TriangleTest::MollerTrumbore, false) => {
+                            k.triangles::<false>(r, leaf, &mut got_t_max, &mut got)
+                        }
+                        (TriangleTest::Watertight, true) => k.watertight::<true>(&w, leaf, &mut got_t_max, &mut got),
+                        (TriangleTest::Watertight, false) => k.watertight::<false>(&w, leaf, &mut got_t_max, &mut got),
+                    };
+                    assert_eq!(got, expected, "{test:?}, {n} triangles, {r:?}");
+                    assert_eq!(found, any_hit && expected.is_some());
+                    assert_eq!(got_t_max, limit);
+                    hits += found as usize;
+                }
+            }
+        }
+    }
+    assert!(hits > 200, "{test:?}: {hits} any-hit hits");
+}
+
+#[test]
+fn leaf_kernel_is_bit_identical_to_intersect_triangle() {
+    leaf_kernel_matches_the_scalar_test(TriangleTest::MollerTrumbore, 0);
+}
+
+#[test]
+fn watertight_leaf_kernel_is_bit_identical_to_the_scalar_test() {
+    leaf_kernel_matches_the_scalar_test(TriangleTest::Watertight, 40);
+}
+
+#[test]
+fn unused_slots_are_never_entered() {
+    // Two triangles: the root has two used slots and two unused ones.
+    let tris = vec![
+        [Vec3::ZERO, Vec3::X, Vec3::Y],
+        [Vec3::new(5.0, 0.0, 0.0), Vec3::new(6.0, 0.0, 0.0), Vec3::new(5.0, 1.0, 0.0)],
+    ];
+    let bvh = Bvh4::build(&tris, BuildConfig { max_leaf_size: 1, ..Default::default() }).unwrap();
+    assert_eq!(bvh.nodes().len(), 1);
+    let node = &bvh.nodes()[0];
+    for dir in [Vec3::X, -Vec3::X, Vec3::new(0.0, -0.0, 1.0), Vec3::new(-0.0, 0.0, -0.0), Vec3::new(1.0, -2.0, 3.0)] {
+        for origin in [Vec3::ZERO, Vec3::splat(-3.0), Vec3::new(5.0, 0.0, 0.0)] {
+            let r = Ray::new(origin, dir);
+            let (mask, _) = Kernel::new(&r).enter(node, f32::INFINITY);
+            let (scalar, _) = ScalarKernel::new(&r).enter(node, f32::INFINITY);
+            assert_eq!(mask, scalar);
+            assert_eq!(mask & 0b1100, 0, "unused slot entered by {r:?}");
+        }
+    }
+}
+
+#[test]
+fn degenerate_duplicate_and_tiny_inputs() {
+    let rs = rays(3, 500, 2.0);
+    agree(&[], BuildConfig::default(), &rs);
+    let empty = Bvh4::build(&[], BuildConfig::default()).unwrap();
+    assert_eq!(empty.stats(), Bvh4Stats::default());
+    assert!(empty.bounds().is_empty());
+    let one = soup(4, 1, 2.0, 1.0);
+    let single = Bvh4::build(&one, BuildConfig::default()).unwrap();
+    assert_eq!((single.stats().nodes, single.stats().leaves, single.stats().depth), (1, 1, 2));
+    agree(&one, BuildConfig::default(), &rs);
+    // A ray straight at the single triangle hits it.
+    let c = (one[0][0] + one[0][1] + one[0][2]) / 3.0;
+    let n = (one[0][1] - one[0][0]).cross(one[0][2] - one[0][0]).normalize();
+    assert!(single.intersect(&Ray::new(c + n, -n)).is_some());
+    // 1000 copies of one triangle: all centroids coincide, the binary tree halves by
+    // position; depth and the stack must stay bounded.
+    let same = vec![soup(5, 1, 2.0, 1.0)[0]; 1000];
+    let towards: Vec<Ray> = {
+        let t = same[0];
+        let c = (t[0] + t[1] + t[2]) / 3.0;
+        let n = (t[1] - t[0]).cross(t[2] - t[0]).normalize();
+        (0..50).map(|i| Ray::new(c + n * (1.0 + i as f32), -n)).collect()
+    };
+    for config in every_config() {
+        let bvh = Bvh4::build(&same, config).unwrap();
+        let s = bvh.stats();
+        assert!(s.depth.saturating_sub(1) * (WIDTH - 1) <= STACK_DEPTH && s.depth < 64, "{s:?}");
+        check_structure(&bvh, same.len());
+        for r in &towards {
+            assert!(bvh.intersect(r).is_some() && bvh.occluded(r));
+        }
+    }
+    agree(&same, BuildConfig::default(), &rs);
+    agree(&same, BuildConfig { method: SplitMethod::SweepSah, max_leaf_size: 1, ..Default::default() }, &towards);
+    // Zero-area triangles mixed in.
+    let mut mixed = soup(6, 300, 2.0, 0.5);
+    mixed.extend((0..50).map(|i| [Vec3::splat(i as f32 * 0.01); 3]));
+    mixed.extend((0..50).map(|i| [Vec3::ZERO, Vec3::X * i as f32, Vec3::X * 2.0 * i as f32]));
+    for config in every_config() {
+        agree(&mixed, config, &rs);
+    }
+}
+
+#[test]
+fn non_finite_rays_hit_nothing_and_terminate() {
+    let tris = soup(9, 500, 5.0, 1.0);
+    let bvh = Bvh4::build(&tris, BuildConfig::default()).unwrap();
+    let oracle = BruteForce::new(&tris).unwrap();
+    for (o, d) in [
+        (Vec3::splat(2.0), Vec3::new(f32::NAN, 1.0, 0.0)),
+        (Vec3::splat(2.0), Vec3::new(f32::INFINITY, 0.0, 0.0)),
+        (Vec3::new(f32::NAN, 2.0, 2.0), Vec3::X),
+        (Vec3::new(f32::NEG_INFINITY, 2.0, 2.0), Vec3::X),
+    ] {
+        let r = Ray::new(o, d);
+        assert_eq!(bvh.intersect(&r), None);
+        assert_eq!(oracle.intersect(&r), None);
+        assert!(!bvh.occluded(&r));
+    }
+    // NaN segment bounds: nothing is hit either.
+    let r = Ray::segment(Vec3::splat(-1.0), Vec3::ONE, f32::NAN, f32::INFINITY);
+    assert_eq!((bvh.intersect(&r), oracle.intersect(&r)), (None, None));
+    let r = Ray::segment(Vec3::splat(-1.0), Vec3::ONE, 0.0, f32::NAN);
+    assert_eq!((bvh.intersect(&r), oracle.intersect(&r)), (None, None));
+}
+
+#[test]
+fn rejects_non_finite_coordinates() {
+    let mut tris = soup(7, 10, 1.0, 1.0);
+    tris[3][1].y = f32::NAN;
+    assert!(matches!(Bvh4::build(&tris, BuildConfig::default()), Err(BuildError::NonFinite { index: 3, .. })));
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(48))]
+    #[test]
+    fn random_soups_agree_with_brute_force(
+        seed in any::<u64>(), n in 1usize..300, leaf in 1usize..9, bins in 2usize..33, m in 0usize..4,
+        by_sah in any::<bool>()
+    ) {
+        let tris = soup(seed, n, 5.0, 1.5);
+        let method = SplitMethod::ALL[m];
+        let config = BuildConfig { method, max_leaf_size: leaf, bins, leaf_by_sah: by_sah, ..Default::default() };
+        let bvh = Bvh4::build(&tris, config).unwrap();
+        check_structure(&bvh, tris.len());
+        agree_with(&bvh, &BruteForce::new(&tris).unwrap(), &tris, &rays(seed ^ 1, 200, 5.0));
+    }
+}

@@ -1,0 +1,175 @@
+//! Ordered traversal of a [`Bvh4`]: the children a ray enters are visited nearest first,
+//! the others pushed with their entry distance and culled on pop against the closest hit
+//! so far; boxes and leaves are tested by a [`RayKernel`].
+
+use super::kernel::{Kernel, Leaf, RayKernel};
+use super::{Bvh4, Bvh4Node, STACK_DEPTH, WIDTH};
+use crate::{Aabb, Accelerator, Hit, Ray, RayStats, TriangleTest, WatertightRay};
+use std::mem::MaybeUninit;
+
+/// A child to visit: a node (`count == 0`) or a leaf's triangle range, with the ray's
+/// entry distance into its box.
+#[derive(Clone, Copy, Default)]
+struct Entry {
+    child: u32,
+    count: u32,
+    t: f32,
+}
+
+/// Sorts the first `k` (≤ 4) entries by entry distance, nearest first (a sorting network).
+#[inline(always)]
+fn sort_by_entry(e: &mut [Entry; WIDTH], k: usize) {
+    #[inline(always)]
+    fn order(e: &mut [Entry; WIDTH], a: usize, b: usize) {
+        if e[b].t < e[a].t {
+            e.swap(a, b);
+        }
+    }
+    match k {
+        0 | 1 => {}
+        2 => order(e, 0, 1),
+        3 => {
+            order(e, 0, 1);
+            order(e, 1, 2);
+            order(e, 0, 1);
+        }
+        4 => {
+            order(e, 0, 1);
+            order(e, 2, 3);
+            order(e, 0, 2);
+            order(e, 1, 3);
+            order(e, 1, 2);
+        }
+        _ => unreachable!("at most four children"),
+    }
+}
+
+impl Bvh4 {
+    #[inline(always)]
+    pub(super) fn traverse<K: RayKernel, const COUNT: bool, const ANY_HIT: bool>(
+        &self,
+        ray: &Ray,
+        stats: &mut RayStats,
+    ) -> Option<Hit> {
+        if COUNT {
+            stats.rays += 1;
+        }
+        // Such rays hit no triangle (Möller–Trumbore's determinant is not finite), and
+        // they are the only ones that could enter an unused slot's empty box.
+        if self.nodes.is_empty() || !ray.origin.is_finite() || !ray.dir.is_finite() {
+            return None;
+        }
+        let kernel = K::new(ray);
+        let watertight = (self.test == TriangleTest::Watertight).then(|| WatertightRay::new(ray));
+        let mut t_max = ray.t_max;
+        let mut best: Option<Hit> = None;
+        // Uninitialised: zeroing 2 KiB would cost more than a short traversal.
+        let mut stack = [MaybeUninit::<Entry>::uninit(); STACK_DEPTH];
+        let mut sp = 0usize;
+        let mut current = Entry::default();
+        loop {
+            if current.count == 0 {
+                let node = &self.nodes[current.child as usize];
+                if COUNT {
+                    stats.nodes_visited += 1;
+                }
+                let (mask, t) = kernel.enter(node, t_max);
+                if mask != 0 {
+                    let entry = |i: usize| Entry { child: node.child[i], count: node.count[i], t: t[i] };
+                    if mask & (mask - 1) == 0 {
+                        current = entry(mask.trailing_zeros() as usize);
+                        continue;
+                    }
+                    // Two to four children: nearest first, the others pushed far to near.
+                    let mut hits = [Entry::default(); WIDTH];
+                    let mut k = 0;
+                    let mut m = mask;
+                    while m != 0 {
+                        hits[k] = entry(m.trailing_zeros() as usize);
+                        self.prefetch(&hits[k]);
+                        k += 1;
+                        m &= m - 1;
+                    }
+                    sort_by_entry(&mut hits, k);
+                    for e in hits[1..k].iter().rev() {
+                        stack[sp] = MaybeUninit::new(*e);
+                        sp += 1;
+                    }
+                    current = hits[0];
+                    continue;
+                }
+            } else {
+                let first = current.child as usize;
+                let count = current.count as usize;
+                if COUNT {
+                    stats.triangles_tested += count as u64;
+                }
+                let leaf = Leaf { soa: &self.soa[9 * first..], ids: &self.prim_ids[first..first + count] };
+                let done = match &watertight {
+                    Some(w) => kernel.watertight::<ANY_HIT>(w, leaf, &mut t_max, &mut best),
+                    None => kernel.triangles::<ANY_HIT>(ray, leaf, &mut t_max, &mut best),
+                };
+                if done {
+                    return best;
+                }
+            }
+            // Pop until a child that may still hold a closer hit.
+            loop {
+                if sp == 0 {
+                    return best;
+                }
+                sp -= 1;
+                // SAFETY: entries below `sp` were all written by the pushes above.
+                let e = unsafe { stack[sp].assume_init() };
+                if e.t <= t_max {
+                    current = e;
+                    break;
+                }
+            }
+        }
+    }
+
+    /// Starts loading a child's node or triangles into the cache, ahead of its visit.
+    #[inline(always)]
+    fn prefetch(&self, e: &Entry) {
+        #[cfg(target_arch = "x86_64")]
+        {
+            use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
+            let (first, last) = if e.count == 0 {
+                let p = self.nodes.as_ptr().wrapping_add(e.child as usize).cast::<i8>();
+                (p, p.wrapping_add(size_of::<Bvh4Node>() - 1))
+            } else {
+                let p = self.soa.as_ptr().wrapping_add(9 * e.child as usize).cast::<i8>();
+                (p, p.wrapping_add(e.count as usize * 9 * size_of::<f32>() - 1))
+            };
+            // SAFETY: SSE is baseline on x86_64, and a prefetch never faults.
+            unsafe {
+                _mm_prefetch::<_MM_HINT_T0>(first);
+                _mm_prefetch::<_MM_HINT_T0>(last);
+            }
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        let _ = e;
+    }
+}
+
+impl Accelerator for Bvh4 {
+    #[inline]
+    fn intersect(&self, ray: &Ray) -> Option<Hit> {
+        self.traverse::<Kernel, false, false>(ray, &mut RayStats::default())
+    }
+
+    #[inline]
+    fn occluded(&self, ray: &Ray) -> bool {
+        self.traverse::<Kernel, false, true>(ray, &mut RayStats::default()).is_some()
+    }
+
+    fn bounds(&self) -> Aabb {
+        self.nodes.first().map_or(Aabb::EMPTY, Bvh4Node::bounds)
+    }
+
+    /// Closest hit, counting wide nodes whose children are tested and triangle tests.
+    fn intersect_counted(&self, ray: &Ray, stats: &mut RayStats) -> Option<Hit> {
+        self.traverse::<Kernel, true, false>(ray, stats)
+    }
+}
