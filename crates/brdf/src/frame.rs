@@ -74,6 +74,19 @@ pub fn flip_z(w: Vec3) -> Vec3 {
     Vec3::new(w.x, w.y, -w.z)
 }
 
+/// For reflection models that act alike on both sides: (ωo, ωi) mirrored to the upper
+/// hemisphere, or `None` where they lie on opposite sides (or on the horizon).
+#[inline]
+pub fn upper_pair(wo: Vec3, wi: Vec3) -> Option<(Vec3, Vec3)> {
+    if wo.z * wi.z <= 0.0 {
+        None
+    } else if wo.z < 0.0 {
+        Some((flip_z(wo), flip_z(wi)))
+    } else {
+        Some((wo, wi))
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

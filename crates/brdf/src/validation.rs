@@ -476,6 +476,62 @@ pub fn check_sample_consistency<B: Bsdf<1>>(cases: &[Chi2Case<B>]) {
     }
 }
 
+/// `inner` with its pdf replaced by `pdf` — in `pdf` and in its samples — for the
+/// deliberately broken variants that prove a chi-square test can fail (a forgotten
+/// Jacobian, a wrong cosine, …).
+pub struct WithPdf<B, F> {
+    /// The BSDF whose sampling is kept.
+    pub inner: B,
+    /// The pdf claimed instead of `inner.pdf`.
+    pub pdf: F,
+}
+
+impl<B: Bsdf<1>, F: Fn(&B, Vec3, Vec3) -> f32> Bsdf<1> for WithPdf<B, F> {
+    fn flags(&self) -> ScatterFlags {
+        self.inner.flags()
+    }
+    fn eval(&self, wo: Vec3, wi: Vec3) -> SampledSpectrum<1> {
+        self.inner.eval(wo, wi)
+    }
+    fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
+        (self.pdf)(&self.inner, wo, wi)
+    }
+    fn sample(&self, wo: Vec3, uc: f32, u: Vec2) -> Option<BsdfSample<1>> {
+        self.inner.sample(wo, uc, u).map(|s| BsdfSample { pdf: self.pdf(wo, s.wi), ..s })
+    }
+}
+
+/// Test functions for a list of [`Chi2Case`]s: `sample_agrees_with_eval_and_pdf`
+/// ([`check_sample_consistency`]) and one test per named part running every
+/// `parts`-th case ([`check_chi2_cases`]), so that a long list runs in parallel:
+///
+/// ```ignore
+/// brdf::chi2_tests!("schlick", cases(), seed 1000, parts [part_1, part_2, part_3]);
+/// ```
+#[macro_export]
+macro_rules! chi2_tests {
+    ($label:literal, $cases:expr, seed $seed:expr, parts [$($part:ident),+ $(,)?]) => {
+        /// `sample` returns what `eval` and `pdf` give for its direction, for every
+        /// chi-square case's BSDF and ωo.
+        #[test]
+        fn sample_agrees_with_eval_and_pdf() {
+            $crate::validation::check_sample_consistency(&$cases);
+        }
+
+        $crate::chi2_tests!(@parts $label, $cases, $seed, [$($part),+], 0usize, [$($part),+]);
+    };
+    (@parts $label:literal, $cases:expr, $seed:expr, [$first:ident $(, $rest:ident)*], $index:expr, [$($all:ident),+]) => {
+        /// Chi-square goodness of fit of `sample` against `pdf` for this part of the cases.
+        #[test]
+        fn $first() {
+            let parts = [$(stringify!($all)),+].len();
+            $crate::validation::check_chi2_cases($label, &$cases, $index, parts, $seed);
+        }
+        $crate::chi2_tests!(@parts $label, $cases, $seed, [$($rest),*], $index + 1usize, [$($all),+]);
+    };
+    (@parts $label:literal, $cases:expr, $seed:expr, [], $index:expr, [$($all:ident),+]) => {};
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

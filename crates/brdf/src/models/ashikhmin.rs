@@ -20,7 +20,7 @@
 //! 1 − n·h is below f32's resolution (WGSL has no `log1p`/`expm1`: mirror them with the
 //! usual `log(1 + x)·x/((1 + x) − 1)` and `(exp(x) − 1)` series guards).
 
-use crate::frame::flip_z;
+use crate::frame::{flip_z, upper_pair};
 use crate::sampling::{cosine_hemisphere, cosine_hemisphere_pdf};
 use crate::wgsl::{ModelWgsl, WgslConstant, WgslPiece, WgslValue};
 use crate::{Bsdf, BsdfSample, Model, ScatterFlags};
@@ -219,18 +219,12 @@ impl<const N: usize> Bsdf<N> for Ashikhmin<N> {
 
     #[inline]
     fn eval(&self, wo: Vec3, wi: Vec3) -> SampledSpectrum<N> {
-        if wo.z * wi.z <= 0.0 {
-            return SampledSpectrum::zero();
-        }
-        if wo.z < 0.0 { self.eval_up(flip_z(wo), flip_z(wi)) } else { self.eval_up(wo, wi) }
+        upper_pair(wo, wi).map_or(SampledSpectrum::zero(), |(wo, wi)| self.eval_up(wo, wi))
     }
 
     #[inline]
     fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
-        if wo.z * wi.z <= 0.0 {
-            return 0.0;
-        }
-        if wo.z < 0.0 { self.pdf_up(flip_z(wo), flip_z(wi)) } else { self.pdf_up(wo, wi) }
+        upper_pair(wo, wi).map_or(0.0, |(wo, wi)| self.pdf_up(wo, wi))
     }
 
     #[inline]

@@ -2,28 +2,11 @@
 
 use super::*;
 use crate::fresnel::fresnel_dielectric;
-use crate::validation::{Chi2Config, chi2_test, directional_albedo, pdf_integral, reciprocity_error, sidak};
-use crate::{Bsdf, BsdfSample, ScatterFlags};
+use crate::validation::{Chi2Config, WithPdf, chi2_test, directional_albedo, pdf_integral, reciprocity_error, sidak};
+use crate::{Bsdf, ScatterFlags};
 use glam::{Vec2, Vec3};
 use spectral::SampledSpectrum;
 use std::f32::consts::FRAC_1_PI;
-
-/// Lambert with a deliberately wrong pdf (uniform instead of cosine): must fail.
-struct WrongPdfLambert(Lambert<1>);
-impl Bsdf<1> for WrongPdfLambert {
-    fn flags(&self) -> ScatterFlags {
-        self.0.flags()
-    }
-    fn eval(&self, wo: Vec3, wi: Vec3) -> SampledSpectrum<1> {
-        self.0.eval(wo, wi)
-    }
-    fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
-        if wo.z * wi.z > 0.0 { 0.5 * FRAC_1_PI } else { 0.0 }
-    }
-    fn sample(&self, wo: Vec3, uc: f32, u: Vec2) -> Option<BsdfSample<1>> {
-        self.0.sample(wo, uc, u).map(|s| BsdfSample { pdf: self.pdf(wo, s.wi), ..s })
-    }
-}
 
 fn incidences() -> [Vec3; 4] {
     [Vec3::Z, Vec3::new(0.6, 0.0, 0.8), Vec3::new(0.0, 0.99875, 0.05), -Vec3::Z]
@@ -41,7 +24,11 @@ fn lambert_sampling_matches_its_pdf() {
 
 #[test]
 fn a_wrong_pdf_fails_the_chi_square_test() {
-    let broken = WrongPdfLambert(Lambert { reflectance: SampledSpectrum([0.8]) });
+    // Lambert with a deliberately wrong pdf (uniform instead of cosine): must fail.
+    let broken = WithPdf {
+        inner: Lambert { reflectance: SampledSpectrum([0.8]) },
+        pdf: |_: &Lambert<1>, wo: Vec3, wi: Vec3| if wo.z * wi.z > 0.0 { 0.5 * FRAC_1_PI } else { 0.0 },
+    };
     let r = chi2_test(&broken, Vec3::Z, &Chi2Config::default(), 7);
     assert!(r.p_value < 1e-6, "the broken pdf passed: {r:?}");
 }

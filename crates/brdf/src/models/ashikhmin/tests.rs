@@ -2,8 +2,8 @@
 
 use super::*;
 use crate::validation::{
-    Chi2Case, Chi2Config, Chi2Grid, Zoom, check_chi2_cases, check_sample_consistency, chi2_test, direction as dir,
-    directional_albedo, pdf_integral, reciprocity_error,
+    Chi2Case, Chi2Config, Chi2Grid, WithPdf, Zoom, chi2_test, direction as dir, directional_albedo, pdf_integral,
+    reciprocity_error,
 };
 use rng::Pcg32;
 
@@ -96,29 +96,7 @@ fn cases() -> Vec<Chi2Case<Ashikhmin<1>>> {
     v
 }
 
-/// `sample` returns what `eval` and `pdf` give for its direction, for every chi-square
-/// case's BSDF and ωo.
-#[test]
-fn sample_agrees_with_eval_and_pdf() {
-    check_sample_consistency(&cases());
-}
-
-fn check_cases(part: usize, parts: usize) {
-    check_chi2_cases("ashikhmin", &cases(), part, parts, 2000);
-}
-
-#[test]
-fn sampling_matches_pdf_part_1() {
-    check_cases(0, 3);
-}
-#[test]
-fn sampling_matches_pdf_part_2() {
-    check_cases(1, 3);
-}
-#[test]
-fn sampling_matches_pdf_part_3() {
-    check_cases(2, 3);
-}
+crate::chi2_tests!("ashikhmin", cases(), seed 2000, parts [sampling_matches_pdf_part_1, sampling_matches_pdf_part_2, sampling_matches_pdf_part_3]);
 
 /// Prints the directional albedo over exponents, reflectances and cos θo, for reports:
 /// `cargo test -p brdf --lib ashikhmin_albedo_table -- --ignored --nocapture`.
@@ -150,28 +128,14 @@ fn ashikhmin_albedo_table() {
 }
 
 /// The specular lobe's pdf without the reflection's Jacobian 1/(4 ωo·h): must fail.
-struct NoJacobian(Ashikhmin<1>);
+fn pdf_without_jacobian(b: &Ashikhmin<1>, wo: Vec3, wi: Vec3) -> f32 {
+    if wo.z <= 0.0 || wi.z <= 0.0 {
+        return 0.0;
+    }
 
-impl Bsdf<1> for NoJacobian {
-    fn flags(&self) -> ScatterFlags {
-        self.0.flags()
-    }
-    fn eval(&self, wo: Vec3, wi: Vec3) -> SampledSpectrum<1> {
-        self.0.eval(wo, wi)
-    }
-    fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
-        if wo.z <= 0.0 || wi.z <= 0.0 {
-            return 0.0;
-        }
-        let b = &self.0;
-        let ps = b.specular_probability(wo.z);
-        let h = (wo + wi).normalize();
-        ps * b.norm * (0.5 * FRAC_1_PI) * phong_lobe(b.nu, b.nv, h) + (1.0 - ps) * cosine_hemisphere_pdf(wi.z)
-    }
-    fn sample(&self, wo: Vec3, uc: f32, u: Vec2) -> Option<BsdfSample<1>> {
-        let s = self.0.sample(wo, uc, u)?;
-        Some(BsdfSample { pdf: self.pdf(wo, s.wi), ..s })
-    }
+    let ps = b.specular_probability(wo.z);
+    let h = (wo + wi).normalize();
+    ps * b.norm * (0.5 * FRAC_1_PI) * phong_lobe(b.nu, b.nv, h) + (1.0 - ps) * cosine_hemisphere_pdf(wi.z)
 }
 
 #[test]
@@ -179,7 +143,7 @@ fn a_pdf_without_the_half_vector_jacobian_fails() {
     for (k, (b, wo)) in
         [(sa(100.0, 100.0, 0.05, 0.5), dir(0.8, 20.0)), (sa(10.0, 1000.0, 0.05, 0.0), Vec3::Z)].into_iter().enumerate()
     {
-        let r = chi2_test(&NoJacobian(b), wo, &Chi2Config::default(), 31 + k as u64);
+        let r = chi2_test(&WithPdf { inner: b, pdf: pdf_without_jacobian }, wo, &Chi2Config::default(), 31 + k as u64);
         eprintln!("chi2 ashikhmin broken (no Jacobian) {k} | p = {:.3e}", r.p_value);
         assert!(r.p_value < 1e-6, "the broken pdf passed: {r:?}");
     }

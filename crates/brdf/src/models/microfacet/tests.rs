@@ -3,7 +3,7 @@
 use super::*;
 use crate::models::metal::{Metal, fresnel_conductor};
 use crate::sampling::uniform_sphere;
-use crate::validation::{Chi2Config, chi2_test, directional_albedo, pdf_integral, reciprocity_error, sidak};
+use crate::validation::{Chi2Config, WithPdf, chi2_test, directional_albedo, pdf_integral, reciprocity_error, sidak};
 use rng::Pcg32;
 
 fn dir(theta_deg: f32, phi_deg: f32) -> Vec3 {
@@ -136,54 +136,6 @@ fn masking_matches_the_textbook_forms() {
     assert_eq!(g.g1(Vec3::X), 0.0);
 }
 
-/// VNDF sampling with a pdf that forgets G1(ωo): must fail.
-struct NoG1(RoughConductor<1>);
-impl Bsdf<1> for NoG1 {
-    fn flags(&self) -> ScatterFlags {
-        self.0.flags()
-    }
-    fn eval(&self, wo: Vec3, wi: Vec3) -> SampledSpectrum<1> {
-        self.0.eval(wo, wi)
-    }
-    fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
-        // D_vis/(4 ωo·h) without G1: D(h) / (4 cos θo).
-        match RoughConductor::<1>::configuration(wo, wi) {
-            Some((wo, _, h)) => self.0.distribution.d(h) / (4.0 * wo.z),
-            None => 0.0,
-        }
-    }
-    fn sample(&self, wo: Vec3, uc: f32, u: Vec2) -> Option<BsdfSample<1>> {
-        self.0.sample(wo, uc, u).map(|s| BsdfSample { pdf: self.pdf(wo, s.wi), ..s })
-    }
-}
-
-/// The rough dielectric with a transmission pdf that forgets the Jacobian
-/// |ωi·h|/(ωi·h + ωo·h/η)²: must fail.
-struct NoJacobian(RoughDielectric<1>);
-impl Bsdf<1> for NoJacobian {
-    fn flags(&self) -> ScatterFlags {
-        self.0.flags()
-    }
-    fn eval(&self, wo: Vec3, wi: Vec3) -> SampledSpectrum<1> {
-        self.0.eval(wo, wi)
-    }
-    fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
-        if wo.z * wi.z >= 0.0 {
-            return self.0.pdf(wo, wi);
-        }
-        let (wo, wi, eta) = if wo.z < 0.0 { (flip_z(wo), flip_z(wi), 1.0 / self.0.eta) } else { (wo, wi, self.0.eta) };
-        let h = (wo + eta * wi).normalize_or_zero();
-        let h = if h.z < 0.0 { -h } else { h };
-        if wo.dot(h) <= 0.0 || wi.dot(h) >= 0.0 {
-            return 0.0;
-        }
-        (1.0 - fresnel_dielectric(wo.dot(h), eta)) * self.0.distribution.d_visible(wo, h)
-    }
-    fn sample(&self, wo: Vec3, uc: f32, u: Vec2) -> Option<BsdfSample<1>> {
-        self.0.sample(wo, uc, u).map(|s| BsdfSample { pdf: self.pdf(wo, s.wi), ..s })
-    }
-}
-
 /// The per-case significance: α = 0.01 over all chi-square cases of this file.
 fn chi2_alpha() -> f64 {
     let (c, d) = chi2_cases();
@@ -213,14 +165,38 @@ fn rough_dielectric_sampling_matches_its_pdf() {
     }
 }
 
+/// VNDF sampling with a pdf that forgets G1(ωo): must fail.
+fn pdf_without_g1(b: &RoughConductor<1>, wo: Vec3, wi: Vec3) -> f32 {
+    // D_vis/(4 ωo·h) without G1: D(h) / (4 cos θo).
+    match RoughConductor::<1>::configuration(wo, wi) {
+        Some((wo, _, h)) => b.distribution.d(h) / (4.0 * wo.z),
+        None => 0.0,
+    }
+}
+
+/// The rough dielectric with a transmission pdf that forgets the Jacobian
+/// |ωi·h|/(ωi·h + ωo·h/η)²: must fail.
+fn pdf_without_jacobian(b: &RoughDielectric<1>, wo: Vec3, wi: Vec3) -> f32 {
+    if wo.z * wi.z >= 0.0 {
+        return b.pdf(wo, wi);
+    }
+    let (wo, wi, eta) = if wo.z < 0.0 { (flip_z(wo), flip_z(wi), 1.0 / b.eta) } else { (wo, wi, b.eta) };
+    let h = (wo + eta * wi).normalize_or_zero();
+    let h = if h.z < 0.0 { -h } else { h };
+    if wo.dot(h) <= 0.0 || wi.dot(h) >= 0.0 {
+        return 0.0;
+    }
+    (1.0 - fresnel_dielectric(wo.dot(h), eta)) * b.distribution.d_visible(wo, h)
+}
+
 #[test]
 fn broken_pdfs_fail_the_chi_square_test() {
     let (eta, k) = gold();
     let g = Ggx::isotropic(0.5);
-    let no_g1 = NoG1(RoughConductor::new(g, eta, k));
+    let no_g1 = WithPdf { inner: RoughConductor::new(g, eta, k), pdf: pdf_without_g1 };
     let r = chi2_test(&no_g1, dir(70.0, 0.0), &Chi2Config::default(), 1);
     assert!(r.p_value < 1e-6, "pdf without G1 passed: {r:?}");
-    let no_jacobian = NoJacobian(RoughDielectric::new(g, 1.5));
+    let no_jacobian = WithPdf { inner: RoughDielectric::new(g, 1.5), pdf: pdf_without_jacobian };
     let r = chi2_test(&no_jacobian, dir(30.0, 0.0), &Chi2Config::default(), 2);
     assert!(r.p_value < 1e-6, "transmission pdf without its Jacobian passed: {r:?}");
 }

@@ -3,7 +3,7 @@
 use super::*;
 use crate::Lambert;
 use crate::sampling::{cosine_hemisphere_pdf, uniform_sphere};
-use crate::validation::{Chi2Config, chi2_test, directional_albedo, pdf_integral, reciprocity_error, sidak};
+use crate::validation::{Chi2Config, WithPdf, chi2_test, directional_albedo, pdf_integral, reciprocity_error, sidak};
 use rng::Pcg32;
 
 fn dir(theta_deg: f32, phi_deg: f32) -> Vec3 {
@@ -58,23 +58,6 @@ fn sigma_zero_is_lambert_exactly() {
     }
 }
 
-/// Oren–Nayar with a pdf that uses the wrong cosine (θo instead of θi): must fail.
-struct WrongCosine(OrenNayar<1>);
-impl Bsdf<1> for WrongCosine {
-    fn flags(&self) -> ScatterFlags {
-        self.0.flags()
-    }
-    fn eval(&self, wo: Vec3, wi: Vec3) -> SampledSpectrum<1> {
-        self.0.eval(wo, wi)
-    }
-    fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
-        if same_hemisphere(wo, wi) { cosine_hemisphere_pdf(wo.z.abs()) } else { 0.0 }
-    }
-    fn sample(&self, wo: Vec3, uc: f32, u: Vec2) -> Option<BsdfSample<1>> {
-        self.0.sample(wo, uc, u).map(|s| BsdfSample { pdf: self.pdf(wo, s.wi), ..s })
-    }
-}
-
 #[test]
 fn sampling_matches_the_pdf() {
     let alpha = sidak(0.01, SIGMAS.len() * incidences().len());
@@ -86,7 +69,13 @@ fn sampling_matches_the_pdf() {
             assert!(r.p_value > alpha && r.inconsistent == 0, "σ={sigma} wo={wo}: {r:?}");
         }
     }
-    let broken = WrongCosine(OrenNayar::new(SampledSpectrum([0.8]), 0.3));
+    // Oren–Nayar with a pdf that uses the wrong cosine (θo instead of θi): must fail.
+    let broken = WithPdf {
+        inner: OrenNayar::new(SampledSpectrum([0.8]), 0.3),
+        pdf: |_: &OrenNayar<1>, wo: Vec3, wi: Vec3| {
+            if same_hemisphere(wo, wi) { cosine_hemisphere_pdf(wo.z.abs()) } else { 0.0 }
+        },
+    };
     let r = chi2_test(&broken, dir(45.0, 0.0), &Chi2Config::default(), 99);
     assert!(r.p_value < 1e-6, "the broken pdf passed: {r:?}");
 }

@@ -2,8 +2,7 @@
 
 use super::*;
 use crate::validation::{
-    Chi2Case, Chi2Config, Chi2Grid, check_chi2_cases, check_sample_consistency, chi2_test, direction as dir,
-    directional_albedo, pdf_integral, reciprocity_error,
+    Chi2Case, Chi2Config, Chi2Grid, chi2_test, direction as dir, directional_albedo, pdf_integral, reciprocity_error,
 };
 use rng::Pcg32;
 
@@ -118,29 +117,7 @@ fn cases() -> Vec<Chi2Case<Schlick<1>>> {
     v
 }
 
-/// `sample` returns what `eval` and `pdf` give for its direction, for every chi-square
-/// case's BSDF and ωo.
-#[test]
-fn sample_agrees_with_eval_and_pdf() {
-    check_sample_consistency(&cases());
-}
-
-fn check_cases(part: usize, parts: usize) {
-    check_chi2_cases("schlick", &cases(), part, parts, 1000);
-}
-
-#[test]
-fn sampling_matches_pdf_part_1() {
-    check_cases(0, 3);
-}
-#[test]
-fn sampling_matches_pdf_part_2() {
-    check_cases(1, 3);
-}
-#[test]
-fn sampling_matches_pdf_part_3() {
-    check_cases(2, 3);
-}
+crate::chi2_tests!("schlick", cases(), seed 1000, parts [sampling_matches_pdf_part_1, sampling_matches_pdf_part_2, sampling_matches_pdf_part_3]);
 
 /// What a deliberately broken variant gets wrong.
 #[derive(Clone, Copy)]
@@ -453,4 +430,3 @@ fn parameters_resolve() {
     let def = SchlickParams::DEF;
     assert!(def.param_by_mtl_key("rough").is_some() && def.param_by_mtl_key("p").is_some());
 }
-
