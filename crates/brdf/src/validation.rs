@@ -280,20 +280,14 @@ pub fn pdf_integral(bsdf: &impl Bsdf<1>, wo: Vec3, n: usize) -> f64 {
 /// (mean, standard error) over `samples` samples.
 pub fn directional_albedo(bsdf: &impl Bsdf<1>, wo: Vec3, samples: usize, seed: u64) -> (f64, f64) {
     let mut rng = Pcg32::seed_from_u64(seed);
-    let (mut sum, mut sum2) = (0.0f64, 0.0f64);
-    for _ in 0..samples {
+    mean_and_standard_error((0..samples).map(|_| {
         let uc = rng.next_f32();
         let u = Vec2::new(rng.next_f32(), rng.next_f32());
-        let w = match bsdf.sample(wo, uc, u) {
+        match bsdf.sample(wo, uc, u) {
             Some(s) if s.pdf > 0.0 => (s.f[0] * s.wi.z.abs() / s.pdf) as f64,
             _ => 0.0,
-        };
-        sum += w;
-        sum2 += w * w;
-    }
-    let n = samples as f64;
-    let mean = sum / n;
-    (mean, ((sum2 / n - mean * mean).max(0.0) / (n - 1.0)).sqrt())
+        }
+    }))
 }
 
 /// Worst relative asymmetry |f(a, b) − f(b, a)| / max(f) over `pairs` random direction
@@ -474,6 +468,73 @@ pub fn check_sample_consistency<B: Bsdf<1>>(cases: &[Chi2Case<B>]) {
             panic!("{}: {e}", case.name);
         }
     }
+}
+
+/// Directions where BSDF formulas divide by cosines or meet their poles: the normal from
+/// both sides, the horizon, a hair above and below it, a denormal elevation, and two
+/// ordinary directions.
+pub fn special_directions() -> Vec<Vec3> {
+    vec![
+        Vec3::Z,
+        -Vec3::Z,
+        Vec3::X,
+        Vec3::Y,
+        Vec3::new(0.6, 0.8, 0.0),
+        Vec3::new(1.0, 0.0, 1e-7).normalize(),
+        Vec3::new(-1.0, 0.0, 1e-7).normalize(),
+        Vec3::new(0.0, -1.0, -1e-7).normalize(),
+        Vec3::new(1.0, 0.0, 1e-30),
+        Vec3::new(0.3, 0.4, 0.866).normalize(),
+        Vec3::new(-0.3, -0.4, 0.866).normalize(),
+    ]
+}
+
+/// Panics unless `bsdf` gives finite, non-negative `eval` and `pdf` for (ωo, ωi), and a
+/// sample at (`uc`, `u`), if any, has a unit direction and finite positive f and pdf.
+pub fn assert_finite(bsdf: &impl Bsdf<1>, wo: Vec3, wi: Vec3, uc: f32, u: Vec2, what: &str) {
+    let (f, p) = (bsdf.eval(wo, wi)[0], bsdf.pdf(wo, wi));
+    assert!(f.is_finite() && f >= 0.0 && p.is_finite() && p >= 0.0, "{what}: wo={wo} wi={wi}: f={f} pdf={p}");
+    if let Some(s) = bsdf.sample(wo, uc, u) {
+        assert!(s.wi.is_finite() && (s.wi.length() - 1.0).abs() < 1e-3, "{what}: wo={wo} uc={uc} u={u}: {s:?}");
+        assert!(
+            s.f[0].is_finite() && s.f[0] >= 0.0 && s.pdf.is_finite() && s.pdf > 0.0,
+            "{what}: wo={wo} uc={uc} u={u}: {s:?}"
+        );
+    }
+}
+
+/// [`assert_finite`] for every pair of [`special_directions`] with corner sample inputs,
+/// then for `random` random direction pairs and inputs.
+pub fn assert_finite_everywhere(bsdf: &impl Bsdf<1>, random: usize, rng: &mut Pcg32, what: &str) {
+    let special = special_directions();
+    let corners = [Vec2::ZERO, Vec2::splat(0.999_999_9), Vec2::new(0.0, 0.999_999_9), Vec2::new(0.5, 0.25)];
+    for &wo in &special {
+        for &wi in &special {
+            for uc in [0.0, 0.5, 0.999_999_9] {
+                for u in corners {
+                    assert_finite(bsdf, wo, wi, uc, u, what);
+                }
+            }
+        }
+    }
+    for _ in 0..random {
+        let wo = crate::sampling::uniform_sphere(rng.next_2d());
+        let wi = crate::sampling::uniform_sphere(rng.next_2d());
+        assert_finite(bsdf, wo, wi, rng.next_f32(), rng.next_2d(), what);
+    }
+}
+
+/// The mean of `weights` and its standard error.
+pub fn mean_and_standard_error(weights: impl IntoIterator<Item = f64>) -> (f64, f64) {
+    let (mut sum, mut sum2, mut n) = (0.0f64, 0.0f64, 0usize);
+    for w in weights {
+        sum += w;
+        sum2 += w * w;
+        n += 1;
+    }
+    let n = n as f64;
+    let mean = sum / n;
+    (mean, ((sum2 / n - mean * mean).max(0.0) / (n - 1.0).max(1.0)).sqrt())
 }
 
 /// `inner` with its pdf replaced by `pdf` — in `pdf` and in its samples — for the
