@@ -15,7 +15,7 @@ use std::process::ExitCode;
 use tracer::camera::Camera;
 use tracer::integrator::{PathSettings, ShadingNormals};
 use tracer::output::write_image;
-use tracer::render::{PreparedScene, RenderStats, SceneOptions};
+use tracer::render::{Capabilities, PreparedScene, RenderStats, SceneOptions};
 use tracer::{Backend, CpuBackend, PathTracer, RenderSettings, Scene};
 
 #[derive(Parser)]
@@ -357,7 +357,7 @@ fn prepare(args: &SceneArgs, spp: u32, mode: SpectralMode) -> Result<(Box<dyn Pr
     }
     let settings = settings(args, spp, mode, &scene)?;
     let backend = make_backend(args)?;
-    backend.capabilities().check_settings(backend.name(), &settings)?;
+    backend.capabilities().check_settings(&settings)?;
     let prepared = backend.prepare(scene, &SceneOptions { triangle_test: args.triangle_test })?;
     Ok((prepared, settings))
 }
@@ -377,19 +377,21 @@ fn make_backend(args: &SceneArgs) -> Result<Box<dyn Backend>> {
             other => bail!("unknown integrator '{other}' (known: {})", INTEGRATORS.join(", ")),
         },
     };
-    let integrator = backend.capabilities().integrator;
-    if integrator != args.integrator {
+    let caps = backend.capabilities();
+    if caps.integrator != args.integrator {
         bail!(
-            "the {} backend runs the '{integrator}' integrator, not '{}': use --integrator {integrator}, or --backend cpu",
-            backend.name(),
-            args.integrator
+            "the {} backend runs the '{}' integrator, not '{}': use --integrator {}, or --backend cpu",
+            caps.backend,
+            caps.integrator,
+            args.integrator,
+            caps.integrator
         );
     }
     Ok(backend)
 }
 
 /// The end-of-render line: wall time, speed, dropped and truncated samples.
-fn report(output: &Path, stats: &RenderStats, backend: &str, cap: Option<u32>) {
+fn report(output: &Path, stats: &RenderStats, caps: &Capabilities) {
     let secs = stats.wall.as_secs_f64();
     eprintln!(
         "wrote {}: {:.2} s, {:.3} M samples/s, {:.2} M rays/s, {} NaN/Inf samples dropped",
@@ -401,10 +403,11 @@ fn report(output: &Path, stats: &RenderStats, backend: &str, cap: Option<u32>) {
     );
     if stats.truncated > 0 {
         eprintln!(
-            "warning: {} paths reached the {backend} backend's cap of {} bounces and were cut short (a bias; \
+            "warning: {} paths reached the {} backend's cap of {} bounces and were cut short (a bias; \
              --backend cpu has no cap)",
             stats.truncated,
-            cap.map_or("?".into(), |c| c.to_string())
+            caps.backend,
+            caps.max_bounces.map_or("?".into(), |c| c.to_string())
         );
     }
 }
@@ -431,7 +434,7 @@ fn run_render(args: RenderArgs) -> Result<()> {
         settings.height,
         settings.spp,
         settings.mode.name(),
-        prepared.backend()
+        prepared.capabilities().backend
     );
     if stats.emitters == 0 && s.environment.is_none() {
         eprintln!("warning: the scene has no light (no Ke > 0 and no environment): the image will be black");
@@ -447,7 +450,7 @@ fn run_render(args: RenderArgs) -> Result<()> {
     if let Some(p) = &args.stderr {
         write_image(p, film.width(), film.height(), &film.std_error_rgb())?;
     }
-    report(&args.output, &stats, prepared.backend(), prepared.capabilities().max_bounces);
+    report(&args.output, &stats, &prepared.capabilities());
     Ok(())
 }
 
@@ -463,7 +466,7 @@ fn run_bench(args: BenchArgs) -> Result<()> {
         .map(|&mode| settings(&args.scene, args.spp, mode, prepared.scene()))
         .collect::<Result<_>>()?;
     for s in &all {
-        prepared.capabilities().check_settings(prepared.backend(), s)?;
+        prepared.capabilities().check_settings(s)?;
     }
     println!(
         "# {} {}x{} {} spp, {} backend, median of {}",
@@ -471,7 +474,7 @@ fn run_bench(args: BenchArgs) -> Result<()> {
         args.scene.width,
         args.scene.height,
         args.spp,
-        prepared.backend(),
+        prepared.capabilities().backend,
         args.repeats
     );
     println!("{:<8} {:>12} {:>12} {:>10} {:>10}", "mode", "Msamples/s", "Mrays/s", "wall_s", "nan");

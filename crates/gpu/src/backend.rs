@@ -106,6 +106,7 @@ const STORAGE_BUFFERS: u32 = 8;
 /// models, both triangle tests, the path tracer, at most [`MAX_BOUNCES`] bounces.
 pub fn capabilities() -> Capabilities {
     Capabilities {
+        backend: "gpu",
         spectral_modes: vec![SpectralMode::Hero],
         analytic_shapes: false,
         custom_bsdfs: false,
@@ -356,7 +357,7 @@ impl GpuBackend {
 
     /// Checks `scene` against the capabilities, uploads it and compiles its kernel.
     pub fn prepare_gpu(&self, scene: Scene, options: &SceneOptions) -> Result<GpuScene, tracer::Error> {
-        capabilities().check_scene("gpu", &scene, options)?;
+        capabilities().check_scene(&scene, options)?;
         scene.validate()?;
         Ok(self.upload(scene, options)?)
     }
@@ -674,10 +675,6 @@ impl From<GpuError> for tracer::Error {
 }
 
 impl Backend for GpuBackend {
-    fn name(&self) -> &str {
-        "gpu"
-    }
-
     fn capabilities(&self) -> Capabilities {
         capabilities()
     }
@@ -688,10 +685,6 @@ impl Backend for GpuBackend {
 }
 
 impl PreparedScene for GpuScene {
-    fn backend(&self) -> &str {
-        "gpu"
-    }
-
     fn capabilities(&self) -> Capabilities {
         capabilities()
     }

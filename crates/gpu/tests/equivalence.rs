@@ -363,19 +363,19 @@ fn unsupported_scenes_and_modes_are_clear_errors() {
         Ok(_) => panic!("a scene with spheres was accepted"),
     }
     let caps = gpu::backend::capabilities();
-    let err = caps.check_scene("gpu", &flake, &SceneOptions::default()).unwrap_err().to_string();
+    let err = caps.check_scene(&flake, &SceneOptions::default()).unwrap_err().to_string();
     assert!(err.contains("does not support analytic shapes") && err.contains("--backend cpu"), "{err}");
     let s = settings(8, 8, 1);
     for mode in [SpectralMode::Rgb, SpectralMode::Bins40] {
-        let err = caps.check_settings("gpu", &RenderSettings { mode, ..s.clone() }).unwrap_err().to_string();
+        let err = caps.check_settings(&RenderSettings { mode, ..s.clone() }).unwrap_err().to_string();
         assert!(err.contains(mode.name()) && err.contains("--backend cpu"), "{err}");
         println!("{err}");
     }
     let deep = RenderSettings { path: PathSettings { max_depth: 1000, ..s.path }, ..s.clone() };
-    let err = caps.check_settings("gpu", &deep).unwrap_err().to_string();
+    let err = caps.check_settings(&deep).unwrap_err().to_string();
     assert!(err.contains("1000 bounces") && err.contains("256"), "{err}");
     let unbounded = RenderSettings { path: PathSettings { max_depth: 0, ..s.path }, ..s.clone() };
-    assert!(caps.check_settings("gpu", &unbounded).is_ok(), "an unbounded depth is traced, truncations counted");
+    assert!(caps.check_settings(&unbounded).is_ok(), "an unbounded depth is traced, truncations counted");
     // The same refusals through a device: before any upload or compilation.
     let Some(ctx) = gpu::require_gpu() else { return };
     let gpu = GpuBackend::with_context(ctx);

@@ -54,7 +54,7 @@ impl<I: Integrator> CpuBackend<I> {
     /// Prepares `scene` (validates it, builds the triangles' 4-wide BVH with the given
     /// test, the shapes' BVH and the light distribution), with the concrete type.
     pub fn prepare_cpu(&self, scene: Scene, options: &SceneOptions) -> Result<CpuScene<I>> {
-        self.capabilities().check_scene(self.name(), &scene, options)?;
+        self.capabilities().check_scene(&scene, options)?;
         scene.validate()?;
         let start = Instant::now();
         let geometry = Geometry::build(&scene, options.triangle_test)?;
@@ -74,6 +74,7 @@ impl<I: Integrator> CpuBackend<I> {
 
 fn cpu_capabilities(integrator: &'static str) -> Capabilities {
     Capabilities {
+        backend: "cpu",
         spectral_modes: vec![SpectralMode::Hero, SpectralMode::Bins40, SpectralMode::Rgb],
         analytic_shapes: true,
         custom_bsdfs: true,
@@ -84,10 +85,6 @@ fn cpu_capabilities(integrator: &'static str) -> Capabilities {
 }
 
 impl<I: Integrator> Backend for CpuBackend<I> {
-    fn name(&self) -> &str {
-        "cpu"
-    }
-
     fn capabilities(&self) -> Capabilities {
         cpu_capabilities(self.integrator.name())
     }
@@ -126,10 +123,6 @@ impl<I: Integrator> CpuScene<I> {
 }
 
 impl<I: Integrator> PreparedScene for CpuScene<I> {
-    fn backend(&self) -> &str {
-        "cpu"
-    }
-
     fn capabilities(&self) -> Capabilities {
         cpu_capabilities(self.integrator.name())
     }

@@ -80,6 +80,8 @@ pub struct SceneOptions {
 /// [`Error::Unsupported`] before any work is done.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Capabilities {
+    /// The backend's name (`cpu`, `gpu`), for messages.
+    pub backend: &'static str,
     /// Spectral modes it traces.
     pub spectral_modes: Vec<SpectralMode>,
     /// Whether it intersects analytic shapes (spheres, boxes, polygons, implicit surfaces).
@@ -97,11 +99,10 @@ pub struct Capabilities {
 }
 
 impl Capabilities {
-    /// Everything the scene and its options need, against what the backend `backend` can
-    /// do.
-    pub fn check_scene(&self, backend: &str, scene: &Scene, options: &SceneOptions) -> Result<()> {
+    /// Everything the scene and its options need, against what the backend can do.
+    pub fn check_scene(&self, scene: &Scene, options: &SceneOptions) -> Result<()> {
         let unsupported = |feature: String, way_out: &str| Error::Unsupported {
-            backend: backend.to_string(),
+            backend: self.backend.to_string(),
             feature,
             way_out: way_out.to_string(),
         };
@@ -133,9 +134,12 @@ impl Capabilities {
     }
 
     /// Everything a render's settings need.
-    pub fn check_settings(&self, backend: &str, settings: &RenderSettings) -> Result<()> {
-        let unsupported =
-            |feature: String, way_out: String| Error::Unsupported { backend: backend.to_string(), feature, way_out };
+    pub fn check_settings(&self, settings: &RenderSettings) -> Result<()> {
+        let unsupported = |feature: String, way_out: String| Error::Unsupported {
+            backend: self.backend.to_string(),
+            feature,
+            way_out,
+        };
         if !self.spectral_modes.contains(&settings.mode) {
             let known: Vec<&str> = self.spectral_modes.iter().map(|m| m.name()).collect();
             return Err(unsupported(
@@ -172,10 +176,7 @@ pub struct PrepareStats {
 /// A way of executing an integrator (CPU with rayon, GPU with wgpu): it prepares scenes,
 /// and the prepared scenes render.
 pub trait Backend: Send + Sync {
-    /// A short name for messages (`cpu`, `gpu`).
-    fn name(&self) -> &str;
-
-    /// What it can render.
+    /// What it can render (and its name, for messages).
     fn capabilities(&self) -> Capabilities;
 
     /// Builds what this backend traverses from `scene`. Fails with
@@ -187,10 +188,7 @@ pub trait Backend: Send + Sync {
 /// A scene made ready by a [`Backend`]: it renders passes of samples. Sample `k` of pixel
 /// `p` always uses the same random stream, so passes may split the samples any way.
 pub trait PreparedScene: Send + Sync {
-    /// The backend's name.
-    fn backend(&self) -> &str;
-
-    /// The backend's capabilities (for checking settings before a render).
+    /// The backend's capabilities (for checking settings before a render) and name.
     fn capabilities(&self) -> Capabilities;
 
     /// The scene.
@@ -231,7 +229,7 @@ pub fn camera_for(scene: &Scene, settings: &RenderSettings) -> Camera {
 /// `render_pass` starts with it.
 pub fn check_pass(prepared: &dyn PreparedScene, settings: &RenderSettings, film: &Film) -> Result<()> {
     settings.validate()?;
-    prepared.capabilities().check_settings(prepared.backend(), settings)?;
+    prepared.capabilities().check_settings(settings)?;
     if film.width() != settings.width || film.height() != settings.height {
         return Err(Error::Setting("film size differs from the settings' image size".into()));
     }
@@ -267,7 +265,7 @@ pub fn render(
     progress: &(dyn Fn(u64) + Sync),
 ) -> Result<(Film, RenderStats)> {
     settings.validate()?;
-    scene.capabilities().check_settings(scene.backend(), settings)?;
+    scene.capabilities().check_settings(settings)?;
     let mut film = Film::new(settings.width, settings.height);
     let start = Instant::now();
     let counters = scene.render_pass(settings, &mut film, 0, settings.spp, progress)?;

@@ -138,7 +138,7 @@ pub fn run(
     let camera = scene.camera(&settings);
     settings.validate().context("render settings")?;
     camera.validate().map_err(|e| anyhow!("camera: {e}"))?;
-    scene.capabilities().check_settings(scene.backend(), &settings).context("render settings")?;
+    scene.capabilities().check_settings(&settings).context("render settings")?;
     let bounds = scene.scene().bounds();
     let scene_size = if bounds.is_empty() { 1.0 } else { bounds.extent().length() };
 
@@ -305,7 +305,7 @@ impl App {
         let start = Instant::now();
         self.scene
             .render_pass(&settings, &mut self.film, self.spp, spp, &|_| {})
-            .with_context(|| format!("{} backend", self.scene.backend()))?;
+            .with_context(|| format!("{} backend", self.scene.capabilities().backend))?;
         let elapsed = start.elapsed();
         let samples = settings.width as u64 * settings.height as u64 * spp as u64;
         self.spp += spp;
@@ -335,7 +335,7 @@ impl App {
             self.options.title,
             self.spp,
             self.title_rate / 1e6,
-            self.scene.backend()
+            self.scene.capabilities().backend
         );
         if let Some(w) = &self.window {
             w.set_title(&title);

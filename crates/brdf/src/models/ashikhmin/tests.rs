@@ -98,22 +98,17 @@ fn cases() -> Vec<Chi2Case<Ashikhmin<1>>> {
 
 crate::chi2_tests!("ashikhmin", cases(), seed 2000, parts [sampling_matches_pdf_part_1, sampling_matches_pdf_part_2, sampling_matches_pdf_part_3]);
 
+/// (n_u, n_v) pairs for the albedo measurements: isotropic from 0 to 10⁵, and anisotropic.
+const EXPONENTS: [(f32, f32); 8] =
+    [(0.0, 0.0), (1.0, 1.0), (10.0, 10.0), (100.0, 100.0), (1e4, 1e4), (1e5, 1e5), (10.0, 1000.0), (1e4, 10.0)];
+
 /// Prints the directional albedo over exponents, reflectances and cos θo, for reports:
 /// `cargo test -p brdf --lib ashikhmin_albedo_table -- --ignored --nocapture`.
 #[test]
 #[ignore]
 fn ashikhmin_albedo_table() {
     for (rs, rd) in [(1.0f32, 1.0f32), (0.0, 1.0), (0.05, 1.0), (0.05, 0.5), (1.0, 0.0), (0.5, 1.0)] {
-        for (nu, nv) in [
-            (0.0f32, 0.0f32),
-            (1.0, 1.0),
-            (10.0, 10.0),
-            (100.0, 100.0),
-            (1e4, 1e4),
-            (1e5, 1e5),
-            (10.0, 1000.0),
-            (1e4, 10.0),
-        ] {
+        for (nu, nv) in EXPONENTS {
             let b = sa(nu, nv, rs, rd);
             let row: Vec<String> = [1.0f32, 0.7, 0.4, 0.2, 0.1, 0.05, 0.01]
                 .iter()
@@ -202,18 +197,8 @@ fn pdf_integrates_to_the_probability_of_a_sample() {
 #[test]
 fn energy_is_conserved() {
     let mut seed = 0;
-    let exponents = [
-        (0.0f32, 0.0f32),
-        (1.0, 1.0),
-        (10.0, 10.0),
-        (100.0, 100.0),
-        (1e4, 1e4),
-        (1e5, 1e5),
-        (10.0, 1000.0),
-        (1e4, 10.0),
-    ];
     for (rs, rd) in [(1.0f32, 1.0f32), (0.0, 1.0), (0.05, 1.0), (0.5, 1.0)] {
-        for (nu, nv) in exponents {
+        for (nu, nv) in EXPONENTS {
             for z in [1.0f32, 0.7, 0.4, 0.1, 0.01] {
                 seed += 1;
                 let (albedo, se) = directional_albedo(&sa(nu, nv, rs, rd), dir(z, 30.0), 20_000, seed);
