@@ -13,6 +13,7 @@ use tracer::camera::Camera;
 use tracer::integrator::PathSettings;
 use tracer::material::Material;
 use tracer::mesh::uv_sphere;
+use tracer::sampler::SamplerKind;
 use tracer::{CpuBackend, RenderSettings, Scene};
 use tracer::{CpuScene, SceneOptions};
 
@@ -41,7 +42,7 @@ fn unit_colour(mode: SpectralMode) -> [f64; 3] {
     }
 }
 
-fn check_room(albedo: f32, mode: SpectralMode, spp: u32) {
+fn check_room(albedo: f32, mode: SpectralMode, sampler: SamplerKind, spp: u32) {
     let le = 0.5f32;
     let prepared = glowing_room(albedo, le);
     let settings = RenderSettings {
@@ -50,6 +51,7 @@ fn check_room(albedo: f32, mode: SpectralMode, spp: u32) {
         spp,
         seed: 11,
         mode,
+        sampler,
         path: PathSettings { max_depth: 0, rr_depth: 3, ..Default::default() },
         camera: None,
     };
@@ -84,14 +86,22 @@ fn check_room(albedo: f32, mode: SpectralMode, spp: u32) {
 #[test]
 fn closed_room_albedo_half() {
     for mode in SpectralMode::ALL {
-        check_room(0.5, mode, 512);
+        check_room(0.5, mode, SamplerKind::Independent, 512);
+    }
+}
+
+/// The analytic answer with Owen-scrambled Sobol samples (unbiased like independent ones).
+#[test]
+fn closed_room_with_the_zsobol_sampler() {
+    for mode in [SpectralMode::Rgb, SpectralMode::Hero] {
+        check_room(0.5, mode, SamplerKind::ZSobol, 512);
     }
 }
 
 #[test]
 fn closed_room_albedo_0_9_needs_long_paths_and_russian_roulette() {
     for mode in [SpectralMode::Rgb, SpectralMode::Hero] {
-        check_room(0.9, mode, 512);
+        check_room(0.9, mode, SamplerKind::Independent, 512);
     }
 }
 
@@ -108,6 +118,7 @@ fn a_depth_limit_cuts_the_series() {
             spp: 64,
             seed: 5,
             mode: SpectralMode::Rgb,
+            sampler: SamplerKind::Independent,
             path: PathSettings { max_depth: k, rr_depth: 100, ..Default::default() },
             camera: None,
         };

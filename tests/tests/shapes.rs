@@ -31,7 +31,7 @@ use tracer::{CpuScene, PreparedScene, SceneOptions};
 fn render(scene: Scene, size: u32, spp: u32, path: PathSettings) -> (CpuScene, Film) {
     let prepared = CpuBackend::new(2).unwrap().prepare_cpu(scene, &SceneOptions::default()).unwrap();
     let settings =
-        RenderSettings { width: size, height: size, spp, seed: 5, mode: SpectralMode::Rgb, path, camera: None };
+        RenderSettings { width: size, height: size, spp, seed: 5, mode: SpectralMode::Rgb, path, ..Default::default() };
     let (film, stats) = tracer::render(&prepared, &settings, &|_| {}).unwrap();
     assert_eq!(stats.non_finite, 0, "NaN/Inf samples");
     (prepared, film)

@@ -16,6 +16,7 @@ use tracer::camera::Camera;
 use tracer::integrator::{PathSettings, ShadingNormals};
 use tracer::output::write_image;
 use tracer::render::{Capabilities, PreparedScene, RenderStats, SceneOptions};
+use tracer::sampler::SamplerKind;
 use tracer::{Backend, CpuBackend, PathTracer, RenderSettings, Scene};
 
 #[derive(Parser)]
@@ -226,6 +227,11 @@ struct SceneArgs {
     /// before any work, with the way out.
     #[arg(long, default_value = "cpu", value_parser = ["cpu", "gpu"])]
     backend: String,
+    /// Sample values: independent (PCG32 per pixel sample) or zsobol (Owen-scrambled
+    /// Sobol in Morton order: stratified per pixel, blue-noise error; needs the whole
+    /// render's --spp, best a power of two).
+    #[arg(long, default_value = "independent", value_parser = parse_sampler)]
+    sampler: SamplerKind,
     /// Light transport: path (path tracing with next-event estimation and MIS).
     #[arg(long, default_value = "path", value_parser = INTEGRATORS)]
     integrator: String,
@@ -240,6 +246,13 @@ fn parse_triangle_test(s: &str) -> Result<TriangleTest, String> {
         .into_iter()
         .find(|t| t.name() == s)
         .ok_or_else(|| format!("unknown triangle test '{s}' (known: watertight, moller-trumbore)"))
+}
+
+fn parse_sampler(s: &str) -> Result<SamplerKind, String> {
+    SamplerKind::ALL.into_iter().find(|k| k.name() == s).ok_or_else(|| {
+        let known: Vec<&str> = SamplerKind::ALL.iter().map(|k| k.name()).collect();
+        format!("unknown sampler '{s}' (known: {})", known.join(", "))
+    })
 }
 
 fn parse_shading_normals(s: &str) -> Result<ShadingNormals, String> {
@@ -333,6 +346,7 @@ fn settings(args: &SceneArgs, spp: u32, mode: SpectralMode, scene: &Scene) -> Re
         spp,
         seed: args.seed,
         mode,
+        sampler: args.sampler,
         path: PathSettings {
             max_depth: args.max_depth,
             rr_depth: args.rr_depth,

@@ -72,6 +72,7 @@ use std::time::{Duration, Instant};
 use tracer::film::{Film, PixelStats};
 use tracer::integrator::PathCounters;
 use tracer::render::{Backend, Capabilities, PrepareStats, PreparedScene, RenderSettings, SceneOptions, check_pass};
+use tracer::sampler::SamplerKind;
 use tracer::{Camera, Scene};
 use wgpu::util::DeviceExt;
 
@@ -108,6 +109,7 @@ pub fn capabilities() -> Capabilities {
     Capabilities {
         backend: "gpu",
         spectral_modes: vec![SpectralMode::Hero],
+        samplers: vec![SamplerKind::Independent],
         analytic_shapes: false,
         custom_bsdfs: false,
         triangle_tests: vec![TriangleTest::Watertight, TriangleTest::MollerTrumbore],

@@ -180,7 +180,7 @@ fn settings(width: u32, height: u32, spp: u32) -> RenderSettings {
         seed: 7,
         mode: SpectralMode::Hero,
         path: PathSettings { max_depth: 8, rr_depth: 100, ..PathSettings::default() },
-        camera: None,
+        ..RenderSettings::default()
     }
 }
 
@@ -374,6 +374,9 @@ fn unsupported_scenes_and_modes_are_clear_errors() {
     let deep = RenderSettings { path: PathSettings { max_depth: 1000, ..s.path }, ..s.clone() };
     let err = caps.check_settings(&deep).unwrap_err().to_string();
     assert!(err.contains("1000 bounces") && err.contains("256"), "{err}");
+    let zsobol = RenderSettings { sampler: tracer::sampler::SamplerKind::ZSobol, ..s.clone() };
+    let err = caps.check_settings(&zsobol).unwrap_err().to_string();
+    assert!(err.contains("'zsobol' sampler") && err.contains("--sampler independent"), "{err}");
     let unbounded = RenderSettings { path: PathSettings { max_depth: 0, ..s.path }, ..s.clone() };
     assert!(caps.check_settings(&unbounded).is_ok(), "an unbounded depth is traced, truncations counted");
     // The same refusals through a device: before any upload or compilation.

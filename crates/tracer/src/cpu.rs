@@ -6,7 +6,7 @@ use crate::geometry::Geometry;
 use crate::integrator::{CameraSample, Integrator, PathCounters, PathTracer, SceneView};
 use crate::lights::Lights;
 use crate::render::{Backend, Capabilities, PrepareStats, PreparedScene, RenderSettings, SceneOptions, check_pass};
-use crate::sampler::Pcg32;
+use crate::sampler::{Pcg32, Sampler, SamplerKind, ZSobolLayout};
 use crate::scene::Scene;
 use crate::{Error, Result};
 use bvh::TriangleTest;
@@ -76,6 +76,7 @@ fn cpu_capabilities(integrator: &'static str) -> Capabilities {
     Capabilities {
         backend: "cpu",
         spectral_modes: vec![SpectralMode::Hero, SpectralMode::Bins40, SpectralMode::Rgb],
+        samplers: SamplerKind::ALL.to_vec(),
         analytic_shapes: true,
         custom_bsdfs: true,
         triangle_tests: vec![TriangleTest::Watertight, TriangleTest::MollerTrumbore],
@@ -144,13 +145,35 @@ impl<I: Integrator> PreparedScene for CpuScene<I> {
         progress: &(dyn Fn(u64) + Sync),
     ) -> Result<PathCounters> {
         check_pass(self, settings, film)?;
+        check_sample_range(settings, first_sample, spp)?;
         let pass = Pass { scene: self, settings, first_sample, spp, progress };
-        Ok(self.pool.install(|| match settings.mode {
-            SpectralMode::Hero => pass.tiles::<4>(film, |rng| SampledWavelengths::sample_hero(rng.next_f32())),
-            SpectralMode::Bins40 => pass.tiles::<40>(film, |_| SampledWavelengths::fixed_bins(380.0, 10.0)),
-            SpectralMode::Rgb => pass.tiles::<3>(film, |_| SampledWavelengths::rgb()),
+        let seed = settings.seed;
+        let width = film.width();
+        Ok(self.pool.install(|| match settings.sampler {
+            SamplerKind::Independent => {
+                pass.modes(film, &|x: u32, y: u32, s: u32| Pcg32::for_sample(seed, y * width + x, s))
+            }
+            SamplerKind::ZSobol => {
+                let layout = ZSobolLayout::new(film.width(), film.height(), settings.spp, seed);
+                pass.modes(film, &|x: u32, y: u32, s: u32| layout.sampler(x, y, s))
+            }
         }))
     }
+}
+
+/// A [`ZSobol`](crate::sampler::ZSobol) render lays its samples out for `settings.spp`
+/// samples per pixel (rounded up to a power of two): a pass must stay within them.
+fn check_sample_range(settings: &RenderSettings, first_sample: u32, spp: u32) -> Result<()> {
+    let budget = (settings.spp as u64).next_power_of_two();
+    if settings.sampler == SamplerKind::ZSobol && first_sample as u64 + spp as u64 > budget {
+        return Err(Error::Setting(format!(
+            "the zsobol sampler lays out {budget} samples per pixel (--spp {} rounded up to a power of two); \
+             samples {first_sample}..{} are beyond them: raise --spp, or use --sampler independent",
+            settings.spp,
+            first_sample as u64 + spp as u64
+        )));
+    }
+    Ok(())
 }
 
 /// One render pass over a CPU scene.
@@ -160,6 +183,13 @@ struct Pass<'a, I: Integrator> {
     first_sample: u32,
     spp: u32,
     progress: &'a (dyn Fn(u64) + Sync),
+}
+
+/// A pass's wavelengths: drawn per sample from one sample value, or the same for all.
+#[derive(Clone, Copy)]
+enum Wavelengths<'a, const N: usize> {
+    Sampled(&'a (dyn Fn(f32) -> SampledWavelengths<N> + Sync)),
+    Fixed(SampledWavelengths<N>),
 }
 
 struct TileResult {
@@ -172,11 +202,25 @@ struct TileResult {
 }
 
 impl<I: Integrator> Pass<'_, I> {
+    /// Renders in the settings' spectral mode with samplers made by `sampler(x, y, s)`.
+    fn modes<S: Sampler>(&self, film: &mut Film, sampler: &(dyn Fn(u32, u32, u32) -> S + Sync)) -> PathCounters {
+        match self.settings.mode {
+            SpectralMode::Hero => {
+                self.tiles::<4, S>(film, sampler, Wavelengths::Sampled(&SampledWavelengths::sample_hero))
+            }
+            SpectralMode::Bins40 => {
+                self.tiles::<40, S>(film, sampler, Wavelengths::Fixed(SampledWavelengths::fixed_bins(380.0, 10.0)))
+            }
+            SpectralMode::Rgb => self.tiles::<3, S>(film, sampler, Wavelengths::Fixed(SampledWavelengths::rgb())),
+        }
+    }
+
     /// Renders every tile in parallel and writes the results into `film`.
-    fn tiles<const N: usize>(
+    fn tiles<const N: usize, S: Sampler>(
         &self,
         film: &mut Film,
-        wavelengths: impl Fn(&mut Pcg32) -> SampledWavelengths<N> + Sync,
+        sampler: &(dyn Fn(u32, u32, u32) -> S + Sync),
+        wavelengths: Wavelengths<'_, N>,
     ) -> PathCounters {
         let (width, height) = (film.width(), film.height());
         let tiles_x = width.div_ceil(TILE);
@@ -184,7 +228,7 @@ impl<I: Integrator> Pass<'_, I> {
             (0..height.div_ceil(TILE)).flat_map(|ty| (0..tiles_x).map(move |tx| (tx * TILE, ty * TILE))).collect();
         let existing: &Film = film;
         let results: Vec<TileResult> =
-            tiles.par_iter().map(|&(x0, y0)| self.tile(existing, x0, y0, &wavelengths)).collect();
+            tiles.par_iter().map(|&(x0, y0)| self.tile(existing, x0, y0, sampler, &wavelengths)).collect();
         let mut total = PathCounters::default();
         for t in results {
             for (i, p) in t.pixels.iter().enumerate() {
@@ -199,12 +243,13 @@ impl<I: Integrator> Pass<'_, I> {
 
     /// One tile: its pixel samples in pixel-major order, in blocks of at most [`BLOCK`]
     /// handed to the integrator, accumulated in the same order.
-    fn tile<const N: usize>(
+    fn tile<const N: usize, S: Sampler>(
         &self,
         film: &Film,
         x0: u32,
         y0: u32,
-        wavelengths: &(impl Fn(&mut Pcg32) -> SampledWavelengths<N> + Sync),
+        sampler: &(dyn Fn(u32, u32, u32) -> S + Sync),
+        wavelengths: &Wavelengths<'_, N>,
     ) -> TileResult {
         let (width, height) = (film.width(), film.height());
         let (w, h) = (TILE.min(width - x0), TILE.min(height - y0));
@@ -216,7 +261,7 @@ impl<I: Integrator> Pass<'_, I> {
         let mut counters = PathCounters::default();
         let samples = (0..w * h).flat_map(|i| (0..self.spp).map(move |s| (i, self.first_sample + s)));
         // The block's samples and, for each, its pixel's index in the tile.
-        let mut block: Vec<CameraSample<N>> = Vec::with_capacity(BLOCK);
+        let mut block: Vec<CameraSample<N, S>> = Vec::with_capacity(BLOCK);
         let mut owners: Vec<u32> = Vec::with_capacity(BLOCK);
         let mut samples = samples.peekable();
         while samples.peek().is_some() {
@@ -224,11 +269,14 @@ impl<I: Integrator> Pass<'_, I> {
             owners.clear();
             for (i, s) in samples.by_ref().take(BLOCK) {
                 let (x, y) = (x0 + i % w, y0 + i / w);
-                let mut rng = Pcg32::for_sample(self.settings.seed, y * width + x, s);
-                let wl = wavelengths(&mut rng);
-                let jitter = rng.next_2d();
+                let mut sampler = sampler(x, y, s);
+                let (u_wavelength, jitter) = sampler.camera(matches!(wavelengths, Wavelengths::Sampled(_)));
+                let wl = match wavelengths {
+                    Wavelengths::Sampled(f) => f(u_wavelength),
+                    Wavelengths::Fixed(wl) => *wl,
+                };
                 let ray = camera.ray(Vec2::new(x as f32, y as f32) + jitter);
-                block.push(CameraSample { ray, wl, rng, radiance: SampledSpectrum::zero() });
+                block.push(CameraSample { ray, wl, sampler, radiance: SampledSpectrum::zero() });
                 owners.push(i);
             }
             self.scene.integrator.radiance_block(&view, &self.settings.path, &mut block, &mut counters);

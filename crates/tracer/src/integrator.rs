@@ -7,7 +7,7 @@
 use crate::geometry::{Geometry, HitSurface, SceneHit};
 use crate::lights::Lights;
 use crate::material::Material;
-use crate::sampler::Pcg32;
+use crate::sampler::Sampler;
 use crate::scene::Scene;
 use brdf::{Bsdf, Frame, ScatterFlags};
 use bvh::Ray;
@@ -55,16 +55,16 @@ impl std::ops::AddAssign for PathCounters {
 }
 
 /// One camera sample on its way through an integrator: its ray, its wavelengths, its own
-/// random stream (already advanced past the camera's draws), and the radiance found.
+/// sample stream (already advanced past the camera's draws), and the radiance found.
 #[derive(Clone, Debug)]
-pub struct CameraSample<const N: usize> {
+pub struct CameraSample<const N: usize, S: Sampler> {
     /// The camera ray.
     pub ray: Ray,
     /// The sampled wavelengths (a dispersive surface may collapse them: convert the
     /// radiance with these, after the integrator has run).
     pub wl: SampledWavelengths<N>,
-    /// The sample's random stream.
-    pub rng: Pcg32,
+    /// The sample's stream of sample values.
+    pub sampler: S,
     /// The estimate (zero until the integrator has run).
     pub radiance: SampledSpectrum<N>,
 }
@@ -82,29 +82,29 @@ pub trait Integrator: Send + Sync + 'static {
     fn name(&self) -> &'static str;
 
     /// Estimates the radiance arriving along `ray` at the sampled wavelengths, drawing
-    /// from `rng`. A dispersive surface may collapse `wl` to one wavelength
-    /// ([`SampledWavelengths::collapse_to`]): the caller converts the result with the
-    /// `wl` it gets back.
-    fn radiance<const N: usize>(
+    /// sample values from `sampler`. A dispersive surface may collapse `wl` to one
+    /// wavelength ([`SampledWavelengths::collapse_to`]): the caller converts the result
+    /// with the `wl` it gets back.
+    fn radiance<const N: usize, S: Sampler>(
         &self,
         view: &SceneView,
         ray: Ray,
         wl: &mut SampledWavelengths<N>,
         settings: &PathSettings,
-        rng: &mut Pcg32,
+        sampler: &mut S,
         counters: &mut PathCounters,
     ) -> SampledSpectrum<N>;
 
     /// Fills in the radiance of every sample of `block`.
-    fn radiance_block<const N: usize>(
+    fn radiance_block<const N: usize, S: Sampler>(
         &self,
         view: &SceneView,
         settings: &PathSettings,
-        block: &mut [CameraSample<N>],
+        block: &mut [CameraSample<N, S>],
         counters: &mut PathCounters,
     ) {
         for s in block {
-            s.radiance = self.radiance(view, s.ray, &mut s.wl, settings, &mut s.rng, counters);
+            s.radiance = self.radiance(view, s.ray, &mut s.wl, settings, &mut s.sampler, counters);
         }
     }
 }
@@ -212,26 +212,26 @@ impl Integrator for PathTracer {
     }
 
     #[inline]
-    fn radiance<const N: usize>(
+    fn radiance<const N: usize, S: Sampler>(
         &self,
         view: &SceneView,
         ray: Ray,
         wl: &mut SampledWavelengths<N>,
         settings: &PathSettings,
-        rng: &mut Pcg32,
+        sampler: &mut S,
         counters: &mut PathCounters,
     ) -> SampledSpectrum<N> {
-        path_radiance(view, ray, wl, settings, rng, counters)
+        path_radiance(view, ray, wl, settings, sampler, counters)
     }
 }
 
 /// [`PathTracer`]'s estimate.
-fn path_radiance<const N: usize>(
+fn path_radiance<const N: usize, S: Sampler>(
     view: &SceneView,
     mut ray: Ray,
     wl: &mut SampledWavelengths<N>,
     settings: &PathSettings,
-    rng: &mut Pcg32,
+    sampler: &mut S,
     counters: &mut PathCounters,
 ) -> SampledSpectrum<N> {
     let scene = view.scene;
@@ -298,7 +298,7 @@ fn path_radiance<const N: usize>(
         // Dispersion: from here on the path follows one wavelength (a random lane, moved
         // to lane 0, so that the BSDF refracts it with its own index).
         if material.is_dispersive() && !wl.is_rgb() && !wl.is_collapsed() {
-            let k = ((rng.next_f32() * N as f32) as usize).min(N - 1);
+            let k = ((sampler.next_1d() * N as f32) as usize).min(N - 1);
             wl.collapse_to(k);
             beta.0.swap(0, k);
             l.0.swap(0, k);
@@ -315,7 +315,7 @@ fn path_radiance<const N: usize>(
 
         // Next-event estimation: one shadow ray to a point on a light.
         if flags.is_non_specular()
-            && let Some(ls) = lights.sample(scene, rng.next_f32(), rng.next_2d())
+            && let Some(ls) = lights.sample(scene, sampler.next_1d(), sampler.next_2d())
         {
             let (wi_world, dist, light_pdf, le) = match ls.prim {
                 Some(t) => {
@@ -357,8 +357,8 @@ fn path_radiance<const N: usize>(
         }
 
         // Continue the path by sampling the BSDF.
-        let uc = rng.next_f32();
-        let u = rng.next_2d();
+        let uc = sampler.next_1d();
+        let u = sampler.next_2d();
         let Some(s) = bsdf.sample(wo, uc, u) else { break };
         if s.pdf <= 0.0 || s.f.is_black() {
             break;
@@ -387,7 +387,7 @@ fn path_radiance<const N: usize>(
         // Russian roulette (Arvo & Kirk 1990): unbiased termination of dim paths.
         if bounce >= settings.rr_depth {
             let q = (1.0 - beta.max_component()).max(RR_MIN_TERMINATION);
-            if rng.next_f32() < q {
+            if sampler.next_1d() < q {
                 break;
             }
             beta /= 1.0 - q;

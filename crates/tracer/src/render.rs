@@ -7,6 +7,7 @@
 use crate::camera::Camera;
 use crate::film::Film;
 use crate::integrator::{PathCounters, PathSettings};
+use crate::sampler::SamplerKind;
 use crate::scene::Scene;
 use crate::{Error, Result};
 use bvh::TriangleTest;
@@ -26,6 +27,8 @@ pub struct RenderSettings {
     pub seed: u64,
     /// How the spectrum is sampled.
     pub mode: SpectralMode,
+    /// How sample values are drawn.
+    pub sampler: SamplerKind,
     /// Path depth, Russian roulette and shading normals, which every integrator reads.
     pub path: PathSettings,
     /// Camera to use instead of the scene's (or the default framing).
@@ -40,6 +43,7 @@ impl Default for RenderSettings {
             spp: 64,
             seed: 0,
             mode: SpectralMode::Hero,
+            sampler: SamplerKind::default(),
             path: PathSettings::default(),
             camera: None,
         }
@@ -84,6 +88,8 @@ pub struct Capabilities {
     pub backend: &'static str,
     /// Spectral modes it traces.
     pub spectral_modes: Vec<SpectralMode>,
+    /// Samplers it draws from.
+    pub samplers: Vec<SamplerKind>,
     /// Whether it intersects analytic shapes (spheres, boxes, polygons, implicit surfaces).
     pub analytic_shapes: bool,
     /// Whether it runs BSDFs written outside the workspace ([`brdf::DynBsdfBuilder`]).
@@ -145,6 +151,13 @@ impl Capabilities {
             return Err(unsupported(
                 format!("the '{}' spectral mode", settings.mode.name()),
                 format!("use --spectral {}, or --backend cpu", known.join(" or ")),
+            ));
+        }
+        if !self.samplers.contains(&settings.sampler) {
+            let known: Vec<&str> = self.samplers.iter().map(|s| s.name()).collect();
+            return Err(unsupported(
+                format!("the '{}' sampler", settings.sampler.name()),
+                format!("use --sampler {}, or --backend cpu", known.join(" or ")),
             ));
         }
         if let Some(cap) = self.max_bounces {

@@ -35,7 +35,7 @@
 
 pub mod camera_control;
 
-use anyhow::{Context as _, anyhow};
+use anyhow::{Context as _, anyhow, bail};
 use camera_control::CameraControl;
 use std::num::NonZeroU32;
 use std::path::{Path, PathBuf};
@@ -139,6 +139,12 @@ pub fn run(
     settings.validate().context("render settings")?;
     camera.validate().map_err(|e| anyhow!("camera: {e}"))?;
     scene.capabilities().check_settings(&settings).context("render settings")?;
+    if settings.sampler == tracer::sampler::SamplerKind::ZSobol && options.max_spp.is_none() {
+        bail!(
+            "the zsobol sampler lays its samples out for a known sample count, and the viewer refines without \
+             end: give --max-spp, or use --sampler independent"
+        );
+    }
     let bounds = scene.scene().bounds();
     let scene_size = if bounds.is_empty() { 1.0 } else { bounds.extent().length() };
 
@@ -301,7 +307,10 @@ impl App {
         if spp == 0 {
             return Ok(());
         }
-        let settings = RenderSettings { spp, camera: Some(self.control.camera()), ..self.settings.clone() };
+        // The render's whole sample budget (for samplers that lay samples out for it); the
+        // pass adds `spp` of them.
+        let budget = self.options.max_spp.unwrap_or(spp);
+        let settings = RenderSettings { spp: budget, camera: Some(self.control.camera()), ..self.settings.clone() };
         let start = Instant::now();
         self.scene
             .render_pass(&settings, &mut self.film, self.spp, spp, &|_| {})

@@ -1,0 +1,110 @@
+//! Tests of `sampler.rs`: the Sobol points are stratified, uniform and decorrelated across
+//! dimensions, and integrate smooth functions with far less error than independent ones.
+
+use super::*;
+
+/// The points of dimensions (d, d+1) of every sample of pixel (x, y).
+fn pixel_points(layout: &ZSobolLayout, x: u32, y: u32, spp: u32, skip_dims: u32) -> Vec<Vec2> {
+    (0..spp)
+        .map(|s| {
+            let mut z = layout.sampler(x, y, s);
+            for _ in 0..skip_dims {
+                z.next_1d();
+            }
+            z.next_2d()
+        })
+        .collect()
+}
+
+/// True if every elementary interval of area 1/n with power-of-two sides holds exactly one
+/// of the n points: a (0, m, 2)-net in base 2.
+fn is_net(points: &[Vec2]) -> bool {
+    let n = points.len();
+    let m = n.trailing_zeros();
+    (0..=m).all(|k| {
+        let (cols, rows) = (1usize << k, n >> k);
+        let mut seen = vec![false; n];
+        points.iter().all(|p| {
+            let c = ((p.x * cols as f32) as usize).min(cols - 1);
+            let r = ((p.y * rows as f32) as usize).min(rows - 1);
+            !std::mem::replace(&mut seen[r * cols + c], true)
+        })
+    })
+}
+
+#[test]
+fn every_dimension_pair_of_a_pixel_is_stratified() {
+    for spp in [4u32, 16, 64] {
+        let layout = ZSobolLayout::new(64, 48, spp, 7);
+        for (x, y) in [(0, 0), (5, 3), (63, 47)] {
+            for skip in [0u32, 2, 3, 7] {
+                let pts = pixel_points(&layout, x, y, spp, skip);
+                assert!(is_net(&pts), "spp {spp} pixel ({x}, {y}) dims {skip}..: {pts:?}");
+            }
+        }
+    }
+    // Independent points are not a net (the check can fail).
+    let mut rng = Pcg32::seed_from_u64(3);
+    let pts: Vec<Vec2> = (0..16).map(|_| Sampler::next_2d(&mut rng)).collect();
+    assert!(!is_net(&pts));
+}
+
+#[test]
+fn values_are_uniform_and_dimensions_uncorrelated() {
+    let layout = ZSobolLayout::new(32, 32, 16, 11);
+    let (mut hist, mut n) = ([0u32; 16], 0u32);
+    let (mut sxy, mut sx, mut sy, mut sxx, mut syy) = (0.0f64, 0.0f64, 0.0f64, 0.0f64, 0.0f64);
+    for y in 0..32 {
+        for x in 0..32 {
+            for s in 0..16 {
+                let mut z = layout.sampler(x, y, s);
+                let _ = z.next_2d();
+                let a = z.next_1d();
+                let b = z.next_1d();
+                hist[(a * 16.0) as usize] += 1;
+                n += 1;
+                let (a, b) = (a as f64, b as f64);
+                (sxy, sx, sy, sxx, syy) = (sxy + a * b, sx + a, sy + b, sxx + a * a, syy + b * b);
+            }
+        }
+    }
+    // Pearson's chi-square over 16 bins (15 dof): far below the 0.999 quantile 37.7.
+    let e = n as f64 / 16.0;
+    let chi2: f64 = hist.iter().map(|&h| (h as f64 - e).powi(2) / e).sum();
+    assert!(chi2 < 37.7, "{hist:?}: chi2 = {chi2}");
+    let nf = n as f64;
+    let r = (sxy / nf - sx / nf * sy / nf) / ((sxx / nf - (sx / nf).powi(2)) * (syy / nf - (sy / nf).powi(2))).sqrt();
+    assert!(r.abs() < 0.02, "dimensions 2 and 3 correlate: r = {r}");
+}
+
+#[test]
+fn smooth_integrals_converge_faster_than_with_independent_points() {
+    // ∫∫ sin(πx) sin(πy) dx dy = 4/π², 64 samples per pixel, mean squared error over pixels.
+    let f = |p: Vec2| (std::f32::consts::PI * p.x).sin() * (std::f32::consts::PI * p.y).sin();
+    let exact = 4.0 / std::f64::consts::PI.powi(2);
+    let layout = ZSobolLayout::new(16, 16, 64, 5);
+    let (mut mse_sobol, mut mse_indep) = (0.0f64, 0.0f64);
+    for y in 0..16 {
+        for x in 0..16 {
+            let est: f64 = pixel_points(&layout, x, y, 64, 4).iter().map(|&p| f(p) as f64).sum::<f64>() / 64.0;
+            mse_sobol += (est - exact).powi(2);
+            let mut rng = Pcg32::for_sample(5, y * 16 + x, 0);
+            let est: f64 = (0..64).map(|_| f(Sampler::next_2d(&mut rng)) as f64).sum::<f64>() / 64.0;
+            mse_indep += (est - exact).powi(2);
+        }
+    }
+    assert!(mse_sobol < 0.05 * mse_indep, "sobol {mse_sobol:.3e} vs independent {mse_indep:.3e}");
+}
+
+#[test]
+fn morton_and_sobol_helpers() {
+    assert_eq!(morton2(0b11, 0b01), 0b0111);
+    assert_eq!(morton2(0, 1), 0b10);
+    assert_eq!((0..8).map(sobol_0).map(|v| v >> 29).collect::<Vec<_>>(), [0, 4, 2, 6, 1, 5, 3, 7]);
+    assert_eq!((0..4).map(sobol_1).map(|v| v >> 30).collect::<Vec<_>>(), [0, 2, 3, 1]);
+    // Scrambling keeps a stratified set stratified: the 8 first points, scrambled, still
+    // have one point per eighth.
+    let mut eighths: Vec<u32> = (0..8).map(|i| owen_scramble(sobol_0(i), 0xdead_beef) >> 29).collect();
+    eighths.sort();
+    assert_eq!(eighths, (0..8).collect::<Vec<u32>>());
+}
