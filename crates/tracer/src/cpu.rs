@@ -6,7 +6,7 @@ use crate::geometry::Geometry;
 use crate::integrator::{CameraSample, Integrator, PathCounters, PathTracer, SceneView};
 use crate::lights::Lights;
 use crate::render::{Backend, Capabilities, PrepareStats, PreparedScene, RenderSettings, SceneOptions, check_pass};
-use crate::sampler::{Pcg32, Sampler, SamplerKind, ZSobolLayout};
+use crate::sampler::{PaddedSobol, Pcg32, Sampler, SamplerKind, ZSobolLayout};
 use crate::scene::Scene;
 use crate::{Error, Result};
 use bvh::TriangleTest;
@@ -153,6 +153,10 @@ impl<I: Integrator> PreparedScene for CpuScene<I> {
             SamplerKind::Independent => {
                 pass.modes(film, &|x: u32, y: u32, s: u32| Pcg32::for_sample(seed, y * width + x, s))
             }
+            SamplerKind::Sobol => {
+                let total = settings.spp;
+                pass.modes(film, &|x: u32, y: u32, s: u32| PaddedSobol::new(x, y, s, total, seed))
+            }
             SamplerKind::ZSobol => {
                 let layout = ZSobolLayout::new(film.width(), film.height(), settings.spp, seed);
                 pass.modes(film, &|x: u32, y: u32, s: u32| layout.sampler(x, y, s))
@@ -161,14 +165,15 @@ impl<I: Integrator> PreparedScene for CpuScene<I> {
     }
 }
 
-/// A [`ZSobol`](crate::sampler::ZSobol) render lays its samples out for `settings.spp`
-/// samples per pixel (rounded up to a power of two): a pass must stay within them.
+/// The Sobol samplers lay their samples out for `settings.spp` samples per pixel (rounded
+/// up to a power of two): a pass must stay within them.
 fn check_sample_range(settings: &RenderSettings, first_sample: u32, spp: u32) -> Result<()> {
     let budget = (settings.spp as u64).next_power_of_two();
-    if settings.sampler == SamplerKind::ZSobol && first_sample as u64 + spp as u64 > budget {
+    if settings.sampler.needs_sample_budget() && first_sample as u64 + spp as u64 > budget {
         return Err(Error::Setting(format!(
-            "the zsobol sampler lays out {budget} samples per pixel (--spp {} rounded up to a power of two); \
+            "the {} sampler lays out {budget} samples per pixel (--spp {} rounded up to a power of two); \
              samples {first_sample}..{} are beyond them: raise --spp, or use --sampler independent",
+            settings.sampler.name(),
             settings.spp,
             first_sample as u64 + spp as u64
         )));

@@ -139,10 +139,11 @@ pub fn run(
     settings.validate().context("render settings")?;
     camera.validate().map_err(|e| anyhow!("camera: {e}"))?;
     scene.capabilities().check_settings(&settings).context("render settings")?;
-    if settings.sampler == tracer::sampler::SamplerKind::ZSobol && options.max_spp.is_none() {
+    if settings.sampler.needs_sample_budget() && options.max_spp.is_none() {
         bail!(
-            "the zsobol sampler lays its samples out for a known sample count, and the viewer refines without \
-             end: give --max-spp, or use --sampler independent"
+            "the {} sampler lays its samples out for a known sample count, and the viewer refines without end: \
+             give --max-spp, or use --sampler independent",
+            settings.sampler.name()
         );
     }
     let bounds = scene.scene().bounds();

@@ -102,9 +102,57 @@ fn morton_and_sobol_helpers() {
     assert_eq!(morton2(0, 1), 0b10);
     assert_eq!((0..8).map(sobol_0).map(|v| v >> 29).collect::<Vec<_>>(), [0, 4, 2, 6, 1, 5, 3, 7]);
     assert_eq!((0..4).map(sobol_1).map(|v| v >> 30).collect::<Vec<_>>(), [0, 2, 3, 1]);
+    // The byte tables agree with the direction-number recurrence bit by bit.
+    let direct = |i: u32| {
+        let (mut v, mut out, mut i) = (1u32 << 31, 0u32, i);
+        while i != 0 {
+            if i & 1 != 0 {
+                out ^= v;
+            }
+            v ^= v >> 1;
+            i >>= 1;
+        }
+        out
+    };
+    for i in [0u32, 1, 255, 256, 0x1234_5678, u32::MAX, 0x8000_0001] {
+        assert_eq!(sobol_1(i as u64), direct(i), "index {i:#x}");
+    }
+    // The one-reversal forms are the composed ones.
+    for (i, seed) in [(0u64, 1u32), (5, 0xdead_beef), (1 << 20 | 77, 12345)] {
+        assert_eq!(scrambled_sobol_0(i, seed), owen_scramble(sobol_0(i), seed));
+        assert_eq!(scrambled_sobol_1(i, seed), owen_scramble(sobol_1(i), seed));
+    }
     // Scrambling keeps a stratified set stratified: the 8 first points, scrambled, still
     // have one point per eighth.
     let mut eighths: Vec<u32> = (0..8).map(|i| owen_scramble(sobol_0(i), 0xdead_beef) >> 29).collect();
     eighths.sort();
     assert_eq!(eighths, (0..8).collect::<Vec<u32>>());
+}
+
+#[test]
+fn padded_sobol_pixels_are_stratified_and_dimensions_shuffled() {
+    for spp in [4u32, 16, 64] {
+        for (x, y) in [(0, 0), (9, 4)] {
+            for skip in [0u32, 2, 5] {
+                let pts: Vec<Vec2> = (0..spp)
+                    .map(|s| {
+                        let mut p = PaddedSobol::new(x, y, s, spp, 3);
+                        for _ in 0..skip {
+                            p.next_1d();
+                        }
+                        p.next_2d()
+                    })
+                    .collect();
+                assert!(is_net(&pts), "spp {spp} pixel ({x}, {y}) dims {skip}..");
+            }
+        }
+    }
+    // Two dimensions of the same sample are not the same value (shuffled independently).
+    let same = (0..64)
+        .filter(|&s| {
+            let mut p = PaddedSobol::new(1, 2, s, 64, 3);
+            p.next_1d() == p.next_1d()
+        })
+        .count();
+    assert!(same < 4, "{same} of 64 samples repeat their value in the next dimension");
 }
