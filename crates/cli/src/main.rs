@@ -71,7 +71,9 @@ fn run_view(args: ViewArgs) -> Result<()> {
     if let Some(p) = &args.save {
         tracer::output::ImageFormat::from_path(p)?;
     }
-    let (prepared, settings) = prepare(&args.scene, args.spp_per_frame.max(1), args.spectral)?;
+    // The viewer refines without end: samplers that need the sample count only on request.
+    let (prepared, settings) =
+        prepare(&args.scene, args.spp_per_frame.max(1), args.spectral, |_| SamplerKind::Independent)?;
     let options = viewer::ViewerOptions {
         width: args.scene.width,
         height: args.scene.height,
@@ -227,11 +229,12 @@ struct SceneArgs {
     /// before any work, with the way out.
     #[arg(long, default_value = "cpu", value_parser = ["cpu", "gpu"])]
     backend: String,
-    /// Sample values: independent (PCG32 per pixel sample) or zsobol (Owen-scrambled
-    /// Sobol in Morton order: stratified per pixel, blue-noise error; needs the whole
-    /// render's --spp, best a power of two).
-    #[arg(long, default_value = "independent", value_parser = parse_sampler)]
-    sampler: SamplerKind,
+    /// Sample values: zsobol (Owen-scrambled Sobol in Morton order: stratified per pixel,
+    /// blue-noise error; lays its samples out for --spp, best a power of two), sobol
+    /// (Owen-scrambled Sobol per pixel) or independent (PCG32 per pixel sample). Default:
+    /// the backend's best (cpu: zsobol, gpu: independent); the viewer: independent.
+    #[arg(long, value_parser = parse_sampler)]
+    sampler: Option<SamplerKind>,
     /// Light transport: path (path tracing with next-event estimation and MIS).
     #[arg(long, default_value = "path", value_parser = INTEGRATORS)]
     integrator: String,
@@ -325,7 +328,13 @@ fn load_scene(path: &Path) -> Result<Scene> {
     }
 }
 
-fn settings(args: &SceneArgs, spp: u32, mode: SpectralMode, scene: &Scene) -> Result<RenderSettings> {
+fn settings(
+    args: &SceneArgs,
+    spp: u32,
+    mode: SpectralMode,
+    sampler: SamplerKind,
+    scene: &Scene,
+) -> Result<RenderSettings> {
     let camera = match (args.eye, args.center) {
         (None, None) if args.fov == tracer::camera::DEFAULT_FOV_Y_DEG && args.up == Vec3::Y => None,
         (eye, center) => {
@@ -346,7 +355,7 @@ fn settings(args: &SceneArgs, spp: u32, mode: SpectralMode, scene: &Scene) -> Re
         spp,
         seed: args.seed,
         mode,
-        sampler: args.sampler,
+        sampler,
         path: PathSettings {
             max_depth: args.max_depth,
             rr_depth: args.rr_depth,
@@ -359,18 +368,30 @@ fn settings(args: &SceneArgs, spp: u32, mode: SpectralMode, scene: &Scene) -> Re
     Ok(s)
 }
 
+/// The backend's preferred sampler (its capabilities list samplers best first).
+fn best_sampler(caps: &Capabilities) -> SamplerKind {
+    caps.samplers.first().copied().unwrap_or_default()
+}
+
 /// The integrators `--integrator` accepts.
 const INTEGRATORS: [&str; 1] = ["path"];
 
 /// Loads the scene, makes the backend `args` asks for, checks the render settings
-/// against its capabilities (before building anything), and prepares the scene.
-fn prepare(args: &SceneArgs, spp: u32, mode: SpectralMode) -> Result<(Box<dyn PreparedScene>, RenderSettings)> {
+/// against its capabilities (before building anything), and prepares the scene. Without
+/// `--sampler`, `default_sampler` picks one from the backend's capabilities.
+fn prepare(
+    args: &SceneArgs,
+    spp: u32,
+    mode: SpectralMode,
+    default_sampler: fn(&Capabilities) -> SamplerKind,
+) -> Result<(Box<dyn PreparedScene>, RenderSettings)> {
     let scene = load_scene(&args.scene)?;
     if scene.triangles.is_empty() && scene.shapes.is_empty() {
         bail!("{}: the scene has no geometry", args.scene.display());
     }
-    let settings = settings(args, spp, mode, &scene)?;
     let backend = make_backend(args)?;
+    let sampler = args.sampler.unwrap_or_else(|| default_sampler(&backend.capabilities()));
+    let settings = settings(args, spp, mode, sampler, &scene)?;
     backend.capabilities().check_settings(&settings)?;
     let prepared = backend.prepare(scene, &SceneOptions { triangle_test: args.triangle_test })?;
     Ok((prepared, settings))
@@ -433,7 +454,7 @@ fn run_render(args: RenderArgs) -> Result<()> {
     {
         bail!("{}: the standard-error image must be an .exr (it is linear)", p.display());
     }
-    let (prepared, settings) = prepare(&args.scene, args.spp, args.spectral)?;
+    let (prepared, settings) = prepare(&args.scene, args.spp, args.spectral, best_sampler)?;
     let s = prepared.scene();
     let stats = prepared.stats();
     eprintln!(
@@ -472,13 +493,10 @@ fn run_bench(args: BenchArgs) -> Result<()> {
     if args.repeats == 0 {
         bail!("--repeats must be at least 1");
     }
-    let (prepared, _) = prepare(&args.scene, args.spp, args.modes.first().copied().unwrap_or_default())?;
+    let first_mode = args.modes.first().copied().unwrap_or_default();
+    let (prepared, base) = prepare(&args.scene, args.spp, first_mode, best_sampler)?;
     // Every mode is checked against the backend before anything is timed.
-    let all: Vec<RenderSettings> = args
-        .modes
-        .iter()
-        .map(|&mode| settings(&args.scene, args.spp, mode, prepared.scene()))
-        .collect::<Result<_>>()?;
+    let all: Vec<RenderSettings> = args.modes.iter().map(|&mode| RenderSettings { mode, ..base.clone() }).collect();
     for s in &all {
         prepared.capabilities().check_settings(s)?;
     }

@@ -221,3 +221,34 @@ fn gpu_backend_renders_through_the_same_command_or_explains_itself() {
     let o = spt(&[&args[..], &["--spectral", "rgb", "-o", out.to_str().unwrap()]].concat());
     assert!(!o.status.success() && stderr(&o).contains("use --spectral hero, or --backend cpu"), "{}", stderr(&o));
 }
+
+#[test]
+fn every_sampler_renders_and_unknown_ones_are_named() {
+    let dir = temp_dir("samplers");
+    let scene = write_scene(&dir, OBJ);
+    let mut images = Vec::new();
+    for sampler in ["independent", "sobol", "zsobol"] {
+        let out = dir.join(format!("{sampler}.exr"));
+        let o = spt(&[
+            "render",
+            scene.to_str().unwrap(),
+            "--width",
+            "16",
+            "--height",
+            "16",
+            "--spp",
+            "8",
+            "--sampler",
+            sampler,
+            "-o",
+            out.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{sampler}: {}", stderr(&o));
+        images.push(std::fs::read(&out).unwrap());
+    }
+    assert!(images[0] != images[1] && images[1] != images[2], "the samplers draw different values");
+    let o = spt(&["render", scene.to_str().unwrap(), "--sampler", "halton"]);
+    assert!(!o.status.success());
+    let e = stderr(&o);
+    assert!(e.contains("unknown sampler 'halton'") && e.contains("zsobol"), "{e}");
+}

@@ -76,7 +76,7 @@ fn cpu_capabilities(integrator: &'static str) -> Capabilities {
     Capabilities {
         backend: "cpu",
         spectral_modes: vec![SpectralMode::Hero, SpectralMode::Bins40, SpectralMode::Rgb],
-        samplers: SamplerKind::ALL.to_vec(),
+        samplers: vec![SamplerKind::ZSobol, SamplerKind::Sobol, SamplerKind::Independent],
         analytic_shapes: true,
         custom_bsdfs: true,
         triangle_tests: vec![TriangleTest::Watertight, TriangleTest::MollerTrumbore],

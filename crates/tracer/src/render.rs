@@ -88,7 +88,7 @@ pub struct Capabilities {
     pub backend: &'static str,
     /// Spectral modes it traces.
     pub spectral_modes: Vec<SpectralMode>,
-    /// Samplers it draws from.
+    /// Samplers it draws from, the best (the CLI's default) first.
     pub samplers: Vec<SamplerKind>,
     /// Whether it intersects analytic shapes (spheres, boxes, polygons, implicit surfaces).
     pub analytic_shapes: bool,
