@@ -34,21 +34,31 @@ pub const DEFAULT_ALBEDO: f32 = 0.5;
 pub fn load_obj(path: &Path) -> Result<Scene> {
     let text = std::fs::read(path).map_err(|source| Error::Io { path: path.to_path_buf(), source })?;
     let text = String::from_utf8_lossy(&text);
-    if let Some((line, message)) = check_obj_text(&text) {
+    load_obj_text(&text, path, &|lib| std::fs::read(lib).map(|b| String::from_utf8_lossy(&b).into_owned()))
+}
+
+/// Loads an OBJ scene from its text, without touching the disk: `path` names the OBJ in
+/// messages and is what `mtllib` names are resolved against; `read_mtl` returns the text
+/// of such a resolved MTL path. [`load_obj`] reads files through it; a fuzzer or a test
+/// can drive the whole loader from memory.
+pub fn load_obj_text(text: &str, path: &Path, read_mtl: &dyn Fn(&Path) -> std::io::Result<String>) -> Result<Scene> {
+    if let Some((line, message)) = check_obj_text(text) {
         return Err(Error::Parse { path: path.to_path_buf(), line: Some(line), message });
     }
     let options = tobj::LoadOptions { triangulate: true, single_index: true, ignore_points: true, ignore_lines: true };
-    let (models, materials) = tobj::load_obj(path, &options).map_err(|e| Error::Parse {
-        path: path.to_path_buf(),
-        line: None,
-        message: e.to_string(),
-    })?;
+    let dir = path.parent().unwrap_or(Path::new(""));
+    let (models, materials) =
+        tobj::load_obj_buf(&mut text.as_bytes(), &options, |lib| match read_mtl(&dir.join(lib)) {
+            Ok(mtl) => tobj::load_mtl_buf(&mut mtl.as_bytes()),
+            Err(_) => Err(tobj::LoadError::OpenFileFailed),
+        })
+        .map_err(|e| Error::Parse { path: path.to_path_buf(), line: None, message: e.to_string() })?;
     let materials = match materials {
         Ok(m) => m,
         Err(e) => {
-            let lib = find_mtllib(&text).map(|l| path.with_file_name(l));
+            let lib = find_mtllib(text).map(|l| path.with_file_name(l));
             if let Some(lib) = &lib
-                && let Ok(mtl) = std::fs::read_to_string(lib)
+                && let Ok(mtl) = read_mtl(lib)
                 && let Some((line, message)) = check_mtl_text(&mtl)
             {
                 return Err(Error::Parse { path: lib.clone(), line: Some(line), message });
