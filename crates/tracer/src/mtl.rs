@@ -187,11 +187,15 @@ fn strip_comment(text: &str) -> &str {
     text.trim()
 }
 
-/// `text` for a message, cut to a readable length (a mutated file can put a megabyte on
+/// A token for a message, cut to a readable length (a mutated file can put a megabyte on
 /// one line).
 pub(crate) fn quote(text: &str) -> std::borrow::Cow<'_, str> {
-    const MAX: usize = 40;
-    match text.char_indices().nth(MAX) {
+    shorten(text, 40)
+}
+
+/// `text` cut to at most `max` characters, with an ellipsis where it was cut.
+pub(crate) fn shorten(text: &str, max: usize) -> std::borrow::Cow<'_, str> {
+    match text.char_indices().nth(max) {
         None => text.into(),
         Some((end, _)) => format!("{}…", &text[..end]).into(),
     }
