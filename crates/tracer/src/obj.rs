@@ -34,6 +34,7 @@ use brdf::params::{ParamError, ParamValue};
 use glam::Vec3;
 use spectral::spectrum::Colour;
 use std::cell::RefCell;
+use std::collections::HashSet;
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::{Path, PathBuf};
 
@@ -70,42 +71,47 @@ pub fn load_obj_text(text: &str, path: &Path, read_mtl: &dyn Fn(&Path) -> std::i
     let dir = path.parent().unwrap_or(Path::new(""));
     // The libraries in the order tobj merged them (tobj's material ids index their
     // concatenation), and the first library that failed.
-    let libraries: RefCell<Vec<(PathBuf, Vec<MtlMaterial>)>> = RefCell::new(Vec::new());
+    let libraries: RefCell<Vec<Library>> = RefCell::new(Vec::new());
     let failure: RefCell<Option<Error>> = RefCell::new(None);
+    // The paths and texts of the libraries read so far.
+    let seen: RefCell<(HashSet<PathBuf>, HashSet<String>)> = RefCell::default();
     let load_library = |name: &Path| -> tobj::MTLLoadResult {
-        let lib = dir.join(name);
+        let path = dir.join(name);
         if failure.borrow().is_some() {
             return Err(tobj::LoadError::MaterialParseError);
         }
-        if libraries.borrow().iter().any(|(p, _)| *p == lib) {
-            // Named again: its names already map to its materials.
+        // A library named again, by the same path or by another to the same text, is
+        // not parsed again: a mutated OBJ can name one library in every line. (Its names
+        // keep the materials they map to, even where a library between redefined them.)
+        if !seen.borrow_mut().0.insert(path.clone()) {
             return Ok(Default::default());
         }
-        let parsed = read_mtl(&lib)
-            .map_err(|e| {
+        let text = match read_mtl(&path) {
+            Ok(text) => text,
+            Err(e) => {
                 // The fault is the `mtllib` statement's: name its line.
                 let line = mtllibs.iter().find(|(_, n)| Path::new(n) == name).map(|&(line, _)| line);
-                let lib = shorten(&lib.display().to_string(), 200).into_owned();
-                obj_error(line, format!("mtllib: cannot read {lib}: {e}"))
-            })
-            .and_then(|text| {
-                mtl::parse_mtl(&text).map_err(|e| Error::Parse {
-                    path: lib.clone(),
-                    line: Some(e.line),
-                    message: e.message,
-                })
-            });
+                let shown = shorten(&path.display().to_string(), 200).into_owned();
+                *failure.borrow_mut() = Some(obj_error(line, format!("mtllib: cannot read {shown}: {e}")));
+                return Err(tobj::LoadError::OpenFileFailed);
+            }
+        };
+        if seen.borrow().1.contains(&text) {
+            return Ok(Default::default());
+        }
+        let parsed = mtl::parse_mtl(&text);
+        seen.borrow_mut().1.insert(text);
         match parsed {
             Ok(materials) => {
                 // tobj only maps `usemtl` names to ids; the last of a repeated name wins.
                 let ids = materials.iter().enumerate().map(|(i, m)| (m.name.clone(), i)).collect();
                 let named = materials.iter().map(|m| tobj::Material { name: m.name.clone(), ..Default::default() });
                 let named = named.collect();
-                libraries.borrow_mut().push((lib, materials));
+                libraries.borrow_mut().push(Library { path, materials });
                 Ok((named, ids))
             }
             Err(e) => {
-                *failure.borrow_mut() = Some(e);
+                *failure.borrow_mut() = Some(Error::Parse { path, line: Some(e.line), message: e.message });
                 Err(tobj::LoadError::MaterialParseError)
             }
         }
@@ -133,9 +139,9 @@ pub fn load_obj_text(text: &str, path: &Path, read_mtl: &dyn Fn(&Path) -> std::i
         }
     };
     let mut converted = Vec::new();
-    for (lib, materials) in libraries.into_inner() {
-        for m in &materials {
-            converted.push(to_material(&lib, m)?);
+    for library in libraries.into_inner() {
+        for m in &library.materials {
+            converted.push(to_material(&library.path, m)?);
         }
     }
     let default = MtlMaterial {
@@ -162,6 +168,14 @@ pub fn load_obj_text(text: &str, path: &Path, read_mtl: &dyn Fn(&Path) -> std::i
         scene.add(&m, material);
     }
     Ok(scene)
+}
+
+/// An MTL library as loaded for one OBJ.
+struct Library {
+    /// Where `mtllib` found it.
+    path: PathBuf,
+    /// Its materials.
+    materials: Vec<MtlMaterial>,
 }
 
 /// An MTL material as a [`Material`]: the model chosen as the module doc says, its
@@ -613,5 +627,24 @@ mod mtl_tests {
         assert_eq!(reads.get(), 1);
         let names: Vec<&str> = scene.materials.iter().map(|m| m.name.as_str()).collect();
         assert_eq!(names, ["b", "a", "(default)"]);
+        // Other paths to the same text are read but add no materials; another library's
+        // names map to its own materials.
+        let obj = "mtllib m.mtl\nmtllib ./m.mtl\nmtllib n.mtl\nmtllib x/../m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\n\
+                   usemtl c\nf 1 2 3\nusemtl a\nf 1 2 3\n";
+        let scene = load_obj_text(obj, Path::new("s.obj"), &|p| {
+            reads.set(reads.get() + 1);
+            Ok(if p.ends_with("n.mtl") { "newmtl c\nKd 0.3\n".into() } else { mtl.to_string() })
+        })
+        .unwrap();
+        assert_eq!(reads.get(), 1 + 4);
+        let albedo: Vec<[f32; 3]> = scene
+            .materials
+            .iter()
+            .map(|m| match &m.surface {
+                Surface::Builtin { params, .. } => params.colour(0).rgb,
+                Surface::Custom { .. } => unreachable!(),
+            })
+            .collect();
+        assert_eq!(albedo, [[0.3; 3], [0.1; 3]]);
     }
 }
