@@ -21,9 +21,10 @@
 //! tobj's errors lack) and hands tobj only what it reads without error or panic: index
 //! references checked against the vertices defined so far, comments cut, vertex colours
 //! and polylines (`l`, which tobj turns into triangles) dropped. Everything the loader
-//! allocates is then proportional to the input's size: faces can only reference
-//! vertices the text defines, and each MTL library is read once however often `mtllib`
-//! names it.
+//! allocates is then proportional to the input's size (the fuzzer,
+//! `examples/fuzz_obj.rs`, measures at most ~72 bytes per input byte): faces can only
+//! reference vertices the text defines, and each MTL library is parsed once however
+//! often, and by whatever path, `mtllib` names it.
 
 use crate::material::{BuiltinModel, Material};
 use crate::mesh::Mesh;
