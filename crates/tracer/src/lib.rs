@@ -18,6 +18,7 @@ pub mod integrator;
 pub mod lights;
 pub mod material;
 pub mod mesh;
+pub mod mtl;
 pub mod obj;
 pub mod output;
 pub mod render;
