@@ -99,7 +99,9 @@ impl PaddedSobol {
         let mask = ((spp.max(1) as u64).next_power_of_two() - 1) as u32;
         Self { pixel: mix64(seed ^ mix64(((x as u64) << 32) | y as u64)), index, mask, dimension: 0 }
     }
+}
 
+impl SobolDraw for PaddedSobol {
     /// The shuffled index and two scrambling seeds for the current dimension.
     #[inline]
     fn draw(&mut self, dims: u32) -> (u64, u64) {
@@ -111,7 +113,13 @@ impl PaddedSobol {
     }
 }
 
-impl Sampler for PaddedSobol {
+/// A scrambled Sobol sampler: per draw, the sample's Sobol index and the seeds that
+/// scramble its values in the current dimension (which the draw advances by `dims`).
+trait SobolDraw: Clone + Send + std::fmt::Debug {
+    fn draw(&mut self, dims: u32) -> (u64, u64);
+}
+
+impl<T: SobolDraw> Sampler for T {
     #[inline]
     fn next_1d(&mut self) -> f32 {
         let (index, hash) = self.draw(1);
@@ -127,7 +135,7 @@ impl Sampler for PaddedSobol {
         )
     }
 
-    /// The jitter first, as [`ZSobol`] does.
+    /// The jitter first: the first dimension pair is the best stratified.
     fn camera(&mut self, wavelength: bool) -> (f32, Vec2) {
         let jitter = self.next_2d();
         (if wavelength { self.next_1d() } else { 0.0 }, jitter)
@@ -197,7 +205,7 @@ pub struct ZSobol<'a> {
     dimension: u32,
 }
 
-impl ZSobol<'_> {
+impl SobolDraw for ZSobol<'_> {
     /// The index of this sample in the Sobol sequence for the current dimension — the
     /// Morton index nested-scrambled: every bit flipped by a hash of the bits above it and
     /// the dimension, so that every dimension visits the pixels' subtrees in another
@@ -211,29 +219,6 @@ impl ZSobol<'_> {
         let (index_seed, value_seed) = self.layout.seeds(self.dimension);
         self.dimension += dims;
         (laine_karras_64(self.reversed, index_seed).reverse_bits() >> self.layout.unused_bits, value_seed)
-    }
-}
-
-impl Sampler for ZSobol<'_> {
-    #[inline]
-    fn next_1d(&mut self) -> f32 {
-        let (index, hash) = self.draw(1);
-        to_unit(scrambled_sobol_0(index, hash as u32))
-    }
-
-    #[inline]
-    fn next_2d(&mut self) -> Vec2 {
-        let (index, hash) = self.draw(2);
-        Vec2::new(
-            to_unit(scrambled_sobol_0(index, hash as u32)),
-            to_unit(scrambled_sobol_1(index, (hash >> 32) as u32)),
-        )
-    }
-
-    /// The jitter first: the first dimension pair is the best stratified.
-    fn camera(&mut self, wavelength: bool) -> (f32, Vec2) {
-        let jitter = self.next_2d();
-        (if wavelength { self.next_1d() } else { 0.0 }, jitter)
     }
 }
 
