@@ -73,7 +73,7 @@ use tracer::film::{Film, PixelStats};
 use tracer::integrator::PathCounters;
 use tracer::render::{Backend, Capabilities, PrepareStats, PreparedScene, RenderSettings, SceneOptions, check_pass};
 use tracer::sampler::SamplerKind;
-use tracer::{Camera, Scene};
+use tracer::Scene;
 use wgpu::util::DeviceExt;
 
 /// The most scattering events a GPU path may have, whatever `max_depth` says (paths cut
@@ -695,6 +695,10 @@ impl PreparedScene for GpuScene {
         &self.scene
     }
 
+    fn bounds(&self) -> Aabb {
+        self.bounds
+    }
+
     fn stats(&self) -> PrepareStats {
         self.stats
     }
@@ -709,12 +713,5 @@ impl PreparedScene for GpuScene {
     ) -> tracer::Result<PathCounters> {
         check_pass(self, settings, film)?;
         Ok(self.render_gpu(settings, film, first_sample, spp, progress)?)
-    }
-
-    fn camera(&self, settings: &RenderSettings) -> Camera {
-        settings
-            .camera
-            .or(self.scene.camera)
-            .unwrap_or_else(|| Camera::framing(&self.bounds, settings.width as f32 / settings.height as f32))
     }
 }

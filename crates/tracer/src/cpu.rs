@@ -1,6 +1,7 @@
 //! The CPU backend: an [`Integrator`] run by rayon over 16×16 tiles, bit-identical for
 //! a given seed whatever the thread count.
 
+use crate::camera::RayGenerator;
 use crate::film::{Film, PixelStats};
 use crate::geometry::Geometry;
 use crate::integrator::{CameraSample, Integrator, PathCounters, PathTracer, SceneView};
@@ -9,7 +10,7 @@ use crate::render::{Backend, Capabilities, PrepareStats, PreparedScene, RenderSe
 use crate::sampler::{PaddedSobol, Pcg32, Sampler, SamplerKind, ZSobolLayout};
 use crate::scene::Scene;
 use crate::{Error, Result};
-use bvh::TriangleTest;
+use bvh::{Aabb, TriangleTest};
 use glam::Vec2;
 use rayon::prelude::*;
 use spectral::{SampledSpectrum, SampledWavelengths, SpectralMode};
@@ -62,6 +63,7 @@ impl<I: Integrator> CpuBackend<I> {
         let lights = Lights::new(&scene);
         let stats = PrepareStats { build, compile: None, total: start.elapsed(), emitters: lights.emitter_count() };
         Ok(CpuScene {
+            bounds: scene.bounds(),
             scene,
             geometry,
             lights,
@@ -99,6 +101,7 @@ impl<I: Integrator> Backend for CpuBackend<I> {
 /// backend's threads and integrator.
 pub struct CpuScene<I: Integrator = PathTracer> {
     scene: Scene,
+    bounds: Aabb,
     geometry: Geometry,
     lights: Lights,
     stats: PrepareStats,
@@ -132,6 +135,10 @@ impl<I: Integrator> PreparedScene for CpuScene<I> {
         &self.scene
     }
 
+    fn bounds(&self) -> Aabb {
+        self.bounds
+    }
+
     fn stats(&self) -> PrepareStats {
         self.stats
     }
@@ -146,7 +153,8 @@ impl<I: Integrator> PreparedScene for CpuScene<I> {
     ) -> Result<PathCounters> {
         check_pass(self, settings, film)?;
         check_sample_range(settings, first_sample, spp)?;
-        let pass = Pass { scene: self, settings, first_sample, spp, progress };
+        let camera = self.camera(settings).rays(film.width(), film.height());
+        let pass = Pass { scene: self, settings, camera, first_sample, spp, progress };
         let seed = settings.seed;
         let width = film.width();
         Ok(self.pool.install(|| match settings.sampler {
@@ -185,6 +193,8 @@ fn check_sample_range(settings: &RenderSettings, first_sample: u32, spp: u32) ->
 struct Pass<'a, I: Integrator> {
     scene: &'a CpuScene<I>,
     settings: &'a RenderSettings,
+    /// The camera's rays, set up once per pass.
+    camera: RayGenerator,
     first_sample: u32,
     spp: u32,
     progress: &'a (dyn Fn(u64) + Sync),
@@ -258,7 +268,6 @@ impl<I: Integrator> Pass<'_, I> {
     ) -> TileResult {
         let (width, height) = (film.width(), film.height());
         let (w, h) = (TILE.min(width - x0), TILE.min(height - y0));
-        let camera = self.scene.camera(self.settings).rays(width, height);
         let view = self.scene.view();
         let mut pixels: Vec<PixelStats> =
             (y0..y0 + h).flat_map(|y| (x0..x0 + w).map(move |x| (x, y))).map(|(x, y)| *film.pixel(x, y)).collect();
@@ -280,7 +289,7 @@ impl<I: Integrator> Pass<'_, I> {
                     Wavelengths::Sampled(f) => f(u_wavelength),
                     Wavelengths::Fixed(wl) => *wl,
                 };
-                let ray = camera.ray(Vec2::new(x as f32, y as f32) + jitter);
+                let ray = self.camera.ray(Vec2::new(x as f32, y as f32) + jitter);
                 block.push(CameraSample { ray, wl, sampler, radiance: SampledSpectrum::zero() });
                 owners.push(i);
             }

@@ -10,7 +10,7 @@ use crate::integrator::{PathCounters, PathSettings};
 use crate::sampler::SamplerKind;
 use crate::scene::Scene;
 use crate::{Error, Result};
-use bvh::TriangleTest;
+use bvh::{Aabb, TriangleTest};
 use spectral::SpectralMode;
 use std::time::{Duration, Instant};
 
@@ -207,6 +207,10 @@ pub trait PreparedScene: Send + Sync {
     /// The scene.
     fn scene(&self) -> &Scene;
 
+    /// The scene's bounds, computed once when it was prepared (the default camera frames
+    /// them, and computing them visits every vertex).
+    fn bounds(&self) -> Aabb;
+
     /// What preparing it took.
     fn stats(&self) -> PrepareStats;
 
@@ -225,17 +229,11 @@ pub trait PreparedScene: Send + Sync {
     /// The camera a render uses: the settings', else the scene's, else the default
     /// framing of the scene's bounds.
     fn camera(&self, settings: &RenderSettings) -> Camera {
-        camera_for(self.scene(), settings)
+        settings
+            .camera
+            .or(self.scene().camera)
+            .unwrap_or_else(|| Camera::framing(&self.bounds(), settings.width as f32 / settings.height as f32))
     }
-}
-
-/// The camera a render of `scene` uses: the settings', else the scene's, else the
-/// default framing.
-pub fn camera_for(scene: &Scene, settings: &RenderSettings) -> Camera {
-    settings
-        .camera
-        .or(scene.camera)
-        .unwrap_or_else(|| Camera::framing(&scene.bounds(), settings.width as f32 / settings.height as f32))
 }
 
 /// Checks `settings` and the film against a prepared scene's backend; every backend's
