@@ -69,11 +69,11 @@ use spectral::SpectralMode;
 use spectral::tables::{CIE_SAMPLES, CIE_X, CIE_Y, CIE_Z};
 use std::sync::{Arc, Mutex, MutexGuard, PoisonError};
 use std::time::{Duration, Instant};
+use tracer::Scene;
 use tracer::film::{Film, PixelStats};
 use tracer::integrator::PathCounters;
 use tracer::render::{Backend, Capabilities, PrepareStats, PreparedScene, RenderSettings, SceneOptions, check_pass};
 use tracer::sampler::SamplerKind;
-use tracer::Scene;
 use wgpu::util::DeviceExt;
 
 /// The most scattering events a GPU path may have, whatever `max_depth` says (paths cut
