@@ -16,7 +16,7 @@
 //! BVH_BENCH_SCENES=cornell,bunny cargo bench -p bvh --bench bvh -- --quick bvh_traverse
 //! ```
 
-use bvh::{Accelerator, BuildConfig, Bvh, Bvh4, Ray, SplitMethod, TriangleTest, make_ray_sets};
+use bvh::{Accelerator, BuildConfig, Bvh, Bvh4, Bvh8, Ray, SplitMethod, TriangleTest, make_ray_sets};
 #[cfg(feature = "obvhs")]
 use bvh::{ObvhsBvh2, ObvhsCwBvh, ObvhsQuality};
 use criterion::{BenchmarkId, Criterion, Throughput};
@@ -44,6 +44,8 @@ enum Builder {
     Wide(SplitMethod),
     /// The same with the Möller–Trumbore triangle test: the price of watertightness.
     WideMollerTrumbore,
+    /// Binned SAH collapsed to 8-wide nodes (AVX2 where the CPU has it).
+    Wide8,
     #[cfg(feature = "obvhs")]
     ObvhsBvh2,
     #[cfg(feature = "obvhs")]
@@ -61,7 +63,7 @@ impl Builder {
             .into_iter()
             .map(Builder::Ours)
             .chain(wide)
-            .chain([Builder::WideMollerTrumbore])
+            .chain([Builder::WideMollerTrumbore, Builder::Wide8])
             .chain(obvhs)
             .collect()
     }
@@ -72,6 +74,7 @@ impl Builder {
             Builder::Wide(SplitMethod::SweepSah) => "bvh4_sweep_sah",
             Builder::Wide(_) => "bvh4_binned_sah",
             Builder::WideMollerTrumbore => "bvh4_binned_sah_mt",
+            Builder::Wide8 => "bvh8_binned_sah",
             #[cfg(feature = "obvhs")]
             Builder::ObvhsBvh2 => "obvhs_bvh2",
             #[cfg(feature = "obvhs")]
@@ -94,6 +97,10 @@ impl Builder {
                 Box::new(
                     Bvh4::build(tris, config).expect("finite scene").with_triangle_test(TriangleTest::MollerTrumbore),
                 )
+            }
+            Builder::Wide8 => {
+                let config = BuildConfig { max_leaf_size: 4, leaf_by_sah: true, ..Default::default() };
+                Box::new(Bvh8::build(tris, config).expect("finite scene"))
             }
             #[cfg(feature = "obvhs")]
             Builder::ObvhsBvh2 => Box::new(ObvhsBvh2::build(tris, ObvhsQuality::Medium).expect("finite scene")),

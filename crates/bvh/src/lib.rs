@@ -4,8 +4,9 @@
 //! * [`Bvh`]: a bounding volume hierarchy built by full-sweep SAH, binned SAH, midpoint
 //!   or the thesis's hybrid ([`SplitMethod`]), flattened depth-first into small POD
 //!   nodes ([`BvhNode`]) that a GPU can traverse unchanged;
-//! * [`Bvh4`]: a 4-wide BVH collapsed from a [`Bvh`], its four child boxes per node
-//!   tested at once with SIMD ([`Bvh4Node`]);
+//! * [`Bvh4`], [`Bvh8`]: 4- and 8-wide BVHs collapsed from a [`Bvh`], a node's child
+//!   boxes tested at once with SIMD (SSE; AVX2 detected at run time) — [`WideBvh`] picks
+//!   the width for the CPU it runs on;
 //! * [`TwoLevel`]: the thesis's two-level structure — a top-level BVH over instances
 //!   (with transforms) of per-object accelerators;
 //! * [`BoxBvh`]: a BVH over the boxes of primitives the crate does not know (analytic
@@ -45,7 +46,7 @@ pub use obvhs_adapter::{ObvhsBvh2, ObvhsCwBvh, ObvhsQuality};
 pub use ray::{Hit, Ray};
 pub use raysets::{RaySets, make_ray_sets, make_ray_sets_from};
 pub use triangle::{Triangle, TriangleTest, WatertightRay, intersect_triangle, intersect_triangle_watertight};
-pub use wide::{Bvh4, Bvh4Node, Bvh4Stats};
+pub use wide::{Bvh4, Bvh4Node, Bvh4Stats, Bvh8, Bvh8Node, BvhWide, BvhWidth, WideBvh, WideNode, wide8_accelerated};
 
 use glam::Vec3;
 

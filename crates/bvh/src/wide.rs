@@ -1,11 +1,14 @@
-//! A 4-wide BVH ([`Bvh4`]) collapsed from a binary [`Bvh`], traversed with SIMD.
+//! Wide BVHs collapsed from a binary [`Bvh`] and traversed with SIMD: [`Bvh4`] (4 children
+//! per node, SSE — part of every x86_64 CPU) and [`Bvh8`] (8 children, AVX2 where the CPU
+//! has it, detected at run time, so that a plain `cargo build --release` uses the machine
+//! it runs on); [`BvhWide`] is the structure both are made of.
 //!
-//! * Nodes: each [`Bvh4Node`] holds the boxes of up to four children in
-//!   structure-of-arrays form, so that one ray is tested against all four at once (SSE on
-//!   x86_64, a scalar loop with the same semantics elsewhere).
+//! * Nodes: each [`WideNode`] holds the boxes of up to `W` children in
+//!   structure-of-arrays form, so that one ray is tested against all of them at once (a
+//!   scalar loop with the same semantics where the SIMD kernel is unavailable).
 //! * Collapse: the children of a wide node are found greedily — starting from a binary
 //!   node's two children, the interior child with the largest surface area is replaced by
-//!   its own two children until there are four or only leaves are left.
+//!   its own two children until there are `W` or only leaves are left.
 //! * Leaves: binary subtrees of at most four triangles become one leaf where an SAH that
 //!   counts one 4-wide triangle test per leaf says so. A leaf's triangles are stored in
 //!   structure-of-arrays form and tested four at a time with the operations of
@@ -15,11 +18,14 @@
 //!   others are pushed with their entry distance and culled on pop against the closest
 //!   hit so far.
 //!
-//! The module is split by concern: [`Bvh4Node`] and its layout in `node`, the collapse
+//! The module is split by concern: [`WideNode`] and its layout in `node`, the collapse
 //! from a binary tree in `collapse`, the ray kernels (the portable one and the leaf
-//! kernels' contract) in `kernel` with the SSE kernel in `sse`, and the ordered traversal
-//! in `traverse`.
+//! kernels' contract) in `kernel` with the SSE kernel in `sse` and the AVX one in `avx`,
+//! and the ordered traversal in `traverse`.
 
+#[cfg(target_arch = "x86_64")]
+mod avx;
+mod choice;
 mod collapse;
 mod kernel;
 mod node;
@@ -29,20 +35,21 @@ mod sse;
 mod tests;
 mod traverse;
 
-pub use node::Bvh4Node;
+pub use choice::{BvhWidth, WideBvh};
+pub use node::{Bvh4Node, Bvh8Node, WideNode};
 
 use crate::{BuildConfig, BuildError, Bvh, TriangleTest};
 use glam::Vec3;
 
-/// Children per wide node.
-const WIDTH: usize = 4;
+/// The widest node of any [`BvhWide`].
+const MAX_WIDTH: usize = 8;
 
-/// Entries of the traversal stack: a wide node pushes at most `WIDTH − 1` children and
-/// the binary trees our builders make are at most 62 levels deep, so a path holds at
-/// most 62 wide nodes; [`Bvh4::from_bvh`] checks the bound.
-const STACK_DEPTH: usize = (WIDTH - 1) * 64;
+/// Entries of the traversal stack: a wide node pushes at most `W − 1` children and the
+/// binary trees our builders make are at most 62 levels deep, so a path holds at most 62
+/// wide nodes; [`BvhWide::from_bvh`] checks the bound.
+const STACK_DEPTH: usize = (MAX_WIDTH - 1) * 64;
 
-/// Figures describing a built [`Bvh4`].
+/// Figures describing a built [`BvhWide`].
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Bvh4Stats {
     /// Wide nodes.
@@ -57,10 +64,10 @@ pub struct Bvh4Stats {
     pub sah_cost: f32,
 }
 
-/// A 4-wide BVH over triangles, collapsed from a binary [`Bvh`].
+/// A BVH over triangles with up to `W` children per node, collapsed from a binary [`Bvh`].
 #[derive(Clone, Debug)]
-pub struct Bvh4 {
-    nodes: Vec<Bvh4Node>,
+pub struct BvhWide<const W: usize> {
+    nodes: Vec<WideNode<W>>,
     /// The triangles leaf by leaf in structure of arrays: a leaf of n triangles starting
     /// at triangle `first` holds v0.x × n, v0.y × n, …, v2.z × n from float 9·first; three
     /// floats of padding at the end let 4-wide loads run past the last leaf. Vertices,
@@ -69,9 +76,27 @@ pub struct Bvh4 {
     prim_ids: Vec<u32>,
     costs: (f32, f32),
     test: TriangleTest,
+    /// True if the CPU has AVX2 (detected when the tree is made), for [`Bvh8`]'s kernel.
+    #[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
+    avx2: bool,
 }
 
-impl Bvh4 {
+/// A 4-wide BVH: SSE box and triangle tests (x86_64 baseline).
+pub type Bvh4 = BvhWide<4>;
+
+/// An 8-wide BVH: AVX box tests where the CPU has AVX2 (detected at run time), SSE
+/// triangle tests; elsewhere the portable kernel, slower than [`Bvh4`]'s.
+pub type Bvh8 = BvhWide<8>;
+
+/// True if this CPU runs [`Bvh8`]'s AVX kernel: where it does not, [`Bvh4`] is faster.
+pub fn wide8_accelerated() -> bool {
+    #[cfg(target_arch = "x86_64")]
+    return avx::avx2_available();
+    #[cfg(not(target_arch = "x86_64"))]
+    false
+}
+
+impl<const W: usize> BvhWide<W> {
     /// Builds a binary [`Bvh`] with `config` and collapses it; rejects non-finite
     /// coordinates. An empty input gives a tree that nothing hits.
     pub fn build(triangles: &[[Vec3; 3]], config: BuildConfig) -> Result<Self, BuildError> {
@@ -90,7 +115,7 @@ impl Bvh4 {
         self
     }
     /// The wide nodes (root first).
-    pub fn nodes(&self) -> &[Bvh4Node] {
+    pub fn nodes(&self) -> &[WideNode<W>] {
         &self.nodes
     }
 
@@ -113,7 +138,7 @@ impl Bvh4 {
             let n = &self.nodes[i];
             s.depth = s.depth.max(depth);
             cost += c_t * n.bounds().surface_area() as f64 / root_area;
-            for slot in 0..WIDTH {
+            for slot in 0..W {
                 let b = n.child_bounds(slot);
                 if b.is_empty() {
                     continue;

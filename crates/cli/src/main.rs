@@ -1,11 +1,12 @@
 //! `spt`: the spectral path tracer's command-line tool.
 
 mod bvh_table;
+mod rays;
 mod sheet;
 mod stability;
 
 use anyhow::{Context, Result, bail};
-use bvh::TriangleTest;
+use bvh::{BvhWidth, TriangleTest};
 use clap::{Args, Parser, Subcommand};
 use glam::Vec3;
 use indicatif::{ProgressBar, ProgressStyle};
@@ -44,6 +45,10 @@ enum Command {
     /// orbit (left) or pan (right), wheel to dolly, WASD/QE to fly, arrows to turn, R to
     /// reset, P/X to save PNG/EXR, Escape to quit. Any camera change restarts the mean.
     View(ViewArgs),
+    /// Ray sets on disk, to compare our traversal ray for ray with another ray tracer:
+    /// `export` a scene's triangles and rays, `trace` them (build ms, Mrays/s, hits).
+    #[command(subcommand)]
+    Rays(rays::RaysCommand),
 }
 
 #[derive(Args)]
@@ -224,6 +229,10 @@ struct SceneArgs {
     /// Ray–triangle test: watertight (Woop et al. 2013) or moller-trumbore (the thesis's).
     #[arg(long, default_value = "watertight", value_parser = parse_triangle_test)]
     triangle_test: TriangleTest,
+    /// Children per node of the CPU's triangle BVH: auto (8 where the CPU has AVX2, else
+    /// 4), 4 (SSE) or 8 (AVX2).
+    #[arg(long, default_value = "auto", value_parser = parse_bvh_width)]
+    bvh_width: BvhWidth,
     /// Where to trace: cpu (rayon, every feature) or gpu (wgpu compute; hero mode, triangle
     /// meshes, registered BSDFs). A request outside a backend's capabilities is refused
     /// before any work, with the way out.
@@ -244,11 +253,18 @@ struct SceneArgs {
     shading_normals: ShadingNormals,
 }
 
-fn parse_triangle_test(s: &str) -> Result<TriangleTest, String> {
+pub(crate) fn parse_triangle_test(s: &str) -> Result<TriangleTest, String> {
     [TriangleTest::Watertight, TriangleTest::MollerTrumbore]
         .into_iter()
         .find(|t| t.name() == s)
         .ok_or_else(|| format!("unknown triangle test '{s}' (known: watertight, moller-trumbore)"))
+}
+
+fn parse_bvh_width(s: &str) -> Result<BvhWidth, String> {
+    BvhWidth::ALL
+        .into_iter()
+        .find(|w| w.name() == s)
+        .ok_or_else(|| format!("unknown BVH width '{s}' (known: auto, 4, 8)"))
 }
 
 fn parse_sampler(s: &str) -> Result<SamplerKind, String> {
@@ -299,7 +315,7 @@ struct BenchArgs {
     modes: Vec<SpectralMode>,
 }
 
-fn parse_vec3(s: &str) -> Result<Vec3, String> {
+pub(crate) fn parse_vec3(s: &str) -> Result<Vec3, String> {
     let parts: Vec<&str> = s.split(',').collect();
     if parts.len() != 3 {
         return Err(format!("expected x,y,z, got '{s}'"));
@@ -314,7 +330,7 @@ fn parse_vec3(s: &str) -> Result<Vec3, String> {
     Ok(Vec3::from_array(v))
 }
 
-fn load_scene(path: &Path) -> Result<Scene> {
+pub(crate) fn load_scene(path: &Path) -> Result<Scene> {
     if let Some(name) = path.to_str().and_then(|p| p.strip_prefix("builtin:")) {
         return Ok(tracer::scenes::builtin(name)?);
     }
@@ -393,7 +409,8 @@ fn prepare(
     let sampler = args.sampler.unwrap_or_else(|| default_sampler(&backend.capabilities()));
     let settings = settings(args, spp, mode, sampler, &scene)?;
     backend.capabilities().check_settings(&settings)?;
-    let prepared = backend.prepare(scene, &SceneOptions { triangle_test: args.triangle_test })?;
+    let prepared =
+        backend.prepare(scene, &SceneOptions { triangle_test: args.triangle_test, bvh_width: args.bvh_width })?;
     Ok((prepared, settings))
 }
 
@@ -540,6 +557,7 @@ fn main() -> ExitCode {
         Command::Bvh(a) => run_bvh(a).context("bvh failed"),
         Command::Stability(a) => stability::run(a).context("stability failed"),
         Command::View(a) => run_view(a).context("view failed"),
+        Command::Rays(c) => rays::run(c).context("rays failed"),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -64,7 +64,7 @@ use crate::kernel::{
     FILM_HEADER_BYTES, HAS_ENVIRONMENT, HAS_NORMALS, HAS_TANGENTS, KernelOptions, LIGHT_FLOATS, Params, PixelAccum,
 };
 use crate::{GpuContext, GpuError};
-use bvh::{Aabb, BuildConfig, Bvh, BvhNode, SplitMethod, TriangleTest};
+use bvh::{Aabb, BuildConfig, Bvh, BvhNode, BvhWidth, SplitMethod, TriangleTest};
 use spectral::SpectralMode;
 use spectral::tables::{CIE_SAMPLES, CIE_X, CIE_Y, CIE_Z};
 use std::sync::{Arc, Mutex, MutexGuard, PoisonError};
@@ -113,6 +113,8 @@ pub fn capabilities() -> Capabilities {
         analytic_shapes: false,
         custom_bsdfs: false,
         triangle_tests: vec![TriangleTest::Watertight, TriangleTest::MollerTrumbore],
+        // The kernel traverses the binary BVH (issue 14: wide nodes on the GPU).
+        bvh_widths: vec![BvhWidth::Auto],
         integrator: "path",
         max_bounces: Some(MAX_BOUNCES),
     }

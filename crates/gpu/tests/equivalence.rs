@@ -435,7 +435,7 @@ fn merging_pass_statistics_equals_adding_every_sample() {
 fn moller_trumbore_matches_the_cpu() {
     let Some(ctx) = gpu::require_gpu() else { return };
     let Some(scene) = cornell() else { return };
-    let options = SceneOptions { triangle_test: bvh::TriangleTest::MollerTrumbore };
+    let options = SceneOptions { triangle_test: bvh::TriangleTest::MollerTrumbore, ..SceneOptions::default() };
     let cpu = CpuBackend::new(2).unwrap().prepare_cpu(scene.clone(), &options).unwrap();
     let gpu = GpuBackend::with_context(ctx).prepare_gpu(scene, &options).unwrap();
     let s = settings(32, 32, 64);

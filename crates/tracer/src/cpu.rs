@@ -10,7 +10,7 @@ use crate::render::{Backend, Capabilities, PrepareStats, PreparedScene, RenderSe
 use crate::sampler::{PaddedSobol, Pcg32, Sampler, SamplerKind, ZSobolLayout};
 use crate::scene::Scene;
 use crate::{Error, Result};
-use bvh::{Aabb, TriangleTest};
+use bvh::{Aabb, BvhWidth, TriangleTest};
 use glam::Vec2;
 use rayon::prelude::*;
 use spectral::{SampledSpectrum, SampledWavelengths, SpectralMode};
@@ -52,13 +52,13 @@ impl<I: Integrator> CpuBackend<I> {
         self.pool.current_num_threads()
     }
 
-    /// Prepares `scene` (validates it, builds the triangles' 4-wide BVH with the given
-    /// test, the shapes' BVH and the light distribution), with the concrete type.
+    /// Prepares `scene` (validates it, builds the triangles' wide BVH with the given
+    /// test and width, the shapes' BVH and the light distribution), with the concrete type.
     pub fn prepare_cpu(&self, scene: Scene, options: &SceneOptions) -> Result<CpuScene<I>> {
         self.capabilities().check_scene(&scene, options)?;
         scene.validate()?;
         let start = Instant::now();
-        let geometry = Geometry::build(&scene, options.triangle_test)?;
+        let geometry = Geometry::build(&scene, options.triangle_test, options.bvh_width)?;
         let build = start.elapsed();
         let lights = Lights::new(&scene);
         let stats = PrepareStats { build, compile: None, total: start.elapsed(), emitters: lights.emitter_count() };
@@ -82,6 +82,7 @@ fn cpu_capabilities(integrator: &'static str) -> Capabilities {
         analytic_shapes: true,
         custom_bsdfs: true,
         triangle_tests: vec![TriangleTest::Watertight, TriangleTest::MollerTrumbore],
+        bvh_widths: BvhWidth::ALL.to_vec(),
         integrator,
         max_bounces: None,
     }

@@ -3,7 +3,7 @@
 
 use crate::scene::Scene;
 use crate::{Error, Result};
-use bvh::{Accelerator, BoxBvh, BuildConfig, Bvh4, Ray, TriangleTest};
+use bvh::{Accelerator, BoxBvh, BuildConfig, BvhWidth, Ray, TriangleTest, WideBvh};
 use shapes::boxes::Cuboid;
 use shapes::implicit::Implicit;
 use shapes::polygon::Polygon;
@@ -82,19 +82,20 @@ pub struct SceneHit {
 
 /// The scene's accelerators.
 pub struct Geometry {
-    /// Triangles: binned-SAH BVH collapsed to 4-wide SIMD nodes (the fastest of the `bvh`
-    /// crate's structures on every scene measured; see `spt bvh`).
-    pub triangles: Bvh4,
+    /// Triangles: binned-SAH BVH collapsed to 4- or 8-wide SIMD nodes (the fastest of the
+    /// `bvh` crate's structures on every scene measured; see `spt bvh` and `spt rays`).
+    pub triangles: WideBvh,
     /// Analytic shapes, by their boxes.
     pub shapes: BoxBvh,
     triangle_count: u32,
 }
 
 impl Geometry {
-    /// Builds both accelerators, the triangles' with the given ray–triangle test.
-    pub fn build(scene: &Scene, test: TriangleTest) -> Result<Self> {
+    /// Builds both accelerators, the triangles' with the given ray–triangle test and
+    /// node width.
+    pub fn build(scene: &Scene, test: TriangleTest, width: BvhWidth) -> Result<Self> {
         let config = BuildConfig { max_leaf_size: 4, ..BuildConfig::default() };
-        let triangles = Bvh4::build(&scene.triangle_soup(), config)?.with_triangle_test(test);
+        let triangles = WideBvh::build(&scene.triangle_soup(), config, width)?.with_triangle_test(test);
         let boxes: Vec<_> = scene.shapes.iter().map(|s| s.shape.shape().bounds()).collect();
         let shapes = BoxBvh::build(&boxes, BuildConfig { max_leaf_size: 2, ..BuildConfig::default() })?;
         let count = scene.triangles.len() + scene.shapes.len();

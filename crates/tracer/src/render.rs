@@ -10,7 +10,7 @@ use crate::integrator::{PathCounters, PathSettings};
 use crate::sampler::SamplerKind;
 use crate::scene::Scene;
 use crate::{Error, Result};
-use bvh::{Aabb, TriangleTest};
+use bvh::{Aabb, BvhWidth, TriangleTest};
 use spectral::SpectralMode;
 use std::time::{Duration, Instant};
 
@@ -77,6 +77,9 @@ impl RenderSettings {
 pub struct SceneOptions {
     /// The ray–triangle test compiled into the traversal.
     pub triangle_test: TriangleTest,
+    /// Children per node of the CPU's triangle BVH ([`BvhWidth::Auto`]: 8 where the CPU
+    /// has AVX2, else 4).
+    pub bvh_width: BvhWidth,
 }
 
 /// What a backend can render. [`Capabilities::check_scene`] and
@@ -96,6 +99,8 @@ pub struct Capabilities {
     pub custom_bsdfs: bool,
     /// Ray–triangle tests it implements.
     pub triangle_tests: Vec<TriangleTest>,
+    /// Triangle-BVH node widths it can be asked for ([`BvhWidth::Auto`] = its own choice).
+    pub bvh_widths: Vec<BvhWidth>,
     /// The integrator it runs (`--integrator` name).
     pub integrator: &'static str,
     /// The most scattering events a path may have, if the backend has a hard cap (paths
@@ -134,6 +139,13 @@ impl Capabilities {
             return Err(unsupported(
                 format!("the '{}' triangle test", options.triangle_test.name()),
                 &format!("use --triangle-test {}, or --backend cpu", known.join(" or ")),
+            ));
+        }
+        if !self.bvh_widths.contains(&options.bvh_width) {
+            let known: Vec<&str> = self.bvh_widths.iter().map(|w| w.name()).collect();
+            return Err(unsupported(
+                format!("a {}-wide triangle BVH", options.bvh_width.name()),
+                &format!("use --bvh-width {}, or --backend cpu", known.join(" or ")),
             ));
         }
         Ok(())

@@ -1,13 +1,13 @@
-//! The collapse of a binary [`Bvh`] into a [`Bvh4`]: greedy by surface area, with small
+//! The collapse of a binary [`Bvh`] into a [`BvhWide`]: greedy by surface area, with small
 //! subtrees merged into one leaf where an SAH with 4-wide triangle tests says so, and the
 //! leaves' triangles copied into structure-of-arrays form.
 
-use super::{Bvh4, Bvh4Node, STACK_DEPTH, WIDTH};
+use super::{BvhWide, STACK_DEPTH, WideNode};
 use crate::{Aabb, Bvh, BvhNode, TriangleTest};
 use glam::Vec3;
 
-impl Bvh4 {
-    /// Collapses a binary tree into a 4-wide one (greedy by surface area), copying its
+impl<const W: usize> BvhWide<W> {
+    /// Collapses a binary tree into a `W`-wide one (greedy by surface area), copying its
     /// leaf-ordered triangles. A binary subtree of at most four triangles becomes a single
     /// leaf when that lowers an SAH in which a leaf costs one 4-wide triangle test and a
     /// binary interior node 0.3 of one; trees whose leaves were split down to at most four
@@ -21,7 +21,7 @@ impl Bvh4 {
     ///
     /// The binary tree keeps vertex 0 and two edges; the vertices are rebuilt as v0 + e,
     /// which may differ from the mesh's in the last bit, so that the watertight guarantee
-    /// holds only for trees made by [`Bvh4::build`].
+    /// holds only for trees made by [`BvhWide::build`].
     pub fn from_bvh(bvh: &Bvh) -> Self {
         Self::collapse(bvh, |i| {
             let t = &bvh.triangles()[i];
@@ -56,11 +56,12 @@ impl Bvh4 {
             prim_ids: bvh.prim_ids().to_vec(),
             costs: (config.traversal_cost, config.intersection_cost),
             test: TriangleTest::default(),
+            avx2: super::wide8_accelerated(),
         };
         let depth = wide.stats().depth;
         assert!(
-            depth.saturating_sub(1) * (WIDTH - 1) <= STACK_DEPTH,
-            "BVH4 of depth {depth} overflows the traversal stack"
+            W <= super::MAX_WIDTH && depth.saturating_sub(1) * (W - 1) <= STACK_DEPTH,
+            "{W}-wide BVH of depth {depth} overflows the traversal stack"
         );
         wide
     }
@@ -76,7 +77,7 @@ const MERGE: u32 = 4;
 const MERGE_NODE_COST: f32 = 0.3;
 
 /// The greedy collapse of a binary tree.
-struct Collapse<'a> {
+struct Collapse<'a, const W: usize> {
     src: &'a [BvhNode],
     /// Per binary node: the first triangle and the number of triangles of its subtree
     /// (a contiguous range, as the builders append leaves depth-first; only used for
@@ -84,10 +85,10 @@ struct Collapse<'a> {
     range: Vec<(u32, u32)>,
     /// Per binary node: true if its subtree becomes one leaf of the wide tree.
     leaf: Vec<bool>,
-    out: Vec<Bvh4Node>,
+    out: Vec<WideNode<W>>,
 }
 
-impl<'a> Collapse<'a> {
+impl<'a, const W: usize> Collapse<'a, W> {
     fn new(src: &'a [BvhNode]) -> Self {
         // Children follow their parents, so one backward pass sees them first.
         let mut range = vec![(0u32, 0u32); src.len()];
@@ -122,9 +123,9 @@ impl<'a> Collapse<'a> {
     fn node(&mut self, root: usize) -> u32 {
         let src = self.src;
         let index = self.out.len();
-        self.out.push(Bvh4Node::EMPTY);
+        self.out.push(WideNode::EMPTY);
         let area = |i: usize| binary_bounds(&src[i]).surface_area();
-        let mut slots = [0usize; WIDTH];
+        let mut slots = [0usize; W];
         let mut n = if self.is_leaf(root) {
             slots[0] = root;
             1
@@ -133,7 +134,7 @@ impl<'a> Collapse<'a> {
             slots[1] = src[root].index as usize;
             2
         };
-        while n < WIDTH {
+        while n < W {
             // Open the interior child with the largest surface area.
             let Some(open) =
                 (0..n).filter(|&i| !self.is_leaf(slots[i])).max_by(|&a, &b| area(slots[a]).total_cmp(&area(slots[b])))
@@ -145,7 +146,7 @@ impl<'a> Collapse<'a> {
             slots[n] = src[opened].index as usize;
             n += 1;
         }
-        let mut node = Bvh4Node::EMPTY;
+        let mut node = WideNode::EMPTY;
         for (i, &s) in slots[..n].iter().enumerate() {
             let (child, count) = if self.is_leaf(s) { self.range[s] } else { (self.node(s), 0) };
             node.set_child(i, &binary_bounds(&src[s]), child, count);

@@ -1,12 +1,13 @@
-//! The ray kernels: a ray prepared for testing a wide node's four boxes at once and a
-//! leaf's triangles ([`RayKernel`]), the portable [`ScalarKernel`], and [`Kernel`], the
-//! one the traversal uses (the SSE kernel on x86_64).
+//! The ray kernels: a ray prepared for testing a wide node's `W` boxes at once and a
+//! leaf's triangles ([`RayKernel`]), and the portable [`ScalarKernel`]. The SSE kernel
+//! (4 lanes, x86_64 baseline) is in `sse`, the AVX2 one (8 lanes, chosen at run time) in
+//! `avx`.
 
-use super::{Bvh4Node, WIDTH};
+use super::WideNode;
 use crate::{Hit, Ray, Triangle, WatertightRay, intersect_triangle, intersect_triangle_watertight};
 use glam::Vec3;
 
-/// A ray prepared for testing the four boxes of a [`Bvh4Node`] at once, and a leaf's
+/// A ray prepared for testing the `W` boxes of a [`WideNode`] at once, and a leaf's
 /// triangles.
 ///
 /// Box conventions as in `SlabRay::enter` and [`Aabb::hit`](crate::Aabb::hit): closed boxes, entry in
@@ -17,11 +18,11 @@ use glam::Vec3;
 /// operation that keeps the accumulator when the distance is NaN, which ignores
 /// exactly the on-plane slabs. Picking planes by sign also makes an unused slot's
 /// inverted box (+∞, −∞) give an entry of +∞ and an exit of −∞ on every axis.
-pub(super) trait RayKernel {
+pub(super) trait RayKernel<const W: usize> {
     fn new(ray: &Ray) -> Self;
     /// Bit `i` set if the ray enters child `i`'s box within (t_min, t_max]; lane `i` of
     /// the array is then its entry distance.
-    fn enter(&self, node: &Bvh4Node, t_max: f32) -> (u32, [f32; 4]);
+    fn enter(&self, node: &WideNode<W>, t_max: f32) -> (u32, [f32; W]);
 
     /// Tests a leaf's triangles in order as [`intersect_triangle`] would, lowering
     /// `t_max` and setting `best` at each closer hit; with `ANY_HIT`, returns true at the
@@ -91,8 +92,7 @@ pub(super) fn plane_rows(inv_dir: Vec3) -> ([usize; 3], [usize; 3]) {
     (near, far)
 }
 
-/// The portable [`RayKernel`]: four lanes in scalar code.
-#[cfg_attr(target_arch = "x86_64", allow(dead_code))]
+/// The portable [`RayKernel`]: `W` lanes in scalar code.
 pub(super) struct ScalarKernel {
     origin: [f32; 3],
     inv_dir: [f32; 3],
@@ -101,7 +101,7 @@ pub(super) struct ScalarKernel {
     t_min: f32,
 }
 
-impl RayKernel for ScalarKernel {
+impl<const W: usize> RayKernel<W> for ScalarKernel {
     #[inline(always)]
     fn new(ray: &Ray) -> Self {
         let (near, far) = plane_rows(ray.inv_dir);
@@ -109,19 +109,19 @@ impl RayKernel for ScalarKernel {
     }
 
     #[inline(always)]
-    fn enter(&self, node: &Bvh4Node, t_max: f32) -> (u32, [f32; 4]) {
+    fn enter(&self, node: &WideNode<W>, t_max: f32) -> (u32, [f32; W]) {
         // SSE's maxps/minps: the second operand unless the first is strictly greater
         // (smaller), so a NaN first operand yields the second.
         let max = |a: f32, acc: f32| if a > acc { a } else { acc };
         let min = |a: f32, acc: f32| if a < acc { a } else { acc };
         let planes = node.planes();
         let mut mask = 0;
-        let mut t = [0.0; 4];
-        for lane in 0..WIDTH {
+        let mut t = [0.0; W];
+        for lane in 0..W {
             let (mut enter, mut exit) = (self.t_min, t_max);
             for axis in (0..3).rev() {
-                let near = (planes[self.near[axis] & 7][lane] - self.origin[axis]) * self.inv_dir[axis];
-                let far = (planes[self.far[axis] & 7][lane] - self.origin[axis]) * self.inv_dir[axis];
+                let near = (planes[self.near[axis]][lane] - self.origin[axis]) * self.inv_dir[axis];
+                let far = (planes[self.far[axis]][lane] - self.origin[axis]) * self.inv_dir[axis];
                 enter = max(near, enter);
                 exit = min(far, exit);
             }
@@ -131,9 +131,3 @@ impl RayKernel for ScalarKernel {
         (mask, t)
     }
 }
-
-/// The kernel the traversal uses: SSE on x86_64, else the portable one.
-#[cfg(target_arch = "x86_64")]
-pub(super) type Kernel = super::sse::SseKernel;
-#[cfg(not(target_arch = "x86_64"))]
-pub(super) type Kernel = ScalarKernel;

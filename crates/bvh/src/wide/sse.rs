@@ -16,7 +16,7 @@ pub(super) struct SseKernel {
     t_min: __m128,
 }
 
-impl RayKernel for SseKernel {
+impl RayKernel<4> for SseKernel {
     #[inline(always)]
     fn new(ray: &Ray) -> Self {
         let (near, far) = plane_rows(ray.inv_dir);

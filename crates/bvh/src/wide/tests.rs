@@ -1,18 +1,22 @@
-use super::kernel::{Kernel, Leaf, RayKernel, ScalarKernel};
+use super::kernel::{Leaf, RayKernel, ScalarKernel};
+#[cfg(target_arch = "x86_64")]
+use super::sse::SseKernel as Kernel;
 use super::*;
 use crate::test_util::{rays, soup};
 use crate::{
     Aabb, Accelerator, Hit, Ray, RayStats, Triangle, WatertightRay, intersect_triangle, intersect_triangle_watertight,
 };
 use crate::{BruteForce, SplitMethod};
+#[cfg(not(target_arch = "x86_64"))]
+use ScalarKernel as Kernel;
 use proptest::prelude::*;
 
 /// The scalar box test, so that the portable path is exercised on x86_64 too.
-fn intersect_scalar(bvh: &Bvh4, ray: &Ray) -> Option<Hit> {
+fn intersect_scalar<const W: usize>(bvh: &BvhWide<W>, ray: &Ray) -> Option<Hit> {
     bvh.traverse::<ScalarKernel, false, false>(ray, &mut RayStats::default())
 }
 
-fn occluded_scalar(bvh: &Bvh4, ray: &Ray) -> bool {
+fn occluded_scalar<const W: usize>(bvh: &BvhWide<W>, ray: &Ray) -> bool {
     bvh.traverse::<ScalarKernel, false, true>(ray, &mut RayStats::default()).is_some()
 }
 
@@ -37,11 +41,14 @@ fn same_hit(a: Option<Hit>, b: Option<Hit>, r: &Ray, tris: &[[Vec3; 3]]) {
                 assert_eq!(a.t, b.t, "different triangle at different t for {r:?}");
             }
         }
-        _ => panic!("bvh4 {a:?} vs brute force {b:?} for {r:?}"),
+        _ => panic!("wide BVH {a:?} vs brute force {b:?} for {r:?}"),
     }
 }
 
-fn agree_with(bvh: &Bvh4, oracle: &BruteForce, tris: &[[Vec3; 3]], rays: &[Ray]) {
+fn agree_with<const W: usize>(bvh: &BvhWide<W>, oracle: &BruteForce, tris: &[[Vec3; 3]], rays: &[Ray])
+where
+    BvhWide<W>: Accelerator,
+{
     for r in rays {
         let expected = oracle.intersect(r);
         let hit = bvh.intersect(r);
@@ -53,8 +60,11 @@ fn agree_with(bvh: &Bvh4, oracle: &BruteForce, tris: &[[Vec3; 3]], rays: &[Ray])
     }
 }
 
+/// Both widths agree with brute force.
 fn agree(tris: &[[Vec3; 3]], config: BuildConfig, rays: &[Ray]) {
-    agree_with(&Bvh4::build(tris, config).unwrap(), &BruteForce::new(tris).unwrap(), tris, rays);
+    let oracle = BruteForce::new(tris).unwrap();
+    agree_with(&Bvh4::build(tris, config).unwrap(), &oracle, tris, rays);
+    agree_with(&Bvh8::build(tris, config).unwrap(), &oracle, tris, rays);
 }
 
 fn every_config() -> Vec<BuildConfig> {
@@ -71,7 +81,7 @@ fn every_config() -> Vec<BuildConfig> {
 
 /// Checks the tree's structure: every triangle in exactly one leaf, children's boxes
 /// inside the parent's, unused slots empty.
-fn check_structure(bvh: &Bvh4, n_tris: usize) {
+fn check_structure<const W: usize>(bvh: &BvhWide<W>, n_tris: usize) {
     let mut seen = vec![false; n_tris];
     let mut reached = vec![false; bvh.nodes().len()];
     let mut stack = if bvh.nodes().is_empty() { vec![] } else { vec![0usize] };
@@ -79,9 +89,9 @@ fn check_structure(bvh: &Bvh4, n_tris: usize) {
         assert!(!reached[i], "node {i} reached twice");
         reached[i] = true;
         let n = &bvh.nodes()[i];
-        let used = (0..WIDTH).filter(|&s| !n.child_bounds(s).is_empty()).count();
+        let used = (0..W).filter(|&s| !n.child_bounds(s).is_empty()).count();
         assert!(used >= 1 && (i == 0 || used >= 2), "node {i} has {used} children");
-        for s in 0..WIDTH {
+        for s in 0..W {
             let b = n.child_bounds(s);
             if b.is_empty() {
                 assert_eq!((n.child[s], n.count[s]), (0, 0));
@@ -113,6 +123,12 @@ fn node_layout() {
     assert_eq!(std::mem::align_of::<Bvh4Node>(), 64);
     let n = Bvh4Node::EMPTY;
     assert_eq!(n.planes()[3], [f32::NEG_INFINITY; 4], "row 3 is max_x");
+    assert_eq!(std::mem::size_of::<Bvh8Node>(), 256);
+    assert_eq!(std::mem::align_of::<Bvh8Node>(), 64);
+    let mut n = Bvh8Node::EMPTY;
+    n.max_y[7] = 2.0;
+    assert_eq!(n.planes()[4][7], 2.0, "row 4 is max_y");
+    assert_eq!(bytemuck::bytes_of(&n).len(), 256);
 }
 
 #[test]
@@ -124,15 +140,26 @@ fn matches_brute_force_for_every_builder_and_leaf_size() {
         let bvh = Bvh4::build(&tris, config).unwrap();
         check_structure(&bvh, tris.len());
         agree_with(&bvh, &oracle, &tris, &rs);
+        let bvh = Bvh8::build(&tris, config).unwrap();
+        check_structure(&bvh, tris.len());
+        agree_with(&bvh, &oracle, &tris, &rs);
     }
 }
 
 #[test]
 fn parallel_build_collapses_and_matches_brute_force() {
     let tris = soup(21, 20_000, 50.0, 1.0);
+    let oracle = BruteForce::new(&tris).unwrap();
     let bvh = Bvh4::build(&tris, BuildConfig::default()).unwrap();
     check_structure(&bvh, tris.len());
-    agree_with(&bvh, &BruteForce::new(&tris).unwrap(), &tris, &rays(22, 500, 50.0));
+    agree_with(&bvh, &oracle, &tris, &rays(22, 500, 50.0));
+    let bvh8 = Bvh8::build(&tris, BuildConfig::default()).unwrap();
+    check_structure(&bvh8, tris.len());
+    agree_with(&bvh8, &oracle, &tris, &rays(22, 500, 50.0));
+    // Fewer, wider nodes: at most about half of the 4-wide tree's.
+    let (s4, s8) = (bvh.stats(), bvh8.stats());
+    assert_eq!(s8.leaves, s4.leaves, "the same leaves");
+    assert!(s8.nodes * 3 < s4.nodes * 2 && s8.depth < s4.depth, "{s8:?} vs {s4:?}");
 }
 
 #[test]
@@ -222,8 +249,8 @@ fn axis_parallel_rays_and_origins_on_slab_planes() {
         }
     }
     for config in every_config() {
-        let bvh = Bvh4::build(&tris, config).unwrap();
-        agree_with(&bvh, &oracle, &tris, &rs);
+        agree_with(&Bvh4::build(&tris, config).unwrap(), &oracle, &tris, &rs);
+        agree_with(&Bvh8::build(&tris, config).unwrap(), &oracle, &tris, &rs);
     }
     // By hand: a ray in the plane y = 0 (the min plane of the front boxes) with a zero y
     // component hits the edge of the first square at t = 1.
@@ -288,7 +315,7 @@ fn leaf_kernel_matches_the_scalar_test(test: TriangleTest, seed: u64) {
                     }
                     let (mut got, mut got_t_max) = (None, t_max);
                     let leaf = Leaf { soa: &soa, ids: &ids };
-                    let k = Kernel::new(r);
+                    let k = <Kernel as RayKernel<4>>::new(r);
                     let found = match (test, any_hit) {
                         (TriangleTest::MollerTrumbore, true) => k.triangles::<true>(r, leaf, &mut got_t_max, &mut got),
                         (TriangleTest::MollerTrumbore, false) => {
@@ -331,10 +358,42 @@ fn unused_slots_are_never_entered() {
     for dir in [Vec3::X, -Vec3::X, Vec3::new(0.0, -0.0, 1.0), Vec3::new(-0.0, 0.0, -0.0), Vec3::new(1.0, -2.0, 3.0)] {
         for origin in [Vec3::ZERO, Vec3::splat(-3.0), Vec3::new(5.0, 0.0, 0.0)] {
             let r = Ray::new(origin, dir);
-            let (mask, _) = Kernel::new(&r).enter(node, f32::INFINITY);
-            let (scalar, _) = ScalarKernel::new(&r).enter(node, f32::INFINITY);
+            let (mask, _) = <Kernel as RayKernel<4>>::new(&r).enter(node, f32::INFINITY);
+            let (scalar, _) = <ScalarKernel as RayKernel<4>>::new(&r).enter(node, f32::INFINITY);
             assert_eq!(mask, scalar);
             assert_eq!(mask & 0b1100, 0, "unused slot entered by {r:?}");
+        }
+    }
+}
+
+#[test]
+#[cfg(target_arch = "x86_64")]
+fn unused_slots_of_an_8_wide_node_are_never_entered() {
+    if !wide8_accelerated() {
+        eprintln!("skipped: this CPU has no AVX2 (the 8-wide tree runs the portable kernel)");
+        return;
+    }
+    // Three triangles: the root has three used slots and five unused ones.
+    let tris: Vec<[Vec3; 3]> = (0..3)
+        .map(|i| [0.0, 1.0, 0.0].map(|y| Vec3::new(5.0 * i as f32 + y, y, 0.0)))
+        .map(|[a, b, _]| [a, b, a + Vec3::Y])
+        .collect();
+    let bvh = Bvh8::build(&tris, BuildConfig { max_leaf_size: 1, ..Default::default() }).unwrap();
+    assert_eq!(bvh.nodes().len(), 1);
+    let node = &bvh.nodes()[0];
+    for dir in [Vec3::X, -Vec3::X, Vec3::new(0.0, -0.0, 1.0), Vec3::new(-0.0, 0.0, -0.0), Vec3::new(1.0, -2.0, 3.0)] {
+        for origin in [Vec3::ZERO, Vec3::splat(-3.0), Vec3::new(5.0, 0.0, 0.0)] {
+            let r = Ray::new(origin, dir);
+            // SAFETY of calling the AVX kernel here: AVX2 was detected above.
+            let (mask, t) = <super::avx::AvxKernel as RayKernel<8>>::new(&r).enter(node, f32::INFINITY);
+            let (scalar, scalar_t) = <ScalarKernel as RayKernel<8>>::new(&r).enter(node, f32::INFINITY);
+            assert_eq!(mask, scalar);
+            assert_eq!(mask & !0b111, 0, "unused slot entered by {r:?}");
+            for i in 0..8 {
+                if mask & (1 << i) != 0 {
+                    assert_eq!(t[i], scalar_t[i]);
+                }
+            }
         }
     }
 }
@@ -366,10 +425,15 @@ fn degenerate_duplicate_and_tiny_inputs() {
     for config in every_config() {
         let bvh = Bvh4::build(&same, config).unwrap();
         let s = bvh.stats();
-        assert!(s.depth.saturating_sub(1) * (WIDTH - 1) <= STACK_DEPTH && s.depth < 64, "{s:?}");
+        assert!(s.depth.saturating_sub(1) * 3 <= STACK_DEPTH && s.depth < 64, "{s:?}");
         check_structure(&bvh, same.len());
+        let bvh8 = Bvh8::build(&same, config).unwrap();
+        let s = bvh8.stats();
+        assert!(s.depth.saturating_sub(1) * 7 <= STACK_DEPTH && s.depth < 64, "{s:?}");
+        check_structure(&bvh8, same.len());
         for r in &towards {
             assert!(bvh.intersect(r).is_some() && bvh.occluded(r));
+            assert!(bvh8.intersect(r).is_some() && bvh8.occluded(r));
         }
     }
     agree(&same, BuildConfig::default(), &rs);
@@ -387,6 +451,7 @@ fn degenerate_duplicate_and_tiny_inputs() {
 fn non_finite_rays_hit_nothing_and_terminate() {
     let tris = soup(9, 500, 5.0, 1.0);
     let bvh = Bvh4::build(&tris, BuildConfig::default()).unwrap();
+    let bvh8 = Bvh8::build(&tris, BuildConfig::default()).unwrap();
     let oracle = BruteForce::new(&tris).unwrap();
     for (o, d) in [
         (Vec3::splat(2.0), Vec3::new(f32::NAN, 1.0, 0.0)),
@@ -398,6 +463,8 @@ fn non_finite_rays_hit_nothing_and_terminate() {
         assert_eq!(bvh.intersect(&r), None);
         assert_eq!(oracle.intersect(&r), None);
         assert!(!bvh.occluded(&r));
+        assert_eq!(bvh8.intersect(&r), None);
+        assert!(!bvh8.occluded(&r));
     }
     // NaN segment bounds: nothing is hit either.
     let r = Ray::segment(Vec3::splat(-1.0), Vec3::ONE, f32::NAN, f32::INFINITY);
@@ -423,8 +490,12 @@ proptest! {
         let tris = soup(seed, n, 5.0, 1.5);
         let method = SplitMethod::ALL[m];
         let config = BuildConfig { method, max_leaf_size: leaf, bins, leaf_by_sah: by_sah, ..Default::default() };
+        let (oracle, rs) = (BruteForce::new(&tris).unwrap(), rays(seed ^ 1, 200, 5.0));
         let bvh = Bvh4::build(&tris, config).unwrap();
         check_structure(&bvh, tris.len());
-        agree_with(&bvh, &BruteForce::new(&tris).unwrap(), &tris, &rays(seed ^ 1, 200, 5.0));
+        agree_with(&bvh, &oracle, &tris, &rs);
+        let bvh = Bvh8::build(&tris, config).unwrap();
+        check_structure(&bvh, tris.len());
+        agree_with(&bvh, &oracle, &tris, &rs);
     }
 }

@@ -1,9 +1,11 @@
-//! Ordered traversal of a [`Bvh4`]: the children a ray enters are visited nearest first,
-//! the others pushed with their entry distance and culled on pop against the closest hit
-//! so far; boxes and leaves are tested by a [`RayKernel`].
+//! Ordered traversal of a [`BvhWide`]: the children a ray enters are visited nearest
+//! first, the others pushed with their entry distance and culled on pop against the
+//! closest hit so far; boxes and leaves are tested by a [`RayKernel`] — for [`Bvh4`] the
+//! SSE kernel (x86_64 baseline), for [`Bvh8`] the AVX one where the CPU has AVX2 (checked
+//! at run time; the traversal is then compiled with AVX2 enabled), else the portable one.
 
-use super::kernel::{Kernel, Leaf, RayKernel};
-use super::{Bvh4, Bvh4Node, STACK_DEPTH, WIDTH};
+use super::kernel::{Leaf, RayKernel, ScalarKernel};
+use super::{Bvh4, Bvh8, BvhWide, STACK_DEPTH, WideNode};
 use crate::{Aabb, Accelerator, Hit, Ray, RayStats, TriangleTest, WatertightRay};
 use std::mem::MaybeUninit;
 
@@ -16,11 +18,12 @@ struct Entry {
     t: f32,
 }
 
-/// Sorts the first `k` (≤ 4) entries by entry distance, nearest first (a sorting network).
+/// Sorts the first `k` (≤ W) entries by entry distance, nearest first (a sorting
+/// network up to four, else insertion).
 #[inline(always)]
-fn sort_by_entry(e: &mut [Entry; WIDTH], k: usize) {
+fn sort_by_entry<const W: usize>(e: &mut [Entry; W], k: usize) {
     #[inline(always)]
-    fn order(e: &mut [Entry; WIDTH], a: usize, b: usize) {
+    fn order<const W: usize>(e: &mut [Entry; W], a: usize, b: usize) {
         if e[b].t < e[a].t {
             e.swap(a, b);
         }
@@ -40,13 +43,23 @@ fn sort_by_entry(e: &mut [Entry; WIDTH], k: usize) {
             order(e, 1, 3);
             order(e, 1, 2);
         }
-        _ => unreachable!("at most four children"),
+        _ => {
+            for i in 1..k {
+                let x = e[i];
+                let mut j = i;
+                while j > 0 && x.t < e[j - 1].t {
+                    e[j] = e[j - 1];
+                    j -= 1;
+                }
+                e[j] = x;
+            }
+        }
     }
 }
 
-impl Bvh4 {
+impl<const W: usize> BvhWide<W> {
     #[inline(always)]
-    pub(super) fn traverse<K: RayKernel, const COUNT: bool, const ANY_HIT: bool>(
+    pub(super) fn traverse<K: RayKernel<W>, const COUNT: bool, const ANY_HIT: bool>(
         &self,
         ray: &Ray,
         stats: &mut RayStats,
@@ -80,8 +93,8 @@ impl Bvh4 {
                         current = entry(mask.trailing_zeros() as usize);
                         continue;
                     }
-                    // Two to four children: nearest first, the others pushed far to near.
-                    let mut hits = [Entry::default(); WIDTH];
+                    // Two or more children: nearest first, the others pushed far to near.
+                    let mut hits = [Entry::default(); W];
                     let mut k = 0;
                     let mut m = mask;
                     while m != 0 {
@@ -137,7 +150,7 @@ impl Bvh4 {
             use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
             let (first, last) = if e.count == 0 {
                 let p = self.nodes.as_ptr().wrapping_add(e.child as usize).cast::<i8>();
-                (p, p.wrapping_add(size_of::<Bvh4Node>() - 1))
+                (p, p.wrapping_add(size_of::<WideNode<W>>() - 1))
             } else {
                 let p = self.soa.as_ptr().wrapping_add(9 * e.child as usize).cast::<i8>();
                 (p, p.wrapping_add(e.count as usize * 9 * size_of::<f32>() - 1))
@@ -153,23 +166,78 @@ impl Bvh4 {
     }
 }
 
+/// The kernel of a [`Bvh4`]: SSE on x86_64, else the portable one.
+#[cfg(target_arch = "x86_64")]
+type Kernel4 = super::sse::SseKernel;
+#[cfg(not(target_arch = "x86_64"))]
+type Kernel4 = ScalarKernel;
+
 impl Accelerator for Bvh4 {
     #[inline]
     fn intersect(&self, ray: &Ray) -> Option<Hit> {
-        self.traverse::<Kernel, false, false>(ray, &mut RayStats::default())
+        self.traverse::<Kernel4, false, false>(ray, &mut RayStats::default())
     }
 
     #[inline]
     fn occluded(&self, ray: &Ray) -> bool {
-        self.traverse::<Kernel, false, true>(ray, &mut RayStats::default()).is_some()
+        self.traverse::<Kernel4, false, true>(ray, &mut RayStats::default()).is_some()
     }
 
     fn bounds(&self) -> Aabb {
-        self.nodes.first().map_or(Aabb::EMPTY, Bvh4Node::bounds)
+        self.nodes.first().map_or(Aabb::EMPTY, WideNode::bounds)
     }
 
     /// Closest hit, counting wide nodes whose children are tested and triangle tests.
     fn intersect_counted(&self, ray: &Ray, stats: &mut RayStats) -> Option<Hit> {
-        self.traverse::<Kernel, true, false>(ray, stats)
+        self.traverse::<Kernel4, true, false>(ray, stats)
+    }
+}
+
+impl Bvh8 {
+    /// The traversal with the AVX kernel where the CPU has AVX2, else the portable one.
+    #[inline(always)]
+    fn traverse_best<const COUNT: bool, const ANY_HIT: bool>(&self, ray: &Ray, stats: &mut RayStats) -> Option<Hit> {
+        #[cfg(target_arch = "x86_64")]
+        if self.avx2 {
+            // SAFETY: `avx2` is set only where the CPU has AVX2 (`avx2_available`).
+            return unsafe { self.traverse_avx2::<COUNT, ANY_HIT>(ray, stats) };
+        }
+        self.traverse::<ScalarKernel, COUNT, ANY_HIT>(ray, stats)
+    }
+
+    /// The traversal compiled with AVX2 enabled, the AVX kernel inlined into it.
+    ///
+    /// # Safety
+    ///
+    /// The CPU must have AVX2.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    unsafe fn traverse_avx2<const COUNT: bool, const ANY_HIT: bool>(
+        &self,
+        ray: &Ray,
+        stats: &mut RayStats,
+    ) -> Option<Hit> {
+        self.traverse::<super::avx::AvxKernel, COUNT, ANY_HIT>(ray, stats)
+    }
+}
+
+impl Accelerator for Bvh8 {
+    #[inline]
+    fn intersect(&self, ray: &Ray) -> Option<Hit> {
+        self.traverse_best::<false, false>(ray, &mut RayStats::default())
+    }
+
+    #[inline]
+    fn occluded(&self, ray: &Ray) -> bool {
+        self.traverse_best::<false, true>(ray, &mut RayStats::default()).is_some()
+    }
+
+    fn bounds(&self) -> Aabb {
+        self.nodes.first().map_or(Aabb::EMPTY, WideNode::bounds)
+    }
+
+    /// Closest hit, counting wide nodes whose children are tested and triangle tests.
+    fn intersect_counted(&self, ray: &Ray, stats: &mut RayStats) -> Option<Hit> {
+        self.traverse_best::<true, false>(ray, stats)
     }
 }

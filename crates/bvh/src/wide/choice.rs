@@ -1,0 +1,109 @@
+//! [`WideBvh`]: the wide tree a renderer should use on the CPU it runs on, chosen at run
+//! time ([`BvhWidth::Auto`]) or by the user.
+
+use super::{Bvh4, Bvh8, wide8_accelerated};
+use crate::{Aabb, Accelerator, BuildConfig, BuildError, Hit, Ray, RayStats, TriangleTest};
+use glam::Vec3;
+
+/// How many children per node a [`WideBvh`] has.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum BvhWidth {
+    /// 8 where the CPU has AVX2 ([`wide8_accelerated`]), else 4.
+    #[default]
+    Auto,
+    /// [`Bvh4`]: SSE, every x86_64 CPU.
+    Four,
+    /// [`Bvh8`]: AVX2 (the portable kernel without it).
+    Eight,
+}
+
+impl BvhWidth {
+    /// Every choice.
+    pub const ALL: [BvhWidth; 3] = [Self::Auto, Self::Four, Self::Eight];
+
+    /// The name used on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Auto => "auto",
+            Self::Four => "4",
+            Self::Eight => "8",
+        }
+    }
+
+    /// The width this choice gives on this CPU: 4 or 8.
+    pub fn resolve(self) -> u32 {
+        match self {
+            Self::Auto if wide8_accelerated() => 8,
+            Self::Auto | Self::Four => 4,
+            Self::Eight => 8,
+        }
+    }
+}
+
+/// A [`Bvh4`] or a [`Bvh8`], by [`BvhWidth`]: one branch per query on which.
+#[derive(Clone, Debug)]
+pub enum WideBvh {
+    /// 4 children per node.
+    Four(Bvh4),
+    /// 8 children per node.
+    Eight(Bvh8),
+}
+
+impl WideBvh {
+    /// Builds a binary tree with `config` and collapses it to `width` (see
+    /// [`BvhWide::build`](super::BvhWide::build)).
+    pub fn build(triangles: &[[Vec3; 3]], config: BuildConfig, width: BvhWidth) -> Result<Self, BuildError> {
+        Ok(match width.resolve() {
+            8 => Self::Eight(Bvh8::build(triangles, config)?),
+            _ => Self::Four(Bvh4::build(triangles, config)?),
+        })
+    }
+
+    /// Selects the triangle test.
+    pub fn with_triangle_test(self, test: TriangleTest) -> Self {
+        match self {
+            Self::Four(b) => Self::Four(b.with_triangle_test(test)),
+            Self::Eight(b) => Self::Eight(b.with_triangle_test(test)),
+        }
+    }
+
+    /// Children per node: 4 or 8.
+    pub fn width(&self) -> u32 {
+        match self {
+            Self::Four(_) => 4,
+            Self::Eight(_) => 8,
+        }
+    }
+}
+
+impl Accelerator for WideBvh {
+    #[inline]
+    fn intersect(&self, ray: &Ray) -> Option<Hit> {
+        match self {
+            Self::Four(b) => b.intersect(ray),
+            Self::Eight(b) => b.intersect(ray),
+        }
+    }
+
+    #[inline]
+    fn occluded(&self, ray: &Ray) -> bool {
+        match self {
+            Self::Four(b) => b.occluded(ray),
+            Self::Eight(b) => b.occluded(ray),
+        }
+    }
+
+    fn bounds(&self) -> Aabb {
+        match self {
+            Self::Four(b) => b.bounds(),
+            Self::Eight(b) => b.bounds(),
+        }
+    }
+
+    fn intersect_counted(&self, ray: &Ray, stats: &mut RayStats) -> Option<Hit> {
+        match self {
+            Self::Four(b) => b.intersect_counted(ray, stats),
+            Self::Eight(b) => b.intersect_counted(ray, stats),
+        }
+    }
+}
