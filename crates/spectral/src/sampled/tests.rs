@@ -117,3 +117,24 @@ fn mode_names_round_trip() {
     }
     assert!("rgb8".parse::<SpectralMode>().is_err());
 }
+
+#[test]
+fn fast_atanh_matches_f64() {
+    // Every 1/4096 of (-1, 1) and points near the clamp of `sample_visible`.
+    let mut worst = (0.0f64, 0.0f32);
+    let grid = (-4095..4096).map(|i| i as f32 / 4096.0);
+    for t in grid.chain([-0.999_999, 0.999_999, 1e-8, -1e-8, 0.0, VIS_TANH_LO, VIS_TANH_HI]) {
+        let exact = (t as f64).atanh();
+        let err = (atanh(t) as f64 - exact).abs();
+        assert!(err <= 2e-7 + 1e-7 * exact.abs(), "atanh({t}) = {} vs {exact}", atanh(t));
+        if err > worst.0 {
+            worst = (err, t);
+        }
+    }
+    assert!(worst.0 > 0.0, "the test compares something");
+    // ln over many octaves, including values just below and above √2.
+    for x in [1e-30f32, 1e-3, 0.5, 0.999_999, 1.0, 1.000_001, 1.414_213, 1.414_214, 2.0, 3.7, 1e6, 3e38] {
+        let exact = (x as f64).ln();
+        assert!((ln_positive(x) as f64 - exact).abs() <= 1e-7 * exact.abs().max(1.0), "ln({x})");
+    }
+}
