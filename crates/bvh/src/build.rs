@@ -125,6 +125,14 @@ impl Bvh {
     /// Builds a tree; rejects non-finite coordinates. Degenerate (zero-area) triangles
     /// are kept (they are never hit). An empty input gives a tree that nothing hits.
     pub fn build(triangles: &[[Vec3; 3]], config: BuildConfig) -> Result<Self, BuildError> {
+        let mut bvh = Self::build_topology(triangles, config)?;
+        bvh.triangles = bvh.prim_ids.iter().map(|&i| Triangle::new(&triangles[i as usize])).collect();
+        Ok(bvh)
+    }
+
+    /// [`Bvh::build`] without the leaf-ordered copy of the triangles (`triangles()` is
+    /// empty): the nodes and the leaf order are all a wide tree's collapse needs.
+    pub(crate) fn build_topology(triangles: &[[Vec3; 3]], config: BuildConfig) -> Result<Self, BuildError> {
         validate(triangles)?;
         let config = BuildConfig {
             bins: config.bins.clamp(2, 256),
@@ -141,10 +149,10 @@ impl Bvh {
         let mut ids: Vec<u32> = (0..prims.len() as u32).collect();
         let mut out = Output::default();
         if !ids.is_empty() {
-            builders::build(&prims, &mut ids, &config, &mut out, 1);
+            let bounds = builders::bounds_of(&prims, &ids);
+            builders::build(&prims, &mut ids, bounds, &config, &mut out, 1);
         }
-        let triangles = out.order.iter().map(|&i| Triangle::new(&triangles[i as usize])).collect();
-        Ok(Self { nodes: out.nodes, triangles, prim_ids: out.order, config })
+        Ok(Self { nodes: out.nodes, triangles: Vec::new(), prim_ids: out.order, config })
     }
 
     /// The flattened nodes (root first).

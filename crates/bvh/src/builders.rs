@@ -89,6 +89,14 @@ pub(crate) fn centroid_bounds(prims: &[Prim], ids: &[u32]) -> Aabb {
     fold_boxes(ids, |b, i| b.grow(prims[i as usize].centre))
 }
 
+/// A node's split: `ids[..mid]` go left; the SAH cost and both children's bounds.
+pub(crate) struct Split {
+    pub mid: usize,
+    pub cost: f32,
+    pub left: Aabb,
+    pub right: Aabb,
+}
+
 /// SAH cost of splitting a node of area `parent_area` into the given children
 /// (MacDonald & Booth 1990): C_t + C_i·(A_l·n_l + A_r·n_r)/A.
 #[inline]
@@ -121,15 +129,21 @@ pub(crate) fn partition(ids: &mut [u32], pred: impl Fn(u32) -> bool) -> usize {
     i
 }
 
-/// Builds the subtree over `ids` with the configured method.
-pub(crate) fn build(prims: &[Prim], ids: &mut [u32], config: &BuildConfig, out: &mut Output, depth: usize) -> usize {
+/// Builds the subtree over `ids`, whose bounds are `bounds`, with the configured method.
+pub(crate) fn build(
+    prims: &[Prim],
+    ids: &mut [u32],
+    bounds: Aabb,
+    config: &BuildConfig,
+    out: &mut Output,
+    depth: usize,
+) -> usize {
     let n = ids.len();
     match config.method {
         SplitMethod::SweepSah => return sweep::build(prims, ids, config, out, depth),
         SplitMethod::Hybrid { threshold } if n <= threshold => return sweep::build(prims, ids, config, out, depth),
         _ => {}
     }
-    let bounds = bounds_of(prims, ids);
     if forced_leaf(config, n, depth) {
         return out.leaf(&bounds, ids.iter().copied());
     }
@@ -137,19 +151,24 @@ pub(crate) fn build(prims: &[Prim], ids: &mut [u32], config: &BuildConfig, out: 
         SplitMethod::BinnedSah => binned::split(prims, ids, &bounds, config),
         _ => midpoint::split(prims, ids, &bounds, config),
     };
-    let mid = match split {
+    // Halving by position, for the cases below.
+    let halve = |ids: &[u32]| {
+        let mid = n / 2;
+        (mid, bounds_of(prims, &ids[..mid]), bounds_of(prims, &ids[mid..]))
+    };
+    let (mid, left_bounds, right_bounds) = match split {
         // A plane that leaves one side empty (centroids closer together than the float
         // spacing at the midpoint) would recurse on the same set: halve by position.
-        Some((mid, cost)) if !sah_prefers_leaf(config, n, cost) => {
-            if mid == 0 || mid == n {
-                n / 2
+        Some(s) if !sah_prefers_leaf(config, n, s.cost) => {
+            if s.mid == 0 || s.mid == n {
+                halve(ids)
             } else {
-                mid
+                (s.mid, s.left, s.right)
             }
         }
         Some(_) => return out.leaf(&bounds, ids.iter().copied()),
         // No split separates the centroids: halve by position to bound leaf sizes.
-        None if n > config.max_leaf_size => n / 2,
+        None if n > config.max_leaf_size => halve(ids),
         None => return out.leaf(&bounds, ids.iter().copied()),
     };
     let index = out.interior(&bounds);
@@ -158,12 +177,12 @@ pub(crate) fn build(prims: &[Prim], ids: &mut [u32], config: &BuildConfig, out: 
         let (l, r) = rayon::join(
             || {
                 let mut o = Output::default();
-                build(prims, left, config, &mut o, depth + 1);
+                build(prims, left, left_bounds, config, &mut o, depth + 1);
                 o
             },
             || {
                 let mut o = Output::default();
-                build(prims, right, config, &mut o, depth + 1);
+                build(prims, right, right_bounds, config, &mut o, depth + 1);
                 o
             },
         );
@@ -172,8 +191,8 @@ pub(crate) fn build(prims: &[Prim], ids: &mut [u32], config: &BuildConfig, out: 
         out.append(r);
         out.nodes[index].index = right_index as u32;
     } else {
-        build(prims, left, config, out, depth + 1);
-        let right_index = build(prims, right, config, out, depth + 1);
+        build(prims, left, left_bounds, config, out, depth + 1);
+        let right_index = build(prims, right, right_bounds, config, out, depth + 1);
         out.nodes[index].index = right_index as u32;
     }
     index
@@ -186,7 +205,8 @@ pub(crate) fn build_over_boxes(boxes: &[Aabb], config: &BuildConfig) -> Output {
     let mut ids: Vec<u32> = (0..prims.len() as u32).collect();
     let mut out = Output::default();
     if !ids.is_empty() {
-        build(&prims, &mut ids, config, &mut out, 1);
+        let bounds = bounds_of(&prims, &ids);
+        build(&prims, &mut ids, bounds, config, &mut out, 1);
     }
     out
 }
@@ -211,7 +231,8 @@ mod tests {
             BuildConfig { method: SplitMethod::Midpoint, max_leaf_size: 1, leaf_by_sah: false, ..Default::default() };
         let mut ids: Vec<u32> = (0..prims.len() as u32).collect();
         let mut out = Output::default();
-        build(&prims, &mut ids, &config, &mut out, 1);
+        let bounds = bounds_of(&prims, &ids);
+        build(&prims, &mut ids, bounds, &config, &mut out, 1);
         let largest = out.nodes.iter().map(|n| n.count).max().unwrap();
         assert!(largest <= 1, "a leaf of {largest} primitives");
         assert!(out.nodes.iter().all(|n| n.count > 0 || n.index as usize > 0), "no empty subtrees");

@@ -100,7 +100,7 @@ impl<const W: usize> BvhWide<W> {
     /// Builds a binary [`Bvh`] with `config` and collapses it; rejects non-finite
     /// coordinates. An empty input gives a tree that nothing hits.
     pub fn build(triangles: &[[Vec3; 3]], config: BuildConfig) -> Result<Self, BuildError> {
-        let bvh = Bvh::build(triangles, config)?;
+        let bvh = Bvh::build_topology(triangles, config)?;
         Ok(Self::collapse(&bvh, |i| triangles[bvh.prim_ids()[i] as usize]))
     }
 

@@ -90,6 +90,9 @@ pub struct TraceArgs {
     /// Ray–triangle test: watertight or moller-trumbore.
     #[arg(long, default_value = "watertight", value_parser = crate::parse_triangle_test)]
     pub triangle_test: TriangleTest,
+    /// Largest leaf of the binary tree before the collapse (default: the renderer's).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=64))]
+    pub max_leaf: Option<u32>,
     /// Do not write the hits files.
     #[arg(long)]
     pub no_write: bool,
@@ -185,17 +188,21 @@ fn trace(args: TraceArgs) -> Result<()> {
     ensure!(!triangles.is_empty(), "{}: no triangles", args.dir.join("triangles.f32").display());
     let pool = rayon::ThreadPoolBuilder::new().num_threads(args.threads as usize).build()?;
     let start = Instant::now();
+    let mut config = tracer::geometry::Geometry::triangle_build_config();
+    if let Some(n) = args.max_leaf {
+        config.max_leaf_size = n as usize;
+    }
     let wide8 = match args.accel {
         AccelChoice::Bvh4 => false,
         AccelChoice::Bvh8 => true,
         AccelChoice::Auto => wide8_accelerated(),
     };
     let (tracer, build, sets) = if wide8 {
-        let bvh = pool.install(|| Bvh8::build(&triangles, BuildConfig::default()))?;
+        let bvh = pool.install(|| Bvh8::build(&triangles, config))?;
         let build = start.elapsed();
         ("bvh8", build, trace_sets(&bvh.with_triangle_test(args.triangle_test), &pool, &args, "bvh8")?)
     } else {
-        let bvh = pool.install(|| Bvh4::build(&triangles, BuildConfig::default()))?;
+        let bvh = pool.install(|| Bvh4::build(&triangles, config))?;
         let build = start.elapsed();
         ("bvh4", build, trace_sets(&bvh.with_triangle_test(args.triangle_test), &pool, &args, "bvh4")?)
     };

@@ -94,8 +94,8 @@ impl Geometry {
     /// Builds both accelerators, the triangles' with the given ray–triangle test and
     /// node width.
     pub fn build(scene: &Scene, test: TriangleTest, width: BvhWidth) -> Result<Self> {
-        let config = BuildConfig { max_leaf_size: 4, ..BuildConfig::default() };
-        let triangles = WideBvh::build(&scene.triangle_soup(), config, width)?.with_triangle_test(test);
+        let triangles =
+            WideBvh::build(&scene.triangle_soup(), Self::triangle_build_config(), width)?.with_triangle_test(test);
         let boxes: Vec<_> = scene.shapes.iter().map(|s| s.shape.shape().bounds()).collect();
         let shapes = BoxBvh::build(&boxes, BuildConfig { max_leaf_size: 2, ..BuildConfig::default() })?;
         let count = scene.triangles.len() + scene.shapes.len();
@@ -103,6 +103,12 @@ impl Geometry {
             return Err(Error::Setting(format!("{count} primitives exceed the 2^32 − 1 a scene can index")));
         }
         Ok(Self { triangles, shapes, triangle_count: scene.triangles.len() as u32 })
+    }
+
+    /// How the triangles' binary BVH is built before it is collapsed: binned SAH, leaves of
+    /// at most four triangles (one SIMD test).
+    pub fn triangle_build_config() -> BuildConfig {
+        BuildConfig { max_leaf_size: 4, ..BuildConfig::default() }
     }
 
     /// Number of triangles (the first shape's primitive id).

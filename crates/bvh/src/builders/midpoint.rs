@@ -2,13 +2,13 @@
 //! fast fallback for large objects (its chapter 8.3). Cheap (O(n) per level, no area
 //! evaluations) but blind to where the primitives are.
 
-use super::{Prim, bounds_of, centroid_bounds, partition, split_cost};
+use super::{Prim, Split, bounds_of, centroid_bounds, partition, split_cost};
 use crate::Aabb;
 use crate::build::BuildConfig;
 
-/// Partitions `ids` at the centroid-bounds midpoint of the longest axis; returns (left
-/// count, SAH cost of the split), or `None` when the centroids span no extent.
-pub(crate) fn split(prims: &[Prim], ids: &mut [u32], bounds: &Aabb, config: &BuildConfig) -> Option<(usize, f32)> {
+/// Partitions `ids` at the centroid-bounds midpoint of the longest axis, or returns `None`
+/// when the centroids span no extent.
+pub(crate) fn split(prims: &[Prim], ids: &mut [u32], bounds: &Aabb, config: &BuildConfig) -> Option<Split> {
     let cb = centroid_bounds(prims, ids);
     let e = cb.extent();
     let axis = if e.x >= e.y && e.x >= e.z {
@@ -23,12 +23,9 @@ pub(crate) fn split(prims: &[Prim], ids: &mut [u32], bounds: &Aabb, config: &Bui
     }
     let pos = cb.min[axis] + 0.5 * e[axis];
     let mid = partition(ids, |i| prims[i as usize].centre[axis] < pos);
-    let (left, right) = ids.split_at(mid);
-    let cost = split_cost(
-        config,
-        bounds.surface_area(),
-        (bounds_of(prims, left).surface_area(), left.len()),
-        (bounds_of(prims, right).surface_area(), right.len()),
-    );
-    Some((mid, cost))
+    let (l, r) = ids.split_at(mid);
+    let (left, right) = (bounds_of(prims, l), bounds_of(prims, r));
+    let cost =
+        split_cost(config, bounds.surface_area(), (left.surface_area(), l.len()), (right.surface_area(), r.len()));
+    Some(Split { mid, cost, left, right })
 }

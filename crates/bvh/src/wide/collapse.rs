@@ -39,7 +39,7 @@ impl<const W: usize> BvhWide<W> {
         }
         let nodes = collapse.out;
         let config = bvh.config();
-        let mut soa = vec![0.0; 9 * bvh.triangles().len() + 3];
+        let mut soa = vec![0.0; 9 * bvh.prim_ids().len() + 3];
         for n in &nodes {
             for (&first, &count) in n.child.iter().zip(&n.count).filter(|(_, c)| **c > 0) {
                 let (first, count) = (first as usize, count as usize);
