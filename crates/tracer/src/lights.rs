@@ -20,11 +20,23 @@ pub struct LightSample {
     pub prim: Option<u32>,
 }
 
+/// An emissive triangle as light sampling needs it, computed once per scene instead of
+/// per shadow ray (vertex lookups, a cross product and two square roots per sample).
+#[derive(Clone, Copy, Debug)]
+struct LightTriangle {
+    vertices: [Vec3; 3],
+    /// Unit front-face normal (counter-clockwise winding).
+    normal: Vec3,
+    area: f32,
+}
+
 /// The scene's emitters and the discrete distribution that picks among them.
 #[derive(Clone, Debug, Default)]
 pub struct Lights {
     /// Emissive primitives (triangles, then shapes).
     prims: Vec<u32>,
+    /// For each entry of `prims` that is a triangle (they come first), its geometry.
+    triangles: Vec<LightTriangle>,
     cdf: Vec<f32>,
     /// Probability of choosing each primitive (0 for non-emitters), for MIS when a
     /// BSDF-sampled ray hits an emitter.
@@ -82,7 +94,16 @@ impl Lights {
         for (&t, p) in prims.iter().zip(&power) {
             prim_pmf[t as usize] = (p / total) as f32;
         }
-        Self { prims, cdf, prim_pmf, environment_pmf: (env_power / total) as f32 }
+        let triangles = prims
+            .iter()
+            .take_while(|&&p| (p as usize) < triangles)
+            .map(|&p| {
+                let vertices = scene.triangle_vertices(p as usize);
+                let cross = (vertices[1] - vertices[0]).cross(vertices[2] - vertices[0]);
+                LightTriangle { vertices, normal: cross.normalize(), area: 0.5 * cross.length() }
+            })
+            .collect();
+        Self { prims, triangles, cdf, prim_pmf, environment_pmf: (env_power / total) as f32 }
     }
 
     /// True if there is nothing to sample.
@@ -150,16 +171,13 @@ impl Lights {
         let k = self.cdf.partition_point(|&c| c <= u_light).min(self.prims.len() - 1);
         let prim = self.prims[k];
         let pmf = self.prim_pmf[prim as usize];
-        let triangles = scene.triangles.len();
-        if (prim as usize) < triangles {
-            let v = scene.triangle_vertices(prim as usize);
+        if let Some(t) = self.triangles.get(k) {
+            let v = &t.vertices;
             let (b0, b1) = uniform_triangle(u);
             let point = b0 * v[0] + b1 * v[1] + (1.0 - b0 - b1) * v[2];
-            let cross = (v[1] - v[0]).cross(v[2] - v[0]);
-            let area = 0.5 * cross.length();
-            return Some(LightSample { point, normal: cross.normalize(), pdf: pmf / area, prim: Some(prim) });
+            return Some(LightSample { point, normal: t.normal, pdf: pmf / t.area, prim: Some(prim) });
         }
-        let shape = scene.shapes[prim as usize - triangles].shape.shape();
+        let shape = scene.shapes[prim as usize - scene.triangles.len()].shape.shape();
         let (point, normal) = shape.sample_area(u)?;
         Some(LightSample { point, normal, pdf: pmf / shape.area(), prim: Some(prim) })
     }
