@@ -77,11 +77,12 @@ const GREY_LIMIT: f32 = 1e30;
 /// Exactly 0 / 1 for x = ∓∞ (and for |x| > 1e18, where x² would overflow); NaN stays NaN.
 #[inline]
 fn sigmoid(x: f32) -> f32 {
-    if x.abs() > 1e18 {
-        // Also ±∞, where x / √(1 + x²) would be ∞/∞ = NaN.
-        return if x > 0.0 { 1.0 } else { 0.0 };
-    }
-    0.5 + x / (2.0 * (1.0 + x * x).sqrt())
+    // Both computed and one selected (no branch), so that loops over wavelengths
+    // vectorise.
+    let y = 0.5 + x / (2.0 * (1.0 + x * x).sqrt());
+    // Beyond ±1e18 (and at ±∞, where x / √(1 + x²) would be ∞/∞ = NaN): exactly 1 or 0.
+    let limit = if x > 0.0 { 1.0 } else { 0.0 };
+    if x.abs() > 1e18 { limit } else { y }
 }
 
 /// The sigmoid in `f64`, exact 0 / 1 where x² would overflow.
