@@ -252,3 +252,93 @@ fn every_sampler_renders_and_unknown_ones_are_named() {
     let e = stderr(&o);
     assert!(e.contains("unknown sampler 'halton'") && e.contains("zsobol"), "{e}");
 }
+
+/// Reads a hits file: (triangle or u32::MAX, t) per ray, t as its bits (NaN for misses
+/// and shadow rays).
+fn read_hits(path: &Path) -> Vec<(u32, u32)> {
+    let bytes = std::fs::read(path).unwrap();
+    assert_eq!(bytes.len() % 16, 0, "{}", path.display());
+    bytes
+        .chunks_exact(16)
+        .map(|r| (u32::from_le_bytes(r[0..4].try_into().unwrap()), u32::from_le_bytes(r[4..8].try_into().unwrap())))
+        .collect()
+}
+
+#[test]
+fn ray_sets_export_and_trace_with_both_widths_alike() {
+    let dir = temp_dir("rays");
+    let scene = write_scene(&dir, OBJ);
+    let sets = dir.join("sets");
+    let o = spt(&[
+        "rays",
+        "export",
+        scene.to_str().unwrap(),
+        "--out",
+        sets.to_str().unwrap(),
+        "--width",
+        "32",
+        "--height",
+        "24",
+        "--subdivide",
+        "1",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    // Two quads = four triangles, subdivided once: 16.
+    assert_eq!(std::fs::metadata(sets.join("triangles.f32")).unwrap().len(), 16 * 36);
+    assert_eq!(std::fs::metadata(sets.join("primary.rays")).unwrap().len(), 32 * 24 * 32);
+    let mut hits = Vec::new();
+    for accel in ["bvh4", "bvh8"] {
+        let o = spt(&["rays", "trace", sets.to_str().unwrap(), "--accel", accel, "--passes", "1", "--threads", "2"]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let json = String::from_utf8_lossy(&o.stdout);
+        assert!(json.contains(&format!(r#""tracer": "{accel}""#)) && json.contains(r#""triangles": 16"#), "{json}");
+        let primary = read_hits(&sets.join(format!("primary.{accel}.hits")));
+        assert_eq!(primary.len(), 32 * 24);
+        let hit = primary.iter().filter(|h| h.0 != u32::MAX).count();
+        assert!(
+            hit > 100 && primary.iter().all(|h| h.0 == u32::MAX || (h.0 < 16 && f32::from_bits(h.1) > 0.0)),
+            "{hit} hits"
+        );
+        let diffuse = read_hits(&sets.join(format!("diffuse.{accel}.hits")));
+        let shadow = read_hits(&sets.join(format!("shadow.{accel}.hits")));
+        assert_eq!((diffuse.len(), shadow.len()), (hit, hit), "one secondary ray per primary hit");
+        hits.push((primary, diffuse, shadow));
+    }
+    assert!(hits[0] == hits[1], "4- and 8-wide trees find the same hits");
+    // A truncated ray file is refused with its name.
+    let rays = std::fs::read(sets.join("diffuse.rays")).unwrap();
+    std::fs::write(sets.join("diffuse.rays"), &rays[..rays.len() - 3]).unwrap();
+    let o = spt(&["rays", "trace", sets.to_str().unwrap(), "--passes", "1"]);
+    assert!(!o.status.success() && stderr(&o).contains("diffuse.rays"), "{}", stderr(&o));
+    let o = spt(&["rays", "trace", dir.join("nowhere").to_str().unwrap()]);
+    assert!(!o.status.success() && stderr(&o).contains("triangles.f32"), "{}", stderr(&o));
+}
+
+#[test]
+fn bvh_width_is_chosen_or_refused_with_the_way_out() {
+    let dir = temp_dir("width");
+    let scene = write_scene(&dir, OBJ);
+    let mut images = Vec::new();
+    for width in ["4", "8", "auto"] {
+        let out = dir.join(format!("w{width}.exr"));
+        let o = spt(&[
+            "render",
+            scene.to_str().unwrap(),
+            "--width",
+            "16",
+            "--height",
+            "12",
+            "--spp",
+            "4",
+            "--bvh-width",
+            width,
+            "-o",
+            out.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        images.push(std::fs::read(&out).unwrap());
+    }
+    assert!(images[0] == images[1] && images[1] == images[2], "the width changes speed, not the image");
+    let o = spt(&["render", scene.to_str().unwrap(), "--bvh-width", "16"]);
+    assert!(!o.status.success() && stderr(&o).contains("unknown BVH width '16'"), "{}", stderr(&o));
+}

@@ -365,6 +365,12 @@ fn unsupported_scenes_and_modes_are_clear_errors() {
     let caps = gpu::backend::capabilities();
     let err = caps.check_scene(&flake, &SceneOptions::default()).unwrap_err().to_string();
     assert!(err.contains("does not support analytic shapes") && err.contains("--backend cpu"), "{err}");
+    // The kernel traverses the binary BVH: a CPU node width is refused, auto accepted.
+    let room = tracer::scenes::material_sphere(Material::diffuse("grey", Colour::constant(0.5)).unwrap());
+    let wide = SceneOptions { bvh_width: bvh::BvhWidth::Eight, ..SceneOptions::default() };
+    let err = caps.check_scene(&room, &wide).unwrap_err().to_string();
+    assert!(err.contains("8-wide triangle BVH") && err.contains("--bvh-width auto"), "{err}");
+    caps.check_scene(&room, &SceneOptions::default()).unwrap();
     let s = settings(8, 8, 1);
     for mode in [SpectralMode::Rgb, SpectralMode::Bins40] {
         let err = caps.check_settings(&RenderSettings { mode, ..s.clone() }).unwrap_err().to_string();
