@@ -139,13 +139,16 @@ impl Bvh {
             max_leaf_size: config.max_leaf_size.clamp(1, 255),
             ..config
         };
-        let prims: Vec<Prim> = triangles
-            .iter()
-            .map(|t| {
-                let bounds = Triangle::bounds(t);
-                Prim { bounds, centre: bounds.centre() }
-            })
-            .collect();
+        let prim = |t: &[Vec3; 3]| {
+            let bounds = Triangle::bounds(t);
+            Prim { bounds, centre: bounds.centre() }
+        };
+        let prims: Vec<Prim> = if triangles.len() > 64 * 1024 {
+            use rayon::prelude::*;
+            triangles.par_iter().map(prim).collect()
+        } else {
+            triangles.iter().map(prim).collect()
+        };
         let mut ids: Vec<u32> = (0..prims.len() as u32).collect();
         let mut out = Output::default();
         if !ids.is_empty() {

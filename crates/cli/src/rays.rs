@@ -93,6 +93,10 @@ pub struct TraceArgs {
     /// Largest leaf of the binary tree before the collapse (default: the renderer's).
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=64))]
     pub max_leaf: Option<u32>,
+    /// Recompute every closest hit's t in f64 (correctly rounded; slower): by default only
+    /// hits close to the origin relative to its coordinates are.
+    #[arg(long)]
+    pub exact_t: bool,
     /// Do not write the hits files.
     #[arg(long)]
     pub no_write: bool,
@@ -200,11 +204,19 @@ fn trace(args: TraceArgs) -> Result<()> {
     let (tracer, build, sets) = if wide8 {
         let bvh = pool.install(|| Bvh8::build(&triangles, config))?;
         let build = start.elapsed();
-        ("bvh8", build, trace_sets(&bvh.with_triangle_test(args.triangle_test), &pool, &args, "bvh8")?)
+        (
+            "bvh8",
+            build,
+            trace_sets(&bvh.with_triangle_test(args.triangle_test).with_exact_t(args.exact_t), &pool, &args, "bvh8")?,
+        )
     } else {
         let bvh = pool.install(|| Bvh4::build(&triangles, config))?;
         let build = start.elapsed();
-        ("bvh4", build, trace_sets(&bvh.with_triangle_test(args.triangle_test), &pool, &args, "bvh4")?)
+        (
+            "bvh4",
+            build,
+            trace_sets(&bvh.with_triangle_test(args.triangle_test).with_exact_t(args.exact_t), &pool, &args, "bvh4")?,
+        )
     };
     println!(
         r#"{{"tracer": "{tracer}", "threads": {}, "triangles": {}, "build_ms": {:.3}, "sets": {{{}}}}}"#,

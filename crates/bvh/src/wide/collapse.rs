@@ -32,7 +32,7 @@ impl<const W: usize> BvhWide<W> {
 
     /// Collapses `bvh`, taking the vertices of its `i`-th leaf-ordered triangle from
     /// `vertices(i)`.
-    pub(super) fn collapse(bvh: &Bvh, vertices: impl Fn(usize) -> [Vec3; 3]) -> Self {
+    pub(super) fn collapse(bvh: &Bvh, vertices: impl Fn(usize) -> [Vec3; 3] + Sync) -> Self {
         let mut collapse = Collapse::new(bvh.nodes());
         if !bvh.nodes().is_empty() {
             collapse.node(0);
@@ -40,15 +40,37 @@ impl<const W: usize> BvhWide<W> {
         let nodes = collapse.out;
         let config = bvh.config();
         let mut soa = vec![0.0; 9 * bvh.prim_ids().len() + 3];
-        for n in &nodes {
-            for (&first, &count) in n.child.iter().zip(&n.count).filter(|(_, c)| **c > 0) {
-                let (first, count) = (first as usize, count as usize);
-                for i in 0..count {
-                    for (k, x) in vertices(first + i).iter().flat_map(|v| v.to_array()).enumerate() {
-                        soa[9 * first + k * count + i] = x;
-                    }
+        // Leaves cover the triangles in contiguous ranges: cut the array into one slice per
+        // leaf and fill them in parallel (a gather from the input order, cache-missing).
+        let mut leaves: Vec<(usize, usize)> = nodes
+            .iter()
+            .flat_map(|n| {
+                n.child.iter().zip(&n.count).filter(|(_, c)| **c > 0).map(|(&f, &c)| (f as usize, c as usize))
+            })
+            .collect();
+        leaves.sort_unstable();
+        let mut slices = Vec::with_capacity(leaves.len());
+        let mut rest = &mut soa[..];
+        let mut at = 0;
+        for &(first, count) in &leaves {
+            let (_, tail) = rest.split_at_mut(9 * (first - at));
+            let (leaf, tail) = tail.split_at_mut(9 * count);
+            slices.push((first, count, leaf));
+            rest = tail;
+            at = first + count;
+        }
+        let fill = |(first, count, leaf): (usize, usize, &mut [f32])| {
+            for i in 0..count {
+                for (k, x) in vertices(first + i).iter().flat_map(|v| v.to_array()).enumerate() {
+                    leaf[k * count + i] = x;
                 }
             }
+        };
+        if leaves.len() > 4096 {
+            use rayon::prelude::*;
+            slices.into_par_iter().for_each(fill);
+        } else {
+            slices.into_iter().for_each(fill);
         }
         let wide = Self {
             nodes,
@@ -56,6 +78,7 @@ impl<const W: usize> BvhWide<W> {
             prim_ids: bvh.prim_ids().to_vec(),
             costs: (config.traversal_cost, config.intersection_cost),
             test: TriangleTest::default(),
+            exact_t: false,
             avx2: super::wide8_accelerated(),
         };
         let depth = wide.stats().depth;

@@ -78,6 +78,7 @@ impl Leaf<'_> {
 
 /// A leaf's triangles as [`RayKernel::triangles`] sees them: `soa` from the leaf's first
 /// float to the end of the array, `ids` the triangles' input indices.
+#[derive(Clone, Copy)]
 pub(super) struct Leaf<'a> {
     pub(super) soa: &'a [f32],
     pub(super) ids: &'a [u32],
