@@ -155,7 +155,7 @@ impl Lights {
     }
 
     /// Picks a light with `u_light`, then a point on it with `u`.
-    #[inline]
+    #[inline(always)]
     pub fn sample(&self, scene: &Scene, u_light: f32, u: Vec2) -> Option<LightSample> {
         if self.is_empty() {
             return None;
