@@ -475,11 +475,12 @@ fn run_render(args: RenderArgs) -> Result<()> {
     let s = prepared.scene();
     let stats = prepared.stats();
     eprintln!(
-        "{}: {} triangles, {} shapes, {} emissive, BVH built in {:.1} ms{}; {}×{} at {} spp, {} mode, {} backend",
+        "{}: {} triangles, {} shapes, {} emissive, {} built in {:.1} ms{}; {}×{} at {} spp, {} mode, {} backend",
         args.scene.scene.display(),
         s.triangles.len(),
         s.shapes.len(),
         stats.emitters,
+        stats.accelerator,
         stats.build.as_secs_f64() * 1e3,
         stats.compile.map_or(String::new(), |c| format!(", kernel compiled in {:.1} ms", c.as_secs_f64() * 1e3)),
         settings.width,

@@ -453,6 +453,7 @@ impl GpuBackend {
             compile: Some(compile_time),
             total: start.elapsed(),
             emitters: data.constants.emitters,
+            accelerator: "binary BVH",
         };
         Ok(GpuScene {
             ctx: Arc::clone(&self.ctx),

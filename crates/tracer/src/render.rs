@@ -196,6 +196,8 @@ pub struct PrepareStats {
     pub total: Duration,
     /// Primitives that emit light.
     pub emitters: usize,
+    /// The triangles' acceleration structure, for messages (e.g. "8-wide BVH (AVX2)").
+    pub accelerator: &'static str,
 }
 
 /// A way of executing an integrator (CPU with rayon, GPU with wgpu): it prepares scenes,
