@@ -131,6 +131,18 @@ impl<const W: usize> BvhWide<W> {
                         current = entry(mask.trailing_zeros() as usize);
                         continue;
                     }
+                    let rest = mask & (mask - 1);
+                    if rest & (rest - 1) == 0 {
+                        // Two children, the commonest case after one: the nearer next, the
+                        // other pushed, without the general sort.
+                        let (a, b) = (entry(mask.trailing_zeros() as usize), entry(rest.trailing_zeros() as usize));
+                        let (near, far) = if b.t < a.t { (b, a) } else { (a, b) };
+                        self.prefetch(&far);
+                        stack[sp] = MaybeUninit::new(far);
+                        sp += 1;
+                        current = near;
+                        continue;
+                    }
                     // Two or more children: nearest first, the others pushed far to near.
                     let mut hits = [Entry::default(); W];
                     let mut k = 0;
