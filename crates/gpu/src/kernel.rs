@@ -248,6 +248,7 @@ pub fn header(options: &KernelOptions) -> String {
         ("PT_MIN_SHADING_COSINE", MIN_SHADING_COSINE),
         ("PT_RR_MIN_TERMINATION", RR_MIN_TERMINATION),
         ("PT_SHADOW_T_MAX", SHADOW_T_MAX),
+        ("PT_ONE_MINUS_EPSILON", tracer::lights::ONE_MINUS_EPSILON),
         ("PT_OFFSET_ORIGIN", shapes::offset::OFFSET_ORIGIN),
         ("PT_OFFSET_FLOAT_SCALE", shapes::offset::OFFSET_FLOAT_SCALE),
         ("PT_OFFSET_INT_SCALE", shapes::offset::OFFSET_INT_SCALE),

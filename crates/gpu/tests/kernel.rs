@@ -106,6 +106,7 @@ fn shared_constants_are_the_rust_values() {
     assert_eq!(constant(&module, "PT_MIN_SHADING_COSINE"), f(tracer::shading::MIN_SHADING_COSINE));
     assert_eq!(constant(&module, "PT_RR_MIN_TERMINATION"), f(tracer::integrator::RR_MIN_TERMINATION));
     assert_eq!(constant(&module, "PT_SHADOW_T_MAX"), f(tracer::integrator::SHADOW_T_MAX));
+    assert_eq!(constant(&module, "PT_ONE_MINUS_EPSILON"), f(tracer::lights::ONE_MINUS_EPSILON));
     assert_eq!(constant(&module, "PT_VIS_K"), f(spectral::sampled::VIS_K));
     assert_eq!(constant(&module, "PT_VIS_TANH_HI"), f(spectral::sampled::VIS_TANH_HI));
     assert_eq!(constant(&module, "PT_OFFSET_INT_SCALE"), f(shapes::offset::OFFSET_INT_SCALE));

@@ -315,7 +315,7 @@ fn path_radiance<const N: usize, S: Sampler>(
 
         // Next-event estimation: one shadow ray to a point on a light.
         if flags.is_non_specular()
-            && let Some(ls) = lights.sample(scene, sampler.next_1d(), sampler.next_2d())
+            && let Some(ls) = lights.sample(scene, sampler.next_2d())
         {
             let (wi_world, dist, light_pdf, le) = match ls.prim {
                 Some(t) => {

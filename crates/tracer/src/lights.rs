@@ -154,21 +154,28 @@ impl Lights {
         self.environment_pmf * UNIFORM_SPHERE_PDF
     }
 
-    /// Picks a light with `u_light`, then a point on it with `u`.
+    /// Picks a light with `u.x`, then a point on it with `u`, `u.x` rescaled to [0, 1)
+    /// within the chosen light's share of the unit interval (sample reuse, as Mitsuba 3
+    /// does): one 2-D sample covers all the lights, so a stratified `u` stays stratified over
+    /// their union — over both triangles of a quad light, instead of per triangle with a
+    /// separate 1-D choice.
     #[inline(always)]
-    pub fn sample(&self, scene: &Scene, u_light: f32, u: Vec2) -> Option<LightSample> {
+    pub fn sample(&self, scene: &Scene, u: Vec2) -> Option<LightSample> {
         if self.is_empty() {
             return None;
         }
-        if u_light < self.environment_pmf || self.prims.is_empty() {
+        if u.x < self.environment_pmf || self.prims.is_empty() {
+            let x = if self.prims.is_empty() { u.x } else { rescale(u.x, 0.0, self.environment_pmf) };
             return Some(LightSample {
-                point: uniform_sphere(u),
+                point: uniform_sphere(Vec2::new(x, u.y)),
                 normal: Vec3::ZERO,
                 pdf: self.environment_pdf(),
                 prim: None,
             });
         }
-        let k = self.cdf.partition_point(|&c| c <= u_light).min(self.prims.len() - 1);
+        let k = self.cdf.partition_point(|&c| c <= u.x).min(self.prims.len() - 1);
+        let below = if k == 0 { self.environment_pmf } else { self.cdf[k - 1] };
+        let u = Vec2::new(rescale(u.x, below, self.cdf[k]), u.y);
         let prim = self.prims[k];
         let pmf = self.prim_pmf[prim as usize];
         if let Some(t) = self.triangles.get(k) {
@@ -180,5 +187,94 @@ impl Lights {
         let shape = scene.shapes[prim as usize - scene.triangles.len()].shape.shape();
         let (point, normal) = shape.sample_area(u)?;
         Some(LightSample { point, normal, pdf: pmf / shape.area(), prim: Some(prim) })
+    }
+}
+
+/// The largest f32 below 1: where a rescaled sample value is clamped.
+pub const ONE_MINUS_EPSILON: f32 = 1.0 - f32::EPSILON / 2.0;
+
+/// `x` ∈ [lo, hi) mapped to [0, 1), kept below 1 where rounding would reach it.
+#[inline]
+fn rescale(x: f32, lo: f32, hi: f32) -> f32 {
+    let width = hi - lo;
+    if width > 0.0 { ((x - lo) / width).clamp(0.0, ONE_MINUS_EPSILON) } else { 0.0 }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::material::Material;
+    use crate::mesh::quad;
+    use crate::scene::Environment;
+    use spectral::spectrum::Colour;
+
+    /// A quad light (two triangles, 1×1), a dimmer and smaller one (0.5×0.5) and a sky.
+    fn scene() -> Scene {
+        let mut s = Scene::default();
+        let lamp = |name: &str, e: f32| {
+            Material::diffuse(name, Colour::constant(0.0)).unwrap().with_emission(Colour::constant(e))
+        };
+        s.add(&quad(Vec3::new(0.0, 2.0, 0.0), -Vec3::Y, 0.5), lamp("big", 4.0));
+        s.add(&quad(Vec3::new(3.0, 2.0, 0.0), -Vec3::Y, 0.25), lamp("small", 2.0));
+        s.environment = Some(Environment { radiance: Colour::constant(0.01) });
+        s
+    }
+
+    #[test]
+    fn one_stratified_2d_sample_covers_all_lights_in_proportion_and_each_uniformly() {
+        let scene = scene();
+        let lights = Lights::new(&scene);
+        assert_eq!(lights.emitter_count(), 4);
+        // Jittered u, one per cell of a 256 × 256 grid: every light is picked in proportion
+        // to its share of the unit interval, and the points on the big quad fill its 8 × 8
+        // cells evenly across both triangles (u.x reused within each light).
+        let n = 256;
+        let mut rng = rng::Pcg32::seed_from_u64(5);
+        let mut env = 0usize;
+        let mut per_prim = [0usize; 4];
+        let mut cells = [[0usize; 8]; 8];
+        for i in 0..n {
+            for j in 0..n {
+                let u = Vec2::new((i as f32 + rng.next_f32()) / n as f32, (j as f32 + rng.next_f32()) / n as f32);
+                let ls = lights.sample(&scene, u).unwrap();
+                assert!(ls.pdf > 0.0 && ls.pdf.is_finite() && ls.point.is_finite());
+                match ls.prim {
+                    None => {
+                        env += 1;
+                        assert!((ls.point.length() - 1.0).abs() < 1e-5, "a unit direction");
+                    }
+                    Some(p) => {
+                        per_prim[p as usize] += 1;
+                        assert_eq!(ls.pdf, lights.prim_pmf(p) / if p < 2 { 0.5 } else { 0.125 });
+                        if p < 2 {
+                            let (x, z) = (ls.point.x + 0.5, ls.point.z + 0.5);
+                            assert!((0.0..=1.0).contains(&x) && (0.0..=1.0).contains(&z), "{:?}", ls.point);
+                            cells[((x * 8.0) as usize).min(7)][((z * 8.0) as usize).min(7)] += 1;
+                        }
+                    }
+                }
+            }
+        }
+        let total = (n * n) as f64;
+        assert!((env as f64 / total - lights.environment_pmf() as f64).abs() < 2.0 / n as f64, "{env}");
+        for p in 0..4u32 {
+            let share = per_prim[p as usize] as f64 / total;
+            assert!((share - lights.prim_pmf(p) as f64).abs() < 2.0 / n as f64, "light {p}: {share}");
+        }
+        let big = (per_prim[0] + per_prim[1]) as f64 / 64.0;
+        for row in &cells {
+            for &c in row {
+                // Uniform: each cell within 4.5 binomial standard deviations of its share.
+                assert!((c as f64 - big).abs() < 4.5 * big.sqrt(), "cell {c} vs {big}: {cells:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn rescaled_values_stay_below_one() {
+        assert_eq!(rescale(0.75, 0.5, 0.75), ONE_MINUS_EPSILON);
+        assert_eq!(rescale(0.5, 0.5, 0.75), 0.0);
+        assert_eq!(rescale(0.6, 0.5, 0.5), 0.0, "an empty interval");
+        const { assert!(ONE_MINUS_EPSILON < 1.0 && ONE_MINUS_EPSILON + f32::EPSILON / 2.0 == 1.0) };
     }
 }

@@ -48,33 +48,52 @@ fn pt_light_f(k: u32, j: u32) -> f32 {
     return pt_tables[pt_params.lights_offset + PT_LIGHT_FLOATS * k + j];
 }
 
-fn pt_sample_light(u_light: f32, u: vec2f) -> PtLightSample {
+// `x` in [lo, hi) mapped to [0, 1), kept below 1 (lights.rs: `rescale`).
+fn pt_rescale(x: f32, lo: f32, hi: f32) -> f32 {
+    let width = hi - lo;
+    if width > 0.0 {
+        return clamp((x - lo) / width, 0.0, PT_ONE_MINUS_EPSILON);
+    }
+    return 0.0;
+}
+
+// lights.rs: `Lights::sample` — u.x picks the light and is reused, rescaled, for the point.
+fn pt_sample_light(u_in: vec2f) -> PtLightSample {
     var ls: PtLightSample;
     ls.valid = false;
     let count = pt_params.light_count;
     if count == 0u && pt_params.env_pmf == 0.0 {
         return ls;
     }
-    if u_light < pt_params.env_pmf || count == 0u {
-        ls.point = pt_uniform_sphere(u);
+    if u_in.x < pt_params.env_pmf || count == 0u {
+        var x = u_in.x;
+        if count != 0u {
+            x = pt_rescale(u_in.x, 0.0, pt_params.env_pmf);
+        }
+        ls.point = pt_uniform_sphere(vec2f(x, u_in.y));
         ls.normal = vec3f(0.0);
         ls.pdf = pt_params.env_pmf * PT_INV_4PI;
         ls.material = PT_NO_HIT;
         ls.valid = true;
         return ls;
     }
-    // partition_point(|c| c <= u_light), clamped to the last light.
+    // partition_point(|c| c <= u.x), clamped to the last light.
     var lo = 0u;
     var hi = count;
     while lo < hi {
         let mid = (lo + hi) / 2u;
-        if pt_light_f(mid, PT_LIGHT_CDF) <= u_light {
+        if pt_light_f(mid, PT_LIGHT_CDF) <= u_in.x {
             lo = mid + 1u;
         } else {
             hi = mid;
         }
     }
     let k = min(lo, count - 1u);
+    var below = pt_params.env_pmf;
+    if k > 0u {
+        below = pt_light_f(k - 1u, PT_LIGHT_CDF);
+    }
+    let u = vec2f(pt_rescale(u_in.x, below, pt_light_f(k, PT_LIGHT_CDF)), u_in.y);
     let v0 = vec3f(pt_light_f(k, 0u), pt_light_f(k, 1u), pt_light_f(k, 2u));
     let v1 = vec3f(pt_light_f(k, 3u), pt_light_f(k, 4u), pt_light_f(k, 5u));
     let v2 = vec3f(pt_light_f(k, 6u), pt_light_f(k, 7u), pt_light_f(k, 8u));

@@ -154,9 +154,7 @@ fn pt_radiance(
 
         // Next-event estimation: one shadow ray to a point on a light.
         if pt_is_non_specular(flags) {
-            let u_light = pt_rng_f32(rng);
-            let u_pt = pt_rng_2d(rng);
-            let ls = pt_sample_light(u_light, u_pt);
+            let ls = pt_sample_light(pt_rng_2d(rng));
             if ls.valid {
                 var wi_world: vec3f;
                 var finite_light = true;
