@@ -4,11 +4,11 @@
 Each row of the CSV is one configuration measured by bench/time_to_error.py; `ratio` is its
 efficiency (1 / (relMSE x sampling time)) divided by that of Mitsuba 3's best sampler in
 the same run, so rows of different runs compare. Draws horizontal bars grouped by run,
-with parity (1.0) and the issue's goal (2.0) marked, to PNG and SVG.
+with parity (1.0) and the issue's goal (2.0) marked, to PNG (and SVG with --svg).
 
 Usage (pip install matplotlib):
 
-    python3 bench/time_to_error_chart.py [docs/time-to-error.csv] [-o docs/time-to-error]
+    python3 bench/time_to_error_chart.py [docs/time-to-error.csv] [-o docs/time-to-error] [--svg]
 """
 import argparse, csv, os
 
@@ -20,6 +20,7 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("csv", nargs="?", default=os.path.join(DOCS, "time-to-error.csv"))
     ap.add_argument("-o", "--out", default=os.path.join(DOCS, "time-to-error"), help="output path without extension")
+    ap.add_argument("--svg", action="store_true", help="also write an SVG")
     a = ap.parse_args()
     with open(a.csv, newline="", encoding="utf-8") as f:
         rows = list(csv.DictReader(line for line in f if not line.startswith("#")))
@@ -46,7 +47,7 @@ def main():
     ax.set_xlabel("equal-error efficiency / Mitsuba 3's best in the same run (higher is better)")
     ax.set_title("Cornell box 256², 64 spp, 2 threads: time to equal error against Mitsuba 3", fontsize=10)
     fig.tight_layout()
-    for ext in ("png", "svg"):
+    for ext in ("png", "svg") if a.svg else ("png",):
         fig.savefig(f"{a.out}.{ext}", dpi=110)
         print(f"wrote {a.out}.{ext}")
 
