@@ -28,6 +28,8 @@ mod avx;
 mod choice;
 mod collapse;
 mod kernel;
+#[cfg(target_arch = "x86_64")]
+mod lanes;
 mod node;
 #[cfg(target_arch = "x86_64")]
 mod sse;
@@ -78,9 +80,6 @@ pub struct BvhWide<const W: usize> {
     test: TriangleTest,
     /// Recompute every closest hit's t in f64 ([`BvhWide::with_exact_t`]).
     exact_t: bool,
-    /// True if the CPU has AVX2 (detected when the tree is made), for [`Bvh8`]'s kernel.
-    #[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
-    avx2: bool,
 }
 
 /// A 4-wide BVH: SSE box and triangle tests (x86_64 baseline).

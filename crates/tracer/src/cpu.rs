@@ -61,18 +61,12 @@ impl<I: Integrator> CpuBackend<I> {
         let geometry = Geometry::build(&scene, options.triangle_test, options.bvh_width)?;
         let build = start.elapsed();
         let lights = Lights::new(&scene);
-        let accelerator = match &geometry.triangles {
-            bvh::WideBvh::Eight(_) if bvh::wide8_accelerated() => "8-wide BVH (AVX2)",
-            bvh::WideBvh::Eight(_) => "8-wide BVH (portable kernel)",
-            bvh::WideBvh::Four(_) if cfg!(target_arch = "x86_64") => "4-wide BVH (SSE)",
-            bvh::WideBvh::Four(_) => "4-wide BVH (portable kernel)",
-        };
         let stats = PrepareStats {
             build,
             compile: None,
             total: start.elapsed(),
             emitters: lights.emitter_count(),
-            accelerator,
+            accelerator: geometry.triangles.description(),
         };
         Ok(CpuScene {
             bounds: scene.bounds(),

@@ -79,7 +79,6 @@ impl<const W: usize> BvhWide<W> {
             costs: (config.traversal_cost, config.intersection_cost),
             test: TriangleTest::default(),
             exact_t: false,
-            avx2: super::wide8_accelerated(),
         };
         let depth = wide.stats().depth;
         assert!(

@@ -33,12 +33,10 @@ pub(super) trait RayKernel<const W: usize> {
             let row =
                 |k: usize| [leaf.soa[3 * k * n + i], leaf.soa[(3 * k + 1) * n + i], leaf.soa[(3 * k + 2) * n + i]];
             let tri = Triangle::new(&[0, 1, 2].map(|k| Vec3::from_array(row(k))));
-            if let Some((t, u, v)) = intersect_triangle(&tri, ray, *t_max) {
-                *t_max = t;
-                *best = Some(Hit { prim, t, u, v });
-                if ANY_HIT {
-                    return true;
-                }
+            if let Some((t, u, v)) = intersect_triangle(&tri, ray, *t_max)
+                && record_hit::<ANY_HIT>(Hit { prim, t, u, v }, t_max, best)
+            {
+                return true;
             }
         }
         false
@@ -54,16 +52,23 @@ pub(super) trait RayKernel<const W: usize> {
         best: &mut Option<Hit>,
     ) -> bool {
         for (i, &prim) in leaf.ids.iter().enumerate() {
-            if let Some((t, u, v)) = intersect_triangle_watertight(&leaf.vertices(i), ray, *t_max) {
-                *t_max = t;
-                *best = Some(Hit { prim, t, u, v });
-                if ANY_HIT {
-                    return true;
-                }
+            if let Some((t, u, v)) = intersect_triangle_watertight(&leaf.vertices(i), ray, *t_max)
+                && record_hit::<ANY_HIT>(Hit { prim, t, u, v }, t_max, best)
+            {
+                return true;
             }
         }
         false
     }
+}
+
+/// Makes `hit` the closest so far (its t the new `t_max`); true if that ends the query
+/// (`ANY_HIT`).
+#[inline(always)]
+pub(super) fn record_hit<const ANY_HIT: bool>(hit: Hit, t_max: &mut f32, best: &mut Option<Hit>) -> bool {
+    *t_max = hit.t;
+    *best = Some(hit);
+    ANY_HIT
 }
 
 impl Leaf<'_> {

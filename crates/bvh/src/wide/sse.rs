@@ -2,61 +2,34 @@
 //! lane computing exactly what the scalar tests compute.
 
 use super::Bvh4Node;
-use super::kernel::{Leaf, RayKernel, plane_rows};
+use super::kernel::{Leaf, RayKernel, record_hit};
+use super::lanes::BoxRay;
 use crate::{Hit, Ray, WatertightRay, intersect_triangle_watertight};
 use std::arch::x86_64::*;
 
 /// The SSE [`RayKernel`] (SSE2 is part of the x86_64 baseline).
 pub(super) struct SseKernel {
-    origin: [__m128; 3],
+    boxes: BoxRay<__m128>,
     dir: [__m128; 3],
-    inv_dir: [__m128; 3],
-    near: [usize; 3],
-    far: [usize; 3],
-    t_min: __m128,
 }
 
 impl RayKernel<4> for SseKernel {
     #[inline(always)]
     fn new(ray: &Ray) -> Self {
-        let (near, far) = plane_rows(ray.inv_dir);
         // SAFETY (all `unsafe` blocks here): SSE and SSE2 are part of the x86_64
         // baseline, so the intrinsics are always available.
-        let splat = |v: glam::Vec3| unsafe { [_mm_set1_ps(v.x), _mm_set1_ps(v.y), _mm_set1_ps(v.z)] };
-        Self {
-            origin: splat(ray.origin),
-            dir: splat(ray.dir),
-            inv_dir: splat(ray.inv_dir),
-            near: near.map(|r| r * 4),
-            far: far.map(|r| r * 4),
-            t_min: unsafe { _mm_set1_ps(ray.t_min) },
+        unsafe {
+            Self {
+                boxes: BoxRay::new(ray),
+                dir: [_mm_set1_ps(ray.dir.x), _mm_set1_ps(ray.dir.y), _mm_set1_ps(ray.dir.z)],
+            }
         }
     }
 
     #[inline(always)]
     fn enter(&self, node: &Bvh4Node, t_max: f32) -> (u32, [f32; 4]) {
-        let base = node.planes().as_ptr().cast::<f32>();
-        let mut t = [0.0f32; 4];
-        // SAFETY: the intrinsics are baseline (see `new`); a plane row is a multiple of
-        // 4 below 24, i.e. a 16-byte-aligned row of the 64-byte-aligned node's six
-        // plane rows; `t` has room for four floats.
-        let mask = unsafe {
-            let slab = |row: usize, axis: usize| {
-                let plane = _mm_load_ps(base.add(row));
-                _mm_mul_ps(_mm_sub_ps(plane, self.origin[axis]), self.inv_dir[axis])
-            };
-            // maxps/minps return their second operand when either is NaN: the
-            // accumulator, which is never NaN for a non-NaN t_min / t_max.
-            let mut enter = self.t_min;
-            let mut exit = _mm_set1_ps(t_max);
-            for axis in (0..3).rev() {
-                enter = _mm_max_ps(slab(self.near[axis], axis), enter);
-                exit = _mm_min_ps(slab(self.far[axis], axis), exit);
-            }
-            _mm_storeu_ps(t.as_mut_ptr(), enter);
-            _mm_movemask_ps(_mm_cmple_ps(enter, exit)) as u32
-        };
-        (mask, t)
+        // SAFETY: baseline instructions (see `new`), and the node is 4 wide.
+        unsafe { self.boxes.enter(node, t_max) }
     }
 
     #[inline(always)]
@@ -75,7 +48,7 @@ impl RayKernel<4> for SseKernel {
                 debug_assert!(leaf.soa.len() >= 9 * n + 3);
                 let ld = |k: usize| _mm_loadu_ps(leaf.soa.as_ptr().add(k * n + j));
                 let [dx, dy, dz] = self.dir;
-                let [ox, oy, oz] = self.origin;
+                let [ox, oy, oz] = self.boxes.origin;
                 let (add, sub, mul) = (_mm_add_ps, _mm_sub_ps, _mm_mul_ps);
                 // The edges as `Triangle::new` computes them.
                 let (v0x, v0y, v0z) = (ld(0), ld(1), ld(2));
@@ -105,7 +78,7 @@ impl RayKernel<4> for SseKernel {
                     and(_mm_cmpge_ps(uu, zero), _mm_cmple_ps(uu, one)),
                 );
                 let ok = and(ok, and(_mm_cmpnlt_ps(vv, zero), _mm_cmpngt_ps(add(uu, vv), one)));
-                let ok = and(ok, and(_mm_cmpgt_ps(tt, self.t_min), _mm_cmplt_ps(tt, _mm_set1_ps(*t_max))));
+                let ok = and(ok, and(_mm_cmpgt_ps(tt, self.boxes.t_min), _mm_cmplt_ps(tt, _mm_set1_ps(*t_max))));
                 _mm_storeu_ps(t.as_mut_ptr(), tt);
                 _mm_storeu_ps(u.as_mut_ptr(), uu);
                 _mm_storeu_ps(v.as_mut_ptr(), vv);
@@ -115,12 +88,10 @@ impl RayKernel<4> for SseKernel {
             while m != 0 {
                 let i = m.trailing_zeros() as usize;
                 m &= m - 1;
-                if t[i] < *t_max {
-                    *t_max = t[i];
-                    *best = Some(Hit { prim: leaf.ids[j + i], t: t[i], u: u[i], v: v[i] });
-                    if ANY_HIT {
-                        return true;
-                    }
+                if t[i] < *t_max
+                    && record_hit::<ANY_HIT>(Hit { prim: leaf.ids[j + i], t: t[i], u: u[i], v: v[i] }, t_max, best)
+                {
+                    return true;
                 }
             }
         }
@@ -198,12 +169,10 @@ impl RayKernel<4> for SseKernel {
                 } else {
                     (t[i] < *t_max).then_some((t[i], u[i], v[i]))
                 };
-                if let Some((t, u, v)) = hit {
-                    *t_max = t;
-                    *best = Some(Hit { prim: leaf.ids[j + i], t, u, v });
-                    if ANY_HIT {
-                        return true;
-                    }
+                if let Some((t, u, v)) = hit
+                    && record_hit::<ANY_HIT>(Hit { prim: leaf.ids[j + i], t, u, v }, t_max, best)
+                {
+                    return true;
                 }
             }
         }

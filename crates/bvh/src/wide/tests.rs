@@ -60,11 +60,19 @@ where
     }
 }
 
+/// Both widths, built with `config`, are well formed and agree with `oracle`.
+fn check_widths(tris: &[[Vec3; 3]], config: BuildConfig, oracle: &BruteForce, rays: &[Ray]) {
+    let bvh4 = Bvh4::build(tris, config).unwrap();
+    check_structure(&bvh4, tris.len());
+    agree_with(&bvh4, oracle, tris, rays);
+    let bvh8 = Bvh8::build(tris, config).unwrap();
+    check_structure(&bvh8, tris.len());
+    agree_with(&bvh8, oracle, tris, rays);
+}
+
 /// Both widths agree with brute force.
 fn agree(tris: &[[Vec3; 3]], config: BuildConfig, rays: &[Ray]) {
-    let oracle = BruteForce::new(tris).unwrap();
-    agree_with(&Bvh4::build(tris, config).unwrap(), &oracle, tris, rays);
-    agree_with(&Bvh8::build(tris, config).unwrap(), &oracle, tris, rays);
+    check_widths(tris, config, &BruteForce::new(tris).unwrap(), rays);
 }
 
 fn every_config() -> Vec<BuildConfig> {
@@ -137,12 +145,7 @@ fn matches_brute_force_for_every_builder_and_leaf_size() {
     let rs = rays(2, 600, 10.0);
     let oracle = BruteForce::new(&tris).unwrap();
     for config in every_config() {
-        let bvh = Bvh4::build(&tris, config).unwrap();
-        check_structure(&bvh, tris.len());
-        agree_with(&bvh, &oracle, &tris, &rs);
-        let bvh = Bvh8::build(&tris, config).unwrap();
-        check_structure(&bvh, tris.len());
-        agree_with(&bvh, &oracle, &tris, &rs);
+        check_widths(&tris, config, &oracle, &rs);
     }
 }
 
@@ -249,8 +252,7 @@ fn axis_parallel_rays_and_origins_on_slab_planes() {
         }
     }
     for config in every_config() {
-        agree_with(&Bvh4::build(&tris, config).unwrap(), &oracle, &tris, &rs);
-        agree_with(&Bvh8::build(&tris, config).unwrap(), &oracle, &tris, &rs);
+        check_widths(&tris, config, &oracle, &rs);
     }
     // By hand: a ray in the plane y = 0 (the min plane of the front boxes) with a zero y
     // component hits the edge of the first square at t = 1.
@@ -490,13 +492,7 @@ proptest! {
         let tris = soup(seed, n, 5.0, 1.5);
         let method = SplitMethod::ALL[m];
         let config = BuildConfig { method, max_leaf_size: leaf, bins, leaf_by_sah: by_sah, ..Default::default() };
-        let (oracle, rs) = (BruteForce::new(&tris).unwrap(), rays(seed ^ 1, 200, 5.0));
-        let bvh = Bvh4::build(&tris, config).unwrap();
-        check_structure(&bvh, tris.len());
-        agree_with(&bvh, &oracle, &tris, &rs);
-        let bvh = Bvh8::build(&tris, config).unwrap();
-        check_structure(&bvh, tris.len());
-        agree_with(&bvh, &oracle, &tris, &rs);
+        agree(&tris, config, &rays(seed ^ 1, 200, 5.0));
     }
 }
 

@@ -252,8 +252,8 @@ impl Bvh8 {
     #[inline(always)]
     fn traverse_best<const COUNT: bool, const ANY_HIT: bool>(&self, ray: &Ray, stats: &mut RayStats) -> Option<Hit> {
         #[cfg(target_arch = "x86_64")]
-        if self.avx2 {
-            // SAFETY: `avx2` is set only where the CPU has AVX2 (`avx2_available`).
+        if super::avx::avx2_available() {
+            // SAFETY: the CPU has AVX2 (the standard library's detection, cached).
             return unsafe { self.traverse_avx2::<COUNT, ANY_HIT>(ray, stats) };
         }
         self.traverse::<ScalarKernel, COUNT, ANY_HIT>(ray, stats)
