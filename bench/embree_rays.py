@@ -12,7 +12,8 @@ Tracers
            binary is missing or older than the source), Embree 4 from the pip wheel
            `embreex` (dlopen of embreex.libs/libembree4-*.so.4), rtcIntersect1 /
            rtcOccluded1 per ray, default build quality. See bench/embree/README.md.
-  ours     `spt rays trace DIR --threads T --passes P --accel A` for each A in --ours.
+  ours     `spt rays trace DIR --threads T --passes P --bvh-width W` for each A in --ours
+           (bvh4 → W = 4, bvh8 → 8, auto → auto).
 Both take chunks of 1024 rays from an atomic counter with T threads, trace every set P
 times and report the fastest pass.
 
@@ -166,8 +167,9 @@ def tracer_cmd(cfg, d, threads, args, embree_bin, embree_lib, spt):
     if cfg["kind"] == "embree":
         return [embree_bin, d, "--lib", embree_lib, "--threads", str(threads),
                 "--passes", str(args.passes)] + shlex.split(args.embree_args)
+    width = {"bvh4": "4", "bvh8": "8"}.get(cfg["accel"], cfg["accel"])
     return [spt, "rays", "trace", d, "--threads", str(threads), "--passes", str(args.passes),
-            "--accel", cfg["accel"]]
+            "--bvh-width", width]
 
 
 # --------------------------------------------------------------------------------------
@@ -509,7 +511,7 @@ def main():
     ap.add_argument("--passes", type=int, default=5, help="passes per set inside each run")
     ap.add_argument("--spt", default="target/release/spt")
     ap.add_argument("--ours", default="auto",
-                    help="comma list of --accel values for spt (bvh4,bvh8,auto) or 'none'")
+                    help="comma list of our BVHs: bvh4, bvh8, auto (spt rays trace --bvh-width 4|8|auto), or 'none'")
     ap.add_argument("--width", type=int, default=1024)
     ap.add_argument("--height", type=int, default=1024)
     ap.add_argument("--seed", type=int, default=1)

@@ -11,7 +11,7 @@ before (or without) the Rust side. NOT a benchmark: tracing is brute force in nu
         soup:N          N random small triangles in [-1,1]^3 and W*H rays per set
                         (primary: pinhole grid from z=-3; diffuse: random origin in the
                         box, random direction; shadow: segments between random points)
-  fake_spt.py rays trace DIR [--threads T] [--passes P] [--accel bvh4|bvh8|auto]
+  fake_spt.py rays trace DIR [--threads T] [--passes P] [--bvh-width 4|8|auto]
       float64 Moller-Trumbore brute force over all triangles (refuses more than 2e8
       ray-triangle tests per set); writes DIR/<set>.<accel>.hits (auto -> bvh8) and prints
       the same JSON line as the real tracers. $FAKE_SPT_CORRUPT=K corrupts the first K
@@ -161,7 +161,7 @@ def brute(tris, rays, any_hit):
 
 
 def trace(a):
-    name = {"auto": "bvh8"}.get(a.accel, a.accel)
+    name = {"auto": "bvh8"}.get(a.width, f"bvh{a.width}")
     tris = np.fromfile(os.path.join(a.dir, "triangles.f32"), "<f4").reshape(-1, 9).astype(np.float64)
     res = {"tracer": name, "threads": a.threads, "triangles": len(tris), "build_ms": 0.0,
            "fake": True, "sets": {}}
@@ -202,7 +202,7 @@ def main():
     t.add_argument("dir")
     t.add_argument("--threads", type=int, default=1)
     t.add_argument("--passes", type=int, default=5)
-    t.add_argument("--accel", default="auto", choices=["bvh4", "bvh8", "auto"])
+    t.add_argument("--bvh-width", dest="width", default="auto", choices=["4", "8", "auto"])
     a = ap.parse_args()
     export(a) if a.cmd == "export" else trace(a)
 

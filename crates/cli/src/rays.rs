@@ -16,8 +16,8 @@
 //!   is 0 if the segment is blocked, else `u32::MAX`; t, u and v are NaN.
 
 use anyhow::{Context, Result, bail, ensure};
-use bvh::{Accelerator, BuildConfig, Bvh4, Bvh8, Hit, Ray, TriangleTest, make_ray_sets_from, wide8_accelerated};
-use clap::{Args, Subcommand, ValueEnum};
+use bvh::{Accelerator, BuildConfig, Bvh4, BvhWidth, Hit, Ray, TriangleTest, WideBvh, make_ray_sets_from};
+use clap::{Args, Subcommand};
 use glam::Vec3;
 use rayon::prelude::*;
 use std::path::{Path, PathBuf};
@@ -62,17 +62,6 @@ pub struct ExportArgs {
     pub seed: u64,
 }
 
-/// Which of our accelerators traces.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-pub enum AccelChoice {
-    /// The 4-wide BVH with the SSE kernel.
-    Bvh4,
-    /// The 8-wide BVH (AVX2 where the CPU has it, detected at run time).
-    Bvh8,
-    /// What the renderer uses on this CPU (8-wide with AVX2, else 4-wide).
-    Auto,
-}
-
 /// Options of `spt rays trace`.
 #[derive(Args)]
 pub struct TraceArgs {
@@ -84,9 +73,10 @@ pub struct TraceArgs {
     /// Timed passes over each set; the fastest counts.
     #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..=1000))]
     pub passes: u32,
-    /// The accelerator.
-    #[arg(long, value_enum, default_value_t = AccelChoice::Auto)]
-    pub accel: AccelChoice,
+    /// Children per node of our BVH, as `spt render --bvh-width`: auto (what the renderer
+    /// uses on this CPU), 4 or 8.
+    #[arg(long, default_value = "auto", value_parser = crate::parse_bvh_width)]
+    pub bvh_width: BvhWidth,
     /// Ray–triangle test: watertight or moller-trumbore.
     #[arg(long, default_value = "watertight", value_parser = crate::parse_triangle_test)]
     pub triangle_test: TriangleTest,
@@ -196,28 +186,11 @@ fn trace(args: TraceArgs) -> Result<()> {
     if let Some(n) = args.max_leaf {
         config.max_leaf_size = n as usize;
     }
-    let wide8 = match args.accel {
-        AccelChoice::Bvh4 => false,
-        AccelChoice::Bvh8 => true,
-        AccelChoice::Auto => wide8_accelerated(),
-    };
-    let (tracer, build, sets) = if wide8 {
-        let bvh = pool.install(|| Bvh8::build(&triangles, config))?;
-        let build = start.elapsed();
-        (
-            "bvh8",
-            build,
-            trace_sets(&bvh.with_triangle_test(args.triangle_test).with_exact_t(args.exact_t), &pool, &args, "bvh8")?,
-        )
-    } else {
-        let bvh = pool.install(|| Bvh4::build(&triangles, config))?;
-        let build = start.elapsed();
-        (
-            "bvh4",
-            build,
-            trace_sets(&bvh.with_triangle_test(args.triangle_test).with_exact_t(args.exact_t), &pool, &args, "bvh4")?,
-        )
-    };
+    let bvh = pool.install(|| WideBvh::build(&triangles, config, args.bvh_width))?;
+    let build = start.elapsed();
+    let tracer = format!("bvh{}", bvh.width());
+    let bvh = bvh.with_triangle_test(args.triangle_test).with_exact_t(args.exact_t);
+    let sets = trace_sets(&bvh, &pool, &args, &tracer)?;
     println!(
         r#"{{"tracer": "{tracer}", "threads": {}, "triangles": {}, "build_ms": {:.3}, "sets": {{{}}}}}"#,
         args.threads,

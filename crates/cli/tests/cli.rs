@@ -30,6 +30,14 @@ fn write_scene(dir: &Path, obj: &str) -> PathBuf {
     path
 }
 
+/// `spt render SCENE` at `width`×`height` and `spp` to `out`, with `extra` options.
+fn render_small(scene: &Path, (width, height, spp): (u32, u32, u32), out: &Path, extra: &[&str]) -> Output {
+    let (w, h, n) = (width.to_string(), height.to_string(), spp.to_string());
+    let args =
+        ["render", scene.to_str().unwrap(), "--width", &w, "--height", &h, "--spp", &n, "-o", out.to_str().unwrap()];
+    spt(&[&args[..], extra].concat())
+}
+
 #[test]
 fn renders_png_exr_and_standard_error() {
     let dir = temp_dir("ok");
@@ -229,20 +237,7 @@ fn every_sampler_renders_and_unknown_ones_are_named() {
     let mut images = Vec::new();
     for sampler in ["independent", "sobol", "zsobol"] {
         let out = dir.join(format!("{sampler}.exr"));
-        let o = spt(&[
-            "render",
-            scene.to_str().unwrap(),
-            "--width",
-            "16",
-            "--height",
-            "16",
-            "--spp",
-            "8",
-            "--sampler",
-            sampler,
-            "-o",
-            out.to_str().unwrap(),
-        ]);
+        let o = render_small(&scene, (16, 16, 8), &out, &["--sampler", sampler]);
         assert!(o.status.success(), "{sampler}: {}", stderr(&o));
         images.push(std::fs::read(&out).unwrap());
     }
@@ -287,8 +282,9 @@ fn ray_sets_export_and_trace_with_both_widths_alike() {
     assert_eq!(std::fs::metadata(sets.join("triangles.f32")).unwrap().len(), 16 * 36);
     assert_eq!(std::fs::metadata(sets.join("primary.rays")).unwrap().len(), 32 * 24 * 32);
     let mut hits = Vec::new();
-    for accel in ["bvh4", "bvh8"] {
-        let o = spt(&["rays", "trace", sets.to_str().unwrap(), "--accel", accel, "--passes", "1", "--threads", "2"]);
+    for (width, accel) in [("4", "bvh4"), ("8", "bvh8")] {
+        let o =
+            spt(&["rays", "trace", sets.to_str().unwrap(), "--bvh-width", width, "--passes", "1", "--threads", "2"]);
         assert!(o.status.success(), "{}", stderr(&o));
         let json = String::from_utf8_lossy(&o.stdout);
         assert!(json.contains(&format!(r#""tracer": "{accel}""#)) && json.contains(r#""triangles": 16"#), "{json}");
@@ -321,20 +317,7 @@ fn bvh_width_is_chosen_or_refused_with_the_way_out() {
     let mut images = Vec::new();
     for width in ["4", "8", "auto"] {
         let out = dir.join(format!("w{width}.exr"));
-        let o = spt(&[
-            "render",
-            scene.to_str().unwrap(),
-            "--width",
-            "16",
-            "--height",
-            "12",
-            "--spp",
-            "4",
-            "--bvh-width",
-            width,
-            "-o",
-            out.to_str().unwrap(),
-        ]);
+        let o = render_small(&scene, (16, 12, 4), &out, &["--bvh-width", width]);
         assert!(o.status.success(), "{}", stderr(&o));
         images.push(std::fs::read(&out).unwrap());
     }

@@ -77,6 +77,14 @@ impl WideBvh {
         }
     }
 
+    /// Recomputes closest hits' t in f64 ([`BvhWide::with_exact_t`](super::BvhWide::with_exact_t)).
+    pub fn with_exact_t(self, exact: bool) -> Self {
+        match self {
+            Self::Four(b) => Self::Four(b.with_exact_t(exact)),
+            Self::Eight(b) => Self::Eight(b.with_exact_t(exact)),
+        }
+    }
+
     /// Children per node: 4 or 8.
     pub fn width(&self) -> u32 {
         match self {
