@@ -165,9 +165,9 @@ impl Lights {
             return None;
         }
         if u.x < self.environment_pmf || self.prims.is_empty() {
-            let x = if self.prims.is_empty() { u.x } else { rescale(u.x, 0.0, self.environment_pmf) };
+            // Without primitives the environment's share is the whole interval (pmf 1).
             return Some(LightSample {
-                point: uniform_sphere(Vec2::new(x, u.y)),
+                point: uniform_sphere(Vec2::new(rescale(u.x, 0.0, self.environment_pmf), u.y)),
                 normal: Vec3::ZERO,
                 pdf: self.environment_pdf(),
                 prim: None,
@@ -267,6 +267,18 @@ mod tests {
                 // Uniform: each cell within 4.5 binomial standard deviations of its share.
                 assert!((c as f64 - big).abs() < 4.5 * big.sqrt(), "cell {c} vs {big}: {cells:?}");
             }
+        }
+    }
+
+    #[test]
+    fn an_environment_alone_takes_the_sample_unchanged() {
+        let mut scene = Scene::default();
+        scene.environment = Some(Environment { radiance: Colour::constant(1.0) });
+        let lights = Lights::new(&scene);
+        assert_eq!(lights.environment_pmf(), 1.0);
+        for u in [Vec2::new(0.0, 0.3), Vec2::new(0.37, 0.9), Vec2::new(ONE_MINUS_EPSILON, 0.5)] {
+            let ls = lights.sample(&scene, u).unwrap();
+            assert_eq!((ls.point, ls.prim), (uniform_sphere(u), None));
         }
     }
 

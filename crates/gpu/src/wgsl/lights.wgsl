@@ -66,11 +66,7 @@ fn pt_sample_light(u_in: vec2f) -> PtLightSample {
         return ls;
     }
     if u_in.x < pt_params.env_pmf || count == 0u {
-        var x = u_in.x;
-        if count != 0u {
-            x = pt_rescale(u_in.x, 0.0, pt_params.env_pmf);
-        }
-        ls.point = pt_uniform_sphere(vec2f(x, u_in.y));
+        ls.point = pt_uniform_sphere(vec2f(pt_rescale(u_in.x, 0.0, pt_params.env_pmf), u_in.y));
         ls.normal = vec3f(0.0);
         ls.pdf = pt_params.env_pmf * PT_INV_4PI;
         ls.material = PT_NO_HIT;
