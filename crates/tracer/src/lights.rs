@@ -272,8 +272,7 @@ mod tests {
 
     #[test]
     fn an_environment_alone_takes_the_sample_unchanged() {
-        let mut scene = Scene::default();
-        scene.environment = Some(Environment { radiance: Colour::constant(1.0) });
+        let scene = Scene { environment: Some(Environment { radiance: Colour::constant(1.0) }), ..Scene::default() };
         let lights = Lights::new(&scene);
         assert_eq!(lights.environment_pmf(), 1.0);
         for u in [Vec2::new(0.0, 0.3), Vec2::new(0.37, 0.9), Vec2::new(ONE_MINUS_EPSILON, 0.5)] {
