@@ -12,7 +12,8 @@ import numpy as np
 import OpenEXR
 
 
-def read(path):
+def read_exr(path):
+    """An EXR's RGB channels as a float64 array (height, width, 3)."""
     with OpenEXR.File(path) as f:
         px = f.parts[0].channels
         if "RGB" in px:
@@ -20,14 +21,18 @@ def read(path):
         return np.stack([np.asarray(px[c].pixels, dtype=np.float64) for c in "RGB"], axis=-1)
 
 
+def rel_mse(img, ref):
+    """Mean over pixel-channels of (img - ref)^2 / (ref^2 + 1e-2)."""
+    return float(np.mean((img - ref) ** 2 / (ref**2 + 1e-2)))
+
+
 def main():
-    ref = read(sys.argv[1])
+    ref = read_exr(sys.argv[1])
     for path in sys.argv[2:]:
-        img = read(path)
+        img = read_exr(path)
         if img.shape != ref.shape:
             sys.exit(f"{path}: shape {img.shape} differs from the reference's {ref.shape}")
-        rel_mse = np.mean((img - ref) ** 2 / (ref**2 + 1e-2))
-        print(f"{path}: relMSE {rel_mse:.5f}, mean {img.reshape(-1, 3).mean(0).round(5).tolist()}")
+        print(f"{path}: relMSE {rel_mse(img, ref):.5f}, mean {img.reshape(-1, 3).mean(0).round(5).tolist()}")
 
 
 if __name__ == "__main__":

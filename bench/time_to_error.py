@@ -21,12 +21,21 @@ Usage (from the repository root, after `cargo build --release -p cli`):
         [CONFIG ...]
 
 CONFIG is `mitsuba:VARIANT:SAMPLER` (e.g. mitsuba:llvm_ad_spectral:multijitter) or
-`ours:MODE:SAMPLER[:extra spt flags]` (e.g. ours:hero:zsobol); the default set is
-Mitsuba's llvm_ad_spectral with its independent, multijitter and ldsampler samplers and
-ours in hero mode with the independent and zsobol samplers. Prints one JSON line per
-configuration and a table, with each efficiency as a ratio to Mitsuba's best.
+`ours[@SPT]:MODE:SAMPLER[:extra spt flags]` (e.g. ours:hero:zsobol; `@SPT` runs another
+spt binary, e.g. the previous commit's, so that a change is measured against it in the
+same run); the default set is Mitsuba's llvm_ad_spectral with its independent,
+multijitter and ldsampler samplers and ours in hero mode with the independent and zsobol
+samplers. Prints one JSON line per configuration and a table, with each efficiency as a
+ratio to Mitsuba's best (to the first configuration when no Mitsuba one runs).
+
+Measuring one change against the commit before it, e.g.:
+
+    git worktree add /tmp/before HEAD~1 && cargo build --release -p cli --manifest-path /tmp/before/Cargo.toml
+    python3 bench/time_to_error.py --rounds 4 ours@/tmp/before/target/release/spt:hero:zsobol ours:hero:zsobol
 """
 import argparse, json, os, re, subprocess, sys, tempfile, time
+
+from compare_error import read_exr, rel_mse
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 REPO = os.path.normpath(os.path.join(HERE, ".."))
@@ -39,21 +48,6 @@ DEFAULT_CONFIGS = [
     "ours:hero:independent",
     "ours:hero:zsobol",
 ]
-
-
-def read_exr(path):
-    import numpy as np
-    import OpenEXR
-    with OpenEXR.File(path) as f:
-        px = f.parts[0].channels
-        if "RGB" in px:
-            return np.asarray(px["RGB"].pixels, dtype=np.float64)
-        return np.stack([np.asarray(px[c].pixels, dtype=np.float64) for c in "RGB"], axis=-1)
-
-
-def rel_mse(img, ref):
-    import numpy as np
-    return float(np.mean((img - ref) ** 2 / (ref**2 + 1e-2)))
 
 
 class Mitsuba:
@@ -99,8 +93,8 @@ class Mitsuba:
 class Ours:
     """One configuration of our `spt render`."""
 
-    def __init__(self, mode, sampler, extra, a):
-        self.cmd = [a.spt, "render", os.path.join(SHARED, "scenes", "cornell-box", "CornellBox-Original-fixed.obj"),
+    def __init__(self, spt, mode, sampler, extra, a):
+        self.cmd = [spt, "render", os.path.join(SHARED, "scenes", "cornell-box", "CornellBox-Original-fixed.obj"),
                     "--width", str(a.res), "--height", str(a.res), "--eye", "0,1,3.9", "--center", "0,1,0",
                     "--fov", "39.3077", "--rr-depth", "5", "--spectral", mode, "--sampler", sampler,
                     "--threads", str(a.threads)] + extra
@@ -137,10 +131,11 @@ def main():
         if parts[0] == "mitsuba":
             ref = "rgb" if parts[1].endswith("rgb") else "spectral"
             runners.append((c, Mitsuba(parts[1], parts[2], a), ref))
-        elif parts[0] == "ours":
+        elif parts[0] == "ours" or parts[0].startswith("ours@"):
+            spt = parts[0][len("ours@"):] or a.spt
             extra = parts[3].split() if len(parts) > 3 else []
             ref = "rgb" if parts[1] == "rgb" else "spectral"
-            runners.append((c, Ours(parts[1], parts[2], extra, a), ref))
+            runners.append((c, Ours(spt, parts[1], parts[2], extra, a), ref))
         else:
             sys.exit(f"unknown configuration {c}")
 
@@ -163,10 +158,12 @@ def main():
         rows.append(row)
         print(json.dumps(row), flush=True)
     best = max((r for r in rows if r["config"].startswith("mitsuba")), key=lambda r: r["efficiency"], default=None)
-    print(f"\n| configuration | M samples/s | relMSE at {a.spp} spp | efficiency | ÷ Mitsuba's best |")
+    anchor = "Mitsuba's best" if best else "the first"
+    best = best or rows[0]
+    print(f"\n| configuration | M samples/s | relMSE at {a.spp} spp | efficiency | ÷ {anchor} |")
     print("|---|---:|---:|---:|---:|")
     for r in rows:
-        ratio = r["efficiency"] / best["efficiency"] if best else float("nan")
+        ratio = r["efficiency"] / best["efficiency"]
         print(f"| {r['config']} | {r['msamples_per_s']:.2f} | {r['rel_mse']:.5f} | {r['efficiency']:.0f} | {ratio:.2f} |")
 
 
