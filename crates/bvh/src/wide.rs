@@ -53,7 +53,7 @@ const STACK_DEPTH: usize = (MAX_WIDTH - 1) * 64;
 
 /// Figures describing a built [`BvhWide`].
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct Bvh4Stats {
+pub struct WideStats {
     /// Wide nodes.
     pub nodes: usize,
     /// Leaf child slots: the source tree's leaves, some merged (see [`Bvh4::from_bvh`]).
@@ -136,8 +136,8 @@ impl<const W: usize> BvhWide<W> {
     }
 
     /// Node count, leaf count, depth and SAH cost.
-    pub fn stats(&self) -> Bvh4Stats {
-        let mut s = Bvh4Stats { nodes: self.nodes.len(), ..Default::default() };
+    pub fn stats(&self) -> WideStats {
+        let mut s = WideStats { nodes: self.nodes.len(), ..Default::default() };
         let Some(root) = self.nodes.first() else {
             return s;
         };
