@@ -54,6 +54,7 @@ fn check_room(albedo: f32, mode: SpectralMode, sampler: SamplerKind, spp: u32) {
         sampler,
         path: PathSettings { max_depth: 0, rr_depth: 3, ..Default::default() },
         camera: None,
+        crop: None,
     };
     let (film, stats) = tracer::render(&prepared, &settings, &|_| {}).unwrap();
     assert_eq!(stats.non_finite, 0);
@@ -74,7 +75,7 @@ fn check_room(albedo: f32, mode: SpectralMode, sampler: SamplerKind, spp: u32) {
     let mut fails = 0;
     for p in film.pixels() {
         for c in 0..3 {
-            let z = (p.mean[c] - expected[c]) / p.std_error()[c].max(1e-12);
+            let z = (p.mean()[c] - expected[c]) / p.std_error()[c].max(1e-12);
             if z.abs() > z_max {
                 fails += 1;
             }
@@ -121,6 +122,7 @@ fn a_depth_limit_cuts_the_series() {
             sampler: SamplerKind::Independent,
             path: PathSettings { max_depth: k, rr_depth: 100, ..Default::default() },
             camera: None,
+            crop: None,
         };
         let (film, _) = tracer::render(&prepared, &settings, &|_| {}).unwrap();
         let expected: f64 = (0..=k).map(|j| (le * albedo.powi(j as i32)) as f64).sum();

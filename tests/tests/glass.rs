@@ -43,13 +43,13 @@ fn beer_lambert_matches_exp_minus_alpha_s() {
     let (film, _) = tracer::render(&prepared, &settings, &|_| {}).unwrap();
     for c in 0..3 {
         let expected = (-alpha[c] * chord).exp() as f64;
-        let got = film.pixel(0, 0).mean[c];
+        let got = film.pixel(0, 0).mean()[c];
         assert!((got / expected - 1.0).abs() < 1e-3, "channel {c}: {got} vs e^(−αs) = {expected}");
     }
     // Spectral: the uplifted coefficient absorbs red most, as in RGB.
     let hero = RenderSettings { mode: SpectralMode::Hero, spp: 4096, ..settings };
     let (film, _) = tracer::render(&prepared, &hero, &|_| {}).unwrap();
-    let m = film.pixel(0, 0).mean;
+    let m = film.pixel(0, 0).mean();
     assert!(m[0] < m[1] && m[1] < m[2], "{m:?}");
 }
 
@@ -108,7 +108,7 @@ fn path_extension_sees_through_glass_beyond_the_depth_limit() {
             ..Default::default()
         };
         let (film, _) = tracer::render(&prepared, &settings, &|_| {}).unwrap();
-        film.pixel(0, 0).mean[1]
+        film.pixel(0, 0).mean()[1]
     };
     // Through two interfaces of n = 1.5 at normal incidence: T² = 0.96² ≈ 0.92 (plus
     // inter-reflections, which need more bounces).

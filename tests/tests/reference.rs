@@ -68,6 +68,7 @@ fn compare(variant: &str, mode: SpectralMode, sampler: SamplerKind, spp: u32) {
         // Unbounded depth, as the reference (Russian roulette is unbiased).
         path: PathSettings { max_depth: 0, rr_depth: 5, ..Default::default() },
         camera: Some(reference.camera),
+        crop: None,
     };
     let (film, stats) = tracer::render(&prepared, &settings, &|_| {}).unwrap();
     assert_eq!(stats.non_finite, 0, "NaN/Inf samples");

@@ -75,7 +75,7 @@ fn convex_in_furnace(shape: ShapeKind, albedo: f32) {
     let (mut sum, mut var) = (0.0, 0.0);
     for &i in &inside {
         let p = &film.pixels()[i];
-        sum += p.mean[1];
+        sum += p.mean()[1];
         var += p.std_error()[1].powi(2);
     }
     let n = inside.len() as f64;
@@ -84,7 +84,7 @@ fn convex_in_furnace(shape: ShapeKind, albedo: f32) {
     println!("{name}: mean {mean:.4} ± {se:.4} over {n} pixels (expected {albedo}), z = {z:.2}");
     assert!(z.abs() < 4.5, "{name}: mean {mean} ± {se}, expected {albedo}");
     // No pixel far below ρ: acne would show as dark pixels (ρ² = 0.25 at most).
-    let darkest = inside.iter().map(|&i| film.pixels()[i].mean[1]).fold(f64::INFINITY, f64::min);
+    let darkest = inside.iter().map(|&i| film.pixels()[i].mean()[1]).fold(f64::INFINITY, f64::min);
     assert!(darkest > 0.8 * albedo as f64, "{name}: a pixel at {darkest}");
 }
 
@@ -155,9 +155,9 @@ fn smooth_sphere_in_furnace(material: Material, shading: ShadingNormals) -> (f64
     let (prepared, film) = render(scene, size, 96, path);
     let inside = interior_pixels(&prepared, size, |_| true);
     let n = inside.len() as f64;
-    let mean = inside.iter().map(|&i| film.pixels()[i].mean[1]).sum::<f64>() / n;
+    let mean = inside.iter().map(|&i| film.pixels()[i].mean()[1]).sum::<f64>() / n;
     let se = inside.iter().map(|&i| film.pixels()[i].std_error()[1].powi(2)).sum::<f64>().sqrt() / n;
-    let darkest = inside.iter().map(|&i| film.pixels()[i].mean[1]).fold(f64::INFINITY, f64::min);
+    let darkest = inside.iter().map(|&i| film.pixels()[i].mean()[1]).fold(f64::INFINITY, f64::min);
     (mean, se, darkest)
 }
 

@@ -379,6 +379,7 @@ fn settings(
             shading_normals: args.shading_normals,
         },
         camera,
+        crop: None,
     };
     s.validate()?;
     Ok(s)

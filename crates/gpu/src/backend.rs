@@ -17,9 +17,10 @@
 //!   most [`DISPATCH_BUDGET`] pixel-samples (1–64 samples per pixel; short dispatches
 //!   stay clear of GPU watchdogs and feed the progress callback). Each invocation adds
 //!   its pixel's samples to an f32 count / mean / M2 (Welford); after the band (or
-//!   every [`SAMPLES_PER_READBACK`] samples) the accumulators are read back and merged
-//!   into the film's f64 [`PixelStats`] with Chan et al.'s parallel update, so a film
-//!   may mix CPU and GPU passes.
+//!   at every multiple of [`SAMPLES_PER_READBACK`] in the sample index) the
+//!   accumulators are read back, converted to the film's exact fixed-point sums
+//!   ([`PixelStats::from_moments`]) and added, so a film may mix CPU and GPU passes, and
+//!   passes split at those multiples give the same bytes as one.
 //! * Rays (camera, extension and shadow, counted as the CPU counts them) are summed
 //!   per invocation and added to a 64-bit atomic counter; paths cut by the bounce cap
 //!   likewise ([`PathCounters::truncated`]).
@@ -58,7 +59,7 @@
 //!   immune to fast-math folding, and dropped and counted as on the CPU.
 //! * Each pixel's mean and M2 are accumulated in f32 over at most
 //!   [`SAMPLES_PER_READBACK`] samples (relative rounding ≲ 1024 · 2⁻²⁴ ≈ 6·10⁻⁵ in the
-//!   worst case), then merged into the film's f64 statistics.
+//!   worst case), then added to the film's exact sums.
 
 use crate::kernel::{
     FILM_HEADER_BYTES, HAS_ENVIRONMENT, HAS_NORMALS, HAS_TANGENTS, KernelOptions, LIGHT_FLOATS, Params, PixelAccum,
@@ -72,7 +73,9 @@ use std::time::{Duration, Instant};
 use tracer::Scene;
 use tracer::film::{Film, PixelStats};
 use tracer::integrator::PathCounters;
-use tracer::render::{Backend, Capabilities, PrepareStats, PreparedScene, RenderSettings, SceneOptions, check_pass};
+use tracer::render::{
+    Backend, Capabilities, PixelRect, PrepareStats, PreparedScene, RenderSettings, SceneOptions, check_pass,
+};
 use tracer::sampler::SamplerKind;
 use wgpu::util::DeviceExt;
 
@@ -88,7 +91,8 @@ pub const DISPATCH_BUDGET: u64 = 1 << 18;
 const MAX_SAMPLES_PER_DISPATCH: u32 = 64;
 
 /// The most samples per pixel accumulated in f32 on the device before they are read
-/// back and merged into the film's f64 statistics.
+/// back and added to the film's exact sums (read-backs fall on multiples of it in the
+/// sample index).
 pub const SAMPLES_PER_READBACK: u32 = 1024;
 
 /// The kernel's workgroup side (8 × 8 invocations, one per pixel).
@@ -117,6 +121,7 @@ pub fn capabilities() -> Capabilities {
         bvh_widths: vec![BvhWidth::Auto],
         integrator: "path",
         max_bounces: Some(MAX_BOUNCES),
+        sample_block: SAMPLES_PER_READBACK,
     }
 }
 
@@ -539,24 +544,31 @@ impl GpuScene {
             ..Params::default()
         };
 
+        // A crop window renders its rows whole; only its columns reach the film.
+        let region = settings.region();
+        let y_end = region.y + region.height;
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
         let mut counters = PathCounters::default();
-        let mut y0 = 0;
-        while y0 < height {
-            let rows = band_rows_max.min(height - y0);
+        let mut y0 = region.y;
+        while y0 < y_end {
+            let rows = band_rows_max.min(y_end - y0);
             let band_pixels = rows as u64 * width as u64;
             let band_bytes = FILM_HEADER_BYTES + band_pixels * PIXEL_BYTES;
             let per_dispatch = (DISPATCH_BUDGET / band_pixels).clamp(1, MAX_SAMPLES_PER_DISPATCH as u64) as u32;
             params.band_y0 = y0;
             params.band_rows = rows;
+            // Read-backs fall on multiples of SAMPLES_PER_READBACK in the sample index, not
+            // in the pass: passes that split a render there give the film's exact sums
+            // the same f32 partial statistics, hence the same bytes.
+            let absolute = |done: u32| first_sample.wrapping_add(done) % SAMPLES_PER_READBACK;
             let mut done = 0;
             while done < spp {
-                let n = per_dispatch.min(spp - done).min(SAMPLES_PER_READBACK - done % SAMPLES_PER_READBACK);
+                let n = per_dispatch.min(spp - done).min(SAMPLES_PER_READBACK - absolute(done));
                 params.first_sample = first_sample.wrapping_add(done);
                 params.samples = n;
                 queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
                 let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
-                if done % SAMPLES_PER_READBACK == 0 {
+                if done == 0 || absolute(done) == 0 {
                     encoder.clear_buffer(&fb.accum, 0, Some(band_bytes));
                 }
                 {
@@ -572,10 +584,10 @@ impl GpuScene {
                 device
                     .poll(wgpu::PollType::Wait { submission_index: Some(index), timeout: None })
                     .map_err(|e| GpuError::Shader(format!("waiting for the GPU: {e}")))?;
-                progress(band_pixels * n as u64);
+                progress(rows as u64 * region.width as u64 * n as u64);
                 done += n;
-                if done % SAMPLES_PER_READBACK == 0 || done == spp {
-                    counters += self.read_band(fb, band_bytes, film, y0, rows)?;
+                if absolute(done) == 0 || done == spp {
+                    counters += self.read_band(fb, band_bytes, film, y0, rows, region)?;
                 }
             }
             y0 += rows;
@@ -624,8 +636,8 @@ impl GpuScene {
         FilmBuffers { pixels, accum, readback, bind_group }
     }
 
-    /// Copies a band's accumulators back, merges them into `film` (rows `y0 ..
-    /// y0 + rows`) and returns the band's ray count.
+    /// Copies a band's accumulators back, merges those of `region`'s columns into `film`
+    /// (rows `y0 .. y0 + rows`) and returns the band's ray count.
     fn read_band(
         &self,
         fb: &FilmBuffers,
@@ -633,6 +645,7 @@ impl GpuScene {
         film: &mut Film,
         y0: u32,
         rows: u32,
+        region: PixelRect,
     ) -> Result<PathCounters, GpuError> {
         let device = &self.ctx.device;
         let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
@@ -662,7 +675,10 @@ impl GpuScene {
             let first = y0 as usize * width;
             let mut non_finite = 0u64;
             for (i, px) in pixels.iter().take(rows as usize * width).enumerate() {
-                let pass = PixelStats { count: px.count, mean: px.mean.map(f64::from), m2: px.m2.map(f64::from) };
+                if !region.contains((i % width) as u32, y0 + (i / width) as u32) {
+                    continue;
+                }
+                let pass = PixelStats::from_moments(px.count, px.mean.map(f64::from), px.m2.map(f64::from));
                 film.pixels_mut()[first + i].merge(&pass);
                 non_finite += px.non_finite as u64;
             }

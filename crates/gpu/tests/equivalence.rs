@@ -96,7 +96,7 @@ fn compare(cpu: &Film, gpu: &Film) -> Comparison {
         for c in 0..3 {
             let se = (sa[c] * sa[c] + sb[c] * sb[c]).sqrt();
             var_sum[c] += se * se;
-            let d = (a.mean[c] - b.mean[c]).abs();
+            let d = (a.mean()[c] - b.mean()[c]).abs();
             let z = if se > 0.0 {
                 d / se
             } else if d < 1e-6 {
@@ -324,8 +324,8 @@ fn passes_bands_and_reruns_add_up() {
     assert_eq!(split.samples(), whole.samples());
     for (a, b) in split.pixels().iter().zip(whole.pixels()) {
         for c in 0..3 {
-            assert!((a.mean[c] - b.mean[c]).abs() <= 1e-5 * b.mean[c].abs().max(1e-3), "{a:?} vs {b:?}");
-            assert!((a.m2[c] - b.m2[c]).abs() <= 1e-4 * b.m2[c].abs().max(1e-3), "{a:?} vs {b:?}");
+            assert!((a.mean()[c] - b.mean()[c]).abs() <= 1e-5 * b.mean()[c].abs().max(1e-3), "{a:?} vs {b:?}");
+            assert!((a.m2()[c] - b.m2()[c]).abs() <= 1e-4 * b.m2()[c].abs().max(1e-3), "{a:?} vs {b:?}");
         }
     }
     // Banded: the same pixels, bit for bit.
@@ -337,8 +337,9 @@ fn passes_bands_and_reruns_add_up() {
     assert!(stats.rays >= stats.samples, "{} rays for {} samples", stats.rays, stats.samples);
 }
 
-/// Long passes are read back and merged every `SAMPLES_PER_READBACK` samples: one pass
-/// of 1100 samples is, bit for bit, a pass of 1024 and one of 76.
+/// Long passes are read back and merged at every multiple of `SAMPLES_PER_READBACK` in the
+/// sample index: one pass of 1100 samples is, bit for bit, a pass of 1024 and one of 76
+/// (whichever runs first); a crop window is, bit for bit, the same pixels of the image.
 #[test]
 fn long_passes_are_merged_in_groups() {
     let Some(ctx) = gpu::require_gpu() else { return };
@@ -348,9 +349,18 @@ fn long_passes_are_merged_in_groups() {
     assert_eq!(gpu::backend::SAMPLES_PER_READBACK, 1024);
     let (one, _) = tracer::render(&gpu, &s, &|_| {}).unwrap();
     let mut two = Film::new(8, 8);
-    gpu.render_pass(&s, &mut two, 0, 1024, &|_| {}).unwrap();
     gpu.render_pass(&s, &mut two, 1024, 76, &|_| {}).unwrap();
+    gpu.render_pass(&s, &mut two, 0, 1024, &|_| {}).unwrap();
     assert_eq!(one, two);
+    let crop = tracer::render::PixelRect { x: 2, y: 3, width: 5, height: 4 };
+    let (cropped, stats) = tracer::render(&gpu, &RenderSettings { crop: Some(crop), ..s.clone() }, &|_| {}).unwrap();
+    assert_eq!(stats.samples, 20 * 1100);
+    for y in 0..8 {
+        for x in 0..8 {
+            let expected = if crop.contains(x, y) { *one.pixel(x, y) } else { PixelStats::default() };
+            assert_eq!(*cropped.pixel(x, y), expected, "pixel ({x}, {y})");
+        }
+    }
 }
 
 #[test]
@@ -416,22 +426,24 @@ fn buffers_beyond_the_limits_are_named() {
     assert!(data.check_limits(&few).unwrap_err().to_string().contains("max_storage_buffers_per_shader_stage"));
 }
 
+/// The GPU's per-pass statistics (count, mean, M2) become the film's sums through
+/// `PixelStats::from_moments`: merged passes agree with adding every sample.
 #[test]
 fn merging_pass_statistics_equals_adding_every_sample() {
     let xs: Vec<[f32; 3]> = (0..37).map(|i| [(i as f32 * 0.37).sin(), (i * i % 11) as f32, 2.0]).collect();
     let mut all = PixelStats::default();
-    xs.iter().for_each(|&x| all.add(x));
+    xs.iter().for_each(|&x| assert!(all.add(x)));
     let mut merged = PixelStats::default();
     for chunk in xs.chunks(10) {
         let mut pass = PixelStats::default();
-        chunk.iter().for_each(|&x| pass.add(x));
-        merged.merge(&pass);
+        chunk.iter().for_each(|&x| assert!(pass.add(x)));
+        merged.merge(&PixelStats::from_moments(pass.count, pass.mean(), pass.m2()));
     }
     merged.merge(&PixelStats::default());
     assert_eq!(merged.count, all.count);
     for c in 0..3 {
-        assert!((merged.mean[c] - all.mean[c]).abs() < 1e-12);
-        assert!((merged.m2[c] - all.m2[c]).abs() < 1e-9 * all.m2[c].max(1.0));
+        assert!((merged.mean()[c] - all.mean()[c]).abs() < 1e-12);
+        assert!((merged.m2()[c] - all.m2()[c]).abs() < 1e-9 * all.m2()[c].max(1.0));
     }
 }
 

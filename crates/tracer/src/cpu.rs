@@ -6,7 +6,9 @@ use crate::film::{Film, PixelStats};
 use crate::geometry::Geometry;
 use crate::integrator::{CameraSample, Integrator, PathCounters, PathTracer, SceneView};
 use crate::lights::Lights;
-use crate::render::{Backend, Capabilities, PrepareStats, PreparedScene, RenderSettings, SceneOptions, check_pass};
+use crate::render::{
+    Backend, Capabilities, PixelRect, PrepareStats, PreparedScene, RenderSettings, SceneOptions, check_pass,
+};
 use crate::sampler::{PaddedSobol, Pcg32, Sampler, SamplerKind, ZSobolLayout};
 use crate::scene::Scene;
 use crate::{Error, Result};
@@ -91,6 +93,7 @@ fn cpu_capabilities(integrator: &'static str) -> Capabilities {
         bvh_widths: BvhWidth::ALL.to_vec(),
         integrator,
         max_bounces: None,
+        sample_block: 1,
     }
 }
 
@@ -196,6 +199,22 @@ fn check_sample_range(settings: &RenderSettings, first_sample: u32, spp: u32) ->
     Ok(())
 }
 
+/// The image grid's [`TILE`] × [`TILE`] cells clipped to `region`, row by row (the grid
+/// stays anchored at the image's corner, so a crop window's tiles are pieces of the full
+/// render's; no pixel's result depends on its tile).
+fn tiles_of(region: PixelRect) -> Vec<PixelRect> {
+    let (x_end, y_end) = (region.x + region.width, region.y + region.height);
+    let cells = |start: u32, end: u32| {
+        let first = start / TILE * TILE;
+        (first..end).step_by(TILE as usize).map(move |c| (c.max(start), (c + TILE).min(end)))
+    };
+    cells(region.y, y_end)
+        .flat_map(|(y0, y1)| {
+            cells(region.x, x_end).map(move |(x0, x1)| PixelRect { x: x0, y: y0, width: x1 - x0, height: y1 - y0 })
+        })
+        .collect()
+}
+
 /// One render pass over a CPU scene.
 struct Pass<'a, I: Integrator> {
     scene: &'a CpuScene<I>,
@@ -244,13 +263,11 @@ impl<I: Integrator> Pass<'_, I> {
         sampler: &(dyn Fn(u32, u32, u32) -> S + Sync),
         wavelengths: Wavelengths<'_, N>,
     ) -> PathCounters {
-        let (width, height) = (film.width(), film.height());
-        let tiles_x = width.div_ceil(TILE);
-        let tiles: Vec<(u32, u32)> =
-            (0..height.div_ceil(TILE)).flat_map(|ty| (0..tiles_x).map(move |tx| (tx * TILE, ty * TILE))).collect();
+        let width = film.width();
+        let tiles = tiles_of(self.settings.region());
         let existing: &Film = film;
         let results: Vec<TileResult> =
-            tiles.par_iter().map(|&(x0, y0)| self.tile(existing, x0, y0, sampler, &wavelengths)).collect();
+            tiles.par_iter().map(|tile| self.tile(existing, tile, sampler, &wavelengths)).collect();
         let mut total = PathCounters::default();
         for t in results {
             for (i, p) in t.pixels.iter().enumerate() {
@@ -268,13 +285,11 @@ impl<I: Integrator> Pass<'_, I> {
     fn tile<const N: usize, S: Sampler>(
         &self,
         film: &Film,
-        x0: u32,
-        y0: u32,
+        tile: &PixelRect,
         sampler: &(dyn Fn(u32, u32, u32) -> S + Sync),
         wavelengths: &Wavelengths<'_, N>,
     ) -> TileResult {
-        let (width, height) = (film.width(), film.height());
-        let (w, h) = (TILE.min(width - x0), TILE.min(height - y0));
+        let (x0, y0, w, h) = (tile.x, tile.y, tile.width, tile.height);
         let view = self.scene.view();
         let mut pixels: Vec<PixelStats> =
             (y0..y0 + h).flat_map(|y| (x0..x0 + w).map(move |x| (x, y))).map(|(x, y)| *film.pixel(x, y)).collect();
@@ -302,10 +317,7 @@ impl<I: Integrator> Pass<'_, I> {
             }
             self.scene.integrator.radiance_block(&view, &self.settings.path, &mut block, &mut counters);
             for (&i, s) in owners.iter().zip(&block) {
-                let rgb = s.wl.to_linear_srgb(&s.radiance);
-                if rgb.iter().all(|v| v.is_finite()) {
-                    pixels[i as usize].add(rgb);
-                } else {
+                if !pixels[i as usize].add(s.wl.to_linear_srgb(&s.radiance)) {
                     non_finite += 1;
                 }
             }

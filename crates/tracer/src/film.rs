@@ -1,54 +1,141 @@
-//! The film: per-pixel running mean and variance of linear-sRGB samples.
+//! The film: per-pixel sums of linear-sRGB samples, kept exactly.
 //!
-//! Each pixel keeps the thesis's progressive running mean g_i = g_{i−1} + (f_i − g_{i−1})/i
-//! (eq. 7.2, written in the numerically stable order) together with Welford's sum of
-//! squared deviations, so the standard error of the mean comes with every image.
+//! Each pixel keeps its sample count, the sum of its samples and the sum of their squares
+//! as **fixed-point integers**: a sample `x` adds `round(x · 2⁶⁴)` to the sum and
+//! `round(x² · 2³⁶)` to the sum of squares, both computed exactly from the f32 sample.
+//! Integer addition is associative, so the film's bits do not depend on how the samples
+//! were grouped: passes of any size, tiles in any order, shards rendered on other
+//! machines and merged later all give the same bytes as one uninterrupted render. A
+//! floating-point running mean (the thesis's eq. 7.2, or Welford's update) would differ
+//! in its last bits with every grouping.
+//!
+//! The range is bounded by the widths: a sample must satisfy |x| < 2³⁴ ≈ 1.7·10¹⁰
+//! ([`MAX_SAMPLE_MAGNITUDE`]; beyond it the sample is dropped and counted with the NaN
+//! and infinite ones) and a pixel holds at most 2²⁴ samples ([`MAX_PIXEL_SAMPLES`]), so
+//! |Σx|·2⁶⁴ < 2¹²² fits an `i128` and Σx²·2³⁶ < 2¹²⁸ a `u128`. The mean's resolution is
+//! 2⁻⁶⁴ ≈ 5·10⁻²⁰ per sample; a square's is 2⁻³⁶ ≈ 1.5·10⁻¹¹, which bounds the error of
+//! a variance by 7·10⁻¹² (negligible beside any sample noise worth measuring).
 
-/// One pixel's accumulator.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+/// Fraction bits of the per-pixel sums.
+pub const SUM_FRACTION_BITS: i32 = 64;
+
+/// Fraction bits of the per-pixel sums of squares.
+pub const SQUARE_FRACTION_BITS: i32 = 36;
+
+/// Samples whose magnitude reaches this (2³⁴) in any channel are dropped (counted in
+/// [`Film::non_finite`]): beyond it the fixed-point sums could overflow.
+pub const MAX_SAMPLE_MAGNITUDE: f32 = 17_179_869_184.0;
+
+/// The most samples one pixel may accumulate (2²⁴): renders and merges refuse more.
+pub const MAX_PIXEL_SAMPLES: u32 = 1 << 24;
+
+/// 2ⁿ as an f64 (exact for the exponents used here).
+fn pow2(n: i32) -> f64 {
+    f64::from_bits(((1023 + n) as u64) << 52)
+}
+
+/// `round(x · 2⁶⁴)` and `round(x² · 2³⁶)` (halves away from zero) for a finite `x` with
+/// |x| < [`MAX_SAMPLE_MAGNITUDE`], from the f32's bits with integer arithmetic only: x is
+/// m · 2ᵉ with a 24-bit m, so both are m or m² shifted, then rounded. (The same values as
+/// `(x as f64 * 2⁶⁴).round()`, which is exact up to its one rounding — tested — but the
+/// float → i128 conversions are library calls and cost 3 % of a Cornell-box render.)
+#[inline]
+fn fixed_point(x: f32) -> (i128, u128) {
+    let bits = x.to_bits();
+    let biased = ((bits >> 23) & 0xff) as i32;
+    // Subnormals have no implicit bit and the exponent of the smallest normals.
+    let (m, e) = if biased == 0 { (bits & 0x7f_ffff, -149) } else { ((bits & 0x7f_ffff) | 0x80_0000, biased - 150) };
+    let m = m as u64;
+    let magnitude = shift_round(m, e + SUM_FRACTION_BITS) as i128;
+    let value = if bits >> 31 == 1 { -magnitude } else { magnitude };
+    (value, shift_round(m * m, 2 * e + SQUARE_FRACTION_BITS))
+}
+
+/// `round(m · 2^shift)`, halves away from zero, for m < 2⁴⁸ and a result < 2¹²⁸.
+#[inline]
+fn shift_round(m: u64, shift: i32) -> u128 {
+    if shift >= 0 {
+        (m as u128) << shift
+    } else if shift > -64 {
+        let k = -shift as u32;
+        (m as u128 + (1u128 << (k - 1))) >> k
+    } else {
+        0
+    }
+}
+
+/// One pixel's accumulator: count, sum and sum of squares per channel, in fixed point.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub struct PixelStats {
     /// Samples accumulated.
     pub count: u32,
-    /// Running mean per channel.
-    pub mean: [f64; 3],
-    /// Welford's M2: Σ (x − mean)² per channel.
-    pub m2: [f64; 3],
+    /// Σ round(x · 2⁶⁴) per channel.
+    pub sum: [i128; 3],
+    /// Σ round(x² · 2³⁶) per channel.
+    pub sum_sq: [u128; 3],
 }
 
 impl PixelStats {
-    /// Adds one sample.
+    /// Adds one sample; returns `false` (and adds nothing) if a channel is NaN, infinite
+    /// or beyond [`MAX_SAMPLE_MAGNITUDE`].
     #[inline]
-    pub fn add(&mut self, rgb: [f32; 3]) {
+    pub fn add(&mut self, rgb: [f32; 3]) -> bool {
+        if !rgb.iter().all(|v| v.abs() < MAX_SAMPLE_MAGNITUDE) {
+            return false;
+        }
         self.count += 1;
-        let n = self.count as f64;
         for c in 0..3 {
-            let x = rgb[c] as f64;
-            let delta = x - self.mean[c];
-            self.mean[c] += delta / n;
-            self.m2[c] += delta * (x - self.mean[c]);
+            let (value, square) = fixed_point(rgb[c]);
+            self.sum[c] += value;
+            self.sum_sq[c] += square;
+        }
+        true
+    }
+
+    /// Adds another accumulator's samples (exact: the result does not depend on how the
+    /// samples were split between accumulators, nor on the order of merging).
+    #[inline]
+    pub fn merge(&mut self, other: &PixelStats) {
+        self.count += other.count;
+        for c in 0..3 {
+            self.sum[c] += other.sum[c];
+            self.sum_sq[c] += other.sum_sq[c];
         }
     }
 
-    /// Merges another accumulator of independent samples into this one (Chan, Golub &
-    /// LeVeque's pairwise update of count, mean and M2), as if its samples had been
-    /// [`PixelStats::add`]ed here; backends that accumulate a pass elsewhere (the GPU)
-    /// merge it with this.
-    pub fn merge(&mut self, other: &PixelStats) {
-        if other.count == 0 {
-            return;
-        }
-        if self.count == 0 {
-            *self = *other;
-            return;
-        }
-        let (na, nb) = (self.count as f64, other.count as f64);
-        let n = na + nb;
+    /// An accumulator from a count, mean and M2 = Σ(x − mean)² computed elsewhere (the
+    /// GPU's per-pass f32 statistics); deterministic, so passes converted this way still
+    /// merge to the same bytes in any grouping.
+    pub fn from_moments(count: u32, mean: [f64; 3], m2: [f64; 3]) -> Self {
+        let n = count as f64;
+        let mut p = PixelStats { count, ..Default::default() };
         for c in 0..3 {
-            let delta = other.mean[c] - self.mean[c];
-            self.mean[c] += delta * nb / n;
-            self.m2[c] += other.m2[c] + delta * delta * na * nb / n;
+            p.sum[c] = (mean[c] * n * pow2(SUM_FRACTION_BITS)).round() as i128;
+            p.sum_sq[c] = ((m2[c].max(0.0) + n * mean[c] * mean[c]) * pow2(SQUARE_FRACTION_BITS)).round() as u128;
         }
-        self.count += other.count;
+        p
+    }
+
+    /// The mean per channel (0 without samples).
+    pub fn mean(&self) -> [f64; 3] {
+        if self.count == 0 {
+            return [0.0; 3];
+        }
+        let n = self.count as f64;
+        self.sum.map(|s| s as f64 * pow2(-SUM_FRACTION_BITS) / n)
+    }
+
+    /// Σ(x − mean)² per channel: Σx² − (Σx)²/n, never negative.
+    pub fn m2(&self) -> [f64; 3] {
+        if self.count == 0 {
+            return [0.0; 3];
+        }
+        let n = self.count as f64;
+        std::array::from_fn(|c| {
+            let s = self.sum[c] as f64 * pow2(-SUM_FRACTION_BITS);
+            let s2 = self.sum_sq[c] as f64 * pow2(-SQUARE_FRACTION_BITS);
+            (s2 - s * s / n).max(0.0)
+        })
     }
 
     /// The standard error of the mean per channel (0 below two samples).
@@ -57,7 +144,7 @@ impl PixelStats {
             return [0.0; 3];
         }
         let n = self.count as f64;
-        self.m2.map(|m2| (m2 / (n - 1.0) / n).sqrt())
+        self.m2().map(|m2| (m2 / (n - 1.0) / n).sqrt())
     }
 }
 
@@ -67,7 +154,8 @@ pub struct Film {
     width: u32,
     height: u32,
     pixels: Vec<PixelStats>,
-    /// Samples that were NaN or infinite and were dropped.
+    /// Samples that were NaN, infinite or beyond [`MAX_SAMPLE_MAGNITUDE`] and were
+    /// dropped.
     pub non_finite: u64,
 }
 
@@ -104,7 +192,7 @@ impl Film {
 
     /// The mean image as linear-sRGB floats, row-major RGB.
     pub fn mean_rgb(&self) -> Vec<f32> {
-        self.pixels.iter().flat_map(|p| p.mean.map(|v| v as f32)).collect()
+        self.pixels.iter().flat_map(|p| p.mean().map(|v| v as f32)).collect()
     }
 
     /// The per-pixel standard error of the mean, row-major RGB.
@@ -118,7 +206,7 @@ impl Film {
         let mut sum = [0.0; 3];
         for p in &self.pixels {
             for c in 0..3 {
-                sum[c] += p.mean[c];
+                sum[c] += p.mean()[c];
             }
         }
         sum.map(|s| s / n)
@@ -135,17 +223,112 @@ mod tests {
     use super::*;
 
     #[test]
-    fn welford_matches_the_two_pass_formulas() {
-        let xs = [0.5f32, 2.0, -1.0, 4.0, 3.5, 0.0];
+    fn sums_match_the_two_pass_formulas() {
+        let xs = [0.5f32, 2.0, -1.0, 4.0, 3.5, 0.0, 1e-9, 3e7];
         let mut p = PixelStats::default();
         for x in xs {
-            p.add([x, 2.0 * x, 1.0]);
+            assert!(p.add([x, 2.0 * x, 1.0]));
         }
-        let mean = xs.iter().map(|&x| x as f64).sum::<f64>() / 6.0;
-        let var = xs.iter().map(|&x| (x as f64 - mean).powi(2)).sum::<f64>() / 5.0;
-        assert!((p.mean[0] - mean).abs() < 1e-12);
-        assert!((p.std_error()[0] - (var / 6.0).sqrt()).abs() < 1e-12);
-        assert!((p.std_error()[1] - 2.0 * (var / 6.0).sqrt()).abs() < 1e-12);
+        let n = xs.len() as f64;
+        let mean = xs.iter().map(|&x| x as f64).sum::<f64>() / n;
+        let var = xs.iter().map(|&x| (x as f64 - mean).powi(2)).sum::<f64>() / (n - 1.0);
+        assert!((p.mean()[0] - mean).abs() <= 1e-15 * mean.abs());
+        assert!((p.std_error()[0] / (var / n).sqrt() - 1.0).abs() < 1e-12);
+        assert!((p.std_error()[1] / (2.0 * (var / n).sqrt()) - 1.0).abs() < 1e-12);
+        assert_eq!(p.mean()[2], 1.0);
         assert_eq!(p.std_error()[2], 0.0);
+    }
+
+    /// The point of fixed point: any grouping and any order of merging gives the same
+    /// bits.
+    #[test]
+    fn grouping_and_order_do_not_change_a_bit() {
+        let mut rng = rng::Pcg32::new(7, 1);
+        let xs: Vec<[f32; 3]> = (0..1000)
+            .map(|_| {
+                let u = rng.next_f32();
+                [u, (1.0 / (u + 1e-6)).powi(2), -u * 1e-7]
+            })
+            .collect();
+        let mut whole = PixelStats::default();
+        xs.iter().for_each(|&x| assert!(whole.add(x)));
+        for (k, chunk) in [1usize, 7, 64, 333].into_iter().enumerate() {
+            let mut parts: Vec<PixelStats> = xs
+                .chunks(chunk)
+                .map(|c| {
+                    let mut p = PixelStats::default();
+                    c.iter().for_each(|&x| assert!(p.add(x)));
+                    p
+                })
+                .collect();
+            if k % 2 == 1 {
+                parts.reverse();
+            }
+            let mut merged = PixelStats::default();
+            parts.iter().for_each(|p| merged.merge(p));
+            assert_eq!(merged, whole, "chunks of {chunk}");
+        }
+    }
+
+    #[test]
+    fn out_of_range_samples_are_refused_whole() {
+        let mut p = PixelStats::default();
+        assert!(!p.add([1.0, f32::NAN, 1.0]));
+        assert!(!p.add([1.0, 1.0, f32::INFINITY]));
+        assert!(!p.add([-MAX_SAMPLE_MAGNITUDE, 0.0, 0.0]));
+        assert_eq!(p, PixelStats::default());
+        let below = f32::from_bits(MAX_SAMPLE_MAGNITUDE.to_bits() - 1);
+        assert!(p.add([below, -below, 0.0]));
+        // The largest pixel the caps allow does not overflow.
+        let mut big = PixelStats::default();
+        for _ in 0..64 {
+            big.merge(&p);
+        }
+        let mut full = PixelStats::default();
+        for _ in 0..MAX_PIXEL_SAMPLES / 64 {
+            full.merge(&big);
+        }
+        assert_eq!(full.count, MAX_PIXEL_SAMPLES);
+        assert!((full.mean()[0] / below as f64 - 1.0).abs() < 1e-12);
+        assert_eq!(full.std_error()[2], 0.0);
+    }
+
+    /// The integer rounding equals the f64 one (exact product, one rounding) on edge
+    /// cases and a million random bit patterns in range.
+    #[test]
+    fn fixed_point_equals_the_exact_float_rounding() {
+        let reference = |x: f32| {
+            let x = x as f64;
+            ((x * pow2(SUM_FRACTION_BITS)).round() as i128, (x * x * pow2(SQUARE_FRACTION_BITS)).round() as u128)
+        };
+        let below_max = f32::from_bits(MAX_SAMPLE_MAGNITUDE.to_bits() - 1);
+        let edges = [0.0, -0.0, 1.0, -1.0, 0.5, 1.5, -2.5, f32::MIN_POSITIVE, 1e-45, -1e-45, 2f32.powi(-18), below_max];
+        // Values at exactly half a unit of the squares' grid: x² · 2³⁶ = k + ½.
+        let halves = [2f32.powi(-18) * 1.5, 2f32.powi(-19) * 3.0, 3.0 * 2f32.powi(-19) * 1.0000001];
+        for x in edges.into_iter().chain(halves) {
+            assert_eq!(fixed_point(x), reference(x), "{x:e}");
+        }
+        let mut rng = rng::Pcg32::new(11, 3);
+        let mut checked = 0;
+        while checked < 1_000_000 {
+            let x = f32::from_bits(rng.next_u32());
+            if x.is_finite() && x.abs() < MAX_SAMPLE_MAGNITUDE {
+                assert_eq!(fixed_point(x), reference(x), "{x:e}");
+                checked += 1;
+            }
+        }
+    }
+
+    #[test]
+    fn moments_convert_back() {
+        let mut p = PixelStats::default();
+        for x in [0.25f32, 0.5, 1.75, 3.0] {
+            p.add([x, x * 0.1, -x]);
+        }
+        let q = PixelStats::from_moments(p.count, p.mean(), p.m2());
+        for c in 0..3 {
+            assert!((q.mean()[c] - p.mean()[c]).abs() < 1e-15);
+            assert!((q.m2()[c] - p.m2()[c]).abs() < 1e-9);
+        }
     }
 }

@@ -5,7 +5,7 @@
 //! them fails before any work, naming the feature and the way out.
 
 use crate::camera::Camera;
-use crate::film::Film;
+use crate::film::{Film, MAX_PIXEL_SAMPLES};
 use crate::integrator::{PathCounters, PathSettings};
 use crate::sampler::SamplerKind;
 use crate::scene::Scene;
@@ -33,6 +33,61 @@ pub struct RenderSettings {
     pub path: PathSettings,
     /// Camera to use instead of the scene's (or the default framing).
     pub camera: Option<Camera>,
+    /// Render only these pixels of the image (a crop window); the others stay empty.
+    /// Pixels keep their place, camera ray and random streams, so the crop of a render
+    /// equals the same pixels of the full render bit for bit.
+    pub crop: Option<PixelRect>,
+}
+
+/// A rectangle of pixels: columns `x .. x + width`, rows `y .. y + height`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
+pub struct PixelRect {
+    /// First column.
+    pub x: u32,
+    /// First row.
+    pub y: u32,
+    /// Columns.
+    pub width: u32,
+    /// Rows.
+    pub height: u32,
+}
+
+impl PixelRect {
+    /// The whole of a `width` × `height` image.
+    pub fn full(width: u32, height: u32) -> Self {
+        Self { x: 0, y: 0, width, height }
+    }
+
+    /// Pixels inside.
+    pub fn pixel_count(&self) -> u64 {
+        self.width as u64 * self.height as u64
+    }
+
+    /// Whether it lies inside a `width` × `height` image and is not empty.
+    pub fn fits(&self, width: u32, height: u32) -> bool {
+        self.width > 0
+            && self.height > 0
+            && self.x as u64 + self.width as u64 <= width as u64
+            && self.y as u64 + self.height as u64 <= height as u64
+    }
+
+    /// Whether pixel (x, y) is inside.
+    pub fn contains(&self, x: u32, y: u32) -> bool {
+        x >= self.x && y >= self.y && x - self.x < self.width && y - self.y < self.height
+    }
+
+    /// Whether the two share a pixel.
+    pub fn overlaps(&self, other: &PixelRect) -> bool {
+        let span =
+            |a: u32, la: u32, b: u32, lb: u32| (a as u64) < b as u64 + lb as u64 && (b as u64) < a as u64 + la as u64;
+        span(self.x, self.width, other.x, other.width) && span(self.y, self.height, other.y, other.height)
+    }
+}
+
+impl std::fmt::Display for PixelRect {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}×{} at ({}, {})", self.width, self.height, self.x, self.y)
+    }
 }
 
 impl Default for RenderSettings {
@@ -46,6 +101,7 @@ impl Default for RenderSettings {
             sampler: SamplerKind::default(),
             path: PathSettings::default(),
             camera: None,
+            crop: None,
         }
     }
 }
@@ -54,6 +110,11 @@ impl Default for RenderSettings {
 pub const MAX_IMAGE_SIDE: u32 = 16_384;
 
 impl RenderSettings {
+    /// The pixels rendered: the crop window, else the whole image.
+    pub fn region(&self) -> PixelRect {
+        self.crop.unwrap_or(PixelRect::full(self.width, self.height))
+    }
+
     /// Rejects absurd values with a message naming the setting.
     pub fn validate(&self) -> Result<()> {
         if self.width == 0 || self.height == 0 || self.width > MAX_IMAGE_SIDE || self.height > MAX_IMAGE_SIDE {
@@ -62,8 +123,18 @@ impl RenderSettings {
                 self.width, self.height
             )));
         }
-        if self.spp == 0 {
-            return Err(Error::Setting("samples per pixel must be at least 1".into()));
+        if self.spp == 0 || self.spp > MAX_PIXEL_SAMPLES {
+            return Err(Error::Setting(format!(
+                "samples per pixel must be between 1 and {MAX_PIXEL_SAMPLES} (the film's exact sums hold at most that many)"
+            )));
+        }
+        if let Some(crop) = &self.crop
+            && !crop.fits(self.width, self.height)
+        {
+            return Err(Error::Setting(format!(
+                "crop window {crop} is empty or reaches outside the {}×{} image",
+                self.width, self.height
+            )));
         }
         if let Some(c) = &self.camera {
             c.validate().map_err(Error::Setting)?;
@@ -107,6 +178,10 @@ pub struct Capabilities {
     /// that reach it with an unbounded `max_depth` are counted as truncated); `None` if
     /// paths end only by the depth limit and Russian roulette.
     pub max_bounces: Option<u32>,
+    /// Passes that split a render at multiples of this sample index give the same film,
+    /// bit for bit, as one pass (1 on the CPU; the GPU sums up to this many samples in f32
+    /// before they reach the film's exact sums).
+    pub sample_block: u32,
 }
 
 impl Capabilities {
@@ -296,7 +371,7 @@ pub fn render(
     let counters = scene.render_pass(settings, &mut film, 0, settings.spp, progress)?;
     let stats = RenderStats {
         wall: start.elapsed(),
-        samples: settings.width as u64 * settings.height as u64 * settings.spp as u64,
+        samples: settings.region().pixel_count() * settings.spp as u64,
         rays: counters.rays,
         non_finite: film.non_finite,
         truncated: counters.truncated,

@@ -42,7 +42,7 @@ use std::path::{Path, PathBuf};
 use std::rc::Rc;
 use std::time::{Duration, Instant};
 use tracer::RenderSettings;
-use tracer::film::Film;
+use tracer::film::{Film, MAX_PIXEL_SAMPLES};
 use tracer::render::{MAX_IMAGE_SIDE, PreparedScene};
 use winit::application::ApplicationHandler;
 use winit::dpi::{PhysicalPosition, PhysicalSize};
@@ -61,7 +61,8 @@ pub struct ViewerOptions {
     /// Samples per pixel added every frame (at least 1).
     pub spp_per_frame: u32,
     /// Stop refining once this many samples per pixel have been taken (the window stays
-    /// open and a camera move starts again); `None` refines for ever.
+    /// open and a camera move starts again); `None` refines until the film holds
+    /// [`MAX_PIXEL_SAMPLES`] (the most its exact sums take: days of frames).
     pub max_spp: Option<u32>,
     /// Quit after this many rendered frames (for tests and CI); also quits once refining
     /// stops at `max_spp`. `None` runs until the window is closed.
@@ -99,6 +100,9 @@ impl ViewerOptions {
         }
         if self.max_spp == Some(0) {
             return Err(anyhow!("the viewer's maximum samples per pixel must be at least 1"));
+        }
+        if self.spp_per_frame.max(self.max_spp.unwrap_or(0)) > MAX_PIXEL_SAMPLES {
+            return Err(anyhow!("the viewer takes at most {MAX_PIXEL_SAMPLES} samples per pixel"));
         }
         Ok(())
     }
@@ -192,7 +196,7 @@ fn no_window(e: impl std::fmt::Display) -> anyhow::Error {
 /// and clamped.
 fn film_to_pixels(film: &Film, out: &mut [u32]) {
     for (o, p) in out.iter_mut().zip(film.pixels()) {
-        let [r, g, b] = p.mean.map(|v| spectral::srgb_to_u8(v as f32) as u32);
+        let [r, g, b] = p.mean().map(|v| spectral::srgb_to_u8(v as f32) as u32);
         *o = (r << 16) | (g << 8) | b;
     }
 }
@@ -249,7 +253,12 @@ struct App {
 
 impl App {
     fn refining(&self) -> bool {
-        self.dirty || self.options.max_spp.is_none_or(|m| self.spp < m)
+        self.dirty || self.spp < self.max_spp()
+    }
+
+    /// Where refining stops.
+    fn max_spp(&self) -> u32 {
+        self.options.max_spp.unwrap_or(MAX_PIXEL_SAMPLES)
     }
 
     fn fail(&mut self, event_loop: &ActiveEventLoop, e: anyhow::Error) {
@@ -301,10 +310,7 @@ impl App {
             self.spp = 0;
             self.dirty = false;
         }
-        let spp = match self.options.max_spp {
-            Some(max) => self.options.spp_per_frame.min(max - self.spp),
-            None => self.options.spp_per_frame.min(u32::MAX - self.spp),
-        };
+        let spp = self.options.spp_per_frame.min(self.max_spp() - self.spp);
         if spp == 0 {
             return Ok(());
         }
@@ -526,14 +532,13 @@ impl ApplicationHandler for App {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use tracer::film::PixelStats;
 
     #[test]
     fn pixels_are_srgb_encoded_0rgb() {
         let mut film = Film::new(3, 1);
         let px = film.pixels_mut();
-        px[0] = PixelStats { count: 1, mean: [1.0, 0.0, 0.5], m2: [0.0; 3] };
-        px[1] = PixelStats { count: 1, mean: [7.0, -1.0, 0.0], m2: [0.0; 3] };
+        assert!(px[0].add([1.0, 0.0, 0.5]));
+        assert!(px[1].add([7.0, -1.0, 0.0]));
         let mut out = vec![0xdead_beef; 3];
         film_to_pixels(&film, &mut out);
         let half = spectral::srgb_to_u8(0.5) as u32;
@@ -547,5 +552,7 @@ mod tests {
         assert!(ViewerOptions { width: 0, ..Default::default() }.validate().is_err());
         assert!(ViewerOptions { spp_per_frame: 0, ..Default::default() }.validate().is_err());
         assert!(ViewerOptions { max_spp: Some(0), ..Default::default() }.validate().is_err());
+        let beyond = Some(tracer::film::MAX_PIXEL_SAMPLES + 1);
+        assert!(ViewerOptions { max_spp: beyond, ..Default::default() }.validate().is_err());
     }
 }

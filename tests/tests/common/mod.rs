@@ -43,7 +43,7 @@ pub fn z_test(a: &[f32], se_a: &[f32], b: &[f32], se_b: &[f32]) -> Comparison {
 /// Image-wide mean of a film channel and its standard error (pixels are independent).
 pub fn channel_mean_and_se(film: &Film, c: usize) -> (f64, f64) {
     let n = film.pixels().len() as f64;
-    let mean = film.pixels().iter().map(|p| p.mean[c]).sum::<f64>() / n;
+    let mean = film.pixels().iter().map(|p| p.mean()[c]).sum::<f64>() / n;
     let var = film.pixels().iter().map(|p| p.std_error()[c].powi(2)).sum::<f64>();
     (mean, var.sqrt() / n)
 }
