@@ -2,6 +2,7 @@
 
 mod bvh_table;
 mod rays;
+mod shards;
 mod sheet;
 mod stability;
 
@@ -15,7 +16,6 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use tracer::camera::Camera;
 use tracer::integrator::{PathSettings, ShadingNormals};
-use tracer::output::write_image;
 use tracer::render::{Capabilities, PreparedScene, RenderStats, SceneOptions};
 use tracer::sampler::SamplerKind;
 use tracer::{Backend, CpuBackend, PathTracer, RenderSettings, Scene};
@@ -49,6 +49,10 @@ enum Command {
     /// `export` a scene's triangles and rays, `trace` them (build ms, Mrays/s, hits).
     #[command(subcommand)]
     Rays(rays::RaysCommand),
+    /// Merge partial renders (`render --shard K/N`, checkpoints) into one image, after
+    /// checking they are one render's pieces covering every sample exactly once; the
+    /// image equals the unsharded render byte for byte.
+    Merge(shards::MergeArgs),
 }
 
 #[derive(Args)]
@@ -298,6 +302,8 @@ struct RenderArgs {
     /// Also write the per-pixel standard error of the mean (linear EXR).
     #[arg(long)]
     stderr: Option<PathBuf>,
+    #[command(flatten)]
+    pieces: shards::PieceArgs,
 }
 
 #[derive(Args)]
@@ -410,9 +416,13 @@ fn prepare(
     let sampler = args.sampler.unwrap_or_else(|| default_sampler(&backend.capabilities()));
     let settings = settings(args, spp, mode, sampler, &scene)?;
     backend.capabilities().check_settings(&settings)?;
-    let prepared =
-        backend.prepare(scene, &SceneOptions { triangle_test: args.triangle_test, bvh_width: args.bvh_width })?;
+    let prepared = backend.prepare(scene, &scene_options(args))?;
     Ok((prepared, settings))
+}
+
+/// The scene-level choices `args` makes.
+fn scene_options(args: &SceneArgs) -> SceneOptions {
+    SceneOptions { triangle_test: args.triangle_test, bvh_width: args.bvh_width }
 }
 
 /// The backend `args` asks for, running the integrator it names; a GPU that cannot be
@@ -466,7 +476,12 @@ fn report(output: &Path, stats: &RenderStats, caps: &Capabilities) {
 }
 
 fn run_render(args: RenderArgs) -> Result<()> {
-    tracer::output::ImageFormat::from_path(&args.output)?;
+    let outputs = args.pieces.outputs(&args.output)?;
+    if let Some(p) = &args.stderr
+        && outputs.image.is_none()
+    {
+        bail!("{}: a shard writes no images (`spt merge --stderr` does)", p.display());
+    }
     if let Some(p) = &args.stderr
         && tracer::output::ImageFormat::from_path(p)? != tracer::output::ImageFormat::Exr
     {
@@ -493,18 +508,49 @@ fn run_render(args: RenderArgs) -> Result<()> {
     if stats.emitters == 0 && s.environment.is_none() {
         eprintln!("warning: the scene has no light (no Ke > 0 and no environment): the image will be black");
     }
-    let total = settings.width as u64 * settings.height as u64 * settings.spp as u64;
-    let bar = ProgressBar::new(total).with_style(
+    let bar = ProgressBar::new(0).with_style(
         ProgressStyle::with_template("{bar:40} {percent:>3}% {human_pos}/{human_len} samples, ETA {eta}")
             .expect("static template"),
     );
-    let (film, stats) = tracer::render(prepared.as_ref(), &settings, &|n| bar.inc(n))?;
+    let piece = shards::render_piece(
+        &args.pieces,
+        &outputs,
+        &args.scene.scene.display().to_string(),
+        prepared.as_ref(),
+        &settings,
+        &scene_options(&args.scene),
+        &bar,
+    )?;
     bar.finish_and_clear();
-    write_image(&args.output, film.width(), film.height(), &film.mean_rgb())?;
-    if let Some(p) = &args.stderr {
-        write_image(p, film.width(), film.height(), &film.std_error_rgb())?;
+    let (film, m) = (&piece.film, &piece.manifest);
+    let written = outputs.image.as_ref().or(outputs.partial.as_ref()).expect("a render writes something");
+    if let Some(image) = &outputs.image {
+        shards::write_image_atomically(image, film, &film.mean_rgb())?;
+        if let Some(p) = &args.stderr {
+            shards::write_image_atomically(p, film, &film.std_error_rgb())?;
+        }
     }
-    report(&args.output, &stats, &prepared.capabilities());
+    let stats = RenderStats {
+        wall: piece.stats.wall,
+        samples: piece.stats.samples,
+        rays: piece.stats.rays,
+        non_finite: film.non_finite,
+        truncated: piece.stats.truncated,
+    };
+    report(written, &stats, &prepared.capabilities());
+    if let Some(p) = &outputs.partial {
+        eprintln!("partial {}: {}", p.display(), m.describe());
+    }
+    if !m.complete() {
+        eprintln!(
+            "stopped at the time budget with samples {}..{} of {}..{} done: rerun the same command to continue{}",
+            m.work.samples.start,
+            m.done,
+            m.work.samples.start,
+            m.work.samples.end,
+            outputs.partial.as_ref().map_or(String::new(), |p| format!(" from {}", p.display()))
+        );
+    }
     Ok(())
 }
 
@@ -560,6 +606,7 @@ fn main() -> ExitCode {
         Command::Stability(a) => stability::run(a).context("stability failed"),
         Command::View(a) => run_view(a).context("view failed"),
         Command::Rays(c) => rays::run(c).context("rays failed"),
+        Command::Merge(a) => shards::run_merge(a).context("merge failed"),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
