@@ -255,6 +255,53 @@ struct SceneArgs {
     /// face-forward (the thesis's workaround) or geometric (flat shading).
     #[arg(long, default_value = "adapted", value_parser = parse_shading_normals)]
     shading_normals: ShadingNormals,
+    /// Light from everywhere that hits nothing: auto (the scene's own; a uniform white sky
+    /// — CIE D65, luminance 1 — if the scene has no light at all), none (no sky, even the
+    /// scene's), white or white:LUMINANCE (a uniform white sky replacing the scene's).
+    #[arg(long, default_value = "auto", value_parser = parse_sky)]
+    sky: Sky,
+}
+
+/// `--sky`: what lights a scene from infinitely far away.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Sky {
+    /// The scene's own environment, or the default white sky if nothing emits.
+    Auto,
+    /// No environment.
+    None,
+    /// A uniform D65 sky of this luminance.
+    White(f32),
+}
+
+fn parse_sky(s: &str) -> Result<Sky, String> {
+    let bad = || format!("unknown sky '{s}' (known: auto, none, white, white:LUMINANCE with LUMINANCE > 0)");
+    match s {
+        "auto" => Ok(Sky::Auto),
+        "none" => Ok(Sky::None),
+        "white" => Ok(Sky::White(tracer::scene::DEFAULT_SKY_LUMINANCE)),
+        _ => {
+            let l: f32 = s.strip_prefix("white:").ok_or_else(bad)?.trim().parse().map_err(|_| bad())?;
+            if l.is_finite() && l > 0.0 { Ok(Sky::White(l)) } else { Err(bad()) }
+        }
+    }
+}
+
+/// Applies `--sky` to a loaded scene (warning when the default sky stands in for missing
+/// lights, as `spt render` and `spt view` would otherwise show black).
+fn apply_sky(scene: &mut Scene, sky: Sky) {
+    match sky {
+        Sky::Auto if !scene.has_lights() => {
+            let l = tracer::scene::DEFAULT_SKY_LUMINANCE;
+            scene.environment = Some(tracer::Environment::white_sky(l));
+            eprintln!(
+                "warning: the scene has no light (no Ke > 0 and no environment): lit by a uniform white sky \
+                 (D65, luminance {l}); --sky none renders it unlit, --sky white:L sets the luminance"
+            );
+        }
+        Sky::Auto => {}
+        Sky::None => scene.environment = None,
+        Sky::White(l) => scene.environment = Some(tracer::Environment::white_sky(l)),
+    }
 }
 
 pub(crate) fn parse_triangle_test(s: &str) -> Result<TriangleTest, String> {
@@ -408,10 +455,11 @@ fn prepare(
     mode: SpectralMode,
     default_sampler: fn(&Capabilities) -> SamplerKind,
 ) -> Result<(Box<dyn PreparedScene>, RenderSettings)> {
-    let scene = load_scene(&args.scene)?;
+    let mut scene = load_scene(&args.scene)?;
     if scene.triangles.is_empty() && scene.shapes.is_empty() {
         bail!("{}: the scene has no geometry", args.scene.display());
     }
+    apply_sky(&mut scene, args.sky);
     let backend = make_backend(args)?;
     let sampler = args.sampler.unwrap_or_else(|| default_sampler(&backend.capabilities()));
     let settings = settings(args, spp, mode, sampler, &scene)?;
@@ -505,8 +553,8 @@ fn run_render(args: RenderArgs) -> Result<()> {
         settings.mode.name(),
         prepared.capabilities().backend
     );
-    if stats.emitters == 0 && s.environment.is_none() {
-        eprintln!("warning: the scene has no light (no Ke > 0 and no environment): the image will be black");
+    if !s.has_lights() {
+        eprintln!("warning: the scene has no light (no Ke > 0, and --sky none): the image will be black");
     }
     let bar = ProgressBar::new(0).with_style(
         ProgressStyle::with_template("{bar:40} {percent:>3}% {human_pos}/{human_len} samples, ETA {eta}")

@@ -292,3 +292,51 @@ fn bvh_width_is_chosen_or_refused_with_the_way_out() {
     let o = spt(&["render", scene.to_str().unwrap(), "--bvh-width", "16"]);
     assert!(!o.status.success() && stderr(&o).contains("unknown BVH width '16'"), "{}", stderr(&o));
 }
+
+/// Mean of each channel of a linear EXR.
+fn exr_means(path: &Path) -> [f64; 3] {
+    let img = image::open(path).unwrap().into_rgb32f();
+    let n = (img.width() * img.height()) as f64;
+    let mut sum = [0.0f64; 3];
+    for p in img.pixels() {
+        for c in 0..3 {
+            sum[c] += p[c] as f64;
+        }
+    }
+    sum.map(|s| s / n)
+}
+
+/// A scene without lights (here a grey square, as most downloaded OBJs are unlit) is lit
+/// by the documented default — a uniform white sky of luminance 1, under which a
+/// Lambertian surface of albedo ρ has radiance ρ — with a warning; `--sky none` leaves it
+/// black (and says so), `--sky white:L` scales it.
+#[test]
+fn scenes_without_lights_get_the_white_sky_unless_told_otherwise() {
+    let dir = temp_dir("sky");
+    std::fs::write(dir.join("grey.mtl"), "newmtl grey\nKd 0.5 0.5 0.5\n").unwrap();
+    let scene = dir.join("square.obj");
+    std::fs::write(&scene, "mtllib grey.mtl\nv -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\nusemtl grey\nf 1 2 3 4\n")
+        .unwrap();
+    let out = dir.join("square.exr");
+    for (sky, expected) in [(None, 0.5), (Some("white"), 0.5), (Some("white:2"), 1.0), (Some("none"), 0.0)] {
+        // Close enough that the square fills the frame.
+        let mut extra = vec!["--eye", "0,0,1", "--center", "0,0,0"];
+        extra.extend(sky.map(|s| ["--sky", s]).into_iter().flatten());
+        let o = render_small(&scene, (24, 16, 16), &out, &extra);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let means = exr_means(&out);
+        for m in means {
+            assert!((m - expected).abs() < 0.02 * expected.max(0.05), "--sky {sky:?}: {means:?}, expected {expected}");
+        }
+        let warned = stderr(&o);
+        match sky {
+            None => assert!(warned.contains("lit by a uniform white sky"), "{warned}"),
+            Some("none") => assert!(warned.contains("the image will be black"), "{warned}"),
+            _ => assert!(!warned.contains("warning"), "{warned}"),
+        }
+    }
+    for bad in ["purple", "white:0", "white:-1", "white:x"] {
+        let o = render_small(&scene, (4, 4, 1), &out, &["--sky", bad]);
+        assert!(!o.status.success() && stderr(&o).contains("unknown sky"), "{bad}: {}", stderr(&o));
+    }
+}

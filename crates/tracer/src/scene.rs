@@ -7,7 +7,7 @@ use crate::mesh::Mesh;
 use crate::{Error, Result};
 use bvh::Aabb;
 use glam::Vec3;
-use spectral::spectrum::Colour;
+use spectral::spectrum::{Colour, ColourRole, Spectrum};
 
 /// Light arriving from infinitely far away in every direction that hits nothing.
 #[derive(Clone, Debug, PartialEq)]
@@ -44,7 +44,29 @@ pub struct Scene {
     pub environment: Option<Environment>,
 }
 
+/// The luminance of the default sky ([`Environment::white_sky`]) that lights scenes
+/// without lights: a white diffuse surface under it has radiance 1 (linear sRGB (1, 1, 1)).
+pub const DEFAULT_SKY_LUMINANCE: f32 = 1.0;
+
+impl Environment {
+    /// A uniform white sky: CIE D65 scaled to luminance Y = `luminance`, sRGB's own white,
+    /// so its linear-sRGB radiance is (`luminance`, `luminance`, `luminance`).
+    pub fn white_sky(luminance: f32) -> Self {
+        Self { radiance: Colour::from_spectrum(Spectrum::D65(luminance), ColourRole::Illuminant) }
+    }
+}
+
 impl Scene {
+    /// Whether anything emits: a non-black environment, or a triangle or shape whose
+    /// material has a non-black emission. A scene without lights renders black.
+    pub fn has_lights(&self) -> bool {
+        let emits =
+            |m: u32| self.materials.get(m as usize).and_then(|m| m.emission.as_ref()).is_some_and(|e| !e.is_black());
+        self.environment.as_ref().is_some_and(|e| !e.radiance.is_black())
+            || self.material_ids.iter().any(|&m| emits(m))
+            || self.shapes.iter().any(|s| emits(s.material))
+    }
+
     /// Appends a mesh with one material (flat-shaded if its normals are empty; tangents
     /// derived from the normal if its tangents are empty); returns the material's index.
     pub fn add(&mut self, mesh: &Mesh, material: Material) -> u32 {
@@ -145,5 +167,48 @@ fn extend_attribute(attr: &mut Vec<[f32; 3]>, base: usize, values: &[Vec3], coun
         attr.extend(values.iter().map(|v| v.to_array()));
     } else if !attr.is_empty() {
         attr.resize(base + count, [0.0; 3]);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::quad;
+
+    #[test]
+    fn lights_are_found_where_they_are() {
+        let mut scene = Scene::default();
+        let grey = Material::diffuse("grey", Colour::constant(0.5)).unwrap();
+        scene.add(&quad(Vec3::ZERO, Vec3::Y, 1.0), grey.clone());
+        assert!(!scene.has_lights());
+        // An emissive material no primitive uses, or a black emission, lights nothing.
+        scene.materials.push(grey.clone().with_emission(Colour::constant(3.0)));
+        scene.add(&quad(Vec3::Y, -Vec3::Y, 0.2), grey.clone().with_emission(Colour::constant(0.0)));
+        assert!(!scene.has_lights());
+        scene.environment = Some(Environment { radiance: Colour::constant(0.0) });
+        assert!(!scene.has_lights());
+        let mut lamp = scene.clone();
+        lamp.add(&quad(Vec3::Y, -Vec3::Y, 0.2), grey.clone().with_emission(Colour::constant(3.0)));
+        assert!(lamp.has_lights());
+        let mut sky = scene.clone();
+        sky.environment = Some(Environment::white_sky(2.0));
+        assert!(sky.has_lights());
+        let mut sphere = scene;
+        sphere.add_shape(
+            crate::ShapeKind::Sphere(
+                shapes::sphere::Sphere::new(Vec3::ZERO, 1.0, shapes::sphere::SphereMethod::default()).unwrap(),
+            ),
+            grey.with_emission(Colour::constant(1.0)),
+        );
+        assert!(sphere.has_lights());
+    }
+
+    #[test]
+    fn the_white_sky_is_srgb_white_of_its_luminance() {
+        let sky = Environment::white_sky(2.5);
+        for c in sky.radiance.rgb {
+            assert!((c - 2.5).abs() < 2.5e-3, "{:?}", sky.radiance.rgb);
+        }
+        assert!((sky.radiance.luminance() - 2.5).abs() < 2.5e-3);
     }
 }
