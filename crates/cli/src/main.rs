@@ -248,9 +248,16 @@ struct SceneArgs {
     /// the backend's best (cpu: zsobol, gpu: independent); the viewer: independent.
     #[arg(long, value_parser = parse_sampler)]
     sampler: Option<SamplerKind>,
-    /// Light transport: path (path tracing with next-event estimation and MIS).
+    /// Light transport: path (path tracing with next-event estimation and MIS), direct
+    /// (emission plus light sampled at the first surface: path tracing's --max-depth 1
+    /// without BSDF-sampled light), ao (ambient occlusion within --ao-distance; not
+    /// light). direct and ao are biased by design.
     #[arg(long, default_value = "path", value_parser = INTEGRATORS)]
     integrator: String,
+    /// The ao integrator's reach: occluders farther than this from the surface do not
+    /// count (scene units; default: any distance).
+    #[arg(long, default_value_t = f32::INFINITY, value_parser = parse_distance)]
+    ao_distance: f32,
     /// Shading normals: adapted (bent where they disagree with the geometry),
     /// face-forward (the thesis's workaround) or geometric (flat shading).
     #[arg(long, default_value = "adapted", value_parser = parse_shading_normals)]
@@ -444,7 +451,14 @@ fn best_sampler(caps: &Capabilities) -> SamplerKind {
 }
 
 /// The integrators `--integrator` accepts.
-const INTEGRATORS: [&str; 1] = ["path"];
+const INTEGRATORS: [&str; 3] = ["path", "direct", "ao"];
+
+fn parse_distance(s: &str) -> Result<f32, String> {
+    match s.trim().parse::<f32>() {
+        Ok(d) if d > 0.0 && !d.is_nan() => Ok(d),
+        _ => Err(format!("'{s}' is not a positive distance (inf for any)")),
+    }
+}
 
 /// Loads the scene, makes the backend `args` asks for, checks the render settings
 /// against its capabilities (before building anything), and prepares the scene. Without
@@ -485,6 +499,10 @@ fn make_backend(args: &SceneArgs) -> Result<Box<dyn Backend>> {
         }
         _ => match args.integrator.as_str() {
             "path" => Box::new(CpuBackend::with_integrator(args.threads, PathTracer)?),
+            "direct" => Box::new(CpuBackend::with_integrator(args.threads, tracer::DirectLighting)?),
+            "ao" => {
+                Box::new(CpuBackend::with_integrator(args.threads, tracer::AmbientOcclusion::new(args.ao_distance))?)
+            }
             other => bail!("unknown integrator '{other}' (known: {})", INTEGRATORS.join(", ")),
         },
     };

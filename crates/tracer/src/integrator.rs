@@ -1,5 +1,6 @@
 //! Light transport: the [`Integrator`] trait (radiance along camera rays over the shared
-//! [`SceneView`]) and its first implementation, [`PathTracer`]: unidirectional path
+//! [`SceneView`]), [`DirectLighting`] and [`AmbientOcclusion`] (biased by design, as their
+//! documentation states), and [`PathTracer`]: unidirectional path
 //! tracing with next-event estimation and multiple importance sampling (Veach 1997,
 //! ch. 9; the thesis's "explicit" and "implicit" paths, ch. 5), Russian roulette and
 //! spectral transport at N sampled wavelengths.
@@ -11,10 +12,13 @@ use crate::sampler::Sampler;
 use crate::scene::Scene;
 use brdf::{Bsdf, Frame, ScatterFlags};
 use bvh::Ray;
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 use shapes::offset::offset_ray_origin;
 
 pub use crate::shading::{ShadingNormals, adapt_shading_normal, shading_normals};
+pub use simple::{AmbientOcclusion, DirectLighting};
+
+mod simple;
 use spectral::{SampledSpectrum, SampledWavelengths};
 
 /// Integrator settings.
@@ -225,6 +229,91 @@ impl Integrator for PathTracer {
     }
 }
 
+/// A surface point ready for light sampling: the interaction, its material, the
+/// geometric normal facing the way the shading normals were reconciled, the outgoing
+/// direction in world and local coordinates, and the shading frame.
+struct Shading<'a> {
+    it: &'a Interaction,
+    material: &'a Material,
+    ng: Vec3,
+    wo_world: Vec3,
+    frame: &'a Frame,
+    wo: Vec3,
+}
+
+/// How a light sample is weighted against BSDF sampling of the same light.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Mis {
+    /// The power heuristic (the path tracer, which also finds lights by BSDF sampling).
+    Power,
+    /// Weight 1 (an estimator that finds lights only by sampling them).
+    None,
+}
+
+/// Next-event estimation (the thesis's "explicit path"): one point on a light (chosen by
+/// the sample value `u`), one shadow ray; `Some((f, Le, k))` with the contribution `f · Le · k` (k = |cos θᵢ| · w / pdf) to
+/// be multiplied by the path throughput, `None` if the light is occluded or contributes
+/// nothing.
+#[inline(always)]
+fn next_event<const N: usize, B: Bsdf<N>>(
+    view: &SceneView,
+    at: &Shading,
+    bsdf: &B,
+    wl: &SampledWavelengths<N>,
+    mis: Mis,
+    u: Vec2,
+    counters: &mut PathCounters,
+) -> Option<(SampledSpectrum<N>, SampledSpectrum<N>, f32)> {
+    let scene = view.scene;
+    let it = at.it;
+    let ls = view.lights.sample(scene, u)?;
+    let (wi_world, dist, light_pdf, le) = match ls.prim {
+        Some(t) => {
+            let d = ls.point - it.p;
+            let dist2 = d.length_squared();
+            let dist = dist2.sqrt();
+            let wi = d / dist;
+            let cos_l = -wi.dot(ls.normal);
+            let emission = view.material(t).emission.as_ref();
+            match emission {
+                Some(e) if cos_l > 0.0 => (wi, dist, ls.pdf * dist2 / cos_l, e.sample(wl)),
+                _ => (wi, dist, 0.0, SampledSpectrum::zero()),
+            }
+        }
+        None => {
+            let le = scene.environment.as_ref().map_or(SampledSpectrum::zero(), |e| e.radiance.sample(wl));
+            (ls.point, f32::INFINITY, ls.pdf, le)
+        }
+    };
+    let wi = at.frame.to_local(wi_world);
+    // Reflection must stay on the geometric side it came from (no light leaks).
+    let same_side = wi_world.dot(at.ng) * at.wo_world.dot(at.ng) > 0.0;
+    // (Written so that a NaN pdf counts as unusable.)
+    let usable = light_pdf > 0.0 && !le.is_black() && (same_side || !at.material.is_two_sided());
+    if !usable {
+        return None;
+    }
+    let f = bsdf.eval(at.wo, wi);
+    if f.is_black() {
+        return None;
+    }
+    let origin = offset_ray_origin(it.p, if wi_world.dot(it.ng) > 0.0 { it.ng } else { -it.ng });
+    let shadow = if dist.is_finite() {
+        Ray::segment(origin, ls.point - origin, 0.0, SHADOW_T_MAX)
+    } else {
+        Ray::new(origin, wi_world)
+    };
+    counters.rays += 1;
+    if view.occluded(&shadow) {
+        return None;
+    }
+    let w = match mis {
+        Mis::Power => power_heuristic(light_pdf, bsdf.pdf(at.wo, wi)),
+        Mis::None => 1.0,
+    };
+    Some((f, le, wi.z.abs() * w / light_pdf))
+}
+
 /// [`PathTracer`]'s estimate.
 fn path_radiance<const N: usize, S: Sampler>(
     view: &SceneView,
@@ -314,45 +403,10 @@ fn path_radiance<const N: usize, S: Sampler>(
         let flags = bsdf.flags();
 
         // Next-event estimation: one shadow ray to a point on a light.
-        if flags.is_non_specular()
-            && let Some(ls) = lights.sample(scene, sampler.next_2d())
-        {
-            let (wi_world, dist, light_pdf, le) = match ls.prim {
-                Some(t) => {
-                    let d = ls.point - it.p;
-                    let dist2 = d.length_squared();
-                    let dist = dist2.sqrt();
-                    let wi = d / dist;
-                    let cos_l = -wi.dot(ls.normal);
-                    let emission = view.material(t).emission.as_ref();
-                    match emission {
-                        Some(e) if cos_l > 0.0 => (wi, dist, ls.pdf * dist2 / cos_l, e.sample(wl)),
-                        _ => (wi, dist, 0.0, SampledSpectrum::zero()),
-                    }
-                }
-                None => {
-                    let le = scene.environment.as_ref().map_or(SampledSpectrum::zero(), |e| e.radiance.sample(wl));
-                    (ls.point, f32::INFINITY, ls.pdf, le)
-                }
-            };
-            let wi = frame.to_local(wi_world);
-            // Reflection must stay on the geometric side it came from (no light leaks).
-            let same_side = wi_world.dot(ng) * wo_world.dot(ng) > 0.0;
-            if light_pdf > 0.0 && !le.is_black() && (same_side || !material.is_two_sided()) {
-                let f = bsdf.eval(wo, wi);
-                if !f.is_black() {
-                    let origin = offset_ray_origin(it.p, if wi_world.dot(it.ng) > 0.0 { it.ng } else { -it.ng });
-                    let shadow = if dist.is_finite() {
-                        Ray::segment(origin, ls.point - origin, 0.0, SHADOW_T_MAX)
-                    } else {
-                        Ray::new(origin, wi_world)
-                    };
-                    counters.rays += 1;
-                    if !view.occluded(&shadow) {
-                        let w = power_heuristic(light_pdf, bsdf.pdf(wo, wi));
-                        l += beta * f * le * (wi.z.abs() * w / light_pdf);
-                    }
-                }
+        if flags.is_non_specular() {
+            let at = Shading { it: &it, material, ng, wo_world, frame: &frame, wo };
+            if let Some((f, le, k)) = next_event(view, &at, &bsdf, wl, Mis::Power, sampler.next_2d(), counters) {
+                l += beta * f * le * k;
             }
         }
 

@@ -31,7 +31,7 @@ pub use camera::Camera;
 pub use cpu::{CpuBackend, CpuScene};
 pub use film::Film;
 pub use geometry::{Geometry, SceneShape, ShapeKind};
-pub use integrator::{Integrator, PathTracer};
+pub use integrator::{AmbientOcclusion, DirectLighting, Integrator, PathTracer};
 pub use material::Material;
 pub use render::{Backend, PreparedScene, RenderSettings, RenderStats, SceneOptions, render};
 pub use scene::{Environment, Scene};
