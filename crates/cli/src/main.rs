@@ -1,6 +1,7 @@
 //! `spt`: the spectral path tracer's command-line tool.
 
 mod bvh_table;
+mod compare;
 mod rays;
 mod shards;
 mod sheet;
@@ -53,6 +54,10 @@ enum Command {
     /// checking they are one render's pieces covering every sample exactly once; the
     /// image equals the unsharded render byte for byte.
     Merge(shards::MergeArgs),
+    /// Render a scene under several configurations (integrators, spectral modes,
+    /// samplers, triangle tests, BVH widths, backends) at 1, 2, 4, … spp, measure relMSE
+    /// and SSIM against a reference, and chart error against time (CSV, PNG, SVG).
+    Compare(compare::CompareArgs),
 }
 
 #[derive(Args)]
@@ -673,6 +678,7 @@ fn main() -> ExitCode {
         Command::View(a) => run_view(a).context("view failed"),
         Command::Rays(c) => rays::run(c).context("rays failed"),
         Command::Merge(a) => shards::run_merge(a).context("merge failed"),
+        Command::Compare(a) => compare::run(a).context("compare failed"),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

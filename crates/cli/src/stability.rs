@@ -17,7 +17,7 @@ use suite::{FAMILIES, Row, Scale, run_family};
 const DEFAULT_FONT: &str = "/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf";
 
 /// Point colours: dark enough to read as text on white.
-const COLOURS: [RGBColor; 8] = [
+pub(crate) const COLOURS: [RGBColor; 8] = [
     RGBColor(0, 90, 181),
     RGBColor(220, 50, 32),
     RGBColor(0, 140, 70),
@@ -206,7 +206,7 @@ fn aggregate(rows: &[&Row]) -> Vec<Point> {
 }
 
 /// Registers the plots' font ("sans-serif"); false (with a warning) if there is none.
-fn load_font() -> bool {
+pub(crate) fn load_font() -> bool {
     let path = std::env::var_os("SPT_FONT").map(PathBuf::from).unwrap_or_else(|| PathBuf::from(DEFAULT_FONT));
     let bytes = match std::fs::read(&path) {
         Ok(b) => b,

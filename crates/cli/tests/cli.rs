@@ -385,3 +385,39 @@ fn integrators_are_chosen_by_name() {
         assert!(!o.status.success() && msg.contains(expected), "{extra:?}: {msg}");
     }
 }
+
+/// `spt compare` end to end: a rendered reference, two configurations at 1, 2, 4, 8 spp,
+/// a CSV row per render with falling error for the unbiased one, and both charts; a
+/// reference of the wrong size and unknown configurations are refused.
+#[test]
+fn compare_charts_error_against_time() {
+    let dir = temp_dir("compare");
+    let scene = write_scene(&dir, OBJ);
+    let out = dir.join("cmp");
+    let args = ["compare", scene.to_str().unwrap(), "--width", "24", "--height", "16", "--spp-max", "8"];
+    let o = spt(
+        &[&args[..], &["--reference-spp", "256", "--configs", "integrators", "-o", out.to_str().unwrap()]].concat()
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let csv = std::fs::read_to_string(out.join("compare.csv")).unwrap();
+    let rows: Vec<Vec<&str>> = csv.lines().skip(1).map(|l| l.split(',').collect()).collect();
+    assert_eq!(rows.len(), 8, "{csv}");
+    let error = |config: &str, spp: &str| -> f64 {
+        rows.iter().find(|r| r[0] == config && r[1] == spp).unwrap()[4].parse().unwrap()
+    };
+    assert!(error("path", "8") < error("path", "1"), "{csv}");
+    for r in &rows {
+        let ssim: f64 = r[5].parse().unwrap();
+        assert!(ssim > 0.0 && ssim <= 1.0, "{csv}");
+    }
+    assert!(std::fs::metadata(out.join("compare.svg")).unwrap().len() > 1000);
+    assert!(image::open(out.join("compare.png")).is_ok());
+    assert!(String::from_utf8_lossy(&o.stdout).contains("efficiency"));
+
+    let small = dir.join("small.exr");
+    assert!(render_small(&scene, (8, 8, 1), &small, &[]).status.success());
+    let o = spt(&[&args[..], &["--reference", small.to_str().unwrap(), "-o", out.to_str().unwrap()]].concat());
+    assert!(!o.status.success() && stderr(&o).contains("the reference is 8×8"), "{}", stderr(&o));
+    let o = spt(&[&args[..], &["--configs", "colours", "-o", out.to_str().unwrap()]].concat());
+    assert!(!o.status.success() && stderr(&o).contains("neither a preset"), "{}", stderr(&o));
+}

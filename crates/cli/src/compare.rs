@@ -1,0 +1,468 @@
+//! `spt compare`: render a scene under several configurations at growing sample counts,
+//! measure each image's error against a reference, and chart error against time.
+
+use crate::{SceneArgs, best_sampler, parse_bvh_width, parse_sampler, parse_triangle_test, prepare};
+use anyhow::{Context, Result, anyhow, bail};
+use clap::Args;
+use indicatif::{ProgressBar, ProgressStyle};
+use plotters::prelude::*;
+use serde::Deserialize;
+use spectral::SpectralMode;
+use std::path::{Path, PathBuf};
+use tracer::output::{read_rgb32f, write_image};
+
+/// `spt compare`'s arguments.
+#[derive(Args)]
+pub struct CompareArgs {
+    #[command(flatten)]
+    scene: SceneArgs,
+    /// The configurations: a preset (spectral, samplers, integrators, triangle-tests,
+    /// bvh-widths) or a JSON file: a list of objects with "name" and any of
+    /// "integrator", "spectral", "sampler", "triangle_test", "bvh_width", "backend"
+    /// (unset fields take the command line's values).
+    #[arg(long, default_value = "samplers")]
+    configs: String,
+    /// The reference image (linear EXR of the same size), e.g. a Mitsuba render.
+    #[arg(long, conflicts_with = "reference_spp")]
+    reference: Option<PathBuf>,
+    /// Without --reference: render one with the path tracer (hero, zsobol) at this many
+    /// samples per pixel (written to DIR/reference.exr and reused if it is there).
+    #[arg(long, default_value_t = 1024)]
+    reference_spp: u32,
+    /// The largest sample count; each configuration renders at 1, 2, 4, … up to it.
+    #[arg(long, default_value_t = 64)]
+    spp_max: u32,
+    /// Directory for compare.csv, compare.png and compare.svg.
+    #[arg(short, long, default_value = "compare")]
+    output: PathBuf,
+}
+
+/// One configuration: a name and the settings it changes.
+#[derive(Clone, Debug, Default, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Config {
+    name: String,
+    integrator: Option<String>,
+    spectral: Option<String>,
+    sampler: Option<String>,
+    triangle_test: Option<String>,
+    bvh_width: Option<String>,
+    backend: Option<String>,
+}
+
+impl Config {
+    fn named(name: &str) -> Self {
+        Self { name: name.into(), ..Default::default() }
+    }
+
+    /// The scene arguments and spectral mode of this configuration over `base`.
+    fn apply(&self, base: &SceneArgs, mode: SpectralMode) -> Result<(SceneArgs, SpectralMode)> {
+        let mut args = base.clone();
+        let named = |what: &str, e: String| anyhow!("configuration '{}': {what}: {e}", self.name);
+        if let Some(i) = &self.integrator {
+            args.integrator = i.clone();
+        }
+        if let Some(b) = &self.backend {
+            args.backend = b.clone();
+        }
+        if let Some(s) = &self.sampler {
+            args.sampler = Some(parse_sampler(s).map_err(|e| named("sampler", e))?);
+        }
+        if let Some(t) = &self.triangle_test {
+            args.triangle_test = parse_triangle_test(t).map_err(|e| named("triangle_test", e))?;
+        }
+        if let Some(w) = &self.bvh_width {
+            args.bvh_width = parse_bvh_width(w).map_err(|e| named("bvh_width", e))?;
+        }
+        let mode = match &self.spectral {
+            Some(m) => m.parse().map_err(|e: String| named("spectral", e))?,
+            None => mode,
+        };
+        Ok((args, mode))
+    }
+}
+
+/// The configurations of a preset, or `None` for an unknown name.
+pub fn preset(name: &str) -> Option<Vec<Config>> {
+    let each = |field: fn(&mut Config) -> &mut Option<String>, values: &[&str]| {
+        values
+            .iter()
+            .map(|v| {
+                let mut c = Config::named(v);
+                *field(&mut c) = Some(v.to_string());
+                c
+            })
+            .collect()
+    };
+    Some(match name {
+        "spectral" => each(|c| &mut c.spectral, &["hero", "bins40", "rgb"]),
+        "samplers" => each(|c| &mut c.sampler, &["zsobol", "sobol", "independent"]),
+        "integrators" => each(|c| &mut c.integrator, &["path", "direct"]),
+        "triangle-tests" => each(|c| &mut c.triangle_test, &["watertight", "moller-trumbore"]),
+        "bvh-widths" => each(|c| &mut c.bvh_width, &["4", "8"]),
+        _ => return None,
+    })
+}
+
+const PRESETS: &str = "spectral, samplers, integrators, triangle-tests, bvh-widths";
+
+fn configs(spec: &str) -> Result<Vec<Config>> {
+    if let Some(c) = preset(spec) {
+        return Ok(c);
+    }
+    let path = Path::new(spec);
+    if !path.exists() {
+        bail!("--configs '{spec}' is neither a preset ({PRESETS}) nor a file");
+    }
+    let text = std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+    let list: Vec<Config> =
+        serde_json::from_str(&text).map_err(|e| anyhow!("{}:{}:{}: {e}", path.display(), e.line(), e.column()))?;
+    if list.is_empty() {
+        bail!("{}: no configurations", path.display());
+    }
+    Ok(list)
+}
+
+/// One measured render.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Measurement {
+    /// The configuration's name.
+    pub config: String,
+    /// Samples per pixel.
+    pub spp: u32,
+    /// Seconds of sampling.
+    pub render_s: f64,
+    /// Seconds preparing the scene (BVH build, kernel compile), once per configuration.
+    pub prepare_s: f64,
+    /// relMSE against the reference.
+    pub rel_mse: f64,
+    /// SSIM of the sRGB-encoded luminance against the reference's.
+    pub ssim: f64,
+}
+
+/// `spt compare`.
+pub fn run(args: CompareArgs) -> Result<()> {
+    if args.spp_max == 0 {
+        bail!("--spp-max must be at least 1");
+    }
+    let configs = configs(&args.configs)?;
+    std::fs::create_dir_all(&args.output).with_context(|| format!("creating {}", args.output.display()))?;
+    let (w, h) = (args.scene.width, args.scene.height);
+    let reference = match &args.reference {
+        Some(p) => p.clone(),
+        None => args.output.join("reference.exr"),
+    };
+    if args.reference.is_none() && !reference.exists() {
+        eprintln!("rendering the reference: path tracer, hero, zsobol, {} spp", args.reference_spp);
+        let mut base = args.scene.clone();
+        base.integrator = "path".into();
+        base.sampler = None;
+        let (prepared, settings) = prepare(&base, args.reference_spp, SpectralMode::Hero, best_sampler)?;
+        let (film, _) = tracer::render(prepared.as_ref(), &settings, &|_| {})?;
+        write_image(&reference, w, h, &film.mean_rgb())?;
+    }
+    let (rw, rh, reference_rgb) = read_rgb32f(&reference)?;
+    if (rw, rh) != (w, h) {
+        bail!("{}: the reference is {rw}×{rh}, the renders {w}×{h}", reference.display());
+    }
+    let budgets: Vec<u32> =
+        std::iter::successors(Some(1u32), |&n| (n < args.spp_max).then(|| (2 * n).min(args.spp_max))).collect();
+    let total: u64 = configs.len() as u64 * budgets.iter().map(|&n| n as u64).sum::<u64>() * w as u64 * h as u64;
+    let bar = ProgressBar::new(total)
+        .with_style(ProgressStyle::with_template("{bar:40} {percent:>3}% {msg} ETA {eta}").expect("static template"));
+    let mut rows = Vec::new();
+    for config in &configs {
+        let (scene_args, mode) = config.apply(&args.scene, SpectralMode::Hero)?;
+        let (prepared, base) = prepare(&scene_args, args.spp_max, mode, best_sampler)
+            .with_context(|| format!("configuration '{}'", config.name))?;
+        let prepare_s = prepared.stats().total.as_secs_f64();
+        for &spp in &budgets {
+            bar.set_message(format!("{} at {spp} spp", config.name));
+            let settings = tracer::RenderSettings { spp, ..base.clone() };
+            let (film, stats) = tracer::render(prepared.as_ref(), &settings, &|n| bar.inc(n))?;
+            let rgb = film.mean_rgb();
+            rows.push(Measurement {
+                config: config.name.clone(),
+                spp,
+                render_s: stats.wall.as_secs_f64(),
+                prepare_s,
+                rel_mse: rel_mse(&rgb, &reference_rgb),
+                ssim: ssim(&luminance_srgb(&rgb), &luminance_srgb(&reference_rgb), w as usize, h as usize),
+            });
+        }
+    }
+    bar.finish_and_clear();
+    let csv_path = args.output.join("compare.csv");
+    std::fs::write(&csv_path, csv(&rows)).with_context(|| format!("writing {}", csv_path.display()))?;
+    let title = format!("{} — relMSE against {}", args.scene.scene.display(), reference.display());
+    // Both backends lay text out with the registered font.
+    if crate::stability::load_font() {
+        chart(&args.output.join("compare.svg"), &title, &rows, false)?;
+        chart(&args.output.join("compare.png"), &title, &rows, true)?;
+    }
+    print!("{}", table(&rows));
+    eprintln!("wrote {} and its charts", csv_path.display());
+    Ok(())
+}
+
+/// Mean over pixel-channels of (x − r)² / (r² + 10⁻²): the relative MSE of
+/// `bench/compare_error.py` (the 10⁻² keeps black pixels from dominating).
+pub fn rel_mse(image: &[f32], reference: &[f32]) -> f64 {
+    let sum: f64 = image
+        .iter()
+        .zip(reference)
+        .map(|(&x, &r)| {
+            let (x, r) = (x as f64, r as f64);
+            (x - r).powi(2) / (r * r + 1e-2)
+        })
+        .sum();
+    sum / image.len().max(1) as f64
+}
+
+/// Per pixel: the luminance of the sRGB-encoded, clamped colour (what a viewer sees).
+fn luminance_srgb(rgb: &[f32]) -> Vec<f64> {
+    rgb.chunks_exact(3)
+        .map(|p| {
+            let y = 0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2];
+            spectral::srgb_to_u8(y) as f64 / 255.0
+        })
+        .collect()
+}
+
+/// The structural similarity index (Wang, Bovik, Sheikh & Simoncelli 2004, eq. 13) of two
+/// single-channel images in [0, 1]: local means, variances and covariance over an 11×11
+/// Gaussian window (σ = 1.5, clipped at the borders and renormalised), C₁ = (0.01)²,
+/// C₂ = (0.03)², averaged over every pixel.
+pub fn ssim(a: &[f64], b: &[f64], width: usize, height: usize) -> f64 {
+    const RADIUS: isize = 5;
+    let kernel: Vec<f64> = (-RADIUS..=RADIUS).map(|i| (-(i * i) as f64 / (2.0 * 1.5 * 1.5)).exp()).collect();
+    // Separable Gaussian blur with renormalisation at the borders.
+    let blur = |img: &[f64]| -> Vec<f64> {
+        let pass = |src: &[f64], horizontal: bool| -> Vec<f64> {
+            let mut out = vec![0.0; src.len()];
+            for y in 0..height {
+                for x in 0..width {
+                    let (mut sum, mut weight) = (0.0, 0.0);
+                    for (k, w) in kernel.iter().enumerate() {
+                        let d = k as isize - RADIUS;
+                        let (sx, sy) =
+                            if horizontal { (x as isize + d, y as isize) } else { (x as isize, y as isize + d) };
+                        if sx >= 0 && sy >= 0 && (sx as usize) < width && (sy as usize) < height {
+                            sum += w * src[sy as usize * width + sx as usize];
+                            weight += w;
+                        }
+                    }
+                    out[y * width + x] = sum / weight;
+                }
+            }
+            out
+        };
+        pass(&pass(img, true), false)
+    };
+    let product = |p: &[f64], q: &[f64]| -> Vec<f64> { p.iter().zip(q).map(|(x, y)| x * y).collect() };
+    let (ma, mb) = (blur(a), blur(b));
+    let (saa, sbb, sab) = (blur(&product(a, a)), blur(&product(b, b)), blur(&product(a, b)));
+    let (c1, c2) = (1e-4, 9e-4);
+    let n = a.len().max(1) as f64;
+    (0..a.len())
+        .map(|i| {
+            let (va, vb, cov) = (saa[i] - ma[i] * ma[i], sbb[i] - mb[i] * mb[i], sab[i] - ma[i] * mb[i]);
+            ((2.0 * ma[i] * mb[i] + c1) * (2.0 * cov + c2)) / ((ma[i] * ma[i] + mb[i] * mb[i] + c1) * (va + vb + c2))
+        })
+        .sum::<f64>()
+        / n
+}
+
+fn csv(rows: &[Measurement]) -> String {
+    let mut out = String::from("config,spp,render_s,prepare_s,rel_mse,ssim,efficiency\n");
+    for r in rows {
+        let quoted = if r.config.contains([',', '"']) {
+            format!("\"{}\"", r.config.replace('"', "\"\""))
+        } else {
+            r.config.clone()
+        };
+        out += &format!(
+            "{quoted},{},{:.6},{:.6},{:.6e},{:.6},{:.6e}\n",
+            r.spp,
+            r.render_s,
+            r.prepare_s,
+            r.rel_mse,
+            r.ssim,
+            1.0 / (r.rel_mse * r.render_s).max(1e-300)
+        );
+    }
+    out
+}
+
+/// A table: per configuration, the largest budget's figures and its efficiency
+/// 1 / (relMSE · seconds) relative to the first configuration's.
+fn table(rows: &[Measurement]) -> String {
+    let mut names: Vec<&str> = Vec::new();
+    for r in rows {
+        if !names.contains(&r.config.as_str()) {
+            names.push(&r.config);
+        }
+    }
+    let last = |name: &str| rows.iter().filter(|r| r.config == name).max_by_key(|r| r.spp);
+    let efficiency = |r: &Measurement| 1.0 / (r.rel_mse * r.render_s).max(1e-300);
+    let first = names.first().and_then(|n| last(n)).map(efficiency).unwrap_or(1.0);
+    let mut out = format!(
+        "{:<20} {:>6} {:>10} {:>12} {:>8} {:>12}\n",
+        "config", "spp", "render_s", "relMSE", "SSIM", "efficiency"
+    );
+    for name in names {
+        if let Some(r) = last(name) {
+            out += &format!(
+                "{:<20} {:>6} {:>10.3} {:>12.5e} {:>8.4} {:>11.2}×\n",
+                name,
+                r.spp,
+                r.render_s,
+                r.rel_mse,
+                r.ssim,
+                efficiency(r) / first
+            );
+        }
+    }
+    out
+}
+
+/// relMSE against render time, log–log, one line per configuration, with the 1/t slope
+/// of an unbiased estimator through the first configuration's first point as a guide
+/// (a biased method's line flattens away from it).
+fn chart(path: &Path, title: &str, rows: &[Measurement], bitmap: bool) -> Result<()> {
+    if bitmap {
+        let root = BitMapBackend::new(path, (1000, 680)).into_drawing_area();
+        draw_chart(root, title, rows)
+    } else {
+        let root = SVGBackend::new(path, (1000, 680)).into_drawing_area();
+        draw_chart(root, title, rows)
+    }
+}
+
+fn draw_chart<DB: DrawingBackend>(
+    root: DrawingArea<DB, plotters::coord::Shift>,
+    title: &str,
+    rows: &[Measurement],
+) -> Result<()>
+where
+    DB::ErrorType: 'static,
+{
+    let err = |e: &dyn std::fmt::Display| anyhow!("drawing the chart: {e}");
+    let points: Vec<(f64, f64)> = rows.iter().map(|r| (r.render_s.max(1e-6), r.rel_mse.max(1e-12))).collect();
+    let (x0, x1) = points.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), p| (lo.min(p.0), hi.max(p.0)));
+    let (y0, y1) = points.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), p| (lo.min(p.1), hi.max(p.1)));
+    if !(x0.is_finite() && y0.is_finite()) {
+        bail!("nothing to chart");
+    }
+    root.fill(&WHITE).map_err(|e| err(&e))?;
+    let mut chart = ChartBuilder::on(&root)
+        .caption(title, ("sans-serif", 20))
+        .margin(20)
+        .x_label_area_size(50)
+        .y_label_area_size(80)
+        .build_cartesian_2d((x0 / 1.5..x1 * 1.5).log_scale(), (y0 / 2.0..y1 * 2.0).log_scale())
+        .map_err(|e| err(&e))?;
+    chart
+        .configure_mesh()
+        .x_desc("render time, s")
+        .y_desc("relMSE")
+        .x_labels(8)
+        .y_labels(8)
+        .x_label_formatter(&|v: &f64| format!("{v:.2e}"))
+        .y_label_formatter(&|v: &f64| format!("{v:.0e}"))
+        .draw()
+        .map_err(|e| err(&e))?;
+    let mut names: Vec<&str> = Vec::new();
+    for r in rows {
+        if !names.contains(&r.config.as_str()) {
+            names.push(&r.config);
+        }
+    }
+    for (i, name) in names.iter().enumerate() {
+        let colour = crate::stability::COLOURS[i % crate::stability::COLOURS.len()];
+        let line: Vec<(f64, f64)> =
+            rows.iter().zip(&points).filter(|(r, _)| r.config == *name).map(|(_, p)| *p).collect();
+        chart
+            .draw_series(LineSeries::new(line.clone(), colour.stroke_width(2)))
+            .map_err(|e| err(&e))?
+            .label(*name)
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(2)));
+        chart.draw_series(line.iter().map(|&p| Circle::new(p, 4, colour.filled()))).map_err(|e| err(&e))?;
+    }
+    // The unbiased 1/t slope through the first point.
+    let (tx, ty) = points[0];
+    let guide: Vec<(f64, f64)> = [x0 / 1.5, x1 * 1.5].iter().map(|&x| (x, ty * tx / x)).collect();
+    chart
+        .draw_series(LineSeries::new(guide, BLACK.mix(0.4).stroke_width(1)))
+        .map_err(|e| err(&e))?
+        .label("1/t (unbiased)")
+        .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLACK.mix(0.4)));
+    chart
+        .configure_series_labels()
+        .background_style(WHITE.mix(0.8))
+        .border_style(BLACK)
+        .position(SeriesLabelPosition::UpperRight)
+        .draw()
+        .map_err(|e| err(&e))?;
+    root.present().map_err(|e| err(&e))?;
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ssim_is_one_for_equal_images_and_falls_with_noise() {
+        let (w, h) = (24, 20);
+        let img: Vec<f64> = (0..w * h).map(|i| (i % w) as f64 / w as f64 * 0.8 + 0.1).collect();
+        assert!((ssim(&img, &img, w, h) - 1.0).abs() < 1e-12);
+        let mut rng = rng::Pcg32::new(3, 1);
+        let mut noisy =
+            |amp: f64| -> Vec<f64> { img.iter().map(|v| v + amp * (rng.next_f32() as f64 - 0.5)).collect() };
+        let (slight, strong) = (noisy(0.02), noisy(0.4));
+        let (s1, s2) = (ssim(&slight, &img, w, h), ssim(&strong, &img, w, h));
+        assert!(s1 < 1.0 && s2 < s1 && s2 > -1.0, "{s1} {s2}");
+        // Symmetric.
+        assert!((ssim(&img, &strong, w, h) - s2).abs() < 1e-12);
+    }
+
+    #[test]
+    fn rel_mse_matches_its_formula() {
+        assert_eq!(rel_mse(&[1.0, 0.0], &[1.0, 0.0]), 0.0);
+        let v = rel_mse(&[2.0, 0.1], &[1.0, 0.0]);
+        assert!((v - (1.0 / 1.01 + 0.01 / 0.01) / 2.0).abs() < 1e-6, "{v}");
+    }
+
+    #[test]
+    fn presets_and_files_name_valid_settings() {
+        for p in ["spectral", "samplers", "integrators", "triangle-tests", "bvh-widths"] {
+            assert!(preset(p).is_some_and(|c| c.len() >= 2), "{p}");
+        }
+        assert!(configs("nope").unwrap_err().to_string().contains("preset"));
+        let dir = std::env::temp_dir().join(format!("spt-compare-unit-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let file = dir.join("c.json");
+        std::fs::write(&file, r#"[{"name": "a", "sampler": "sobol"}, {"name": "b", "colour": "red"}]"#).unwrap();
+        let msg = configs(file.to_str().unwrap()).unwrap_err().to_string();
+        assert!(msg.contains("c.json:1:") && msg.contains("colour"), "{msg}");
+    }
+
+    #[test]
+    fn csv_and_table_have_a_row_per_measurement() {
+        let m = |config: &str, spp, render_s, rel_mse| Measurement {
+            config: config.into(),
+            spp,
+            render_s,
+            prepare_s: 0.01,
+            rel_mse,
+            ssim: 0.9,
+        };
+        let rows = [m("a", 1, 1.0, 0.4), m("a", 2, 2.0, 0.2), m("b, quoted", 1, 1.0, 0.1)];
+        let text = csv(&rows);
+        assert_eq!(text.lines().count(), 4);
+        assert!(text.contains("\"b, quoted\""));
+        // b reaches 4× the efficiency of a at its largest budget: 1/(0.1·1) against 1/(0.2·2).
+        assert!(table(&rows).contains("4.00×"), "{}", table(&rows));
+    }
+}
