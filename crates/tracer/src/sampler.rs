@@ -86,8 +86,10 @@ impl SamplerKind {
 #[derive(Clone, Debug)]
 pub struct PaddedSobol {
     pixel: u64,
-    index: u32,
-    mask: u32,
+    /// The sample index at the top of 64 bits, bit-reversed (as the index scramble wants).
+    reversed: u64,
+    /// 64 minus the bits of the sample indices.
+    unused_bits: u32,
     dimension: u32,
 }
 
@@ -96,8 +98,10 @@ impl PaddedSobol {
     /// pixel (rounded up to a power of two) seeded with `seed`.
     #[inline]
     pub fn new(x: u32, y: u32, index: u32, spp: u32, seed: u64) -> Self {
-        let mask = ((spp.max(1) as u64).next_power_of_two() - 1) as u32;
-        Self { pixel: mix64(seed ^ mix64(((x as u64) << 32) | y as u64)), index, mask, dimension: 0 }
+        let bits = (spp.max(1) as u64).next_power_of_two().trailing_zeros();
+        let unused_bits = 64 - bits;
+        let reversed = if bits == 0 { 0 } else { ((index as u64) << unused_bits).reverse_bits() };
+        Self { pixel: mix64(seed ^ mix64(((x as u64) << 32) | y as u64)), reversed, unused_bits, dimension: 0 }
     }
 }
 
@@ -107,9 +111,18 @@ impl SobolDraw for PaddedSobol {
     fn draw(&mut self, dims: u32) -> (u64, u64) {
         let h = mix64(self.pixel ^ (self.dimension as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15));
         self.dimension += dims;
-        // A bijection of 0..=mask: xor, then multiplication by an odd number modulo 2^k.
-        let index = ((self.index ^ h as u32).wrapping_mul((h >> 32) as u32 | 1)) & self.mask;
-        (index as u64, mix64(h))
+        // A nested (Owen) scramble of the index, as ZSobol's: every bit flipped by a hash
+        // of the bits above it, so each dimension visits the spp indices in its own order
+        // (an aligned block of 2ᵏ indices stays one). An xor-and-odd-multiply shuffle
+        // (the first version) keeps the index's low bit up to a constant, which ties the
+        // halves [0, ½) / [½, 1) of every dimension together: the error of such a render
+        // stopped falling at 256 spp (docs/compare.md).
+        let index = if self.unused_bits == 64 {
+            0
+        } else {
+            laine_karras_64(self.reversed, h).reverse_bits() >> self.unused_bits
+        };
+        (index, mix64(h))
     }
 }
 

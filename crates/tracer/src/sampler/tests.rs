@@ -156,3 +156,22 @@ fn padded_sobol_pixels_are_stratified_and_dimensions_shuffled() {
         .count();
     assert!(same < 4, "{same} of 64 samples repeat their value in the next dimension");
 }
+
+/// Across two dimensions of a pixel's samples, whether each value lies in [0, ½) must
+/// not be tied: for a good scramble about half the samples agree. (The xor-and-multiply
+/// index shuffle this sampler first had made all 256 agree, or none.)
+#[test]
+fn padded_sobol_dimensions_are_not_tied() {
+    for (x, y) in [(0, 0), (5, 3), (17, 11)] {
+        for (a, b) in [(0u32, 1u32), (1, 4), (3, 9)] {
+            let agree = (0..256)
+                .filter(|&s| {
+                    let mut p = PaddedSobol::new(x, y, s, 256, 7);
+                    let values: Vec<f32> = (0..10).map(|_| p.next_1d()).collect();
+                    (values[a as usize] < 0.5) == (values[b as usize] < 0.5)
+                })
+                .count();
+            assert!((80..=176).contains(&agree), "pixel ({x}, {y}) dims {a}, {b}: {agree} of 256 agree");
+        }
+    }
+}
