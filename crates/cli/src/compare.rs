@@ -59,11 +59,18 @@ impl Config {
     fn apply(&self, base: &SceneArgs, mode: SpectralMode) -> Result<(SceneArgs, SpectralMode)> {
         let mut args = base.clone();
         let named = |what: &str, e: String| anyhow!("configuration '{}': {what}: {e}", self.name);
+        let one_of = |what: &str, value: &String, known: &[&str]| {
+            if known.contains(&value.as_str()) {
+                Ok(value.clone())
+            } else {
+                Err(named(what, format!("unknown '{value}' (known: {})", known.join(", "))))
+            }
+        };
         if let Some(i) = &self.integrator {
-            args.integrator = i.clone();
+            args.integrator = one_of("integrator", i, &crate::INTEGRATORS)?;
         }
         if let Some(b) = &self.backend {
-            args.backend = b.clone();
+            args.backend = one_of("backend", b, &crate::BACKENDS)?;
         }
         if let Some(s) = &self.sampler {
             args.sampler = Some(parse_sampler(s).map_err(|e| named("sampler", e))?);
@@ -273,6 +280,17 @@ pub fn ssim(a: &[f64], b: &[f64], width: usize, height: usize) -> f64 {
         / n
 }
 
+/// The configurations' names, in order of first appearance.
+fn config_names(rows: &[Measurement]) -> Vec<&str> {
+    let mut names: Vec<&str> = Vec::new();
+    for r in rows {
+        if !names.contains(&r.config.as_str()) {
+            names.push(&r.config);
+        }
+    }
+    names
+}
+
 fn csv(rows: &[Measurement]) -> String {
     let mut out = String::from("config,spp,render_s,prepare_s,rel_mse,ssim,efficiency\n");
     for r in rows {
@@ -297,12 +315,7 @@ fn csv(rows: &[Measurement]) -> String {
 /// A table: per configuration, the largest budget's figures and its efficiency
 /// 1 / (relMSE · seconds) relative to the first configuration's.
 fn table(rows: &[Measurement]) -> String {
-    let mut names: Vec<&str> = Vec::new();
-    for r in rows {
-        if !names.contains(&r.config.as_str()) {
-            names.push(&r.config);
-        }
-    }
+    let names = config_names(rows);
     let last = |name: &str| rows.iter().filter(|r| r.config == name).max_by_key(|r| r.spp);
     let efficiency = |r: &Measurement| 1.0 / (r.rel_mse * r.render_s).max(1e-300);
     let first = names.first().and_then(|n| last(n)).map(efficiency).unwrap_or(1.0);
@@ -372,12 +385,7 @@ where
         .y_label_formatter(&|v: &f64| format!("{v:.0e}"))
         .draw()
         .map_err(|e| err(&e))?;
-    let mut names: Vec<&str> = Vec::new();
-    for r in rows {
-        if !names.contains(&r.config.as_str()) {
-            names.push(&r.config);
-        }
-    }
+    let names = config_names(rows);
     for (i, name) in names.iter().enumerate() {
         let colour = crate::stability::COLOURS[i % crate::stability::COLOURS.len()];
         let line: Vec<(f64, f64)> =
@@ -436,9 +444,26 @@ mod tests {
 
     #[test]
     fn presets_and_files_name_valid_settings() {
-        for p in ["spectral", "samplers", "integrators", "triangle-tests", "bvh-widths"] {
-            assert!(preset(p).is_some_and(|c| c.len() >= 2), "{p}");
+        #[derive(clap::Parser)]
+        struct Wrapper {
+            #[command(flatten)]
+            scene: SceneArgs,
         }
+        let base = <Wrapper as clap::Parser>::parse_from(["spt", "scene.obj"]).scene;
+        for p in PRESETS.split(", ") {
+            let configs = preset(p).unwrap_or_else(|| panic!("{p} is listed but not a preset"));
+            assert!(configs.len() >= 2, "{p}");
+            for c in &configs {
+                // Every value a preset sets is one the command line accepts.
+                c.apply(&base, SpectralMode::Hero).unwrap_or_else(|e| panic!("{p}: {e}"));
+            }
+        }
+        let bad = Config { spectral: Some("cmyk".into()), ..Config::named("x") };
+        let Err(e) = bad.apply(&base, SpectralMode::Hero) else { panic!("cmyk accepted") };
+        assert!(e.to_string().contains("'x': spectral"), "{e}");
+        let bad = Config { integrator: Some("bdpt".into()), ..Config::named("y") };
+        let Err(e) = bad.apply(&base, SpectralMode::Hero) else { panic!("bdpt accepted") };
+        assert!(e.to_string().contains("'y': integrator"), "{e}");
         assert!(configs("nope").unwrap_err().to_string().contains("preset"));
         let dir = std::env::temp_dir().join(format!("spt-compare-unit-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();

@@ -245,7 +245,7 @@ struct SceneArgs {
     /// Where to trace: cpu (rayon, every feature) or gpu (wgpu compute; hero mode, triangle
     /// meshes, registered BSDFs). A request outside a backend's capabilities is refused
     /// before any work, with the way out.
-    #[arg(long, default_value = "cpu", value_parser = ["cpu", "gpu"])]
+    #[arg(long, default_value = "cpu", value_parser = BACKENDS)]
     backend: String,
     /// Sample values: zsobol (Owen-scrambled Sobol in Morton order: stratified per pixel,
     /// blue-noise error; lays its samples out for --spp, best a power of two), sobol
@@ -455,6 +455,9 @@ fn best_sampler(caps: &Capabilities) -> SamplerKind {
     caps.samplers.first().copied().unwrap_or_default()
 }
 
+/// The backends `--backend` accepts.
+const BACKENDS: [&str; 2] = ["cpu", "gpu"];
+
 /// The integrators `--integrator` accepts.
 const INTEGRATORS: [&str; 3] = ["path", "direct", "ao"];
 
@@ -614,11 +617,8 @@ fn run_render(args: RenderArgs) -> Result<()> {
     }
     if !m.complete() {
         eprintln!(
-            "stopped at the time budget with samples {}..{} of {}..{} done: rerun the same command to continue{}",
-            m.work.samples.start,
-            m.done,
-            m.work.samples.start,
-            m.work.samples.end,
+            "stopped at the time budget with {}: rerun the same command to continue{}",
+            m.progress(),
             outputs.partial.as_ref().map_or(String::new(), |p| format!(" from {}", p.display()))
         );
     }

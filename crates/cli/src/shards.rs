@@ -45,7 +45,7 @@ pub struct PieceArgs {
 
 fn parse_duration(s: &str) -> Result<Duration, String> {
     let d = match s.trim().parse::<f64>() {
-        Ok(secs) => parse_seconds(&secs.to_string())?,
+        Ok(secs) => seconds(s, secs)?,
         Err(_) => humantime::parse_duration(s).map_err(|e| format!("'{s}': {e} (e.g. 90s, 20m, 1h30m)"))?,
     };
     if d.is_zero() {
@@ -55,7 +55,11 @@ fn parse_duration(s: &str) -> Result<Duration, String> {
 }
 
 fn parse_seconds(s: &str) -> Result<Duration, String> {
-    let secs: f64 = s.trim().parse().map_err(|_| format!("'{s}' is not a number of seconds"))?;
+    seconds(s, s.trim().parse().map_err(|_| format!("'{s}' is not a number of seconds"))?)
+}
+
+/// `secs` (read from the argument `s`) as a duration, if positive and at most 10⁹.
+fn seconds(s: &str, secs: f64) -> Result<Duration, String> {
     if !(secs > 0.0 && secs <= 1e9) {
         return Err(format!("'{s}': expected a positive number of seconds (at most 10⁹)"));
     }
@@ -129,36 +133,19 @@ pub fn render_piece(
 ) -> Result<PieceResult> {
     let caps = prepared.capabilities();
     let job = Job::new(TOOL, prepared.scene(), settings, options, &caps, prepared.camera(settings));
-    let work = match &outputs.shard {
-        Some(spec) => spec.work(settings.width, settings.height, settings.spp, caps.sample_block)?,
-        None => Work::whole(settings.width, settings.height, settings.spp),
-    };
-    let fresh = Manifest {
-        format: shard::manifest::FORMAT_VERSION,
-        scene: scene_name.to_string(),
-        job,
-        shard: outputs.shard,
-        done: work.samples.start,
-        work,
-        sample_block: caps.sample_block,
-        non_finite: 0,
-        rays: 0,
-    };
+    let work = Work::plan(outputs.shard, settings.width, settings.height, settings.spp, caps.sample_block)?;
+    let fresh = Partial::fresh(scene_name, job, outputs.shard, work, caps.sample_block);
     let mut partial = match &outputs.partial {
-        Some(path) if path.exists() => resume_or_refuse(path, &fresh, args.force)?,
+        Some(path) if path.exists() => resume_or_refuse(path, &fresh.manifest, args.force)?,
         _ => None,
     }
-    .unwrap_or_else(|| Partial { film: Film::new(settings.width, settings.height), manifest: fresh });
+    .unwrap_or(fresh);
     let m = &partial.manifest;
     bar.set_length(m.work.region.pixel_count() * (m.work.samples.end - m.done) as u64);
     let progress = |n| bar.inc(n);
     let budget = Budget { time: args.time, checkpoint_every: args.write_partial };
-    let mut checkpoint = |p: &Partial| -> shard::Result<()> {
-        match &outputs.partial {
-            Some(path) if args.write_partial.is_some() => p.write(path),
-            _ => Ok(()),
-        }
-    };
+    // Called only with --write-partial, which implies a partial path.
+    let mut checkpoint = |p: &Partial| outputs.partial.as_ref().map_or(Ok(()), |path| p.write(path));
     let stats = shard::run_work(prepared, settings, &mut partial, &budget, &mut checkpoint, &progress)?;
     if let Some(path) = &outputs.partial {
         partial.write(path)?;
@@ -189,14 +176,7 @@ fn resume_or_refuse(path: &Path, fresh: &Manifest, force: bool) -> Result<Option
     if m.work != fresh.work || m.shard != fresh.shard {
         return refuse(format!("holds another piece of this render ({})", m.describe()));
     }
-    eprintln!(
-        "resuming from {}: samples {}..{} of {}..{} done",
-        path.display(),
-        m.work.samples.start,
-        m.done,
-        m.work.samples.start,
-        m.work.samples.end
-    );
+    eprintln!("resuming from {}: {}", path.display(), m.progress());
     Ok(Some(old))
 }
 
@@ -231,11 +211,7 @@ pub struct MergeArgs {
 /// `spt merge`.
 pub fn run_merge(args: MergeArgs) -> Result<()> {
     if args.check {
-        let parts: Vec<(PathBuf, Manifest)> = args
-            .partials
-            .iter()
-            .map(|p| Ok((p.clone(), shard::partial::Reader::open(p)?.manifest)))
-            .collect::<Result<_>>()?;
+        let parts = shard::read_manifests(&args.partials)?;
         for (path, m) in &parts {
             println!("{}", serde_json::json!({ "file": path, "manifest": m }));
         }

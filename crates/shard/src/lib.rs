@@ -30,7 +30,7 @@ pub mod plan;
 pub mod progressive;
 
 pub use manifest::{Job, Manifest, scene_hash};
-pub use merge::{merge, plan_coverage};
+pub use merge::{merge, plan_coverage, read_manifests};
 pub use partial::Partial;
 pub use plan::{ShardSpec, Split, Work};
 pub use progressive::{Budget, WorkStats, run_work};

@@ -131,7 +131,8 @@ pub struct Manifest {
     /// Samples `work.samples.start .. done` of every pixel of `work.region` are in the
     /// file; `done == work.samples.end` when the piece is complete.
     pub done: u32,
-    /// Samples dropped as NaN, infinite or out of range.
+    /// Samples dropped as NaN, infinite or out of range (written from the film's count
+    /// by [`crate::Partial::write`]; read into it by [`crate::partial::Reader::add_into`]).
     pub non_finite: u64,
     /// Rays traced.
     pub rays: u64,
@@ -151,8 +152,13 @@ impl Manifest {
     /// A short description: `shard 2/4 by samples: samples 16..32 of 512×512 at (0, 0)`.
     pub fn describe(&self) -> String {
         let shard = self.shard.map_or("render".to_string(), |s| s.to_string());
-        let held = self.done_samples();
-        format!("{shard}: samples {}..{} of {}", held.start, held.end, self.work.region)
+        format!("{shard}: {}", Work { samples: self.done_samples(), ..self.work.clone() })
+    }
+
+    /// How far the piece got: `samples 0..14 of 0..64 done`.
+    pub fn progress(&self) -> String {
+        let s = &self.work.samples;
+        format!("samples {}..{} of {}..{} done", s.start, self.done, s.start, s.end)
     }
 
     /// Checks the manifest's own consistency (region inside the image, sample ranges in

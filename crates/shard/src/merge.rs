@@ -23,18 +23,25 @@ pub struct Merged {
 /// Reads the partials' manifests, checks that they are one render's pieces covering
 /// every pixel's samples exactly once ([`plan_coverage`]), and adds their films.
 pub fn merge(paths: &[PathBuf]) -> Result<Merged> {
-    let parts: Vec<(PathBuf, Manifest)> =
-        paths.iter().map(|p| Ok((p.clone(), Reader::open(p)?.manifest))).collect::<Result<_>>()?;
+    let parts = read_manifests(paths)?;
     plan_coverage(&parts)?;
     let job = &parts[0].1.job;
     let mut film = Film::new(job.width, job.height);
     let mut rays = 0;
+    // Each file is opened again here, one at a time: holding thousands of shards open
+    // since the manifests were read could exceed the limit on open files.
     for (path, _) in &parts {
         let mut reader = Reader::open(path)?;
         reader.add_into(&mut film)?;
         rays += reader.manifest.rays;
     }
     Ok(Merged { film, parts, rays })
+}
+
+/// Each partial's manifest (checked for magic, format and length; the pixels are not
+/// read), with its path.
+pub fn read_manifests(paths: &[PathBuf]) -> Result<Vec<(PathBuf, Manifest)>> {
+    paths.iter().map(|p| Ok((p.clone(), Reader::open(p)?.manifest))).collect()
 }
 
 /// Checks that the partials belong to one render (equal jobs) and that, together, they
@@ -185,12 +192,8 @@ fn missing_shards(parts: &[(PathBuf, Manifest)], split: Split, missing: impl Fn(
         .filter_map(|k| {
             let spec = crate::ShardSpec { index: k, ..first };
             let work = spec.work(job.width, job.height, job.spp, block).ok()?;
-            missing(&work).then(|| format!("{spec} ({})", describe_work(&work)))
+            missing(&work).then(|| format!("{spec} ({work})"))
         })
         .collect();
     (!names.is_empty()).then(|| names.join(", "))
-}
-
-fn describe_work(w: &Work) -> String {
-    format!("samples {}..{} of rows {}..{}", w.samples.start, w.samples.end, w.region.y, w.region.y + w.region.height)
 }

@@ -17,7 +17,8 @@
 //! only on what was rendered (no time stamps, no host names), so a shard rerun with the
 //! same arguments writes the same bytes.
 
-use crate::manifest::Manifest;
+use crate::manifest::{FORMAT_VERSION, Job, Manifest};
+use crate::plan::{ShardSpec, Work};
 use crate::{Error, Result};
 use sha2::{Digest, Sha256};
 use std::fs::File;
@@ -45,9 +46,28 @@ pub struct Partial {
 }
 
 impl Partial {
-    /// Writes the partial to `path` atomically (temporary file, sync, rename).
+    /// A piece with nothing rendered yet: an empty full-size film and a manifest whose
+    /// `done` is the start of the work's samples.
+    pub fn fresh(scene: &str, job: Job, shard: Option<ShardSpec>, work: Work, sample_block: u32) -> Self {
+        let film = Film::new(job.width, job.height);
+        let manifest = Manifest {
+            format: FORMAT_VERSION,
+            scene: scene.to_string(),
+            job,
+            shard,
+            done: work.samples.start,
+            work,
+            sample_block,
+            non_finite: 0,
+            rays: 0,
+        };
+        Partial { manifest, film }
+    }
+
+    /// Writes the partial to `path` atomically (temporary file, sync, rename). The
+    /// manifest's count of dropped samples is the film's.
     pub fn write(&self, path: &Path) -> Result<()> {
-        let m = &self.manifest;
+        let m = &Manifest { non_finite: self.film.non_finite, ..self.manifest.clone() };
         if self.film.width() != m.job.width || self.film.height() != m.job.height {
             return Err(Error::Mismatch("film size differs from the manifest's".into()));
         }

@@ -118,10 +118,24 @@ pub struct Work {
     pub samples: Range<u32>,
 }
 
+impl std::fmt::Display for Work {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "samples {}..{} of {}", self.samples.start, self.samples.end, self.region)
+    }
+}
+
 impl Work {
     /// The whole render: every pixel, samples `0 .. spp`.
     pub fn whole(width: u32, height: u32, spp: u32) -> Self {
         Self { region: PixelRect::full(width, height), samples: 0..spp }
+    }
+
+    /// The work of `shard` (see [`ShardSpec::work`]), or the whole render without one.
+    pub fn plan(shard: Option<ShardSpec>, width: u32, height: u32, spp: u32, sample_block: u32) -> Result<Self> {
+        match shard {
+            Some(spec) => spec.work(width, height, spp, sample_block),
+            None => Ok(Self::whole(width, height, spp)),
+        }
     }
 
     /// Pixel samples in it.

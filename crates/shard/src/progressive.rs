@@ -64,42 +64,35 @@ pub fn run_work(
     let mut stats = WorkStats::default();
     // Seconds per sample per pixel, from the last pass.
     let mut per_spp: Option<f64> = None;
+    let end = work.samples.end as u64;
     while partial.manifest.done < work.samples.end {
         let done = partial.manifest.done;
-        let left = work.samples.end - done;
-        let elapsed = start.elapsed();
-        let until_budget = budget.time.map_or(UNBOUNDED, |t| t.saturating_sub(elapsed));
+        let until_budget = budget.time.map_or(UNBOUNDED, |t| t.saturating_sub(start.elapsed()));
         let until_checkpoint =
             budget.checkpoint_every.map_or(UNBOUNDED, |c| c.saturating_sub(last_checkpoint.elapsed()));
-        // The first pass is one block (its speed sizes the rest).
-        let n = match per_spp {
-            None if until_budget == UNBOUNDED && until_checkpoint == UNBOUNDED => left,
-            None => block.min(left),
+        // Passes end on a multiple of the block (or at the end of the work), at the
+        // earliest on the next one; the first is that one, and its speed sizes the rest.
+        let next_boundary = ((done / block + 1) * block) as u64;
+        let pass_end = match per_spp {
+            None if until_budget == UNBOUNDED && until_checkpoint == UNBOUNDED => end,
+            None => next_boundary,
             Some(per) => {
-                let fits = |d: Duration| if d == UNBOUNDED { u32::MAX } else { (d.as_secs_f64() / per) as u32 };
-                let by_budget = fits(until_budget);
-                // Samples up to the next multiple of the block (passes start on them).
-                let to_boundary = block - done % block;
-                if by_budget < to_boundary.min(left) {
+                let fits = |d: Duration| if d == UNBOUNDED { u64::MAX } else { (d.as_secs_f64() / per) as u64 };
+                let by_budget = (done as u64).saturating_add(fits(until_budget));
+                if by_budget < next_boundary.min(end) {
                     break; // the next pass would overrun the budget
                 }
-                let wanted = by_budget.min(fits(until_checkpoint).max(1)).max(1);
-                // Passes end on a block boundary (or at the end of the work).
-                let aligned = if wanted <= to_boundary {
-                    to_boundary
-                } else {
-                    to_boundary + (wanted - to_boundary) / block * block
-                };
-                aligned.min(left)
+                let wanted = by_budget.min((done as u64).saturating_add(fits(until_checkpoint).max(1)));
+                (wanted / block as u64 * block as u64).max(next_boundary)
             }
         };
+        let n = (pass_end.min(end) - done as u64) as u32;
         let pass_start = Instant::now();
         let counters = prepared.render_pass(&settings, &mut partial.film, done, n, progress)?;
         let secs = pass_start.elapsed().as_secs_f64();
         per_spp = Some((secs / n as f64).max(1e-9));
         partial.manifest.done += n;
         partial.manifest.rays += counters.rays;
-        partial.manifest.non_finite = partial.film.non_finite;
         stats.passes += 1;
         stats.samples += work.region.pixel_count() * n as u64;
         stats.rays += counters.rays;

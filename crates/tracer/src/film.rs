@@ -29,11 +29,6 @@ pub const MAX_SAMPLE_MAGNITUDE: f32 = 17_179_869_184.0;
 /// The most samples one pixel may accumulate (2²⁴): renders and merges refuse more.
 pub const MAX_PIXEL_SAMPLES: u32 = 1 << 24;
 
-/// 2ⁿ as an f64 (exact for the exponents used here).
-fn pow2(n: i32) -> f64 {
-    f64::from_bits(((1023 + n) as u64) << 52)
-}
-
 /// `round(x · 2⁶⁴)` and `round(x² · 2³⁶)` (halves away from zero) for a finite `x` with
 /// |x| < [`MAX_SAMPLE_MAGNITUDE`], from the f32's bits with integer arithmetic only: x is
 /// m · 2ᵉ with a 24-bit m, so both are m or m² shifted, then rounded. (The same values as
@@ -110,8 +105,8 @@ impl PixelStats {
         let n = count as f64;
         let mut p = PixelStats { count, ..Default::default() };
         for c in 0..3 {
-            p.sum[c] = (mean[c] * n * pow2(SUM_FRACTION_BITS)).round() as i128;
-            p.sum_sq[c] = ((m2[c].max(0.0) + n * mean[c] * mean[c]) * pow2(SQUARE_FRACTION_BITS)).round() as u128;
+            p.sum[c] = (mean[c] * n * 2f64.powi(SUM_FRACTION_BITS)).round() as i128;
+            p.sum_sq[c] = ((m2[c].max(0.0) + n * mean[c] * mean[c]) * 2f64.powi(SQUARE_FRACTION_BITS)).round() as u128;
         }
         p
     }
@@ -122,7 +117,7 @@ impl PixelStats {
             return [0.0; 3];
         }
         let n = self.count as f64;
-        self.sum.map(|s| s as f64 * pow2(-SUM_FRACTION_BITS) / n)
+        self.sum.map(|s| s as f64 * 2f64.powi(-SUM_FRACTION_BITS) / n)
     }
 
     /// Σ(x − mean)² per channel: Σx² − (Σx)²/n, never negative.
@@ -132,8 +127,8 @@ impl PixelStats {
         }
         let n = self.count as f64;
         std::array::from_fn(|c| {
-            let s = self.sum[c] as f64 * pow2(-SUM_FRACTION_BITS);
-            let s2 = self.sum_sq[c] as f64 * pow2(-SQUARE_FRACTION_BITS);
+            let s = self.sum[c] as f64 * 2f64.powi(-SUM_FRACTION_BITS);
+            let s2 = self.sum_sq[c] as f64 * 2f64.powi(-SQUARE_FRACTION_BITS);
             (s2 - s * s / n).max(0.0)
         })
     }
@@ -299,7 +294,10 @@ mod tests {
     fn fixed_point_equals_the_exact_float_rounding() {
         let reference = |x: f32| {
             let x = x as f64;
-            ((x * pow2(SUM_FRACTION_BITS)).round() as i128, (x * x * pow2(SQUARE_FRACTION_BITS)).round() as u128)
+            (
+                (x * 2f64.powi(SUM_FRACTION_BITS)).round() as i128,
+                (x * x * 2f64.powi(SQUARE_FRACTION_BITS)).round() as u128,
+            )
         };
         let below_max = f32::from_bits(MAX_SAMPLE_MAGNITUDE.to_bits() - 1);
         let edges = [0.0, -0.0, 1.0, -1.0, 0.5, 1.5, -2.5, f32::MIN_POSITIVE, 1e-45, -1e-45, 2f32.powi(-18), below_max];

@@ -15,11 +15,12 @@ use bvh::Ray;
 use glam::{Vec2, Vec3};
 use shapes::offset::offset_ray_origin;
 
+use spectral::{SampledSpectrum, SampledWavelengths};
+
 pub use crate::shading::{ShadingNormals, adapt_shading_normal, shading_normals};
 pub use simple::{AmbientOcclusion, DirectLighting};
 
 mod simple;
-use spectral::{SampledSpectrum, SampledWavelengths};
 
 /// Integrator settings.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -251,9 +252,9 @@ enum Mis {
 }
 
 /// Next-event estimation (the thesis's "explicit path"): one point on a light (chosen by
-/// the sample value `u`), one shadow ray; `Some((f, Le, k))` with the contribution `f · Le · k` (k = |cos θᵢ| · w / pdf) to
-/// be multiplied by the path throughput, `None` if the light is occluded or contributes
-/// nothing.
+/// the sample value `u`), one shadow ray; `Some((f, Le, k))` with the contribution
+/// f · Le · k (k = |cos θᵢ| · w / pdf) to be multiplied by the path throughput, `None`
+/// if the light is occluded or contributes nothing.
 #[inline(always)]
 fn next_event<const N: usize, B: Bsdf<N>>(
     view: &SceneView,
