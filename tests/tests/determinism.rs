@@ -68,3 +68,36 @@ fn passes_in_any_order_and_crops_equal_one_pass() {
         }
     }
 }
+
+/// A viewer's accumulation on the CPU (the trait's default, a film): frames of any size
+/// give the film of one render, a restart forgets it, a resize changes the film's size,
+/// and its display is the film's `display_pixels`.
+#[test]
+fn frames_accumulate_to_the_film_of_one_render() {
+    let prepared: std::sync::Arc<dyn PreparedScene> = std::sync::Arc::new(scene(2));
+    let settings = RenderSettings { width: 21, height: 18, spp: 13, seed: 9, ..Default::default() };
+    let mut acc = std::sync::Arc::clone(&prepared).accumulate(&settings).unwrap();
+    for n in [1, 4, 8] {
+        acc.add(n).unwrap();
+    }
+    assert_eq!(acc.samples(), 13);
+    let (one, stats) = tracer::render(prepared.as_ref(), &settings, &|_| {}).unwrap();
+    let film = acc.film().unwrap();
+    assert!(film == one, "frames of 1, 4 and 8 samples differ from one 13-spp render");
+    assert_eq!(acc.counters().unwrap().rays, stats.rays);
+    let (mut shown, mut expected) = (vec![0; 21 * 18], vec![1; 21 * 18]);
+    acc.display(&mut shown).unwrap();
+    one.display_pixels(&mut expected);
+    assert_eq!(shown, expected);
+    assert!(shown.iter().any(|&p| p != 0));
+
+    let resized = RenderSettings { width: 5, height: 4, seed: 10, ..settings };
+    acc.restart(&resized).unwrap();
+    assert_eq!(acc.samples(), 0);
+    assert_eq!(acc.film().unwrap(), tracer::Film::new(5, 4));
+    acc.add(2).unwrap();
+    let (two, _) = tracer::render(prepared.as_ref(), &RenderSettings { spp: 2, ..resized.clone() }, &|_| {}).unwrap();
+    assert!(acc.film().unwrap() == two, "after a restart at another size");
+    let crop = tracer::render::PixelRect { x: 0, y: 0, width: 1, height: 1 };
+    assert!(acc.restart(&RenderSettings { crop: Some(crop), ..resized }).is_err(), "a crop window is refused");
+}

@@ -15,6 +15,8 @@ use indicatif::{ProgressBar, ProgressStyle};
 use spectral::SpectralMode;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
+use std::sync::Arc;
+use std::time::Instant;
 use tracer::camera::Camera;
 use tracer::integrator::{PathSettings, ShadingNormals};
 use tracer::render::{Capabilities, PreparedScene, RenderStats, SceneOptions};
@@ -238,8 +240,9 @@ struct SceneArgs {
     /// Ray–triangle test: watertight (Woop et al. 2013) or moller-trumbore (the thesis's).
     #[arg(long, default_value = "watertight", value_parser = parse_triangle_test)]
     triangle_test: TriangleTest,
-    /// Children per node of the CPU's triangle BVH: auto (8 where the CPU has AVX2, else
-    /// 4), 4 (SSE) or 8 (AVX2).
+    /// Children per node of the triangle BVH: auto (the backend's choice: on the CPU 8
+    /// where it has AVX2, else 4; on the GPU 2), 2 (binary, GPU only), 4 (SSE on the CPU,
+    /// 4-wide nodes on the GPU) or 8 (AVX2, CPU only).
     #[arg(long, default_value = "auto", value_parser = parse_bvh_width)]
     bvh_width: BvhWidth,
     /// Where to trace: cpu (rayon, every feature) or gpu (wgpu compute; hero mode, triangle
@@ -327,7 +330,7 @@ fn parse_bvh_width(s: &str) -> Result<BvhWidth, String> {
     BvhWidth::ALL
         .into_iter()
         .find(|w| w.name() == s)
-        .ok_or_else(|| format!("unknown BVH width '{s}' (known: auto, 4, 8)"))
+        .ok_or_else(|| format!("unknown BVH width '{s}' (known: auto, 2, 4, 8)"))
 }
 
 fn parse_sampler(s: &str) -> Result<SamplerKind, String> {
@@ -378,6 +381,12 @@ struct BenchArgs {
     /// Spectral modes to time, comma-separated.
     #[arg(long, value_delimiter = ',', default_value = "hero,bins40,rgb")]
     modes: Vec<SpectralMode>,
+    /// Time N viewer frames per mode instead of whole renders: each frame adds --spp
+    /// samples per pixel to a running accumulation and converts it for display (what
+    /// `spt view` does per frame, without the window); frames/s and the median frame
+    /// time are reported, after one untimed frame.
+    #[arg(long, value_name = "N")]
+    frames: Option<u32>,
 }
 
 pub(crate) fn parse_vec3(s: &str) -> Result<Vec3, String> {
@@ -637,14 +646,26 @@ fn run_bench(args: BenchArgs) -> Result<()> {
         prepared.capabilities().check_settings(s)?;
     }
     println!(
-        "# {} {}x{} {} spp, {} backend, median of {}",
+        "# {} {}x{} {} spp, {} backend, {}",
         args.scene.scene.display(),
         args.scene.width,
         args.scene.height,
         args.spp,
         prepared.capabilities().backend,
-        args.repeats
+        args.frames.map_or(format!("median of {}", args.repeats), |n| format!("{n} frames of {} spp", args.spp))
     );
+    let stats = prepared.stats();
+    println!(
+        "# {} triangles; {} built in {:.1} ms{}; prepared in {:.1} ms",
+        prepared.scene().triangles.len(),
+        stats.accelerator,
+        stats.build.as_secs_f64() * 1e3,
+        stats.compile.map_or(String::new(), |c| format!(", kernel compiled in {:.1} ms", c.as_secs_f64() * 1e3)),
+        stats.total.as_secs_f64() * 1e3
+    );
+    if let Some(frames) = args.frames {
+        return bench_frames(Arc::from(prepared), &all, args.spp, frames);
+    }
     println!("{:<8} {:>12} {:>12} {:>10} {:>10}", "mode", "Msamples/s", "Mrays/s", "wall_s", "nan");
     for settings in &all {
         let mut runs = Vec::new();
@@ -662,6 +683,51 @@ fn run_bench(args: BenchArgs) -> Result<()> {
             m.rays as f64 / secs / 1e6,
             secs,
             m.non_finite
+        );
+    }
+    Ok(())
+}
+
+/// `spt bench --frames`: viewer frames through [`tracer::Accumulation`], timed one by
+/// one after an untimed first frame.
+fn bench_frames(prepared: Arc<dyn PreparedScene>, all: &[RenderSettings], spp: u32, frames: u32) -> Result<()> {
+    if frames == 0 {
+        bail!("--frames must be at least 1");
+    }
+    let budget = spp.checked_mul(frames + 1).filter(|&n| n <= tracer::film::MAX_PIXEL_SAMPLES).with_context(|| {
+        format!("--frames {frames} × --spp {spp} is beyond {} samples per pixel", tracer::film::MAX_PIXEL_SAMPLES)
+    })?;
+    println!(
+        "{:<8} {:>10} {:>10} {:>12} {:>12} {:>8}",
+        "mode", "frames/s", "median_ms", "Msamples/s", "Mrays/s", "frames"
+    );
+    for settings in all {
+        let settings = RenderSettings { spp: budget, ..settings.clone() };
+        let mut acc = Arc::clone(&prepared).accumulate(&settings)?;
+        let mut out = vec![0u32; settings.width as usize * settings.height as usize];
+        acc.add(spp)?;
+        acc.display(&mut out)?;
+        acc.restart(&settings)?;
+        let mut times = Vec::with_capacity(frames as usize);
+        let start = Instant::now();
+        for _ in 0..frames {
+            let t = Instant::now();
+            acc.add(spp)?;
+            acc.display(&mut out)?;
+            times.push(t.elapsed());
+        }
+        let wall = start.elapsed().as_secs_f64();
+        let counters = acc.counters()?;
+        times.sort();
+        let samples = settings.width as f64 * settings.height as f64 * (spp as f64 * frames as f64);
+        println!(
+            "{:<8} {:>10.2} {:>10.2} {:>12.3} {:>12.3} {:>8}",
+            settings.mode.name(),
+            frames as f64 / wall,
+            times[times.len() / 2].as_secs_f64() * 1e3,
+            samples / wall / 1e6,
+            counters.rays as f64 / wall / 1e6,
+            frames
         );
     }
     Ok(())

@@ -180,6 +180,11 @@ fn trace(args: TraceArgs) -> Result<()> {
         .map(|t| [Vec3::new(t[0], t[1], t[2]), Vec3::new(t[3], t[4], t[5]), Vec3::new(t[6], t[7], t[8])])
         .collect();
     ensure!(!triangles.is_empty(), "{}: no triangles", args.dir.join("triangles.f32").display());
+    ensure!(
+        BvhWidth::CPU.contains(&args.bvh_width),
+        "--bvh-width {}: the CPU traces 4- or 8-wide trees (auto, 4 or 8)",
+        args.bvh_width.name()
+    );
     let pool = rayon::ThreadPoolBuilder::new().num_threads(args.threads as usize).build()?;
     let start = Instant::now();
     let mut config = tracer::geometry::Geometry::triangle_build_config();

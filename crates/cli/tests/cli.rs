@@ -291,6 +291,10 @@ fn bvh_width_is_chosen_or_refused_with_the_way_out() {
     assert!(images[0] == images[1] && images[1] == images[2], "the width changes speed, not the image");
     let o = spt(&["render", scene.to_str().unwrap(), "--bvh-width", "16"]);
     assert!(!o.status.success() && stderr(&o).contains("unknown BVH width '16'"), "{}", stderr(&o));
+    // The binary tree is the GPU's: the CPU refuses it and names the ways out.
+    let o = render_small(&scene, (16, 12, 4), &dir.join("w2.exr"), &["--bvh-width", "2"]);
+    let err = stderr(&o);
+    assert!(!o.status.success() && err.contains("2-wide") && err.contains("--backend gpu"), "{err}");
 }
 
 /// Mean of each channel of a linear EXR.
@@ -420,4 +424,44 @@ fn compare_charts_error_against_time() {
     assert!(!o.status.success() && stderr(&o).contains("the reference is 8×8"), "{}", stderr(&o));
     let o = spt(&[&args[..], &["--configs", "colours", "-o", out.to_str().unwrap()]].concat());
     assert!(!o.status.success() && stderr(&o).contains("neither a preset"), "{}", stderr(&o));
+}
+
+/// `spt view --backend gpu` keeps its statistics on the device and reads back only display
+/// pixels; what it saves after 3 frames of 2 samples is, byte for byte, what
+/// `spt render --spp 6` writes with the same settings (its exact film is assembled from
+/// the device's accumulators on saving).
+#[test]
+fn the_gpu_viewer_saves_the_image_a_render_of_its_samples_gives() {
+    let scene =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/scenes/cornell-box/CornellBox-Original.obj");
+    if !scene.exists() {
+        eprintln!("skipping: {} not found", scene.display());
+        return;
+    }
+    if gpu::require_gpu().is_none() {
+        return;
+    }
+    if std::process::Command::new("xvfb-run").arg("--help").output().is_err() {
+        assert!(std::env::var_os("SPT_REQUIRE_DISPLAY").is_none(), "SPT_REQUIRE_DISPLAY is set but xvfb-run is absent");
+        eprintln!("skipping: xvfb-run is not on PATH");
+        return;
+    }
+    let dir = temp_dir("gpu-view");
+    let (viewed, rendered) = (dir.join("viewed.exr"), dir.join("rendered.exr"));
+    let common = ["--backend", "gpu", "--width", "24", "--height", "16", "--seed", "5"];
+    let o = std::process::Command::new("xvfb-run")
+        .args(["-a", "-s", "-screen 0 640x480x24", env!("CARGO_BIN_EXE_spt"), "view", scene.to_str().unwrap()])
+        .args(common)
+        .args(["--spp-per-frame", "2", "--frames", "3", "--save", viewed.to_str().unwrap()])
+        .env_remove("WAYLAND_DISPLAY")
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stderr(&o).contains("3 frames, 6 spp"), "{}", stderr(&o));
+    let o =
+        spt(&[&["render", scene.to_str().unwrap()], &common[..], &["--spp", "6", "-o", rendered.to_str().unwrap()]]
+            .concat());
+    assert!(o.status.success(), "{}", stderr(&o));
+    let (a, b) = (std::fs::read(&viewed).unwrap(), std::fs::read(&rendered).unwrap());
+    assert!(a == b, "the viewer's 6 spp differ from the render's");
 }

@@ -61,16 +61,21 @@
 //!   [`SAMPLES_PER_READBACK`] samples (relative rounding ≲ 1024 · 2⁻²⁴ ≈ 6·10⁻⁵ in the
 //!   worst case), then added to the film's exact sums.
 
+use crate::accumulation::DeviceAccumulation;
 use crate::kernel::{
-    FILM_HEADER_BYTES, HAS_ENVIRONMENT, HAS_NORMALS, HAS_TANGENTS, KernelOptions, LIGHT_FLOATS, Params, PixelAccum,
+    FILM_HEADER_BYTES, HAS_ENVIRONMENT, HAS_NORMALS, HAS_TANGENTS, KernelOptions, LIGHT_FLOATS, NodeLayout, Params,
+    PixelAccum, WideNode,
 };
+use crate::wide::WideBvh;
 use crate::{GpuContext, GpuError};
 use bvh::{Aabb, BuildConfig, Bvh, BvhNode, BvhWidth, SplitMethod, TriangleTest};
+use rayon::prelude::*;
 use spectral::SpectralMode;
 use spectral::tables::{CIE_SAMPLES, CIE_X, CIE_Y, CIE_Z};
 use std::sync::{Arc, Mutex, MutexGuard, PoisonError};
 use std::time::{Duration, Instant};
 use tracer::Scene;
+use tracer::accumulation::{Accumulation, FilmAccumulation};
 use tracer::film::{Film, PixelStats};
 use tracer::integrator::PathCounters;
 use tracer::render::{
@@ -117,8 +122,9 @@ pub fn capabilities() -> Capabilities {
         analytic_shapes: false,
         custom_bsdfs: false,
         triangle_tests: vec![TriangleTest::Watertight, TriangleTest::MollerTrumbore],
-        // The kernel traverses the binary BVH (issue 14: wide nodes on the GPU).
-        bvh_widths: vec![BvhWidth::Auto],
+        // Auto is the binary tree: on an H100 the 4-wide one (`crate::wide`) renders 1.2–1.7×
+        // slower in this megakernel; it stays selectable for comparisons.
+        bvh_widths: vec![BvhWidth::Auto, BvhWidth::Two, BvhWidth::Four],
         integrator: "path",
         max_bounces: Some(MAX_BOUNCES),
         sample_block: SAMPLES_PER_READBACK,
@@ -140,7 +146,10 @@ struct SceneConstants {
 
 /// A scene as the flat arrays the kernel reads, built on the CPU; see the module docs.
 pub struct SceneData {
-    nodes: Vec<BvhNode>,
+    /// The BVH nodes in the layout of `options.nodes`, as bytes.
+    nodes: Vec<u8>,
+    /// Bytes per node.
+    node_bytes: usize,
     tri_verts: Vec<[f32; 4]>,
     tri_vidx: Vec<[u32; 4]>,
     attrs: Vec<[f32; 4]>,
@@ -172,6 +181,19 @@ impl SceneData {
         };
         let bvh = Bvh::build(&scene.triangle_soup(), config)
             .map_err(|e| GpuError::Unsupported(format!("this geometry ({e})")))?;
+        let (nodes, node_bytes, node_count, layout) = match options.nodes {
+            NodeLayout::Binary => {
+                let nodes: &[u8] = bytemuck::cast_slice(bvh.nodes());
+                (nodes.to_vec(), std::mem::size_of::<BvhNode>(), bvh.nodes().len(), NodeLayout::Binary)
+            }
+            NodeLayout::Wide4 { .. } => {
+                let wide = WideBvh::collapse(&bvh);
+                let layout = NodeLayout::Wide4 { stack: wide.stack_bound };
+                let bytes: &[u8] = bytemuck::cast_slice(&wide.nodes);
+                (bytes.to_vec(), std::mem::size_of::<WideNode>(), wide.nodes.len(), layout)
+            }
+        };
+        let options = KernelOptions { nodes: layout, ..options };
         let build_time = start.elapsed();
         let lights = tracer::lights::Lights::new(scene);
         let pmfs = lights.prim_pmfs();
@@ -229,7 +251,7 @@ impl SceneData {
         }
 
         let constants = SceneConstants {
-            node_count: bvh.nodes().len() as u32,
+            node_count: node_count as u32,
             light_count: lights.prims().len() as u32,
             lights_offset,
             env_offset,
@@ -239,7 +261,8 @@ impl SceneData {
         };
         Ok(Self {
             constants,
-            nodes: bvh.nodes().to_vec(),
+            nodes,
+            node_bytes,
             tri_verts,
             tri_vidx,
             attrs,
@@ -258,7 +281,7 @@ impl SceneData {
     pub fn buffer_sizes(&self) -> [(&'static str, u64); 7] {
         let bytes = |n: usize, each: usize| (n * each) as u64;
         [
-            ("BVH nodes", bytes(self.nodes.len(), 32)),
+            ("BVH nodes", self.nodes.len() as u64),
             ("triangle vertices", bytes(self.tri_verts.len(), 16)),
             ("triangle vertex indices", bytes(self.tri_vidx.len(), 16)),
             ("vertex normals and tangents", bytes(self.attrs.len(), 16)),
@@ -373,8 +396,14 @@ impl GpuBackend {
 
     fn upload(&self, scene: Scene, options: &SceneOptions) -> Result<GpuScene, GpuError> {
         let start = Instant::now();
-        let data =
-            SceneData::new(&scene, KernelOptions { triangle_test: options.triangle_test, max_bounces: MAX_BOUNCES })?;
+        let nodes = match options.bvh_width {
+            BvhWidth::Four => NodeLayout::Wide4 { stack: 0 },
+            _ => NodeLayout::Binary,
+        };
+        let data = SceneData::new(
+            &scene,
+            KernelOptions { triangle_test: options.triangle_test, max_bounces: MAX_BOUNCES, nodes },
+        )?;
         data.check_limits(&self.ctx.limits)?;
         let device = &self.ctx.device;
         let validation = device.push_error_scope(wgpu::ErrorFilter::Validation);
@@ -394,7 +423,7 @@ impl GpuBackend {
             })
         };
         let buffers = vec![
-            storage("bvh nodes", bytemuck::cast_slice(&data.nodes), 32),
+            storage("bvh nodes", &data.nodes, data.node_bytes),
             storage("triangle vertices", bytemuck::cast_slice(&data.tri_verts), 48),
             storage("triangle vertex indices", bytemuck::cast_slice(&data.tri_vidx), 16),
             storage("vertex attributes", bytemuck::cast_slice(&data.attrs), 32),
@@ -458,7 +487,10 @@ impl GpuBackend {
             compile: Some(compile_time),
             total: start.elapsed(),
             emitters: data.constants.emitters,
-            accelerator: "binary BVH",
+            accelerator: match data.options.nodes {
+                NodeLayout::Binary => "binary BVH",
+                NodeLayout::Wide4 { .. } => "4-wide BVH",
+            },
         };
         Ok(GpuScene {
             ctx: Arc::clone(&self.ctx),
@@ -476,6 +508,11 @@ impl GpuBackend {
 }
 
 impl GpuScene {
+    /// The device the scene lives on.
+    pub fn context(&self) -> &GpuContext {
+        &self.ctx
+    }
+
     /// Time spent compiling the shader and creating the pipeline.
     pub fn compile_time(&self) -> Duration {
         self.stats.compile.unwrap_or_default()
@@ -485,6 +522,36 @@ impl GpuScene {
     /// generation), upload and compilation.
     pub fn prepare_time(&self) -> Duration {
         self.stats.total
+    }
+
+    /// The kernel's uniforms for `settings` (the band and the samples are the caller's).
+    pub(crate) fn kernel_params(&self, settings: &RenderSettings) -> Params {
+        let (width, height) = (settings.width, settings.height);
+        let (eye, forward, right, up) = PreparedScene::camera(self, settings).rays(width, height).basis();
+        let v4 = |v: glam::Vec3| [v.x, v.y, v.z, 0.0];
+        let shading = settings.path.shading_normals.code();
+        Params {
+            width,
+            height,
+            seed_lo: settings.seed as u32,
+            seed_hi: (settings.seed >> 32) as u32,
+            max_depth: settings.path.max_depth,
+            rr_depth: settings.path.rr_depth,
+            specular_extension: settings.path.specular_extension,
+            shading,
+            scene_flags: self.constants.scene_flags,
+            node_count: self.constants.node_count,
+            light_count: self.constants.light_count,
+            env_pmf: self.constants.env_pmf,
+            eye: v4(eye),
+            forward: v4(forward),
+            right: v4(right),
+            up: v4(up),
+            inv_size: [1.0 / width as f32, 1.0 / height as f32],
+            lights_offset: self.constants.lights_offset,
+            env_offset: self.constants.env_offset,
+            ..Params::default()
+        }
     }
 
     /// Adds samples `first_sample .. first_sample + spp` of every pixel to `film`, as
@@ -518,31 +585,7 @@ impl GpuScene {
         }
         let fb = film_slot.as_ref().expect("just made");
 
-        let (eye, forward, right, up) = PreparedScene::camera(self, settings).rays(width, height).basis();
-        let v4 = |v: glam::Vec3| [v.x, v.y, v.z, 0.0];
-        let shading = settings.path.shading_normals.code();
-        let mut params = Params {
-            width,
-            height,
-            seed_lo: settings.seed as u32,
-            seed_hi: (settings.seed >> 32) as u32,
-            max_depth: settings.path.max_depth,
-            rr_depth: settings.path.rr_depth,
-            specular_extension: settings.path.specular_extension,
-            shading,
-            scene_flags: self.constants.scene_flags,
-            node_count: self.constants.node_count,
-            light_count: self.constants.light_count,
-            env_pmf: self.constants.env_pmf,
-            eye: v4(eye),
-            forward: v4(forward),
-            right: v4(right),
-            up: v4(up),
-            inv_size: [1.0 / width as f32, 1.0 / height as f32],
-            lights_offset: self.constants.lights_offset,
-            env_offset: self.constants.env_offset,
-            ..Params::default()
-        };
+        let mut params = self.kernel_params(settings);
 
         // A crop window renders its rows whole; only its columns reach the film.
         let region = settings.region();
@@ -571,15 +614,7 @@ impl GpuScene {
                 if done == 0 || absolute(done) == 0 {
                     encoder.clear_buffer(&fb.accum, 0, Some(band_bytes));
                 }
-                {
-                    let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                        label: Some("spt"),
-                        timestamp_writes: None,
-                    });
-                    pass.set_pipeline(&self.pipeline);
-                    pass.set_bind_group(0, &fb.bind_group, &[]);
-                    pass.dispatch_workgroups(width.div_ceil(WORKGROUP), rows.div_ceil(WORKGROUP), 1);
-                }
+                self.encode_dispatch(&mut encoder, &fb.bind_group, width, rows);
                 let index = queue.submit([encoder.finish()]);
                 device
                     .poll(wgpu::PollType::Wait { submission_index: Some(index), timeout: None })
@@ -587,13 +622,39 @@ impl GpuScene {
                 progress(rows as u64 * region.width as u64 * n as u64);
                 done += n;
                 if absolute(done) == 0 || done == spp {
-                    counters += self.read_band(fb, band_bytes, film, y0, rows, region)?;
+                    counters += self.read_back(&fb.accum, &fb.readback, band_bytes, film, y0, rows, region)?;
                 }
             }
             y0 += rows;
         }
         pop_scope(scope, "rendering")?;
         Ok(counters)
+    }
+
+    /// The path kernel's bind group: the scene's buffers with `params` and the
+    /// accumulators `accum`.
+    pub(crate) fn bind_group(&self, params: &wgpu::Buffer, accum: &wgpu::Buffer) -> wgpu::BindGroup {
+        let b = &self.buffers;
+        let bindings = [
+            (0, params),
+            (1, &b[0]),
+            (2, &b[1]),
+            (3, &b[2]),
+            (4, &b[3]),
+            (5, &b[4]),
+            (6, accum),
+            (10, &b[5]),
+            (11, &b[6]),
+        ];
+        let entries: Vec<_> = bindings
+            .iter()
+            .map(|&(binding, buffer)| wgpu::BindGroupEntry { binding, resource: buffer.as_entire_binding() })
+            .collect();
+        self.ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("spt"),
+            layout: &self.layout,
+            entries: &entries,
+        })
     }
 
     /// Accumulator and read-back buffers for `pixels` pixels, with their bind group.
@@ -612,35 +673,34 @@ impl GpuScene {
             usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        let b = &self.buffers;
-        let bindings = [
-            (0, &self.params),
-            (1, &b[0]),
-            (2, &b[1]),
-            (3, &b[2]),
-            (4, &b[3]),
-            (5, &b[4]),
-            (6, &accum),
-            (10, &b[5]),
-            (11, &b[6]),
-        ];
-        let entries: Vec<_> = bindings
-            .iter()
-            .map(|&(binding, buffer)| wgpu::BindGroupEntry { binding, resource: buffer.as_entire_binding() })
-            .collect();
-        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("spt"),
-            layout: &self.layout,
-            entries: &entries,
-        });
+        let bind_group = self.bind_group(&self.params, &accum);
         FilmBuffers { pixels, accum, readback, bind_group }
     }
 
-    /// Copies a band's accumulators back, merges those of `region`'s columns into `film`
-    /// (rows `y0 .. y0 + rows`) and returns the band's ray count.
-    fn read_band(
+    /// Records one dispatch of the path kernel over `rows` rows of `width` pixels.
+    pub(crate) fn encode_dispatch(
         &self,
-        fb: &FilmBuffers,
+        encoder: &mut wgpu::CommandEncoder,
+        bind_group: &wgpu::BindGroup,
+        width: u32,
+        rows: u32,
+    ) {
+        let mut pass =
+            encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("spt"), timestamp_writes: None });
+        pass.set_pipeline(&self.pipeline);
+        pass.set_bind_group(0, bind_group, &[]);
+        pass.dispatch_workgroups(width.div_ceil(WORKGROUP), rows.div_ceil(WORKGROUP), 1);
+    }
+
+    /// Copies `bytes` of the accumulators `accum` (a band of `rows` rows from `y0`) back
+    /// through `readback`, merges the pixels of `region`'s columns into `film` (row by
+    /// row in parallel: a 1080p film is 2M pixel merges) and returns the band's
+    /// counters.
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn read_back(
+        &self,
+        accum: &wgpu::Buffer,
+        readback: &wgpu::Buffer,
         bytes: u64,
         film: &mut Film,
         y0: u32,
@@ -649,44 +709,57 @@ impl GpuScene {
     ) -> Result<PathCounters, GpuError> {
         let device = &self.ctx.device;
         let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
-        encoder.copy_buffer_to_buffer(&fb.accum, 0, &fb.readback, 0, Some(bytes));
+        encoder.copy_buffer_to_buffer(accum, 0, readback, 0, Some(bytes));
         self.ctx.queue.submit([encoder.finish()]);
-        let (tx, rx) = std::sync::mpsc::channel();
-        fb.readback.map_async(wgpu::MapMode::Read, 0..bytes, move |r| {
-            let _ = tx.send(r);
-        });
-        device
-            .poll(wgpu::PollType::wait_indefinitely())
-            .map_err(|e| GpuError::Shader(format!("waiting for the GPU: {e}")))?;
-        rx.recv()
-            .map_err(|e| GpuError::Shader(format!("reading the accumulators back: {e}")))?
-            .map_err(|e| GpuError::Shader(format!("reading the accumulators back: {e}")))?;
         let counters;
         {
-            let view = fb
-                .readback
-                .get_mapped_range(0..bytes)
-                .map_err(|e| GpuError::Shader(format!("reading the accumulators back: {e}")))?;
+            let view = map_read(&self.ctx, readback, bytes, "reading the accumulators back")?;
             let (header, pixels) = view.split_at(FILM_HEADER_BYTES as usize);
             let words: &[u32] = bytemuck::cast_slice(header);
             counters = PathCounters { rays: words[0] as u64 | (words[1] as u64) << 32, truncated: words[2] as u64 };
             let pixels: &[PixelAccum] = bytemuck::cast_slice(pixels);
             let width = film.width() as usize;
             let first = y0 as usize * width;
-            let mut non_finite = 0u64;
-            for (i, px) in pixels.iter().take(rows as usize * width).enumerate() {
-                if !region.contains((i % width) as u32, y0 + (i / width) as u32) {
-                    continue;
-                }
-                let pass = PixelStats::from_moments(px.count, px.mean.map(f64::from), px.m2.map(f64::from));
-                film.pixels_mut()[first + i].merge(&pass);
-                non_finite += px.non_finite as u64;
-            }
+            let (x0, x1) = (region.x as usize, (region.x + region.width) as usize);
+            let band = &mut film.pixels_mut()[first..first + rows as usize * width];
+            let non_finite: u64 = band
+                .par_chunks_mut(width)
+                .zip(pixels.par_chunks(width))
+                .map(|(film_row, device_row)| {
+                    let mut dropped = 0u64;
+                    for (f, px) in film_row[x0..x1].iter_mut().zip(&device_row[x0..x1]) {
+                        f.merge(&PixelStats::from_moments(px.count, px.mean.map(f64::from), px.m2.map(f64::from)));
+                        dropped += px.non_finite as u64;
+                    }
+                    dropped
+                })
+                .sum();
             film.non_finite += non_finite;
         }
-        fb.readback.unmap();
+        readback.unmap();
         Ok(counters)
     }
+}
+
+/// Maps the first `bytes` of `buffer` (MAP_READ, its copy already submitted) and waits
+/// for it; the caller unmaps after dropping the view.
+pub(crate) fn map_read(
+    ctx: &GpuContext,
+    buffer: &wgpu::Buffer,
+    bytes: u64,
+    what: &str,
+) -> Result<wgpu::BufferView, GpuError> {
+    let (tx, rx) = std::sync::mpsc::channel();
+    buffer.map_async(wgpu::MapMode::Read, 0..bytes, move |r| {
+        let _ = tx.send(r);
+    });
+    ctx.device
+        .poll(wgpu::PollType::wait_indefinitely())
+        .map_err(|e| GpuError::Shader(format!("waiting for the GPU: {e}")))?;
+    rx.recv()
+        .map_err(|e| GpuError::Shader(format!("{what}: {e}")))?
+        .map_err(|e| GpuError::Shader(format!("{what}: {e}")))?;
+    buffer.get_mapped_range(0..bytes).map_err(|e| GpuError::Shader(format!("{what}: {e}")))
 }
 
 impl From<GpuError> for tracer::Error {
@@ -732,5 +805,15 @@ impl PreparedScene for GpuScene {
     ) -> tracer::Result<PathCounters> {
         check_pass(self, settings, film)?;
         Ok(self.render_gpu(settings, film, first_sample, spp, progress)?)
+    }
+
+    /// Statistics on the device ([`DeviceAccumulation`]) where the whole image's
+    /// accumulators fit one buffer, else passes into a film on the CPU.
+    fn accumulate(self: Arc<Self>, settings: &RenderSettings) -> tracer::Result<Box<dyn Accumulation>> {
+        if DeviceAccumulation::fits(&self.ctx.limits, settings.width, settings.height) {
+            Ok(Box::new(DeviceAccumulation::new(self, settings)?))
+        } else {
+            Ok(Box::new(FilmAccumulation::new(self, settings)?))
+        }
     }
 }

@@ -8,14 +8,18 @@
 //! * [`kernel`]: the path-tracing kernel's WGSL — structs and constants generated from
 //!   the Rust definitions, the rest one hand-written file per Rust file it mirrors;
 //! * [`backend`]: [`GpuBackend`], the tracer's [`tracer::Backend`] on the GPU, and
-//!   [`GpuScene`], a scene prepared on the device.
+//!   [`GpuScene`], a scene prepared on the device;
+//! * [`accumulation`]: a viewer's frame-by-frame refinement with the statistics kept on
+//!   the device and only display pixels read back.
 //!
 //! Citations: "the thesis", "the lecture" and the papers named in comments are listed in `docs/references.md`.
 
+pub mod accumulation;
 pub mod backend;
 pub mod context;
 pub mod kernel;
 pub mod materials;
+pub mod wide;
 
 pub use backend::{GpuBackend, GpuScene};
 pub use context::{GpuContext, require_gpu};

@@ -9,7 +9,11 @@ use spectral::spectrum::Colour;
 use tracer::material::Material;
 
 fn options(triangle_test: bvh::TriangleTest) -> KernelOptions {
-    KernelOptions { triangle_test, max_bounces: gpu::backend::MAX_BOUNCES }
+    KernelOptions {
+        triangle_test,
+        max_bounces: gpu::backend::MAX_BOUNCES,
+        nodes: gpu::kernel::NodeLayout::Wide4 { stack: 24 },
+    }
 }
 
 /// The whole kernel for a one-material scene, parsed and validated by naga.
@@ -53,8 +57,11 @@ fn mismatches<T: WgslStruct>(module: &naga::Module) -> Vec<String> {
 fn generated_structs_have_the_host_layout() {
     let (_, module) = kernel_module(&options(bvh::TriangleTest::Watertight));
     let mut problems = mismatches::<Params>(&module);
-    problems.extend(mismatches::<bvh::BvhNode>(&module));
+    problems.extend(mismatches::<gpu::kernel::WideNode>(&module));
     problems.extend(mismatches::<PixelAccum>(&module));
+    let binary = KernelOptions { nodes: gpu::kernel::NodeLayout::Binary, ..options(bvh::TriangleTest::Watertight) };
+    let (_, binary_module) = kernel_module(&binary);
+    problems.extend(mismatches::<bvh::BvhNode>(&binary_module));
     assert!(problems.is_empty(), "{problems:#?}");
     // The film: header words, then the accumulators at the stride the host reads.
     let (members, _) = wgsl_layout(&module, "PtFilm");

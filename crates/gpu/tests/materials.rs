@@ -702,6 +702,9 @@ struct ModelReport {
     sample_pdf: Quantity,
     /// Sample f against the CPU sample's own f (direction differences included).
     sample_f_direct: Worst,
+    /// Samples whose lobe choice sat on a threshold (the CPU picks the GPU's lobe with uc
+    /// moved by 4 ulp).
+    lobe_ties: usize,
     cases: usize,
     samples: usize,
 }
@@ -804,7 +807,29 @@ fn every_model_matches_the_cpu_on_the_gpu() {
         // sample: existence, flags, direction, then f and pdf.
         let gs_pdf = g[12];
         let gs_flags = g[13].to_bits();
-        match bsdf.sample(c.wo, c.uc, c.u) {
+        let gwi = Vec3::new(g[5], g[6], g[7]);
+        let agrees = |t: &Option<brdf::BsdfSample<4>>| match t {
+            None => gs_pdf == 0.0,
+            Some(t) => {
+                gs_pdf != 0.0 && t.flags.bits() as u32 == gs_flags && ((gwi - t.wi).length() as f64) <= TOLERANCE
+            }
+        };
+        let mut cpu_sample = bsdf.sample(c.wo, c.uc, c.u);
+        if !agrees(&cpu_sample) {
+            // The lobe is chosen by comparing uc with sums of quotients of the lobe
+            // weights, which a GPU's division (in Vulkan not correctly rounded: 2.5 ulp)
+            // may round to the other side of uc; the chosen lobe may then fail to sample
+            // where the other succeeds. Where moving uc by 4 ulp makes the CPU do what the
+            // GPU did, the two agree up to that rounding.
+            let eps = 4.0 * f32::EPSILON;
+            if let Some(t) =
+                [1.0 - eps, 1.0 + eps].into_iter().map(|k| bsdf.sample(c.wo, c.uc * k, c.u)).find(|t| agrees(t))
+            {
+                r.lobe_ties += 1;
+                cpu_sample = t;
+            }
+        }
+        match cpu_sample {
             None if gs_pdf == 0.0 => {}
             None => failures.push(format!("sample: the GPU sampled (pdf {gs_pdf}) where the CPU did not, at {}", at())),
             Some(s) if gs_pdf == 0.0 => {
@@ -812,7 +837,6 @@ fn every_model_matches_the_cpu_on_the_gpu() {
             }
             Some(s) => {
                 r.samples += 1;
-                let gwi = Vec3::new(g[5], g[6], g[7]);
                 if s.flags.bits() as u32 != gs_flags {
                     failures.push(format!("sample flags: gpu {gs_flags} cpu {} at {}", s.flags.bits(), at()));
                 }
@@ -910,6 +934,9 @@ fn every_model_matches_the_cpu_on_the_gpu() {
         if !places.is_empty() {
             println!("  {name}: ill-conditioned (accepted as f32 noise) at {places:?}");
         }
+        if r.lobe_ties > 0 {
+            println!("  {name}: {} samples chose their lobe on a threshold (uc ± 4 ulp)", r.lobe_ties);
+        }
     }
     println!("emission/absorption: max error {:.2e}", accessor_worst.err);
     assert_eq!(reports.len(), ModelId::ALL.len());
@@ -943,23 +970,49 @@ fn fresnel_routines_match_the_cpu_on_the_gpu() {
     let n = input.len() / 4;
     let (out, _) = h.run(&pipeline, &kernel, &input, n as u32, n * 4);
     let mut worst = [Worst::default(), Worst::default(), Worst::default()];
-    for i in 0..n {
-        let (c, eta, k) = (input[4 * i], input[4 * i + 1], input[4 * i + 2]);
-        let cpu = [
+    let mut ill = [0usize; 3];
+    let mut failures = Vec::new();
+    let fresnel = |c: f32, eta: f32, k: f32| {
+        [
             brdf::fresnel::fresnel_dielectric(c, eta),
             brdf::fresnel::fresnel_schlick(c, eta),
             brdf::models::fresnel_conductor(c, eta, k),
-        ];
+        ]
+    };
+    for i in 0..n {
+        let (c, eta, k) = (input[4 * i], input[4 * i + 1], input[4 * i + 2]);
+        let cpu = fresnel(c, eta, k);
+        // The CPU's own spread when cos θ and η move by 4 ulp: near η = 1 the reflectance
+        // is a difference of nearly equal terms, which no f32 evaluation pins down better
+        // (the GPU's sqrt and division are not correctly rounded).
+        let eps = 4.0 * f32::EPSILON;
+        let mut noise = [0.0f64; 3];
+        for (dc, de) in [(1.0 + eps, 1.0), (1.0 - eps, 1.0), (1.0, 1.0 + eps), (1.0, 1.0 - eps)] {
+            let moved = fresnel(c * dc, eta * de, k);
+            for j in 0..3 {
+                noise[j] = noise[j].max(rel_floor(moved[j], cpu[j], FRESNEL_FLOOR));
+            }
+        }
         for j in 0..3 {
-            worst[j].add(rel_floor(out[4 * i + j], cpu[j], FRESNEL_FLOOR), || {
-                format!("cos={c} η={eta} κ={k}: gpu {} cpu {}", out[4 * i + j], cpu[j])
-            });
+            let e = rel_floor(out[4 * i + j], cpu[j], FRESNEL_FLOOR);
+            let at =
+                || format!("cos={c} η={eta} κ={k}: gpu {} cpu {} (f32 noise {:.1e})", out[4 * i + j], cpu[j], noise[j]);
+            worst[j].add(e, at);
+            if e > TOLERANCE && e <= 4.0 * noise[j] {
+                ill[j] += 1;
+            } else if e > TOLERANCE {
+                failures.push(at());
+            }
         }
     }
-    for (name, w) in ["dielectric", "schlick", "conductor"].iter().zip(&worst) {
-        println!("Fresnel {name}: max relative error {:.2e} ({n} inputs; worst {})", w.err, w.at);
-        assert!(w.err <= TOLERANCE, "Fresnel {name}: {:.2e} at {}", w.err, w.at);
+    for ((name, w), ill) in ["dielectric", "schlick", "conductor"].iter().zip(&worst).zip(ill) {
+        println!(
+            "Fresnel {name}: max relative error {:.2e} ({n} inputs, {ill} beyond {TOLERANCE:e} within 4× the CPU's f32 \
+             noise; worst {})",
+            w.err, w.at
+        );
     }
+    assert!(failures.is_empty(), "Fresnel beyond the tolerance and the f32 noise: {failures:#?}");
 }
 
 #[test]

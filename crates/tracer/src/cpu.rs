@@ -90,7 +90,7 @@ fn cpu_capabilities(integrator: &'static str) -> Capabilities {
         analytic_shapes: true,
         custom_bsdfs: true,
         triangle_tests: vec![TriangleTest::Watertight, TriangleTest::MollerTrumbore],
-        bvh_widths: BvhWidth::ALL.to_vec(),
+        bvh_widths: BvhWidth::CPU.to_vec(),
         integrator,
         max_bounces: None,
         sample_block: 1,

@@ -185,6 +185,28 @@ impl Film {
         &self.pixels[(y * self.width + x) as usize]
     }
 
+    /// Forgets every sample (keeps the allocation: a viewer restarts its film at every
+    /// camera move).
+    pub fn clear(&mut self) {
+        self.pixels.fill(PixelStats::default());
+        self.non_finite = 0;
+    }
+
+    /// The mean image packed for display: one 0x00RRGGBB word per pixel, each channel
+    /// sRGB-encoded and clamped ([`spectral::srgb_to_u8`]), row-major; `out` has one
+    /// element per pixel.
+    pub fn display_pixels(&self, out: &mut [u32]) {
+        use rayon::prelude::*;
+        // Rows in parallel: a 1080p film is 2M divisions of 128-bit sums.
+        let row = self.width.max(1) as usize;
+        out.par_chunks_mut(row).zip(self.pixels.par_chunks(row)).for_each(|(out, pixels)| {
+            for (o, p) in out.iter_mut().zip(pixels) {
+                let [r, g, b] = p.mean().map(|v| spectral::srgb_to_u8(v as f32) as u32);
+                *o = (r << 16) | (g << 8) | b;
+            }
+        });
+    }
+
     /// The mean image as linear-sRGB floats, row-major RGB.
     pub fn mean_rgb(&self) -> Vec<f32> {
         self.pixels.iter().flat_map(|p| p.mean().map(|v| v as f32)).collect()
@@ -216,6 +238,21 @@ impl Film {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn display_pixels_are_srgb_encoded_0rgb() {
+        let mut film = Film::new(3, 1);
+        let px = film.pixels_mut();
+        assert!(px[0].add([1.0, 0.0, 0.5]));
+        assert!(px[1].add([7.0, -1.0, 0.0]));
+        let mut out = vec![0xdead_beef; 3];
+        film.display_pixels(&mut out);
+        let half = spectral::srgb_to_u8(0.5) as u32;
+        assert_eq!(half, 188);
+        assert_eq!(out, [0xff_00_00 | half, 0xff_00_00, 0]);
+        film.clear();
+        assert_eq!(film, Film::new(3, 1));
+    }
 
     #[test]
     fn sums_match_the_two_pass_formulas() {

@@ -10,6 +10,7 @@
 //!
 //! Citations: "the thesis", "the lecture" and the papers named in comments are listed in `docs/references.md`.
 
+pub mod accumulation;
 pub mod camera;
 pub mod cpu;
 pub mod film;
@@ -27,6 +28,7 @@ pub mod scene;
 pub mod scenes;
 pub mod shading;
 
+pub use accumulation::{Accumulation, FilmAccumulation};
 pub use camera::Camera;
 pub use cpu::{CpuBackend, CpuScene};
 pub use film::Film;

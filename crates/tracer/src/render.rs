@@ -4,6 +4,7 @@
 //! samples into a [`Film`]. Each backend declares its [`Capabilities`]; a request outside
 //! them fails before any work, naming the feature and the way out.
 
+use crate::accumulation::{Accumulation, FilmAccumulation};
 use crate::camera::Camera;
 use crate::film::{Film, MAX_PIXEL_SAMPLES};
 use crate::integrator::{PathCounters, PathSettings};
@@ -12,6 +13,7 @@ use crate::scene::Scene;
 use crate::{Error, Result};
 use bvh::{Aabb, BvhWidth, TriangleTest};
 use spectral::SpectralMode;
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 /// What to render and how.
@@ -220,7 +222,11 @@ impl Capabilities {
             let known: Vec<&str> = self.bvh_widths.iter().map(|w| w.name()).collect();
             return Err(unsupported(
                 format!("a {}-wide triangle BVH", options.bvh_width.name()),
-                &format!("use --bvh-width {}, or --backend cpu", known.join(" or ")),
+                &if self.backend == "cpu" {
+                    format!("use --bvh-width {}, or --backend gpu", known.join(" or "))
+                } else {
+                    format!("use --bvh-width {}, or --backend cpu", known.join(" or "))
+                },
             ));
         }
         Ok(())
@@ -289,7 +295,7 @@ pub trait Backend: Send + Sync {
 
 /// A scene made ready by a [`Backend`]: it renders passes of samples. Sample `k` of pixel
 /// `p` always uses the same random stream, so passes may split the samples any way.
-pub trait PreparedScene: Send + Sync {
+pub trait PreparedScene: Send + Sync + 'static {
     /// The backend's capabilities (for checking settings before a render) and name.
     fn capabilities(&self) -> Capabilities;
 
@@ -314,6 +320,14 @@ pub trait PreparedScene: Send + Sync {
         spp: u32,
         progress: &(dyn Fn(u64) + Sync),
     ) -> Result<PathCounters>;
+
+    /// An empty [`Accumulation`] of this scene seen with `settings`, for frame-by-frame
+    /// refinement (a viewer). The default renders passes into a film
+    /// ([`FilmAccumulation`]); a backend whose film would have to travel (the GPU's)
+    /// keeps its statistics where it renders.
+    fn accumulate(self: Arc<Self>, settings: &RenderSettings) -> Result<Box<dyn Accumulation>> {
+        Ok(Box::new(FilmAccumulation::new(self, settings)?))
+    }
 
     /// The camera a render uses: the settings', else the scene's, else the default
     /// framing of the scene's bounds.

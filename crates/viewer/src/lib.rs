@@ -40,9 +40,11 @@ use camera_control::CameraControl;
 use std::num::NonZeroU32;
 use std::path::{Path, PathBuf};
 use std::rc::Rc;
+use std::sync::Arc;
 use std::time::{Duration, Instant};
+use tracer::Accumulation;
 use tracer::RenderSettings;
-use tracer::film::{Film, MAX_PIXEL_SAMPLES};
+use tracer::film::MAX_PIXEL_SAMPLES;
 use tracer::render::{MAX_IMAGE_SIDE, PreparedScene};
 use winit::application::ApplicationHandler;
 use winit::dpi::{PhysicalPosition, PhysicalSize};
@@ -150,6 +152,13 @@ pub fn run(
             settings.sampler.name()
         );
     }
+    let scene: Arc<dyn PreparedScene> = Arc::from(scene);
+    let first = RenderSettings {
+        spp: options.max_spp.unwrap_or(options.spp_per_frame),
+        camera: Some(camera),
+        ..settings.clone()
+    };
+    let accumulation = Arc::clone(&scene).accumulate(&first).context("render settings")?;
     let bounds = scene.scene().bounds();
     let scene_size = if bounds.is_empty() { 1.0 } else { bounds.extent().length() };
 
@@ -159,13 +168,12 @@ pub fn run(
     let event_loop = builder.build().map_err(no_window)?;
 
     let mut app = App {
-        film: Film::new(options.width, options.height),
+        accumulation,
         pixels: vec![0; options.width as usize * options.height as usize],
         control: CameraControl::new(camera, scene_size),
         scene,
         settings,
         options,
-        spp: 0,
         dirty: false,
         window: None,
         surface: None,
@@ -182,7 +190,7 @@ pub fn run(
     if let Some(path) = app.options.save_on_exit.clone() {
         app.save(&path)?;
     }
-    Ok(ViewStats { frames: app.stats.frames, spp: app.spp, samples_per_second: app.stats.rate() })
+    Ok(ViewStats { frames: app.stats.frames, spp: app.accumulation.samples(), samples_per_second: app.stats.rate() })
 }
 
 fn no_window(e: impl std::fmt::Display) -> anyhow::Error {
@@ -190,15 +198,6 @@ fn no_window(e: impl std::fmt::Display) -> anyhow::Error {
     let text = e.to_string();
     let message = text.strip_prefix("os error at ").and_then(|r| r.split_once(": ")).map_or(text.as_str(), |(_, m)| m);
     anyhow!("cannot open a window: {message} (set DISPLAY, or run under xvfb-run)")
-}
-
-/// Packs a film's mean (linear sRGB) into softbuffer's 0x00RRGGBB pixels, sRGB-encoded
-/// and clamped.
-fn film_to_pixels(film: &Film, out: &mut [u32]) {
-    for (o, p) in out.iter_mut().zip(film.pixels()) {
-        let [r, g, b] = p.mean().map(|v| spectral::srgb_to_u8(v as f32) as u32);
-        *o = (r << 16) | (g << 8) | b;
-    }
 }
 
 /// Mouse state between events.
@@ -231,14 +230,15 @@ impl Counters {
 const TITLE_INTERVAL: Duration = Duration::from_millis(250);
 
 struct App {
-    scene: Box<dyn PreparedScene>,
+    scene: Arc<dyn PreparedScene>,
     settings: RenderSettings,
     options: ViewerOptions,
     control: CameraControl,
-    film: Film,
-    /// Samples per pixel in `film`.
-    spp: u32,
-    /// The camera or size changed since `film` was started: reset before the next pass.
+    /// The running render (on the device for the GPU backend: a frame reads back only
+    /// the display pixels).
+    accumulation: Box<dyn Accumulation>,
+    /// The camera or size changed since `accumulation` was started: restart it before
+    /// the next pass.
     dirty: bool,
     /// The image on screen, 0RGB.
     pixels: Vec<u32>,
@@ -253,7 +253,7 @@ struct App {
 
 impl App {
     fn refining(&self) -> bool {
-        self.dirty || self.spp < self.max_spp()
+        self.dirty || self.accumulation.samples() < self.max_spp()
     }
 
     /// Where refining stops.
@@ -284,15 +284,13 @@ impl App {
     /// Renders at a new image size (from the next frame on).
     fn resize(&mut self, width: u32, height: u32) {
         let (width, height) = (width.min(MAX_IMAGE_SIDE), height.min(MAX_IMAGE_SIDE));
-        if width == 0 || height == 0 || (width, height) == (self.film.width(), self.film.height()) {
+        if width == 0 || height == 0 || (width, height) == (self.settings.width, self.settings.height) {
             return;
         }
         self.settings.width = width;
         self.settings.height = height;
-        self.film = Film::new(width, height);
         self.pixels = vec![0; width as usize * height as usize];
-        self.spp = 0;
-        self.dirty = false;
+        self.dirty = true;
     }
 
     /// Marks the accumulation stale after a camera move and asks for a frame.
@@ -303,34 +301,31 @@ impl App {
         }
     }
 
-    /// Adds one frame's samples to the film and refreshes the displayed image.
+    /// Adds one frame's samples and refreshes the displayed image.
     fn render_pass(&mut self) -> anyhow::Result<()> {
+        let backend = self.scene.capabilities().backend;
         if self.dirty {
-            self.film = Film::new(self.settings.width, self.settings.height);
-            self.spp = 0;
+            // The render's whole sample budget (for samplers that lay samples out for
+            // it); each frame adds `spp_per_frame` of them.
+            let budget = self.options.max_spp.unwrap_or(self.options.spp_per_frame);
+            let settings = RenderSettings { spp: budget, camera: Some(self.control.camera()), ..self.settings.clone() };
+            self.accumulation.restart(&settings).with_context(|| format!("{backend} backend"))?;
             self.dirty = false;
         }
-        let spp = self.options.spp_per_frame.min(self.max_spp() - self.spp);
+        let spp = self.options.spp_per_frame.min(self.max_spp() - self.accumulation.samples());
         if spp == 0 {
             return Ok(());
         }
-        // The render's whole sample budget (for samplers that lay samples out for it); the
-        // pass adds `spp` of them.
-        let budget = self.options.max_spp.unwrap_or(spp);
-        let settings = RenderSettings { spp: budget, camera: Some(self.control.camera()), ..self.settings.clone() };
         let start = Instant::now();
-        self.scene
-            .render_pass(&settings, &mut self.film, self.spp, spp, &|_| {})
-            .with_context(|| format!("{} backend", self.scene.capabilities().backend))?;
+        self.accumulation.add(spp).with_context(|| format!("{backend} backend"))?;
+        self.accumulation.display(&mut self.pixels).with_context(|| format!("{backend} backend"))?;
         let elapsed = start.elapsed();
-        let samples = settings.width as u64 * settings.height as u64 * spp as u64;
-        self.spp += spp;
+        let samples = self.settings.width as u64 * self.settings.height as u64 * spp as u64;
         self.stats.frames += 1;
         self.stats.samples += samples;
         self.stats.time += elapsed;
         self.stats.recent_samples += samples;
         self.stats.recent_time += elapsed;
-        film_to_pixels(&self.film, &mut self.pixels);
         Ok(())
     }
 
@@ -349,7 +344,7 @@ impl App {
         let title = format!(
             "spt — {} — {} spp, {:.2} M samples/s ({}){done}",
             self.options.title,
-            self.spp,
+            self.accumulation.samples(),
             self.title_rate / 1e6,
             self.scene.capabilities().backend
         );
@@ -360,7 +355,7 @@ impl App {
 
     fn present(&mut self) -> anyhow::Result<()> {
         let Some(surface) = self.surface.as_mut() else { return Ok(()) };
-        let (w, h) = (self.film.width(), self.film.height());
+        let (w, h) = (self.settings.width, self.settings.height);
         let (Some(nw), Some(nh)) = (NonZeroU32::new(w), NonZeroU32::new(h)) else { return Ok(()) };
         surface.resize(nw, nh).map_err(|e| anyhow!("cannot resize the window's buffer: {e}"))?;
         let mut buffer = surface.buffer_mut().map_err(|e| anyhow!("cannot draw in the window: {e}"))?;
@@ -394,9 +389,10 @@ impl App {
     }
 
     /// Writes the current mean image, PNG or EXR by extension.
-    fn save(&self, path: &Path) -> anyhow::Result<()> {
-        tracer::output::write_image(path, self.film.width(), self.film.height(), &self.film.mean_rgb())?;
-        eprintln!("saved {} ({} spp)", path.display(), self.spp);
+    fn save(&mut self, path: &Path) -> anyhow::Result<()> {
+        let film = self.accumulation.film()?;
+        tracer::output::write_image(path, film.width(), film.height(), &film.mean_rgb())?;
+        eprintln!("saved {} ({} spp)", path.display(), self.accumulation.samples());
         Ok(())
     }
 
@@ -430,7 +426,7 @@ impl App {
                 }
                 "p" | "x" if !event.repeat => {
                     let ext = if s.eq_ignore_ascii_case("p") { "png" } else { "exr" };
-                    let path = PathBuf::from(format!("spt-view-{}spp.{ext}", self.spp));
+                    let path = PathBuf::from(format!("spt-view-{}spp.{ext}", self.accumulation.samples()));
                     if let Err(e) = self.save(&path) {
                         eprintln!("cannot save the image: {e:#}");
                     }
@@ -466,7 +462,7 @@ impl App {
     fn cursor_moved(&mut self, position: PhysicalPosition<f64>) {
         let last = self.input.cursor.replace(position);
         let Some(last) = last else { return };
-        let height = self.film.height().max(1) as f64;
+        let height = self.settings.height.max(1) as f64;
         let (dx, dy) = (((position.x - last.x) / height) as f32, ((position.y - last.y) / height) as f32);
         if dx == 0.0 && dy == 0.0 {
             return;
@@ -532,19 +528,6 @@ impl ApplicationHandler for App {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn pixels_are_srgb_encoded_0rgb() {
-        let mut film = Film::new(3, 1);
-        let px = film.pixels_mut();
-        assert!(px[0].add([1.0, 0.0, 0.5]));
-        assert!(px[1].add([7.0, -1.0, 0.0]));
-        let mut out = vec![0xdead_beef; 3];
-        film_to_pixels(&film, &mut out);
-        let half = spectral::srgb_to_u8(0.5) as u32;
-        assert_eq!(half, 188);
-        assert_eq!(out, [0xff_00_00 | half, 0xff_00_00, 0]);
-    }
 
     #[test]
     fn options_are_checked() {

@@ -11,6 +11,10 @@ pub enum BvhWidth {
     /// 8 where the CPU has AVX2 ([`wide8_accelerated`]), else 4.
     #[default]
     Auto,
+    /// The binary tree ([`crate::Bvh`]) as it is: the GPU backend can traverse it (for
+    /// comparisons with its wide nodes); the CPU backend has no kernel for it and refuses
+    /// it.
+    Two,
     /// [`Bvh4`]: SSE, every x86_64 CPU.
     Four,
     /// [`Bvh8`]: AVX2 (the portable kernel without it).
@@ -19,22 +23,27 @@ pub enum BvhWidth {
 
 impl BvhWidth {
     /// Every choice.
-    pub const ALL: [BvhWidth; 3] = [Self::Auto, Self::Four, Self::Eight];
+    pub const ALL: [BvhWidth; 4] = [Self::Auto, Self::Two, Self::Four, Self::Eight];
+
+    /// The choices the CPU's wide kernels serve.
+    pub const CPU: [BvhWidth; 3] = [Self::Auto, Self::Four, Self::Eight];
 
     /// The name used on the command line.
     pub fn name(self) -> &'static str {
         match self {
             Self::Auto => "auto",
+            Self::Two => "2",
             Self::Four => "4",
             Self::Eight => "8",
         }
     }
 
-    /// The width this choice gives on this CPU: 4 or 8.
+    /// The width of the CPU's wide tree this choice gives on this CPU: 4 or 8 (4 for
+    /// [`BvhWidth::Two`], which the CPU backend refuses before building anything).
     pub fn resolve(self) -> u32 {
         match self {
             Self::Auto if wide8_accelerated() => 8,
-            Self::Auto | Self::Four => 4,
+            Self::Auto | Self::Two | Self::Four => 4,
             Self::Eight => 8,
         }
     }

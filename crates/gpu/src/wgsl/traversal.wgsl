@@ -3,48 +3,6 @@
 // nodes beyond the closest hit culled on the way back. The triangle test
 // (`pt_intersect_triangle`, from triangle_*.wgsl) is chosen when the kernel is generated.
 
-struct PtHit {
-    t: f32,
-    u: f32,
-    v: f32,
-    prim: u32,
-}
-
-struct PtRay {
-    o: vec3f,
-    d: vec3f,
-    inv: vec3f,
-    // Watertight test: permutation (kz = the direction's largest axis) and shear.
-    kx: u32,
-    ky: u32,
-    kz: u32,
-    shear: vec3f,
-    t_min: f32,
-}
-
-fn pt_make_ray(o: vec3f, d: vec3f, t_min: f32) -> PtRay {
-    // Zero direction components get a tiny finite stand-in (WGSL promises no infinities):
-    // the slab test then behaves as the CPU's on-plane rule.
-    let tiny = select(vec3f(1e-30), vec3f(-1e-30), d < vec3f(0.0));
-    let dd = select(d, tiny, abs(d) < vec3f(1e-30));
-    let a = abs(d);
-    var kz = 2u;
-    if a.x >= a.y && a.x >= a.z {
-        kz = 0u;
-    } else if a.y >= a.z {
-        kz = 1u;
-    }
-    var kx = (kz + 1u) % 3u;
-    var ky = (kx + 1u) % 3u;
-    if d[kz] < 0.0 {
-        let t = kx;
-        kx = ky;
-        ky = t;
-    }
-    let shear = vec3f(d[kx] / d[kz], d[ky] / d[kz], 1.0 / d[kz]);
-    return PtRay(o, d, 1.0 / dd, kx, ky, kz, shear, t_min);
-}
-
 // Entry distance into a node's box within (t_min, t_max], or PT_MISS.
 fn pt_slab_enter(node: PtNode, r: PtRay, t_max: f32) -> f32 {
     let t0 = (node.min - r.o) * r.inv;
