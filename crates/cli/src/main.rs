@@ -509,7 +509,13 @@ fn scene_options(args: &SceneArgs) -> SceneOptions {
 fn make_backend(args: &SceneArgs) -> Result<Box<dyn Backend>> {
     let backend: Box<dyn Backend> = match args.backend.as_str() {
         "gpu" => {
-            let gpu = gpu::GpuBackend::new()?;
+            let integrator = match args.integrator.as_str() {
+                "path" => gpu::kernel::GpuIntegrator::Path,
+                "direct" => gpu::kernel::GpuIntegrator::Direct,
+                "ao" => gpu::kernel::GpuIntegrator::AmbientOcclusion { max_distance: args.ao_distance },
+                other => bail!("unknown integrator '{other}' (known: {})", INTEGRATORS.join(", ")),
+            };
+            let gpu = gpu::GpuBackend::new()?.with_integrator(integrator);
             let info = &gpu.context().info;
             eprintln!("GPU: {} ({:?}, driver {})", info.name, info.backend, info.driver);
             Box::new(gpu)

@@ -17,7 +17,7 @@ use std::sync::Arc;
 use tracer::accumulation::{Accumulation, check_accumulation_settings};
 use tracer::film::{Film, MAX_PIXEL_SAMPLES};
 use tracer::integrator::PathCounters;
-use tracer::render::{PixelRect, RenderSettings};
+use tracer::render::{PixelRect, PreparedScene, RenderSettings};
 
 /// The most samples per pixel one dispatch of an accumulation traces.
 const MAX_SAMPLES_PER_DISPATCH: u64 = 64;
@@ -119,7 +119,7 @@ impl DeviceAccumulation {
     /// image's accumulators do not fit one buffer of the device (see
     /// [`DeviceAccumulation::fits`]).
     pub fn new(scene: Arc<GpuScene>, settings: &RenderSettings) -> Result<Self, tracer::Error> {
-        check_accumulation_settings(&crate::backend::capabilities(), settings)?;
+        check_accumulation_settings(&scene.capabilities(), settings)?;
         let ctx = scene.context();
         let display = Display::new(ctx)?;
         let buffers = Self::buffers(&scene, &display, settings.width, settings.height)?;
@@ -320,7 +320,7 @@ impl Accumulation for DeviceAccumulation {
     }
 
     fn restart(&mut self, settings: &RenderSettings) -> tracer::Result<()> {
-        check_accumulation_settings(&crate::backend::capabilities(), settings)?;
+        check_accumulation_settings(&self.scene.capabilities(), settings)?;
         if (settings.width, settings.height) != (self.buffers.width, self.buffers.height) {
             self.buffers = Self::buffers(&self.scene, &self.display, settings.width, settings.height)?;
             self.film = Film::new(settings.width, settings.height);

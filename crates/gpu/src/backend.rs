@@ -27,7 +27,10 @@
 //!
 //! # Differences from the CPU integrator
 //!
-//! The kernel (`wgsl/path.wgsl`) is a line-by-line port of `tracer`'s `PathTracer`, and
+//! The backend runs one integrator, compiled into its kernel ([`GpuBackend::with_integrator`]):
+//! `wgsl/path.wgsl` is a line-by-line port of `tracer`'s `PathTracer`, `wgsl/simple.wgsl`
+//! of `DirectLighting` and `AmbientOcclusion` (sharing the path tracer's interaction and
+//! next-event code, as the CPU's do). The path kernel is the one described here, and
 //! it draws the CPU's own random stream (`Pcg32::for_sample(seed, pixel, sample)`, with
 //! the 64-bit arithmetic emulated on word pairs) in the CPU's order, so a GPU path starts
 //! as the CPU path of the same pixel sample and usually stays on it. What differs:
@@ -63,8 +66,8 @@
 
 use crate::accumulation::DeviceAccumulation;
 use crate::kernel::{
-    FILM_HEADER_BYTES, HAS_ENVIRONMENT, HAS_NORMALS, HAS_TANGENTS, KernelOptions, LIGHT_FLOATS, NodeLayout, Params,
-    PixelAccum, WideNode,
+    FILM_HEADER_BYTES, GpuIntegrator, HAS_ENVIRONMENT, HAS_NORMALS, HAS_TANGENTS, KernelOptions, LIGHT_FLOATS,
+    NodeLayout, Params, PixelAccum, WideNode,
 };
 use crate::wide::WideBvh;
 use crate::{GpuContext, GpuError};
@@ -112,9 +115,14 @@ const FILM_BAND_CAP: u64 = 64 << 20;
 /// Storage buffers the kernel binds (six of ours, two of the material kernel's).
 const STORAGE_BUFFERS: u32 = 8;
 
-/// What the GPU backend can render: hero wavelengths, triangle meshes, registered
-/// models, both triangle tests, the path tracer, at most [`MAX_BOUNCES`] bounces.
+/// What the GPU backend running the path tracer can render: hero wavelengths, triangle
+/// meshes, registered models, both triangle tests, at most [`MAX_BOUNCES`] bounces.
 pub fn capabilities() -> Capabilities {
+    capabilities_for(GpuIntegrator::Path)
+}
+
+/// [`capabilities`] of a backend running `integrator`.
+pub fn capabilities_for(integrator: GpuIntegrator) -> Capabilities {
     Capabilities {
         backend: "gpu",
         spectral_modes: vec![SpectralMode::Hero],
@@ -125,7 +133,7 @@ pub fn capabilities() -> Capabilities {
         // Auto is the binary tree: on an H100 the 4-wide one (`crate::wide`) renders 1.2–1.7×
         // slower in this megakernel; it stays selectable for comparisons.
         bvh_widths: vec![BvhWidth::Auto, BvhWidth::Two, BvhWidth::Four],
-        integrator: "path",
+        integrator: integrator.name(),
         max_bounces: Some(MAX_BOUNCES),
         sample_block: SAMPLES_PER_READBACK,
     }
@@ -135,6 +143,8 @@ pub fn capabilities() -> Capabilities {
 /// from [`SceneData`] into [`GpuScene`].
 #[derive(Clone, Copy, Debug)]
 struct SceneConstants {
+    integrator: GpuIntegrator,
+    white_offset: u32,
     node_count: u32,
     light_count: u32,
     lights_offset: u32,
@@ -242,6 +252,14 @@ impl SceneData {
         if scene.environment.is_some() {
             scene_flags |= HAS_ENVIRONMENT;
         }
+        // Ambient occlusion's white: the CPU's `AmbientOcclusion` value, tabulated.
+        let white_offset = tables.len() as u32;
+        if let GpuIntegrator::AmbientOcclusion { .. } = options.integrator {
+            let white = tracer::AmbientOcclusion::white();
+            for i in 0..CIE_SAMPLES {
+                tables.push(white.spectrum.eval(spectral::tables::CIE_LAMBDA_MIN + i as f32));
+            }
+        }
         let lights_offset = tables.len() as u32;
         for (&prim, &cdf) in lights.prims().iter().zip(lights.cdf()) {
             // Shapes are rejected above, so every sampled emitter is a triangle.
@@ -251,6 +269,8 @@ impl SceneData {
         }
 
         let constants = SceneConstants {
+            integrator: options.integrator,
+            white_offset,
             node_count: node_count as u32,
             light_count: lights.prims().len() as u32,
             lights_offset,
@@ -357,6 +377,7 @@ pub struct GpuScene {
 /// The tracer's [`Backend`] on a wgpu device.
 pub struct GpuBackend {
     ctx: Arc<GpuContext>,
+    integrator: GpuIntegrator,
 }
 
 fn lock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
@@ -377,9 +398,14 @@ impl GpuBackend {
         Ok(Self::with_context(GpuContext::new()?))
     }
 
-    /// A backend on an already open device.
+    /// A backend on an already open device, running the path tracer.
     pub fn with_context(ctx: GpuContext) -> Self {
-        Self { ctx: Arc::new(ctx) }
+        Self { ctx: Arc::new(ctx), integrator: GpuIntegrator::Path }
+    }
+
+    /// The same device running `integrator` (the kernel is compiled for it).
+    pub fn with_integrator(self, integrator: GpuIntegrator) -> Self {
+        Self { integrator, ..self }
     }
 
     /// The device the backend renders on.
@@ -389,7 +415,7 @@ impl GpuBackend {
 
     /// Checks `scene` against the capabilities, uploads it and compiles its kernel.
     pub fn prepare_gpu(&self, scene: Scene, options: &SceneOptions) -> Result<GpuScene, tracer::Error> {
-        capabilities().check_scene(&scene, options)?;
+        capabilities_for(self.integrator).check_scene(&scene, options)?;
         scene.validate()?;
         Ok(self.upload(scene, options)?)
     }
@@ -402,7 +428,12 @@ impl GpuBackend {
         };
         let data = SceneData::new(
             &scene,
-            KernelOptions { triangle_test: options.triangle_test, max_bounces: MAX_BOUNCES, nodes },
+            KernelOptions {
+                triangle_test: options.triangle_test,
+                max_bounces: MAX_BOUNCES,
+                nodes,
+                integrator: self.integrator,
+            },
         )?;
         data.check_limits(&self.ctx.limits)?;
         let device = &self.ctx.device;
@@ -550,6 +581,11 @@ impl GpuScene {
             inv_size: [1.0 / width as f32, 1.0 / height as f32],
             lights_offset: self.constants.lights_offset,
             env_offset: self.constants.env_offset,
+            white_offset: self.constants.white_offset,
+            ao_distance: match self.constants.integrator {
+                GpuIntegrator::AmbientOcclusion { max_distance } => max_distance.min(3.0e38),
+                _ => 0.0,
+            },
             ..Params::default()
         }
     }
@@ -770,7 +806,7 @@ impl From<GpuError> for tracer::Error {
 
 impl Backend for GpuBackend {
     fn capabilities(&self) -> Capabilities {
-        capabilities()
+        capabilities_for(self.integrator)
     }
 
     fn prepare(&self, scene: Scene, options: &SceneOptions) -> tracer::Result<Box<dyn PreparedScene>> {
@@ -780,7 +816,7 @@ impl Backend for GpuBackend {
 
 impl PreparedScene for GpuScene {
     fn capabilities(&self) -> Capabilities {
-        capabilities()
+        capabilities_for(self.constants.integrator)
     }
 
     fn scene(&self) -> &Scene {

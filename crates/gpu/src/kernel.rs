@@ -145,6 +145,48 @@ wgsl_struct! {
         lights_offset: u32,
         /// Offset of the environment's spectrum in `pt_tables`.
         env_offset: u32,
+        /// Offset of the ambient-occlusion white (D65, luminance 1) in `pt_tables`.
+        white_offset: u32,
+        /// The ambient-occlusion probe's reach (finite: `PT_FAR` stands for ∞).
+        ao_distance: f32,
+        /// Padding to the uniform block's 16-byte multiple.
+        pad0: u32,
+        /// Padding.
+        pad1: u32,
+    }
+}
+
+/// The integrator a kernel runs (compiled in: the others' code is not in the kernel).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum GpuIntegrator {
+    /// `tracer::PathTracer` (`wgsl/path.wgsl`).
+    Path,
+    /// `tracer::DirectLighting` (`wgsl/simple.wgsl`).
+    Direct,
+    /// `tracer::AmbientOcclusion` with this reach (`wgsl/simple.wgsl`).
+    AmbientOcclusion {
+        /// Occluders farther than this do not count (∞: any).
+        max_distance: f32,
+    },
+}
+
+impl GpuIntegrator {
+    /// The `--integrator` name.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Path => "path",
+            Self::Direct => "direct",
+            Self::AmbientOcclusion { .. } => "ao",
+        }
+    }
+
+    /// The code `PT_INTEGRATOR` holds.
+    fn code(self) -> u32 {
+        match self {
+            Self::Path => 0,
+            Self::Direct => 1,
+            Self::AmbientOcclusion { .. } => 2,
+        }
     }
 }
 
@@ -228,7 +270,7 @@ const LIGHT_MATERIAL: u32 = 11;
 const STACK_ENTRIES: u32 = 64;
 
 /// What a kernel is specialised for.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct KernelOptions {
     /// The triangle test compiled in.
     pub triangle_test: TriangleTest,
@@ -236,6 +278,8 @@ pub struct KernelOptions {
     pub max_bounces: u32,
     /// The BVH layout traversed.
     pub nodes: NodeLayout,
+    /// The integrator compiled in.
+    pub integrator: GpuIntegrator,
 }
 
 /// An f32 as a WGSL literal that parses back to the same value.
@@ -290,6 +334,10 @@ pub fn header(options: &KernelOptions) -> String {
     u("PT_LIGHT_PMF", LIGHT_PMF);
     u("PT_LIGHT_MATERIAL", LIGHT_MATERIAL);
     u("PT_STACK", stack);
+    u("PT_INTEGRATOR", options.integrator.code());
+    u("PT_INTEGRATOR_PATH", GpuIntegrator::Path.code());
+    u("PT_INTEGRATOR_DIRECT", GpuIntegrator::Direct.code());
+    u("PT_INTEGRATOR_AO", GpuIntegrator::AmbientOcclusion { max_distance: 0.0 }.code());
     u("PT_WIDE_EMPTY", WIDE_EMPTY);
     u("PT_MAX_BOUNCES", options.max_bounces);
     for (name, v) in [
@@ -328,7 +376,7 @@ pub fn header(options: &KernelOptions) -> String {
 }
 
 /// The hand-written files, in the order they are concatenated.
-const FILES: [(&str, &str); 8] = [
+const FILES: [(&str, &str); 9] = [
     ("rng.wgsl", include_str!("wgsl/rng.wgsl")),
     ("spectral.wgsl", include_str!("wgsl/spectral.wgsl")),
     ("frame.wgsl", include_str!("wgsl/frame.wgsl")),
@@ -337,6 +385,7 @@ const FILES: [(&str, &str); 8] = [
     ("ray.wgsl", include_str!("wgsl/ray.wgsl")),
     ("lights.wgsl", include_str!("wgsl/lights.wgsl")),
     ("path.wgsl", include_str!("wgsl/path.wgsl")),
+    ("simple.wgsl", include_str!("wgsl/simple.wgsl")),
 ];
 
 /// The kernel's entry point, last.

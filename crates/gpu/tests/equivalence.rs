@@ -134,6 +134,15 @@ fn prepare_both(gpu: &GpuBackend, scene: &Scene) -> Result<(CpuScene, gpu::GpuSc
 
 fn render_three(gpu: &GpuBackend, scene: &Scene, s: &RenderSettings) -> Result<Renders, tracer::Error> {
     let (cpu_scene, gpu_scene) = prepare_both(gpu, scene)?;
+    render_three_with(&cpu_scene, &gpu_scene, s)
+}
+
+/// [`render_three`] of scenes already prepared (on backends running another integrator).
+fn render_three_with(
+    cpu_scene: &dyn PreparedScene,
+    gpu_scene: &gpu::GpuScene,
+    s: &RenderSettings,
+) -> Result<Renders, tracer::Error> {
     let samples = (s.width * s.height * s.spp) as f64;
     let timed = |p: &dyn PreparedScene, s: &RenderSettings| -> Result<(Film, f64), tracer::Error> {
         let start = Instant::now();
@@ -142,9 +151,9 @@ fn render_three(gpu: &GpuBackend, scene: &Scene, s: &RenderSettings) -> Result<R
     };
     // One sample first, so that the GPU timing excludes the driver's first-dispatch work.
     gpu_scene.render_pass(s, &mut Film::new(s.width, s.height), 0, 1, &|_| {})?;
-    let (cpu, cpu_rate) = timed(&cpu_scene, s)?;
-    let (same, gpu_rate) = timed(&gpu_scene, s)?;
-    let (other, _) = timed(&gpu_scene, &RenderSettings { seed: s.seed + 1000, ..s.clone() })?;
+    let (cpu, cpu_rate) = timed(cpu_scene, s)?;
+    let (same, gpu_rate) = timed(gpu_scene, s)?;
+    let (other, _) = timed(gpu_scene, &RenderSettings { seed: s.seed + 1000, ..s.clone() })?;
     let (compile, prepare) = (gpu_scene.compile_time(), gpu_scene.prepare_time());
     Ok(Renders { cpu, same, other, cpu_rate, gpu_rate, compile, prepare })
 }
@@ -171,7 +180,8 @@ fn kernel_options() -> gpu::kernel::KernelOptions {
     gpu::kernel::KernelOptions {
         triangle_test: bvh::TriangleTest::Watertight,
         max_bounces: gpu::backend::MAX_BOUNCES,
-        nodes: gpu::kernel::NodeLayout::Wide4 { stack: 0 },
+        nodes: gpu::kernel::NodeLayout::Binary,
+        integrator: gpu::kernel::GpuIntegrator::Path,
     }
 }
 
@@ -522,4 +532,38 @@ fn wide_and_binary_bvhs_give_the_same_image() {
         assert!(films[0].0 == films[2].0, "{name}: auto is the binary BVH");
         assert_eq!(films[0].1.rays, films[1].1.rays, "{name}: ray counts");
     }
+}
+
+/// The biased integrators compiled into the kernel (`--integrator direct|ao --backend
+/// gpu`) match the CPU's `DirectLighting` and `AmbientOcclusion` on the Cornell box: the
+/// same z-tests and channel-mean checks as the path tracer's.
+#[test]
+fn direct_lighting_and_ambient_occlusion_match_the_cpu() {
+    use gpu::kernel::GpuIntegrator;
+    use tracer::{AmbientOcclusion, Backend, DirectLighting};
+    let Some(ctx) = gpu::require_gpu() else { return };
+    drop(ctx);
+    let Some(scene) = cornell() else { return };
+    let s = settings(32, 32, 128);
+    let reach = 150.0; // the box is 550 wide: some corners occluded, the open middle not
+    let cases: [(&str, GpuIntegrator, Box<dyn Backend>); 2] = [
+        ("direct", GpuIntegrator::Direct, Box::new(CpuBackend::with_integrator(2, DirectLighting).unwrap())),
+        (
+            "ao",
+            GpuIntegrator::AmbientOcclusion { max_distance: reach },
+            Box::new(CpuBackend::with_integrator(2, AmbientOcclusion::new(reach)).unwrap()),
+        ),
+    ];
+    let mut failures = Vec::new();
+    for (name, integrator, cpu) in cases {
+        let options = SceneOptions::default();
+        let cpu_scene = cpu.prepare(scene.clone(), &options).unwrap();
+        let backend = GpuBackend::with_context(gpu::require_gpu().unwrap()).with_integrator(integrator);
+        assert_eq!(backend.capabilities().integrator, name);
+        let gpu_scene = backend.prepare_gpu(scene.clone(), &options).unwrap();
+        let r = render_three_with(cpu_scene.as_ref(), &gpu_scene, &s).unwrap();
+        assert!(r.cpu.channel_means()[1] > 0.01, "{name}: a black image proves nothing");
+        failures.extend(compare_all(&format!("Cornell box, {name}"), &r));
+    }
+    assert!(failures.is_empty(), "{failures:#?}");
 }

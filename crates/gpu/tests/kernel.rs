@@ -13,6 +13,7 @@ fn options(triangle_test: bvh::TriangleTest) -> KernelOptions {
         triangle_test,
         max_bounces: gpu::backend::MAX_BOUNCES,
         nodes: gpu::kernel::NodeLayout::Wide4 { stack: 24 },
+        integrator: gpu::kernel::GpuIntegrator::Path,
     }
 }
 

@@ -20,18 +20,24 @@ fn pt_uniform_triangle(u: vec2f) -> vec2f {
     return vec2f(u.x - b1, b1);
 }
 
-// The environment's radiance, tabulated at 1 nm over 360–830 nm, linearly interpolated.
-fn pt_environment(lambda: vec4f) -> vec4f {
+// A spectrum tabulated at 1 nm over 360–830 nm from `offset` in the tables, linearly
+// interpolated (as `pt_environment`).
+fn pt_table_spectrum(offset: u32, lambda: vec4f) -> vec4f {
     var out = vec4f(0.0);
     for (var k = 0u; k < 4u; k++) {
         let x = clamp(lambda[k] - PT_CIE_LAMBDA_MIN, 0.0, f32(PT_CIE_SAMPLES - 1u));
         let i = min(u32(x), PT_CIE_SAMPLES - 2u);
         let f = x - f32(i);
-        let a = pt_tables[pt_params.env_offset + i];
-        let b = pt_tables[pt_params.env_offset + i + 1u];
+        let a = pt_tables[offset + i];
+        let b = pt_tables[offset + i + 1u];
         out[k] = a + (b - a) * f;
     }
     return out;
+}
+
+// The environment's radiance, tabulated at 1 nm over 360–830 nm, linearly interpolated.
+fn pt_environment(lambda: vec4f) -> vec4f {
+    return pt_table_spectrum(pt_params.env_offset, lambda);
 }
 
 struct PtLightSample {

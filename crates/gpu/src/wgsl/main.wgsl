@@ -23,7 +23,15 @@ fn pt_main(@builtin(global_invocation_id) gid: vec3u) {
         let film = vec2f(f32(x), f32(y)) + jitter;
         let ndc = vec2f(2.0 * film.x * pt_params.inv_size.x - 1.0, 1.0 - 2.0 * film.y * pt_params.inv_size.y);
         let dir = normalize(pt_params.forward.xyz + ndc.x * pt_params.right.xyz + ndc.y * pt_params.up.xyz);
-        let l = pt_radiance(pt_params.eye.xyz, dir, &wl, &rng, &rays, &truncated);
+        // The integrator is a constant: the others' branches compile away.
+        var l: vec4f;
+        if PT_INTEGRATOR == PT_INTEGRATOR_DIRECT {
+            l = pt_direct(pt_params.eye.xyz, dir, wl, &rng, &rays);
+        } else if PT_INTEGRATOR == PT_INTEGRATOR_AO {
+            l = pt_ambient_occlusion(pt_params.eye.xyz, dir, wl, &rng, &rays);
+        } else {
+            l = pt_radiance(pt_params.eye.xyz, dir, &wl, &rng, &rays, &truncated);
+        }
         let rgb = pt_to_linear_srgb(l, wl);
         if pt_is_finite3(rgb) {
             acc.count += 1u;

@@ -21,6 +21,130 @@ fn pt_is_non_specular(f: u32) -> bool {
     return (f & (SCATTER_DIFFUSE | SCATTER_GLOSSY)) != 0u;
 }
 
+// A surface hit: position from the vertices, geometric and shading normals, tangent
+// (`SceneView::interaction`), and the triangle's material, light pmf and area.
+struct PtSurface {
+    p: vec3f,
+    ng: vec3f,
+    ns: vec3f,
+    tangent: vec3f,
+    m: u32,
+    prim_pmf: f32,
+    area: f32,
+}
+
+fn pt_surface(hit: PtHit) -> PtSurface {
+    let i = hit.prim;
+    let q0 = pt_tri_verts[3u * i];
+    let q1 = pt_tri_verts[3u * i + 1u];
+    let q2 = pt_tri_verts[3u * i + 2u];
+    let v0 = q0.xyz;
+    let v1 = q1.xyz;
+    let v2 = q2.xyz;
+    let b0 = 1.0 - hit.u - hit.v;
+    let p = b0 * v0 + hit.u * v1 + hit.v * v2;
+    let cr = cross(v1 - v0, v2 - v0);
+    let area = 0.5 * length(cr);
+    let it_ng = cr / (2.0 * area);
+    var it_ns = it_ng;
+    var tangent = vec3f(0.0);
+    let flags_scene = pt_params.scene_flags;
+    if (flags_scene & (PT_HAS_NORMALS | PT_HAS_TANGENTS)) != 0u {
+        let vi = pt_tri_vidx[i];
+        if (flags_scene & PT_HAS_NORMALS) != 0u && pt_params.shading != PT_SHADING_GEOMETRIC {
+            let n = b0 * pt_attrs[2u * vi.x].xyz + hit.u * pt_attrs[2u * vi.y].xyz + hit.v * pt_attrs[2u * vi.z].xyz;
+            if dot(n, n) > 1e-12 {
+                let nn = normalize(n);
+                it_ns = select(nn, -nn, dot(nn, it_ng) < 0.0);
+            }
+        }
+        if (flags_scene & PT_HAS_TANGENTS) != 0u {
+            tangent = b0 * pt_attrs[2u * vi.x + 1u].xyz + hit.u * pt_attrs[2u * vi.y + 1u].xyz
+                + hit.v * pt_attrs[2u * vi.z + 1u].xyz;
+        }
+    }
+    return PtSurface(p, it_ng, it_ns, tangent, bitcast<u32>(q0.w), q1.w, area);
+}
+
+// Next-event estimation (`next_event`): one light sample from `u`, its shadow ray, and
+// the contribution as f, Le and the factor |cos θi| · w / pdf, with `mis` the power
+// heuristic's w against the BSDF's pdf, else w = 1.
+struct PtNextEvent {
+    f: vec4f,
+    le: vec4f,
+    k: f32,
+    valid: bool,
+}
+
+fn pt_next_event(
+    sf: PtSurface,
+    frame: PtFrame,
+    ng: vec3f,
+    wo_world: vec3f,
+    wo: vec3f,
+    two_sided: bool,
+    lambda: vec4f,
+    u: vec2f,
+    mis: bool,
+    rays: ptr<function, u32>,
+) -> PtNextEvent {
+    var out = PtNextEvent(vec4f(0.0), vec4f(0.0), 0.0, false);
+    let ls = pt_sample_light(u);
+    if !ls.valid {
+        return out;
+    }
+    let m = sf.m;
+    let p = sf.p;
+    var wi_world: vec3f;
+    var finite_light = true;
+    var light_pdf = 0.0;
+    var le = vec4f(0.0);
+    if ls.material != PT_NO_HIT {
+        let dl = ls.point - p;
+        let dist2 = dot(dl, dl);
+        let dist = sqrt(dist2);
+        wi_world = dl / dist;
+        let cos_l = -dot(wi_world, ls.normal);
+        if cos_l > 0.0 {
+            light_pdf = ls.pdf * dist2 / cos_l;
+            le = material_emission(ls.material, lambda);
+        }
+    } else {
+        wi_world = ls.point;
+        finite_light = false;
+        light_pdf = ls.pdf;
+        if (pt_params.scene_flags & PT_HAS_ENVIRONMENT) != 0u {
+            le = pt_environment(lambda);
+        }
+    }
+    let wi = pt_to_local(frame, wi_world);
+    // Reflection must stay on the geometric side it came from (no light leaks).
+    let same_side = dot(wi_world, ng) * dot(wo_world, ng) > 0.0;
+    if !(light_pdf > 0.0 && any(le != vec4f(0.0)) && (same_side || !two_sided)) {
+        return out;
+    }
+    let f = bsdf_eval(m, wo, wi, lambda);
+    if all(f == vec4f(0.0)) {
+        return out;
+    }
+    let off = pt_offset_ray_origin(p, select(-sf.ng, sf.ng, dot(wi_world, sf.ng) > 0.0));
+    *rays += 1u;
+    var blocked: bool;
+    if finite_light {
+        blocked = pt_trace(off, ls.point - off, 0.0, PT_SHADOW_T_MAX, true).prim != PT_NO_HIT;
+    } else {
+        blocked = pt_trace(off, wi_world, 0.0, PT_FAR, true).prim != PT_NO_HIT;
+    }
+    if blocked {
+        return out;
+    }
+    var w = 1.0;
+    if mis {
+        w = pt_power_heuristic(light_pdf, bsdf_pdf(m, wo, wi, lambda));
+    }
+    return PtNextEvent(f, le, abs(wi.z) * w / light_pdf, true);
+}
+
 fn pt_radiance(
     origin: vec3f,
     dir: vec3f,
@@ -54,39 +178,14 @@ fn pt_radiance(
             break;
         }
 
-        // The interaction: position from the vertices, geometric and shading normals,
-        // tangent.
-        let i = hit.prim;
-        let q0 = pt_tri_verts[3u * i];
-        let q1 = pt_tri_verts[3u * i + 1u];
-        let q2 = pt_tri_verts[3u * i + 2u];
-        let v0 = q0.xyz;
-        let v1 = q1.xyz;
-        let v2 = q2.xyz;
-        let m = bitcast<u32>(q0.w);
-        let prim_pmf = q1.w;
-        let b0 = 1.0 - hit.u - hit.v;
-        let p = b0 * v0 + hit.u * v1 + hit.v * v2;
-        let cr = cross(v1 - v0, v2 - v0);
-        let area = 0.5 * length(cr);
-        let it_ng = cr / (2.0 * area);
-        var it_ns = it_ng;
-        var tangent = vec3f(0.0);
-        let flags_scene = pt_params.scene_flags;
-        if (flags_scene & (PT_HAS_NORMALS | PT_HAS_TANGENTS)) != 0u {
-            let vi = pt_tri_vidx[i];
-            if (flags_scene & PT_HAS_NORMALS) != 0u && pt_params.shading != PT_SHADING_GEOMETRIC {
-                let n = b0 * pt_attrs[2u * vi.x].xyz + hit.u * pt_attrs[2u * vi.y].xyz + hit.v * pt_attrs[2u * vi.z].xyz;
-                if dot(n, n) > 1e-12 {
-                    let nn = normalize(n);
-                    it_ns = select(nn, -nn, dot(nn, it_ng) < 0.0);
-                }
-            }
-            if (flags_scene & PT_HAS_TANGENTS) != 0u {
-                tangent = b0 * pt_attrs[2u * vi.x + 1u].xyz + hit.u * pt_attrs[2u * vi.y + 1u].xyz
-                    + hit.v * pt_attrs[2u * vi.z + 1u].xyz;
-            }
-        }
+        let sf = pt_surface(hit);
+        let m = sf.m;
+        let p = sf.p;
+        let it_ng = sf.ng;
+        let it_ns = sf.ns;
+        let tangent = sf.tangent;
+        let prim_pmf = sf.prim_pmf;
+        let area = sf.area;
         let wo_world = -d;
         let front = dot(wo_world, it_ng) > 0.0;
         let two_sided = material_two_sided(m);
@@ -154,50 +253,9 @@ fn pt_radiance(
 
         // Next-event estimation: one shadow ray to a point on a light.
         if pt_is_non_specular(flags) {
-            let ls = pt_sample_light(pt_rng_2d(rng));
-            if ls.valid {
-                var wi_world: vec3f;
-                var finite_light = true;
-                var light_pdf = 0.0;
-                var le = vec4f(0.0);
-                if ls.material != PT_NO_HIT {
-                    let dl = ls.point - p;
-                    let dist2 = dot(dl, dl);
-                    let dist = sqrt(dist2);
-                    wi_world = dl / dist;
-                    let cos_l = -dot(wi_world, ls.normal);
-                    if cos_l > 0.0 {
-                        light_pdf = ls.pdf * dist2 / cos_l;
-                        le = material_emission(ls.material, lambda);
-                    }
-                } else {
-                    wi_world = ls.point;
-                    finite_light = false;
-                    light_pdf = ls.pdf;
-                    if (flags_scene & PT_HAS_ENVIRONMENT) != 0u {
-                        le = pt_environment(lambda);
-                    }
-                }
-                let wi = pt_to_local(frame, wi_world);
-                // Reflection must stay on the geometric side it came from (no light leaks).
-                let same_side = dot(wi_world, ng) * dot(wo_world, ng) > 0.0;
-                if light_pdf > 0.0 && any(le != vec4f(0.0)) && (same_side || !two_sided) {
-                    let f = bsdf_eval(m, wo, wi, lambda);
-                    if any(f != vec4f(0.0)) {
-                        let off = pt_offset_ray_origin(p, select(-it_ng, it_ng, dot(wi_world, it_ng) > 0.0));
-                        *rays += 1u;
-                        var blocked: bool;
-                        if finite_light {
-                            blocked = pt_trace(off, ls.point - off, 0.0, PT_SHADOW_T_MAX, true).prim != PT_NO_HIT;
-                        } else {
-                            blocked = pt_trace(off, wi_world, 0.0, PT_FAR, true).prim != PT_NO_HIT;
-                        }
-                        if !blocked {
-                            let w = pt_power_heuristic(light_pdf, bsdf_pdf(m, wo, wi, lambda));
-                            l += beta * f * le * (abs(wi.z) * w / light_pdf);
-                        }
-                    }
-                }
+            let e = pt_next_event(sf, frame, ng, wo_world, wo, two_sided, lambda, pt_rng_2d(rng), true, rays);
+            if e.valid {
+                l += beta * e.f * e.le * e.k;
             }
         }
 

@@ -81,7 +81,12 @@ pub struct AmbientOcclusion {
 impl AmbientOcclusion {
     /// Ambient occlusion up to `max_distance` (positive; `f32::INFINITY` for any).
     pub fn new(max_distance: f32) -> Self {
-        Self { max_distance, white: Colour::from_spectrum(Spectrum::D65(1.0), ColourRole::Illuminant) }
+        Self { max_distance, white: Self::white() }
+    }
+
+    /// The value of an unoccluded sample: D65 at luminance 1 (the GPU tabulates it).
+    pub fn white() -> Colour {
+        Colour::from_spectrum(Spectrum::D65(1.0), ColourRole::Illuminant)
     }
 }
 
