@@ -253,7 +253,7 @@ struct SceneArgs {
     /// Sample values: zsobol (Owen-scrambled Sobol in Morton order: stratified per pixel,
     /// blue-noise error; lays its samples out for --spp, best a power of two), sobol
     /// (Owen-scrambled Sobol per pixel) or independent (PCG32 per pixel sample). Default:
-    /// the backend's best (cpu: zsobol, gpu: independent); the viewer: independent.
+    /// the backend's best (zsobol on both); the viewer: independent.
     #[arg(long, value_parser = parse_sampler)]
     sampler: Option<SamplerKind>,
     /// Light transport: path (path tracing with next-event estimation and MIS), direct

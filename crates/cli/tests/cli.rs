@@ -460,9 +460,12 @@ fn the_gpu_viewer_saves_the_image_a_render_of_its_samples_gives() {
         .unwrap();
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(stderr(&o).contains("3 frames, 6 spp"), "{}", stderr(&o));
-    let o =
-        spt(&[&["render", scene.to_str().unwrap()], &common[..], &["--spp", "6", "-o", rendered.to_str().unwrap()]]
-            .concat());
+    let o = spt(&[
+        &["render", scene.to_str().unwrap(), "--sampler", "independent"],
+        &common[..],
+        &["--spp", "6", "-o", rendered.to_str().unwrap()],
+    ]
+    .concat());
     assert!(o.status.success(), "{}", stderr(&o));
     let (a, b) = (std::fs::read(&viewed).unwrap(), std::fs::read(&rendered).unwrap());
     assert!(a == b, "the viewer's 6 spp differ from the render's");

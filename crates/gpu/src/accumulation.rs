@@ -340,6 +340,7 @@ impl Accumulation for DeviceAccumulation {
     }
 
     fn add(&mut self, spp: u32) -> tracer::Result<()> {
+        tracer::render::check_sample_range(&self.settings, self.samples, spp)?;
         Ok(self.add_gpu(spp)?)
     }
 

@@ -21,6 +21,7 @@ use spectral::sampled::{LAMBDA_MAX, LAMBDA_MIN, VIS_CENTRE, VIS_K, VIS_TANH_HI, 
 use spectral::tables::{CIE_LAMBDA_MIN, CIE_SAMPLES, CIE_Y_INTEGRAL};
 use std::fmt::Write as _;
 use tracer::integrator::{RR_MIN_TERMINATION, SHADOW_T_MAX};
+use tracer::sampler::SamplerKind;
 use tracer::shading::{MIN_SHADING_COSINE, ShadingNormals};
 
 /// A Rust type whose layout a WGSL struct mirrors.
@@ -149,10 +150,27 @@ wgsl_struct! {
         white_offset: u32,
         /// The ambient-occlusion probe's reach (finite: `PT_FAR` stands for ∞).
         ao_distance: f32,
-        /// Padding to the uniform block's 16-byte multiple.
-        pad0: u32,
-        /// Padding.
-        pad1: u32,
+        /// [`sampler_code`] of the render's sampler.
+        sampler: u32,
+        /// Offset of the Sobol sampler's bit-reversed second-dimension tables in `pt_tables`.
+        sobol_offset: u32,
+        /// ZSobol: log₂ of the samples per pixel (rounded up to a power of two).
+        log2_spp: u32,
+        /// Sobol samplers: 64 minus the bits of their sample indices.
+        unused_bits: u32,
+        /// ZSobol: `mix64(seed)`, low word.
+        zseed_lo: u32,
+        /// ZSobol: `mix64(seed)`, high word.
+        zseed_hi: u32,
+    }
+}
+
+/// The code of a sampler in `Params::sampler` and `PT_SAMPLER_*`.
+pub fn sampler_code(kind: SamplerKind) -> u32 {
+    match kind {
+        SamplerKind::Independent => 0,
+        SamplerKind::Sobol => 1,
+        SamplerKind::ZSobol => 2,
     }
 }
 
@@ -335,6 +353,12 @@ pub fn header(options: &KernelOptions) -> String {
     u("PT_LIGHT_MATERIAL", LIGHT_MATERIAL);
     u("PT_STACK", stack);
     u("PT_INTEGRATOR", options.integrator.code());
+    for kind in SamplerKind::ALL {
+        u(&format!("PT_SAMPLER_{}", kind.name().to_ascii_uppercase()), sampler_code(kind));
+    }
+    for (i, m) in tracer::sampler::LAINE_KARRAS_MULS.into_iter().enumerate() {
+        u(&format!("PT_LK_MUL{i}"), m);
+    }
     u("PT_INTEGRATOR_PATH", GpuIntegrator::Path.code());
     u("PT_INTEGRATOR_DIRECT", GpuIntegrator::Direct.code());
     u("PT_INTEGRATOR_AO", GpuIntegrator::AmbientOcclusion { max_distance: 0.0 }.code());
@@ -364,6 +388,11 @@ pub fn header(options: &KernelOptions) -> String {
         ("PT_PCG_SAMPLE_STREAM_KEY", rng::SAMPLE_STREAM_KEY),
         ("PT_MIX64_MUL1", rng::MIX64_MUL1),
         ("PT_MIX64_MUL2", rng::MIX64_MUL2),
+        ("PT_DIMENSION_MUL", tracer::sampler::DIMENSION_MUL),
+        ("PT_VALUE_SEED_KEY", tracer::sampler::VALUE_SEED_KEY),
+        ("PT_LK64_MUL0", tracer::sampler::LAINE_KARRAS_64_MULS[0]),
+        ("PT_LK64_MUL1", tracer::sampler::LAINE_KARRAS_64_MULS[1]),
+        ("PT_LK64_MUL2", tracer::sampler::LAINE_KARRAS_64_MULS[2]),
     ] {
         let _ = writeln!(out, "const {name}: vec2u = vec2u({:#010x}u, {:#010x}u);", v as u32, (v >> 32) as u32);
     }
@@ -376,8 +405,9 @@ pub fn header(options: &KernelOptions) -> String {
 }
 
 /// The hand-written files, in the order they are concatenated.
-const FILES: [(&str, &str); 9] = [
+const FILES: [(&str, &str); 10] = [
     ("rng.wgsl", include_str!("wgsl/rng.wgsl")),
+    ("sampler.wgsl", include_str!("wgsl/sampler.wgsl")),
     ("spectral.wgsl", include_str!("wgsl/spectral.wgsl")),
     ("frame.wgsl", include_str!("wgsl/frame.wgsl")),
     ("offset.wgsl", include_str!("wgsl/offset.wgsl")),

@@ -8,6 +8,7 @@ use crate::integrator::{CameraSample, Integrator, PathCounters, PathTracer, Scen
 use crate::lights::Lights;
 use crate::render::{
     Backend, Capabilities, PixelRect, PrepareStats, PreparedScene, RenderSettings, SceneOptions, check_pass,
+    check_sample_range,
 };
 use crate::sampler::{PaddedSobol, Pcg32, Sampler, SamplerKind, ZSobolLayout};
 use crate::scene::Scene;
@@ -181,22 +182,6 @@ impl<I: Integrator> PreparedScene for CpuScene<I> {
             }
         }))
     }
-}
-
-/// The Sobol samplers lay their samples out for `settings.spp` samples per pixel (rounded
-/// up to a power of two): a pass must stay within them.
-fn check_sample_range(settings: &RenderSettings, first_sample: u32, spp: u32) -> Result<()> {
-    let budget = (settings.spp as u64).next_power_of_two();
-    if settings.sampler.needs_sample_budget() && first_sample as u64 + spp as u64 > budget {
-        return Err(Error::Setting(format!(
-            "the {} sampler lays out {budget} samples per pixel (--spp {} rounded up to a power of two); \
-             samples {first_sample}..{} are beyond them: raise --spp, or use --sampler independent",
-            settings.sampler.name(),
-            settings.spp,
-            first_sample as u64 + spp as u64
-        )));
-    }
-    Ok(())
 }
 
 /// The image grid's [`TILE`] × [`TILE`] cells clipped to `region`, row by row (the grid

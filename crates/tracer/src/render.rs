@@ -350,6 +350,22 @@ pub fn check_pass(prepared: &dyn PreparedScene, settings: &RenderSettings, film:
     Ok(())
 }
 
+/// The Sobol samplers lay their samples out for `settings.spp` samples per pixel (rounded
+/// up to a power of two): a pass must stay within them.
+pub fn check_sample_range(settings: &RenderSettings, first_sample: u32, spp: u32) -> Result<()> {
+    let budget = (settings.spp as u64).next_power_of_two();
+    if settings.sampler.needs_sample_budget() && first_sample as u64 + spp as u64 > budget {
+        return Err(Error::Setting(format!(
+            "the {} sampler lays out {budget} samples per pixel (--spp {} rounded up to a power of two); \
+             samples {first_sample}..{} are beyond them: raise --spp, or use --sampler independent",
+            settings.sampler.name(),
+            settings.spp,
+            first_sample as u64 + spp as u64
+        )));
+    }
+    Ok(())
+}
+
 /// Figures from a finished render.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct RenderStats {

@@ -109,7 +109,7 @@ impl SobolDraw for PaddedSobol {
     /// The shuffled index and two scrambling seeds for the current dimension.
     #[inline]
     fn draw(&mut self, dims: u32) -> (u64, u64) {
-        let h = mix64(self.pixel ^ (self.dimension as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15));
+        let h = mix64(self.pixel ^ (self.dimension as u64).wrapping_mul(DIMENSION_MUL));
         self.dimension += dims;
         // A nested (Owen) scramble of the index, as ZSobol's: every bit flipped by a hash
         // of the bits above it, so each dimension visits the spp indices in its own order
@@ -188,7 +188,9 @@ impl ZSobolLayout {
     #[inline]
     pub fn sampler(&self, x: u32, y: u32, index: u32) -> ZSobol<'_> {
         let morton = (morton2(x, y) << self.log2_spp) | index as u64;
-        ZSobol { layout: self, reversed: (morton << self.unused_bits).reverse_bits(), dimension: 0 }
+        // A 1×1 image at 1 spp has no index bits at all (and a shift by 64 would overflow).
+        let reversed = if self.unused_bits == 64 { 0 } else { (morton << self.unused_bits).reverse_bits() };
+        ZSobol { layout: self, reversed, dimension: 0 }
     }
 
     /// The seeds of `dimension`.
@@ -201,10 +203,22 @@ impl ZSobolLayout {
     }
 }
 
+/// The golden-ratio multiplier that spreads dimension numbers before they are hashed.
+pub const DIMENSION_MUL: u64 = 0x9E37_79B9_7F4A_7C15;
+
+/// Mixed into the value seeds of [`ZSobol`]'s dimensions.
+pub const VALUE_SEED_KEY: u64 = 0xA511_E9B3_0000_0000;
+
+/// The multipliers of [`laine_karras`] (even: each bit depends only on the bits below).
+pub const LAINE_KARRAS_MULS: [u32; 3] = [0x3d20_adea, 0x0552_6c56, 0x53a2_2864];
+
+/// The multipliers of [`laine_karras_64`].
+pub const LAINE_KARRAS_64_MULS: [u64; 3] = [0x3d20_adea_6c5f_e1b2, 0x0552_6c56_a7d4_b3f8, 0x53a2_2864_91e3_c5a4];
+
 /// (the index scramble's seed, the values' scramble seeds) of a dimension.
 fn dimension_seeds(seed: u64, dimension: u32) -> (u64, u64) {
     let d = dimension as u64;
-    (mix64(seed ^ d.wrapping_mul(0x9E37_79B9_7F4A_7C15)), mix64((d << 32) ^ seed ^ 0xA511_E9B3_0000_0000))
+    (mix64(seed ^ d.wrapping_mul(DIMENSION_MUL)), mix64((d << 32) ^ seed ^ VALUE_SEED_KEY))
 }
 
 /// Owen-scrambled Sobol points in Morton order (see the module documentation). Made by
@@ -231,7 +245,12 @@ impl SobolDraw for ZSobol<'_> {
     fn draw(&mut self, dims: u32) -> (u64, u64) {
         let (index_seed, value_seed) = self.layout.seeds(self.dimension);
         self.dimension += dims;
-        (laine_karras_64(self.reversed, index_seed).reverse_bits() >> self.layout.unused_bits, value_seed)
+        let index = if self.layout.unused_bits == 64 {
+            0
+        } else {
+            laine_karras_64(self.reversed, index_seed).reverse_bits() >> self.layout.unused_bits
+        };
+        (index, value_seed)
     }
 }
 
@@ -240,11 +259,12 @@ impl SobolDraw for ZSobol<'_> {
 /// that maps aligned blocks of 2ᵏ values to aligned blocks of 2ᵏ.
 #[inline]
 fn laine_karras_64(mut v: u64, seed: u64) -> u64 {
-    v ^= v.wrapping_mul(0x3d20_adea_6c5f_e1b2);
+    let [m0, m1, m2] = LAINE_KARRAS_64_MULS;
+    v ^= v.wrapping_mul(m0);
     v = v.wrapping_add(seed);
     v = v.wrapping_mul((seed >> 32) | 1);
-    v ^= v.wrapping_mul(0x0552_6c56_a7d4_b3f8);
-    v ^= v.wrapping_mul(0x53a2_2864_91e3_c5a4);
+    v ^= v.wrapping_mul(m1);
+    v ^= v.wrapping_mul(m2);
     v
 }
 /// A 32-bit fixed-point fraction as an f32 in [0, 1) (24 bits, never 1).
@@ -280,8 +300,9 @@ fn sobol_1(index: u64) -> u32 {
 #[cfg(test)]
 static SOBOL_1_TABLES: [[u32; 256]; 4] = sobol_1_tables(false);
 
-/// The tables of [`sobol_1`] bit-reversed, for [`scrambled_sobol_1`].
-static SOBOL_1_REVERSED: [[u32; 256]; 4] = sobol_1_tables(true);
+/// The tables of [`sobol_1`] bit-reversed, for [`scrambled_sobol_1`] (the GPU uploads
+/// them).
+pub static SOBOL_1_REVERSED: [[u32; 256]; 4] = sobol_1_tables(true);
 
 const fn sobol_1_tables(reversed: bool) -> [[u32; 256]; 4] {
     let mut v = [0u32; 32];
@@ -326,11 +347,12 @@ fn owen_scramble(v: u32, seed: u32) -> u32 {
 /// bits below it (multiplications by even constants only carry upwards).
 #[inline]
 fn laine_karras(mut v: u32, seed: u32) -> u32 {
-    v ^= v.wrapping_mul(0x3d20_adea);
+    let [m0, m1, m2] = LAINE_KARRAS_MULS;
+    v ^= v.wrapping_mul(m0);
     v = v.wrapping_add(seed);
     v = v.wrapping_mul((seed >> 16) | 1);
-    v ^= v.wrapping_mul(0x0552_6c56);
-    v ^= v.wrapping_mul(0x53a2_2864);
+    v ^= v.wrapping_mul(m1);
+    v ^= v.wrapping_mul(m2);
     v
 }
 

@@ -17,20 +17,21 @@ fn pt_main(@builtin(global_invocation_id) gid: vec3u) {
     var rays = 0u;
     var truncated = 0u;
     for (var k = 0u; k < pt_params.samples; k++) {
-        var rng = pt_rng_for_sample(pixel, pt_params.first_sample + k);
-        var wl = pt_sample_hero(pt_rng_f32(&rng));
-        let jitter = pt_rng_2d(&rng);
+        var smp = pt_sampler_for(x, y, pixel, pt_params.first_sample + k);
+        let cam = pt_camera(&smp);
+        var wl = pt_sample_hero(cam.x);
+        let jitter = cam.yz;
         let film = vec2f(f32(x), f32(y)) + jitter;
         let ndc = vec2f(2.0 * film.x * pt_params.inv_size.x - 1.0, 1.0 - 2.0 * film.y * pt_params.inv_size.y);
         let dir = normalize(pt_params.forward.xyz + ndc.x * pt_params.right.xyz + ndc.y * pt_params.up.xyz);
         // The integrator is a constant: the others' branches compile away.
         var l: vec4f;
         if PT_INTEGRATOR == PT_INTEGRATOR_DIRECT {
-            l = pt_direct(pt_params.eye.xyz, dir, wl, &rng, &rays);
+            l = pt_direct(pt_params.eye.xyz, dir, wl, &smp, &rays);
         } else if PT_INTEGRATOR == PT_INTEGRATOR_AO {
-            l = pt_ambient_occlusion(pt_params.eye.xyz, dir, wl, &rng, &rays);
+            l = pt_ambient_occlusion(pt_params.eye.xyz, dir, wl, &smp, &rays);
         } else {
-            l = pt_radiance(pt_params.eye.xyz, dir, &wl, &rng, &rays, &truncated);
+            l = pt_radiance(pt_params.eye.xyz, dir, &wl, &smp, &rays, &truncated);
         }
         let rgb = pt_to_linear_srgb(l, wl);
         if pt_is_finite3(rgb) {

@@ -149,7 +149,7 @@ fn pt_radiance(
     origin: vec3f,
     dir: vec3f,
     wl: ptr<function, PtWavelengths>,
-    rng: ptr<function, PtRng>,
+    smp: ptr<function, PtSampler>,
     rays: ptr<function, u32>,
     truncated: ptr<function, u32>,
 ) -> vec4f {
@@ -226,7 +226,7 @@ fn pt_radiance(
         // Dispersion: from here on the path follows one wavelength (a random lane, moved
         // to lane 0).
         if material_dispersive(m) && !(*wl).collapsed {
-            let k = min(u32(pt_rng_f32(rng) * 4.0), 3u);
+            let k = min(u32(pt_next_1d(smp) * 4.0), 3u);
             let lk = (*wl).lambda[k];
             (*wl).lambda[k] = (*wl).lambda[0];
             (*wl).lambda[0] = lk;
@@ -253,15 +253,15 @@ fn pt_radiance(
 
         // Next-event estimation: one shadow ray to a point on a light.
         if pt_is_non_specular(flags) {
-            let e = pt_next_event(sf, frame, ng, wo_world, wo, two_sided, lambda, pt_rng_2d(rng), true, rays);
+            let e = pt_next_event(sf, frame, ng, wo_world, wo, two_sided, lambda, pt_next_2d(smp), true, rays);
             if e.valid {
                 l += beta * e.f * e.le * e.k;
             }
         }
 
         // Continue the path by sampling the BSDF.
-        let uc = pt_rng_f32(rng);
-        let u = pt_rng_2d(rng);
+        let uc = pt_next_1d(smp);
+        let u = pt_next_2d(smp);
         let s = bsdf_sample(m, wo, uc, u, lambda);
         if s.pdf <= 0.0 || all(s.f == vec4f(0.0)) {
             break;
@@ -288,7 +288,7 @@ fn pt_radiance(
         // Russian roulette (Arvo & Kirk 1990).
         if bounce >= pt_params.rr_depth {
             let q = max(1.0 - max(max(beta.x, beta.y), max(beta.z, beta.w)), PT_RR_MIN_TERMINATION);
-            if pt_rng_f32(rng) < q {
+            if pt_next_1d(smp) < q {
                 break;
             }
             beta /= 1.0 - q;

@@ -4,7 +4,7 @@
 // cosine-distributed direction above the first surface reaches `ao_distance`, as a grey
 // of D65 white at luminance 1). They draw the CPU's random numbers in the CPU's order.
 
-fn pt_direct(origin: vec3f, dir: vec3f, wl: PtWavelengths, rng: ptr<function, PtRng>, rays: ptr<function, u32>) -> vec4f {
+fn pt_direct(origin: vec3f, dir: vec3f, wl: PtWavelengths, smp: ptr<function, PtSampler>, rays: ptr<function, u32>) -> vec4f {
     let lambda = wl.lambda;
     *rays += 1u;
     let hit = pt_trace(origin, dir, 0.0, PT_FAR, false);
@@ -25,7 +25,7 @@ fn pt_direct(origin: vec3f, dir: vec3f, wl: PtWavelengths, rng: ptr<function, Pt
     let frame = pt_frame_from_normal_tangent(sn.ns, sf.tangent);
     if pt_is_non_specular(material_flags(sf.m)) {
         let wo = pt_to_local(frame, wo_world);
-        let e = pt_next_event(sf, frame, sn.ng, wo_world, wo, two_sided, lambda, pt_rng_2d(rng), false, rays);
+        let e = pt_next_event(sf, frame, sn.ng, wo_world, wo, two_sided, lambda, pt_next_2d(smp), false, rays);
         if e.valid {
             l += e.f * e.le * e.k;
         }
@@ -37,7 +37,7 @@ fn pt_ambient_occlusion(
     origin: vec3f,
     dir: vec3f,
     wl: PtWavelengths,
-    rng: ptr<function, PtRng>,
+    smp: ptr<function, PtSampler>,
     rays: ptr<function, u32>,
 ) -> vec4f {
     *rays += 1u;
@@ -53,7 +53,7 @@ fn pt_ambient_occlusion(
     if dot(ns, ng) <= 0.0 {
         ns = ng;
     }
-    let wi = pt_to_world(pt_frame_from_normal_tangent(ns, sf.tangent), mat_cosine_hemisphere(pt_rng_2d(rng)));
+    let wi = pt_to_world(pt_frame_from_normal_tangent(ns, sf.tangent), mat_cosine_hemisphere(pt_next_2d(smp)));
     if dot(wi, ng) <= 0.0 {
         // A shading normal tilted the sample under the surface: it is blocked.
         return vec4f(0.0);

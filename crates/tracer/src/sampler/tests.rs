@@ -175,3 +175,16 @@ fn padded_sobol_dimensions_are_not_tied() {
         }
     }
 }
+
+/// A 1×1 image at 1 spp leaves no bits for the Morton index: the sampler must not shift
+/// by 64 (a panic in debug builds, a wrong index in release) but draw sample 0.
+#[test]
+fn a_one_pixel_one_sample_zsobol_render_draws_index_zero() {
+    let layout = ZSobolLayout::new(1, 1, 1, 3);
+    let mut s = layout.sampler(0, 0, 0);
+    let a = s.next_2d();
+    let b = s.next_1d();
+    assert!((0.0..1.0).contains(&a.x) && (0.0..1.0).contains(&a.y) && (0.0..1.0).contains(&b));
+    let mut padded = PaddedSobol::new(0, 0, 0, 1, 3);
+    assert!((0.0..1.0).contains(&padded.next_1d()));
+}
