@@ -1,11 +1,15 @@
 //! The interactive viewer: a window showing the progressive image, refined frame by frame
 //! as the thesis's running mean, with a mouse and keyboard camera.
 //!
-//! [`run`] opens a window (winit) the size of the image and, every frame, asks the given
-//! [`PreparedScene`] (prepared by any backend) for `spp_per_frame` more samples of every pixel into one [`Film`], whose
-//! per-pixel running mean g_i = g_{i−1} + (f_i − g_{i−1})/i is shown through a CPU
-//! framebuffer (softbuffer, so it works under Xvfb and needs no GPU surface). Any camera
-//! move or window resize starts the accumulation again.
+//! [`run`] opens a window (winit) the size of the image; a render thread (the private
+//! `worker` module) asks the given [`PreparedScene`] (prepared by any backend) for
+//! `spp_per_frame` more samples of every pixel each frame, through the backend's
+//! [`tracer::Accumulation`] (the GPU keeps its statistics on the device), and hands the
+//! per-pixel running mean g_i = g_{i−1} + (f_i − g_{i−1})/i to the window, which shows it
+//! through a CPU framebuffer (softbuffer, so it works under Xvfb and needs no GPU
+//! surface). The window never waits for a frame: input is handled while one renders. Any
+//! camera move starts the accumulation again, with one quarter-size preview frame first
+//! (shown scaled up, so dragging stays fluid); a resize starts it at the new size.
 //!
 //! Controls:
 //!
@@ -34,6 +38,7 @@
 //! Citations: "the thesis", "the lecture" and the papers named in comments are listed in `docs/references.md`.
 
 pub mod camera_control;
+mod worker;
 
 use anyhow::{Context as _, anyhow, bail};
 use camera_control::CameraControl;
@@ -42,7 +47,6 @@ use std::path::{Path, PathBuf};
 use std::rc::Rc;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
-use tracer::Accumulation;
 use tracer::RenderSettings;
 use tracer::film::MAX_PIXEL_SAMPLES;
 use tracer::render::{MAX_IMAGE_SIDE, PreparedScene};
@@ -52,6 +56,7 @@ use winit::event::{ElementState, KeyEvent, MouseButton, MouseScrollDelta, Window
 use winit::event_loop::{ActiveEventLoop, ControlFlow, EventLoop};
 use winit::keyboard::{Key, KeyCode, ModifiersState, NamedKey, PhysicalKey};
 use winit::window::{Window, WindowId};
+use worker::{Command, Frame, Pace, Worker};
 
 /// How the viewer window behaves.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -159,22 +164,33 @@ pub fn run(
         ..settings.clone()
     };
     let accumulation = Arc::clone(&scene).accumulate(&first).context("render settings")?;
+    let pace = Pace {
+        spp_per_frame: options.spp_per_frame,
+        max_spp: options.max_spp.unwrap_or(MAX_PIXEL_SAMPLES),
+        max_frames: options.exit_after_frames,
+    };
     let bounds = scene.scene().bounds();
     let scene_size = if bounds.is_empty() { 1.0 } else { bounds.extent().length() };
 
-    let mut builder = EventLoop::builder();
+    let mut builder = EventLoop::<Wake>::with_user_event();
     #[cfg(target_os = "linux")]
     winit::platform::x11::EventLoopBuilderExtX11::with_any_thread(&mut builder, true);
     let event_loop = builder.build().map_err(no_window)?;
+    let proxy = event_loop.create_proxy();
+    let worker = Worker::start(Arc::clone(&scene), accumulation, pace, move || {
+        let _ = proxy.send_event(Wake);
+    })?;
 
     let mut app = App {
-        accumulation,
+        worker,
+        generation: 0,
+        spp: 0,
+        refining: true,
         pixels: vec![0; options.width as usize * options.height as usize],
         control: CameraControl::new(camera, scene_size),
         scene,
         settings,
         options,
-        dirty: false,
         window: None,
         surface: None,
         input: Input::default(),
@@ -190,7 +206,7 @@ pub fn run(
     if let Some(path) = app.options.save_on_exit.clone() {
         app.save(&path)?;
     }
-    Ok(ViewStats { frames: app.stats.frames, spp: app.accumulation.samples(), samples_per_second: app.stats.rate() })
+    Ok(ViewStats { frames: app.stats.frames, spp: app.spp, samples_per_second: app.stats.rate() })
 }
 
 fn no_window(e: impl std::fmt::Display) -> anyhow::Error {
@@ -234,12 +250,15 @@ struct App {
     settings: RenderSettings,
     options: ViewerOptions,
     control: CameraControl,
-    /// The running render (on the device for the GPU backend: a frame reads back only
-    /// the display pixels).
-    accumulation: Box<dyn Accumulation>,
-    /// The camera or size changed since `accumulation` was started: restart it before
-    /// the next pass.
-    dirty: bool,
+    /// The render thread (it owns the running render: on the device for the GPU backend,
+    /// whose frames read back only the display pixels).
+    worker: Worker,
+    /// The view the window shows: frames of older views are dropped.
+    generation: u64,
+    /// Samples per pixel of the image on screen.
+    spp: u32,
+    /// Whether the worker is still refining the view (as of its last frame).
+    refining: bool,
     /// The image on screen, 0RGB.
     pixels: Vec<u32>,
     window: Option<Rc<Window>>,
@@ -253,12 +272,21 @@ struct App {
 
 impl App {
     fn refining(&self) -> bool {
-        self.dirty || self.accumulation.samples() < self.max_spp()
+        self.refining
     }
 
-    /// Where refining stops.
-    fn max_spp(&self) -> u32 {
-        self.options.max_spp.unwrap_or(MAX_PIXEL_SAMPLES)
+    /// The settings of the current view: the window's size, the user's camera, the
+    /// render's whole sample budget (for samplers that lay samples out for it).
+    fn view_settings(&self) -> RenderSettings {
+        let budget = self.options.max_spp.unwrap_or(self.options.spp_per_frame);
+        RenderSettings { spp: budget, camera: Some(self.control.camera()), ..self.settings.clone() }
+    }
+
+    /// Starts a new view on the worker; `preview` asks for a quick quarter-size frame first.
+    fn new_view(&mut self, preview: bool) {
+        self.generation += 1;
+        self.refining = true;
+        self.worker.send(Command::View { generation: self.generation, settings: self.view_settings(), preview });
     }
 
     fn fail(&mut self, event_loop: &ActiveEventLoop, e: anyhow::Error) {
@@ -290,43 +318,42 @@ impl App {
         self.settings.width = width;
         self.settings.height = height;
         self.pixels = vec![0; width as usize * height as usize];
-        self.dirty = true;
+        self.new_view(false);
     }
 
-    /// Marks the accumulation stale after a camera move and asks for a frame.
+    /// Restarts the render after a camera move, with a quick preview first.
     fn moved(&mut self) {
-        self.dirty = true;
-        if let Some(w) = &self.window {
-            w.request_redraw();
-        }
+        self.new_view(true);
     }
 
-    /// Adds one frame's samples and refreshes the displayed image.
-    fn render_pass(&mut self) -> anyhow::Result<()> {
-        let backend = self.scene.capabilities().backend;
-        if self.dirty {
-            // The render's whole sample budget (for samplers that lay samples out for
-            // it); each frame adds `spp_per_frame` of them.
-            let budget = self.options.max_spp.unwrap_or(self.options.spp_per_frame);
-            let settings = RenderSettings { spp: budget, camera: Some(self.control.camera()), ..self.settings.clone() };
-            self.accumulation.restart(&settings).with_context(|| format!("{backend} backend"))?;
-            self.dirty = false;
+    /// Shows a frame from the worker (if it belongs to the current view), scaled to the
+    /// window where it is a preview.
+    fn show(&mut self, frame: Frame) {
+        self.stats.frames = frame.frames;
+        self.stats.recent_samples += frame.samples - self.stats.samples;
+        self.stats.recent_time += frame.time.saturating_sub(self.stats.time);
+        self.stats.samples = frame.samples;
+        self.stats.time = frame.time;
+        if frame.generation != self.generation {
+            return;
         }
-        let spp = self.options.spp_per_frame.min(self.max_spp() - self.accumulation.samples());
-        if spp == 0 {
-            return Ok(());
+        let (w, h) = (self.settings.width as usize, self.settings.height as usize);
+        let (fw, fh) = (frame.width as usize, frame.height as usize);
+        if (fw, fh) == (w, h) {
+            self.pixels.copy_from_slice(&frame.pixels);
+        } else if fw > 0 && fh > 0 {
+            // Nearest neighbour: a preview (or a frame of the size before a resize).
+            for y in 0..h {
+                let row = &frame.pixels[(y * fh / h) * fw..][..fw];
+                for (x, p) in self.pixels[y * w..][..w].iter_mut().enumerate() {
+                    *p = row[x * fw / w];
+                }
+            }
         }
-        let start = Instant::now();
-        self.accumulation.add(spp).with_context(|| format!("{backend} backend"))?;
-        self.accumulation.display(&mut self.pixels).with_context(|| format!("{backend} backend"))?;
-        let elapsed = start.elapsed();
-        let samples = self.settings.width as u64 * self.settings.height as u64 * spp as u64;
-        self.stats.frames += 1;
-        self.stats.samples += samples;
-        self.stats.time += elapsed;
-        self.stats.recent_samples += samples;
-        self.stats.recent_time += elapsed;
-        Ok(())
+        if !frame.preview {
+            self.spp = frame.spp;
+            self.refining = frame.refining;
+        }
     }
 
     fn update_title(&mut self, force: bool) {
@@ -344,7 +371,7 @@ impl App {
         let title = format!(
             "spt — {} — {} spp, {:.2} M samples/s ({}){done}",
             self.options.title,
-            self.accumulation.samples(),
+            self.spp,
             self.title_rate / 1e6,
             self.scene.capabilities().backend
         );
@@ -366,33 +393,37 @@ impl App {
     }
 
     fn redraw(&mut self, event_loop: &ActiveEventLoop) {
-        let refining = self.refining();
-        if refining && let Err(e) = self.render_pass() {
-            return self.fail(event_loop, e);
-        }
-        self.update_title(refining && !self.refining());
         if let Err(e) = self.present() {
-            return self.fail(event_loop, e);
-        }
-        if let Some(n) = self.options.exit_after_frames
-            && (self.stats.frames >= n || !self.refining())
-        {
-            self.update_title(true);
-            event_loop.exit();
-            return;
-        }
-        if self.refining()
-            && let Some(w) = &self.window
-        {
-            w.request_redraw();
+            self.fail(event_loop, e);
         }
     }
 
-    /// Writes the current mean image, PNG or EXR by extension.
+    /// A frame is waiting (or the worker failed): show it and decide whether to quit.
+    fn frame_arrived(&mut self, event_loop: &ActiveEventLoop) {
+        let Some(frame) = self.worker.take() else { return };
+        let frame = match frame {
+            Ok(f) => f,
+            Err(e) => return self.fail(event_loop, e),
+        };
+        let was_refining = self.refining;
+        self.show(frame);
+        self.update_title(was_refining && !self.refining);
+        if let Some(w) = &self.window {
+            w.request_redraw();
+        }
+        if let Some(n) = self.options.exit_after_frames
+            && (self.stats.frames >= n || !self.refining)
+        {
+            self.update_title(true);
+            event_loop.exit();
+        }
+    }
+
+    /// Writes the current mean image, PNG or EXR by extension (the worker writes it
+    /// between frames).
     fn save(&mut self, path: &Path) -> anyhow::Result<()> {
-        let film = self.accumulation.film()?;
-        tracer::output::write_image(path, film.width(), film.height(), &film.mean_rgb())?;
-        eprintln!("saved {} ({} spp)", path.display(), self.accumulation.samples());
+        let spp = self.worker.save(path.to_path_buf())?;
+        eprintln!("saved {} ({spp} spp)", path.display());
         Ok(())
     }
 
@@ -426,7 +457,7 @@ impl App {
                 }
                 "p" | "x" if !event.repeat => {
                     let ext = if s.eq_ignore_ascii_case("p") { "png" } else { "exr" };
-                    let path = PathBuf::from(format!("spt-view-{}spp.{ext}", self.accumulation.samples()));
+                    let path = PathBuf::from(format!("spt-view-{}spp.{ext}", self.spp));
                     if let Err(e) = self.save(&path) {
                         eprintln!("cannot save the image: {e:#}");
                     }
@@ -477,7 +508,18 @@ impl App {
     }
 }
 
-impl ApplicationHandler for App {
+/// The worker's signal that a frame is in its mailbox.
+#[derive(Clone, Copy, Debug)]
+struct Wake;
+
+/// Divisor of the preview frames' width and height while the camera moves.
+const PREVIEW_DIVISOR: u32 = 4;
+
+impl ApplicationHandler<Wake> for App {
+    fn user_event(&mut self, event_loop: &ActiveEventLoop, _: Wake) {
+        self.frame_arrived(event_loop);
+    }
+
     fn resumed(&mut self, event_loop: &ActiveEventLoop) {
         event_loop.set_control_flow(ControlFlow::Wait);
         if self.window.is_none()
