@@ -27,7 +27,9 @@ bunny2="$OUT/bunny-sub2.obj"
 bench() { # NAME SCENE [ARGS...]: one scene on both backends
     local name=$1 scene=$2
     shift 2
-    local common=(--width "$W" --height "$H" --max-depth 5 --modes hero "$@")
+    # The independent sampler on both backends (the viewer's; the Sobol samplers' cost and
+    # gain are bench/gpu/samplers.sh's).
+    local common=(--width "$W" --height "$H" --max-depth 5 --modes hero --sampler independent "$@")
     echo "## $name"
     for width in $GPU_WIDTHS; do
         local gpu=(--backend gpu --bvh-width "$width")
