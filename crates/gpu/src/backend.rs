@@ -140,7 +140,7 @@ pub fn capabilities_for(integrator: GpuIntegrator) -> Capabilities {
         analytic_shapes: false,
         custom_bsdfs: false,
         triangle_tests: vec![TriangleTest::Watertight, TriangleTest::MollerTrumbore],
-        // Auto is the binary tree: on an H100 the 4-wide one (`crate::wide`) renders 1.2–1.7×
+        // Auto is the binary tree: on an H100 the 4-wide one (`crate::wide`) renders 1.2–1.8×
         // slower in this megakernel; it stays selectable for comparisons.
         bvh_widths: vec![BvhWidth::Auto, BvhWidth::Two, BvhWidth::Four],
         integrator: integrator.name(),

@@ -5,9 +5,9 @@
 //! GPUs, in a wavefront tracer).
 //!
 //! Measured here it does not pay: in our path-tracing megakernel on an H100 (1080p, 1
-//! spp, depth 5, viewer frames, same run) the binary BVH renders Sponza at 49 frames/s
-//! and the 4-wide at 31, the Cornell box at 252 and 146, a 1.1M-triangle mesh at 263 and
-//! 218 — the 128-byte nodes and the unrolled child loop cost more than the visits they
+//! spp, depth 5, viewer frames, same run) the binary BVH renders Sponza at 47 frames/s
+//! and the 4-wide at 30, the Cornell box at 223 and 151, a 1.1M-triangle mesh at 246 and
+//! 209 — the 128-byte nodes and the unrolled child loop cost more than the visits they
 //! save (the megakernel's occupancy is bound by its registers). So the binary BVH is the
 //! default (`auto`); this layout stays for comparisons and as the starting point for
 //! compressed nodes or a wavefront kernel (docs/gpu.md).
