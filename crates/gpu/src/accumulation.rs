@@ -250,6 +250,7 @@ impl DeviceAccumulation {
         let pixels = width as u64 * height as u64;
         let per_dispatch = (DISPATCH_BUDGET / pixels.max(1)).clamp(1, MAX_SAMPLES_PER_DISPATCH) as u32;
         let mut params = scene.kernel_params(&self.settings);
+        let pipeline = scene.pipeline(self.settings.sampler)?;
         params.band_y0 = 0;
         params.band_rows = height;
         let scope = ctx.device.push_error_scope(wgpu::ErrorFilter::Validation);
@@ -260,7 +261,7 @@ impl DeviceAccumulation {
             params.samples = n;
             ctx.queue.write_buffer(&self.buffers.params, 0, bytemuck::bytes_of(&params));
             let mut encoder = ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
-            scene.encode_dispatch(&mut encoder, &self.buffers.path_bind, width, height);
+            scene.encode_dispatch(&mut encoder, &pipeline, &self.buffers.path_bind, width, height);
             ctx.queue.submit([encoder.finish()]);
             self.samples += n;
             left -= n;

@@ -68,7 +68,7 @@
 use crate::accumulation::DeviceAccumulation;
 use crate::kernel::{
     FILM_HEADER_BYTES, GpuIntegrator, HAS_ENVIRONMENT, HAS_NORMALS, HAS_TANGENTS, KernelOptions, LIGHT_FLOATS,
-    NodeLayout, Params, PixelAccum, WideNode, sampler_code,
+    NodeLayout, Params, PixelAccum, WideNode,
 };
 use crate::wide::WideBvh;
 use crate::{GpuContext, GpuError};
@@ -379,7 +379,12 @@ pub struct GpuScene {
     ctx: Arc<GpuContext>,
     scene: Scene,
     bounds: Aabb,
-    pipeline: wgpu::ComputePipeline,
+    /// The kernels compiled so far, one per sampler (the sampler is compiled in).
+    pipelines: Mutex<Vec<(SamplerKind, wgpu::ComputePipeline)>>,
+    pipeline_layout: wgpu::PipelineLayout,
+    /// What another sampler's kernel is generated from.
+    material_wgsl: String,
+    kernel_options: KernelOptions,
     layout: wgpu::BindGroupLayout,
     params: wgpu::Buffer,
     /// Scene buffers in binding order 1–5, then the material buffers (10, 11).
@@ -397,6 +402,26 @@ pub struct GpuBackend {
 
 fn lock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
     m.lock().unwrap_or_else(PoisonError::into_inner)
+}
+
+/// Compiles the path kernel `source` into a pipeline with `layout`.
+fn compile(ctx: &GpuContext, layout: &wgpu::PipelineLayout, source: &str) -> Result<wgpu::ComputePipeline, GpuError> {
+    let device = &ctx.device;
+    let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
+    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some("spt path tracer"),
+        source: wgpu::ShaderSource::Wgsl(source.into()),
+    });
+    let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+        label: Some("spt path tracer"),
+        layout: Some(layout),
+        module: &module,
+        entry_point: Some("pt_main"),
+        compilation_options: Default::default(),
+        cache: None,
+    });
+    pop_scope(scope, "the path-tracing kernel does not compile")?;
+    Ok(pipeline)
 }
 
 /// Waits for an error scope and turns what it caught into a [`GpuError::Shader`].
@@ -448,6 +473,8 @@ impl GpuBackend {
                 max_bounces: MAX_BOUNCES,
                 nodes,
                 integrator: self.integrator,
+                // The kernel a render with the default sampler uses; others compile on demand.
+                sampler: capabilities_for(self.integrator).samplers[0],
             },
         )?;
         data.check_limits(&self.ctx.limits)?;
@@ -505,26 +532,12 @@ impl GpuBackend {
             immediate_size: 0,
         });
 
-        let source = data.shader_source();
         let compile_start = Instant::now();
-        let shader_scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
-        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("spt path tracer"),
-            source: wgpu::ShaderSource::Wgsl(source.into()),
-        });
-        let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: Some("spt path tracer"),
-            layout: Some(&pipeline_layout),
-            module: &module,
-            entry_point: Some("pt_main"),
-            compilation_options: Default::default(),
-            cache: None,
-        });
-        let shader_result = pop_scope(shader_scope, "the path-tracing kernel does not compile");
+        let shader_result = compile(&self.ctx, &pipeline_layout, &data.shader_source());
         let compile_time = compile_start.elapsed();
         let memory_result = pop_scope(memory, "out of GPU memory uploading the scene");
         let validation_result = pop_scope(validation, "uploading the scene");
-        shader_result?;
+        let pipeline = shader_result?;
         memory_result?;
         validation_result?;
 
@@ -542,7 +555,10 @@ impl GpuBackend {
             ctx: Arc::clone(&self.ctx),
             bounds: scene.bounds(),
             scene,
-            pipeline,
+            pipelines: Mutex::new(vec![(data.options.sampler, pipeline)]),
+            pipeline_layout,
+            material_wgsl: data.material_wgsl,
+            kernel_options: data.options,
             layout,
             params,
             buffers,
@@ -602,7 +618,6 @@ impl GpuScene {
                 GpuIntegrator::AmbientOcclusion { max_distance } => max_distance.min(3.0e38),
                 _ => 0.0,
             },
-            sampler: sampler_code(settings.sampler),
             sobol_offset: self.constants.sobol_offset,
             log2_spp: sobol_bits(settings.spp),
             unused_bits: match settings.sampler {
@@ -650,6 +665,7 @@ impl GpuScene {
         let fb = film_slot.as_ref().expect("just made");
 
         let mut params = self.kernel_params(settings);
+        let pipeline = self.pipeline(settings.sampler)?;
 
         // A crop window renders its rows whole; only its columns reach the film.
         let region = settings.region();
@@ -678,7 +694,7 @@ impl GpuScene {
                 if done == 0 || absolute(done) == 0 {
                     encoder.clear_buffer(&fb.accum, 0, Some(band_bytes));
                 }
-                self.encode_dispatch(&mut encoder, &fb.bind_group, width, rows);
+                self.encode_dispatch(&mut encoder, &pipeline, &fb.bind_group, width, rows);
                 let index = queue.submit([encoder.finish()]);
                 device
                     .poll(wgpu::PollType::Wait { submission_index: Some(index), timeout: None })
@@ -741,17 +757,33 @@ impl GpuScene {
         FilmBuffers { pixels, accum, readback, bind_group }
     }
 
-    /// Records one dispatch of the path kernel over `rows` rows of `width` pixels.
+    /// The kernel for `sampler`, compiled on first use (the scene's buffers and layout
+    /// stay; only the sampler's constant differs).
+    pub(crate) fn pipeline(&self, sampler: SamplerKind) -> Result<wgpu::ComputePipeline, GpuError> {
+        let mut pipelines = lock(&self.pipelines);
+        if let Some((_, p)) = pipelines.iter().find(|(s, _)| *s == sampler) {
+            return Ok(p.clone());
+        }
+        let options = KernelOptions { sampler, ..self.kernel_options };
+        let pipeline =
+            compile(&self.ctx, &self.pipeline_layout, &crate::kernel::source(&self.material_wgsl, &options))?;
+        pipelines.push((sampler, pipeline.clone()));
+        Ok(pipeline)
+    }
+
+    /// Records one dispatch of `pipeline` (the path kernel) over `rows` rows of `width`
+    /// pixels.
     pub(crate) fn encode_dispatch(
         &self,
         encoder: &mut wgpu::CommandEncoder,
+        pipeline: &wgpu::ComputePipeline,
         bind_group: &wgpu::BindGroup,
         width: u32,
         rows: u32,
     ) {
         let mut pass =
             encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("spt"), timestamp_writes: None });
-        pass.set_pipeline(&self.pipeline);
+        pass.set_pipeline(pipeline);
         pass.set_bind_group(0, bind_group, &[]);
         pass.dispatch_workgroups(width.div_ceil(WORKGROUP), rows.div_ceil(WORKGROUP), 1);
     }

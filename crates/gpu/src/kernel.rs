@@ -150,8 +150,8 @@ wgsl_struct! {
         white_offset: u32,
         /// The ambient-occlusion probe's reach (finite: `PT_FAR` stands for ∞).
         ao_distance: f32,
-        /// [`sampler_code`] of the render's sampler.
-        sampler: u32,
+        /// Padding to the uniform block's 16-byte multiple.
+        pad: u32,
         /// Offset of the Sobol sampler's bit-reversed second-dimension tables in `pt_tables`.
         sobol_offset: u32,
         /// ZSobol: log₂ of the samples per pixel (rounded up to a power of two).
@@ -298,6 +298,8 @@ pub struct KernelOptions {
     pub nodes: NodeLayout,
     /// The integrator compiled in.
     pub integrator: GpuIntegrator,
+    /// The sampler compiled in (`PT_SAMPLER`): a render with another gets another kernel.
+    pub sampler: SamplerKind,
 }
 
 /// An f32 as a WGSL literal that parses back to the same value.
@@ -353,6 +355,7 @@ pub fn header(options: &KernelOptions) -> String {
     u("PT_LIGHT_MATERIAL", LIGHT_MATERIAL);
     u("PT_STACK", stack);
     u("PT_INTEGRATOR", options.integrator.code());
+    u("PT_SAMPLER", sampler_code(options.sampler));
     for kind in SamplerKind::ALL {
         u(&format!("PT_SAMPLER_{}", kind.name().to_ascii_uppercase()), sampler_code(kind));
     }

@@ -182,6 +182,7 @@ fn kernel_options() -> gpu::kernel::KernelOptions {
         max_bounces: gpu::backend::MAX_BOUNCES,
         nodes: gpu::kernel::NodeLayout::Binary,
         integrator: gpu::kernel::GpuIntegrator::Path,
+        sampler: tracer::sampler::SamplerKind::ZSobol,
     }
 }
 

@@ -14,6 +14,7 @@ fn options(triangle_test: bvh::TriangleTest) -> KernelOptions {
         max_bounces: gpu::backend::MAX_BOUNCES,
         nodes: gpu::kernel::NodeLayout::Wide4 { stack: 24 },
         integrator: gpu::kernel::GpuIntegrator::Path,
+        sampler: tracer::sampler::SamplerKind::ZSobol,
     }
 }
 

@@ -1,8 +1,8 @@
 // Where the integrators' random numbers come from, mirroring crates/tracer/src/sampler.rs:
 // independent PCG32 per pixel sample (`Pcg32`), per-pixel Owen-scrambled Sobol
 // (`PaddedSobol`) and Owen-scrambled Sobol in Morton order over the image (`ZSobol`,
-// after Ahmed & Wonka 2020 and pbrt-v4's `ZSobolSampler`), chosen per render by
-// `pt_params.sampler` (a uniform branch). The Sobol samplers reproduce the CPU's values
+// after Ahmed & Wonka 2020 and pbrt-v4's `ZSobolSampler`), the one `PT_SAMPLER` names
+// compiled in (the backend keeps a kernel per sampler used). The Sobol samplers reproduce the CPU's values
 // bit for bit: 64-bit scrambles on (lo, hi) word pairs, the second dimension from the
 // CPU's bit-reversed tables (uploaded into `pt_tables`).
 
@@ -85,11 +85,11 @@ fn pt_spread16(v0: u32) -> u32 {
 
 fn pt_sampler_for(x: u32, y: u32, pixel: u32, sample: u32) -> PtSampler {
     var s = PtSampler(PtRng(vec2u(0u), vec2u(0u)), vec2u(0u), vec2u(0u), 0u);
-    if pt_params.sampler == PT_SAMPLER_ZSOBOL {
+    if PT_SAMPLER == PT_SAMPLER_ZSOBOL {
         let morton = vec2u((pt_spread16(x) | (pt_spread16(y) << 1u)), 0u);
         let index = pt_shl64_any(morton, pt_params.log2_spp) | vec2u(sample, 0u);
         s.reversed = pt_reverse64(pt_shl64_any(index, pt_params.unused_bits));
-    } else if pt_params.sampler == PT_SAMPLER_SOBOL {
+    } else if PT_SAMPLER == PT_SAMPLER_SOBOL {
         let seed = vec2u(pt_params.seed_lo, pt_params.seed_hi);
         s.pixel = pt_mix64(seed ^ pt_mix64(vec2u(y, x)));
         if pt_params.unused_bits < 64u {
@@ -105,7 +105,7 @@ fn pt_sampler_for(x: u32, y: u32, pixel: u32, sample: u32) -> PtSampler {
 fn pt_sobol_draw(s: ptr<function, PtSampler>, dims: u32) -> array<vec2u, 2> {
     let d = vec2u((*s).dimension, 0u);
     (*s).dimension += dims;
-    if pt_params.sampler == PT_SAMPLER_ZSOBOL {
+    if PT_SAMPLER == PT_SAMPLER_ZSOBOL {
         let seed = vec2u(pt_params.zseed_lo, pt_params.zseed_hi);
         let index_seed = pt_mix64(seed ^ pt_mul64(d, PT_DIMENSION_MUL));
         let value_seed = pt_mix64(vec2u(0u, d.x) ^ seed ^ PT_VALUE_SEED_KEY);
@@ -121,7 +121,7 @@ fn pt_sobol_draw(s: ptr<function, PtSampler>, dims: u32) -> array<vec2u, 2> {
 }
 
 fn pt_next_1d(s: ptr<function, PtSampler>) -> f32 {
-    if pt_params.sampler == PT_SAMPLER_INDEPENDENT {
+    if PT_SAMPLER == PT_SAMPLER_INDEPENDENT {
         // Through a local copy: naga 30's SPIR-V writer rejects a pointer to a member of a
         // pointer argument.
         var r = (*s).rng;
@@ -134,7 +134,7 @@ fn pt_next_1d(s: ptr<function, PtSampler>) -> f32 {
 }
 
 fn pt_next_2d(s: ptr<function, PtSampler>) -> vec2f {
-    if pt_params.sampler == PT_SAMPLER_INDEPENDENT {
+    if PT_SAMPLER == PT_SAMPLER_INDEPENDENT {
         var r = (*s).rng;
         let v = pt_rng_2d(&r);
         (*s).rng = r;
@@ -150,7 +150,7 @@ fn pt_next_2d(s: ptr<function, PtSampler>) -> vec2f {
 // independent sampler draws the wavelength first; the Sobol samplers give their best
 // stratified first pair to the jitter.
 fn pt_camera(s: ptr<function, PtSampler>) -> vec3f {
-    if pt_params.sampler == PT_SAMPLER_INDEPENDENT {
+    if PT_SAMPLER == PT_SAMPLER_INDEPENDENT {
         let u = pt_next_1d(s);
         let j = pt_next_2d(s);
         return vec3f(u, j);
