@@ -364,6 +364,12 @@ struct RenderArgs {
     /// Also write the per-pixel standard error of the mean (linear EXR).
     #[arg(long)]
     stderr: Option<PathBuf>,
+    /// Measure the render against this image (linear EXR of the same size) as it goes:
+    /// passes end at powers of two of the sample count and each prints its relMSE (as
+    /// `spt compare` defines it; pbrt's --mse-reference-image). The image written is the
+    /// one a render without it writes.
+    #[arg(long, value_name = "REF.exr")]
+    reference: Option<PathBuf>,
     #[command(flatten)]
     pieces: shards::PieceArgs,
 }
@@ -597,6 +603,22 @@ fn run_render(args: RenderArgs) -> Result<()> {
     if !s.has_lights() {
         eprintln!("warning: the scene has no light (no Ke > 0, and --sky none): the image will be black");
     }
+    if let Some(reference) = &args.reference {
+        let p = &args.pieces;
+        if p.shard.is_some() || p.time.is_some() || p.write_partial.is_some() || p.partial.is_some() {
+            bail!(
+                "--reference measures one whole render pass by pass: it does not combine with --shard, --time, \
+                 --write-partial or --partial"
+            );
+        }
+        let (film, stats) = render_against_reference(prepared.as_ref(), &settings, reference)?;
+        shards::write_image_atomically(&args.output, &film, &film.mean_rgb())?;
+        if let Some(p) = &args.stderr {
+            shards::write_image_atomically(p, &film, &film.std_error_rgb())?;
+        }
+        report(&args.output, &stats, &prepared.capabilities());
+        return Ok(());
+    }
     let bar = ProgressBar::new(0).with_style(
         ProgressStyle::with_template("{bar:40} {percent:>3}% {human_pos}/{human_len} samples, ETA {eta}")
             .expect("static template"),
@@ -638,6 +660,41 @@ fn run_render(args: RenderArgs) -> Result<()> {
         );
     }
     Ok(())
+}
+
+/// `spt render --reference`: the render in passes that end at every power of two of the
+/// sample count that is a multiple of the backend's sample block (so the film's bytes are
+/// those of one pass), with the relMSE against the reference printed after each.
+fn render_against_reference(
+    prepared: &dyn PreparedScene,
+    settings: &RenderSettings,
+    path: &Path,
+) -> Result<(tracer::Film, RenderStats)> {
+    let (rw, rh, reference) = tracer::output::read_rgb32f(path)?;
+    if (rw, rh) != (settings.width, settings.height) {
+        bail!("{}: the reference is {rw}×{rh}, the render {}×{}", path.display(), settings.width, settings.height);
+    }
+    let block = prepared.capabilities().sample_block.max(1);
+    let mut ends: Vec<u32> = std::iter::successors(Some(1u32), |n| n.checked_mul(2))
+        .take_while(|&n| n < settings.spp)
+        .filter(|n| n % block == 0)
+        .collect();
+    ends.push(settings.spp);
+    let mut film = tracer::Film::new(settings.width, settings.height);
+    let (mut done, mut wall) = (0, std::time::Duration::ZERO);
+    let mut counters = tracer::integrator::PathCounters::default();
+    eprintln!("{:>8}  {:>11}  {:>9}", "spp", "relMSE", "seconds");
+    for end in ends {
+        let start = Instant::now();
+        counters += prepared.render_pass(settings, &mut film, done, end - done, &|_| {})?;
+        wall += start.elapsed();
+        done = end;
+        eprintln!("{done:>8}  {:>11.4e}  {:>9.3}", compare::rel_mse(&film.mean_rgb(), &reference), wall.as_secs_f64());
+    }
+    let samples = settings.width as u64 * settings.height as u64 * settings.spp as u64;
+    let stats =
+        RenderStats { wall, samples, rays: counters.rays, non_finite: film.non_finite, truncated: counters.truncated };
+    Ok((film, stats))
 }
 
 fn run_bench(args: BenchArgs) -> Result<()> {

@@ -470,3 +470,42 @@ fn the_gpu_viewer_saves_the_image_a_render_of_its_samples_gives() {
     let (a, b) = (std::fs::read(&viewed).unwrap(), std::fs::read(&rendered).unwrap());
     assert!(a == b, "the viewer's 6 spp differ from the render's");
 }
+
+/// `spt render --reference REF.exr` prints the relMSE after passes ending at 1, 2, 4, …
+/// spp (falling as the render converges), writes the image a render without it writes,
+/// and refuses a reference of another size or a sharded render by name.
+#[test]
+fn render_measures_its_error_against_a_reference_as_it_goes() {
+    let dir = temp_dir("reference");
+    let scene = write_scene(&dir, OBJ);
+    let (reference, measured, plain) = (dir.join("ref.exr"), dir.join("measured.exr"), dir.join("plain.exr"));
+    assert!(render_small(&scene, (16, 12, 256), &reference, &["--seed", "99"]).status.success());
+    let o = render_small(&scene, (16, 12, 16), &measured, &["--reference", reference.to_str().unwrap()]);
+    let err = stderr(&o);
+    assert!(o.status.success(), "{err}");
+    let rows: Vec<(u32, f64)> = err
+        .lines()
+        .filter_map(|l| {
+            let mut f = l.split_whitespace();
+            Some((f.next()?.parse().ok()?, f.next()?.parse().ok()?))
+        })
+        .collect();
+    assert_eq!(rows.iter().map(|r| r.0).collect::<Vec<_>>(), [1, 2, 4, 8, 16], "{err}");
+    assert!(rows[4].1 < rows[0].1 / 4.0, "the error falls with the samples: {rows:?}");
+    assert!(render_small(&scene, (16, 12, 16), &plain, &[]).status.success());
+    assert!(std::fs::read(&measured).unwrap() == std::fs::read(&plain).unwrap(), "the same image either way");
+    let o = render_small(&scene, (8, 8, 4), &measured, &["--reference", reference.to_str().unwrap()]);
+    assert!(!o.status.success() && stderr(&o).contains("the reference is 16×12, the render 8×8"), "{}", stderr(&o));
+    let sharded = dir.join("piece.partial");
+    let o = spt(&[
+        "render",
+        scene.to_str().unwrap(),
+        "--reference",
+        reference.to_str().unwrap(),
+        "--shard",
+        "1/2",
+        "-o",
+        sharded.to_str().unwrap(),
+    ]);
+    assert!(!o.status.success() && stderr(&o).contains("does not combine with --shard"), "{}", stderr(&o));
+}
