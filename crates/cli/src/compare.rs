@@ -178,7 +178,9 @@ pub fn run(args: CompareArgs) -> Result<()> {
     let bar = ProgressBar::new(total)
         .with_style(ProgressStyle::with_template("{bar:40} {percent:>3}% {msg} ETA {eta}").expect("static template"));
     let mut rows = Vec::new();
+    let crop = Crop::centred(w, h);
     for config in &configs {
+        let mut strip = Vec::new();
         let (scene_args, mode) = config.apply(&args.scene, SpectralMode::Hero)?;
         let (prepared, base) = prepare(&scene_args, args.spp_max, mode, best_sampler)
             .with_context(|| format!("configuration '{}'", config.name))?;
@@ -188,6 +190,13 @@ pub fn run(args: CompareArgs) -> Result<()> {
             let settings = tracer::RenderSettings { spp, ..base.clone() };
             let (film, stats) = tracer::render(prepared.as_ref(), &settings, &|n| bar.inc(n))?;
             let rgb = film.mean_rgb();
+            strip.push(crop.cut(&rgb, w));
+            if spp == *budgets.last().expect("at least one budget") {
+                let heat = heat_map(&rgb, &reference_rgb);
+                let path = args.output.join(format!("heat-{}.png", file_name(&config.name)));
+                image::save_buffer(&path, &heat, w, h, image::ColorType::Rgb8)
+                    .with_context(|| format!("writing {}", path.display()))?;
+            }
             rows.push(Measurement {
                 config: config.name.clone(),
                 spp,
@@ -197,6 +206,9 @@ pub fn run(args: CompareArgs) -> Result<()> {
                 ssim: ssim(&luminance_srgb(&rgb), &luminance_srgb(&reference_rgb), w as usize, h as usize),
             });
         }
+        strip.push(crop.cut(&reference_rgb, w));
+        let path = args.output.join(format!("strip-{}.png", file_name(&config.name)));
+        crop.write_strip(&path, &strip)?;
     }
     bar.finish_and_clear();
     let csv_path = args.output.join("compare.csv");
@@ -210,6 +222,72 @@ pub fn run(args: CompareArgs) -> Result<()> {
     print!("{}", table(&rows));
     eprintln!("wrote {} and its charts", csv_path.display());
     Ok(())
+}
+
+/// The part of the image a convergence strip shows: a centred square of at most 128
+/// pixels a side.
+struct Crop {
+    x: u32,
+    y: u32,
+    side: u32,
+}
+
+impl Crop {
+    fn centred(width: u32, height: u32) -> Self {
+        let side = width.min(height).min(128);
+        Self { x: (width - side) / 2, y: (height - side) / 2, side }
+    }
+
+    /// The crop of a linear RGB image `width` wide, row-major RGB.
+    fn cut(&self, rgb: &[f32], width: u32) -> Vec<f32> {
+        (self.y..self.y + self.side)
+            .flat_map(|y| {
+                let start = 3 * (y * width + self.x) as usize;
+                rgb[start..start + 3 * self.side as usize].iter().copied()
+            })
+            .collect()
+    }
+
+    /// The crops side by side, left to right (each budget, then the reference), sRGB.
+    fn write_strip(&self, path: &Path, crops: &[Vec<f32>]) -> Result<()> {
+        let side = self.side as usize;
+        let width = side * crops.len();
+        let mut pixels = vec![0u8; 3 * width * side];
+        for (k, crop) in crops.iter().enumerate() {
+            for y in 0..side {
+                for x in 0..side {
+                    for c in 0..3 {
+                        pixels[3 * (y * width + k * side + x) + c] = spectral::srgb_to_u8(crop[3 * (y * side + x) + c]);
+                    }
+                }
+            }
+        }
+        image::save_buffer(path, &pixels, width as u32, side as u32, image::ColorType::Rgb8)
+            .with_context(|| format!("writing {}", path.display()))
+    }
+}
+
+/// The per-pixel relative squared error (as [`rel_mse`], averaged over the channels) as
+/// an 8-bit RGB heat map on a fixed logarithmic scale — 10⁻⁵ and below black, then dark
+/// red, orange, yellow, 1 and above white — so that the maps of several configurations
+/// compare by eye.
+fn heat_map(image: &[f32], reference: &[f32]) -> Vec<u8> {
+    image
+        .chunks_exact(3)
+        .zip(reference.chunks_exact(3))
+        .flat_map(|(x, r)| {
+            let e = rel_mse(x, r).max(1e-12);
+            let t = ((e.log10() + 5.0) / 5.0).clamp(0.0, 1.0) as f32;
+            // Black → red → yellow → white in three equal thirds of t.
+            let ramp = |from: f32| ((3.0 * t - from).clamp(0.0, 1.0) * 255.0).round() as u8;
+            [ramp(0.0), ramp(1.0), ramp(2.0)]
+        })
+        .collect()
+}
+
+/// A configuration's name as a file name: letters, digits and `-` only.
+fn file_name(name: &str) -> String {
+    name.chars().map(|c| if c.is_ascii_alphanumeric() { c } else { '-' }).collect()
 }
 
 /// Mean over pixel-channels of (x − r)² / (r² + 10⁻²): the relative MSE of
@@ -419,6 +497,30 @@ where
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The heat map's scale: no error is black, 10⁻⁵ still black, 10⁻² past red into
+    /// orange, ≥ 1 white; the crop takes the centred square, row by row.
+    #[test]
+    fn heat_maps_and_crops() {
+        let reference = [0.5f32, 0.5, 0.5];
+        let heat = |x: f32| heat_map(&[x, x, x], &reference);
+        assert_eq!(heat(0.5), [0, 0, 0]);
+        // (x − r)² / (r² + 0.01) = 1e-5 at the bottom of the scale.
+        assert_eq!(heat(0.5 + (1e-5f32 * 0.26).sqrt()), [0, 0, 0]);
+        let mid = heat(0.5 + (1e-2f32 * 0.26).sqrt());
+        assert!(mid[0] == 255 && mid[1] > 0 && mid[1] < 255 && mid[2] == 0, "{mid:?}");
+        assert_eq!(heat(5.0), [255, 255, 255]);
+        assert_eq!(file_name("gpu zsobol/2"), "gpu-zsobol-2");
+
+        let (w, h) = (5u32, 3u32);
+        let rgb: Vec<f32> = (0..w * h * 3).map(|i| i as f32).collect();
+        let crop = Crop::centred(w, h);
+        assert_eq!((crop.x, crop.y, crop.side), (1, 0, 3));
+        let cut = crop.cut(&rgb, w);
+        assert_eq!(cut.len(), 27);
+        assert_eq!(&cut[..3], &rgb[3..6], "row 0 starts at column 1");
+        assert_eq!(&cut[9..12], &rgb[18..21], "row 1 starts at pixel 6");
+    }
 
     #[test]
     fn ssim_is_one_for_equal_images_and_falls_with_noise() {

@@ -418,6 +418,23 @@ fn compare_charts_error_against_time() {
     }
     assert!(std::fs::metadata(out.join("compare.svg")).unwrap().len() > 1000);
     assert!(image::open(out.join("compare.png")).is_ok());
+    // A convergence strip per configuration (a 16-pixel crop at 1, 2, 4, 8 spp and the
+    // reference) and a heat map of its error at the largest budget.
+    for config in ["path", "direct"] {
+        let strip = image::open(out.join(format!("strip-{config}.png"))).unwrap();
+        assert_eq!((strip.width(), strip.height()), (5 * 16, 16), "{config}");
+        let heat = image::open(out.join(format!("heat-{config}.png"))).unwrap().into_rgb8();
+        assert_eq!(heat.dimensions(), (24, 16), "{config}");
+    }
+    // The strip ends with the reference's centred crop (columns 4..20), sRGB-encoded.
+    let reference = image::open(out.join("reference.exr")).unwrap().into_rgb32f();
+    let strip = image::open(out.join("strip-path.png")).unwrap().into_rgb8();
+    for (x, y) in [(0, 0), (7, 9), (15, 15)] {
+        let expected = reference.get_pixel(4 + x, y).0.map(spectral::srgb_to_u8);
+        assert_eq!(strip.get_pixel(4 * 16 + x, y).0, expected, "strip pixel ({x}, {y})");
+    }
+    let heat = image::open(out.join("heat-path.png")).unwrap().into_rgb8();
+    assert!(heat.pixels().any(|p| p.0 != [0, 0, 0]), "8 spp leave some error");
     assert!(String::from_utf8_lossy(&o.stdout).contains("efficiency"));
 
     let small = dir.join("small.exr");
