@@ -404,6 +404,16 @@ fn lock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
     m.lock().unwrap_or_else(PoisonError::into_inner)
 }
 
+/// A compute-stage buffer binding of a bind group layout.
+pub(crate) fn buffer_entry(binding: u32, ty: wgpu::BufferBindingType) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Buffer { ty, has_dynamic_offset: false, min_binding_size: None },
+        count: None,
+    }
+}
+
 /// Compiles the path kernel `source` into a pipeline with `layout`.
 fn compile(ctx: &GpuContext, layout: &wgpu::PipelineLayout, source: &str) -> Result<wgpu::ComputePipeline, GpuError> {
     let device = &ctx.device;
@@ -511,18 +521,12 @@ impl GpuBackend {
             mapped_at_creation: false,
         });
 
-        let entry = |binding: u32, ty: wgpu::BufferBindingType| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility: wgpu::ShaderStages::COMPUTE,
-            ty: wgpu::BindingType::Buffer { ty, has_dynamic_offset: false, min_binding_size: None },
-            count: None,
-        };
         let read = wgpu::BufferBindingType::Storage { read_only: true };
         let entries: Vec<_> = [(0, wgpu::BufferBindingType::Uniform)]
             .into_iter()
             .chain([1, 2, 3, 4, 5, 10, 11].map(|b| (b, read)))
             .chain([(6, wgpu::BufferBindingType::Storage { read_only: false })])
-            .map(|(b, ty)| entry(b, ty))
+            .map(|(b, ty)| buffer_entry(b, ty))
             .collect();
         let layout =
             device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: Some("spt"), entries: &entries });
