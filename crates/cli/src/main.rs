@@ -502,6 +502,9 @@ fn prepare(
     let settings = settings(args, spp, mode, sampler, &scene)?;
     backend.capabilities().check_settings(&settings)?;
     let prepared = backend.prepare(scene, &scene_options(args))?;
+    // Kernel compilation for a non-default sampler belongs to preparation, not to the
+    // timed render.
+    prepared.warm_up(&settings)?;
     Ok((prepared, settings))
 }
 

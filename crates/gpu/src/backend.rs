@@ -761,6 +761,11 @@ impl GpuScene {
         FilmBuffers { pixels, accum, readback, bind_group }
     }
 
+    /// The samplers whose kernels are compiled, in the order they were.
+    pub fn compiled_samplers(&self) -> Vec<SamplerKind> {
+        lock(&self.pipelines).iter().map(|(s, _)| *s).collect()
+    }
+
     /// The kernel for `sampler`, compiled on first use (the scene's buffers and layout
     /// stay; only the sampler's constant differs).
     pub(crate) fn pipeline(&self, sampler: SamplerKind) -> Result<wgpu::ComputePipeline, GpuError> {
@@ -906,6 +911,12 @@ impl PreparedScene for GpuScene {
         check_pass(self, settings, film)?;
         check_sample_range(settings, first_sample, spp)?;
         Ok(self.render_gpu(settings, film, first_sample, spp, progress)?)
+    }
+
+    /// Compiles the kernel for the settings' sampler (one per sampler, kept).
+    fn warm_up(&self, settings: &RenderSettings) -> tracer::Result<()> {
+        self.pipeline(settings.sampler)?;
+        Ok(())
     }
 
     /// Statistics on the device ([`DeviceAccumulation`]) where the whole image's

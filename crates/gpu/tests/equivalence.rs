@@ -588,6 +588,10 @@ fn sobol_samplers_match_the_cpu() {
     let Some(scene) = cornell() else { return };
     let gpu = GpuBackend::with_context(ctx);
     let (cpu_scene, gpu_scene) = prepare_both(&gpu, &scene).unwrap();
+    // Preparing compiles the default sampler's kernel; warming up compiles another's.
+    assert_eq!(gpu_scene.compiled_samplers(), [SamplerKind::ZSobol]);
+    gpu_scene.warm_up(&RenderSettings { sampler: SamplerKind::Independent, ..settings(8, 8, 1) }).unwrap();
+    assert_eq!(gpu_scene.compiled_samplers(), [SamplerKind::ZSobol, SamplerKind::Independent]);
     let mut failures = Vec::new();
     for sampler in [SamplerKind::Independent, SamplerKind::ZSobol, SamplerKind::Sobol] {
         let s = RenderSettings { sampler, ..settings(32, 32, 64) };

@@ -321,6 +321,14 @@ pub trait PreparedScene: Send + Sync + 'static {
         progress: &(dyn Fn(u64) + Sync),
     ) -> Result<PathCounters>;
 
+    /// Does ahead of a render what its first pass with `settings` would otherwise do
+    /// inside the timed render (the GPU compiles the kernel for the settings' sampler);
+    /// the default does nothing.
+    fn warm_up(&self, settings: &RenderSettings) -> Result<()> {
+        let _ = settings;
+        Ok(())
+    }
+
     /// An empty [`Accumulation`] of this scene seen with `settings`, for frame-by-frame
     /// refinement (a viewer). The default renders passes into a film
     /// ([`FilmAccumulation`]); a backend whose film would have to travel (the GPU's)
