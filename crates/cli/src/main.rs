@@ -60,6 +60,84 @@ enum Command {
     /// samplers, triangle tests, BVH widths, backends) at 1, 2, 4, … spp, measure relMSE
     /// and SSIM against a reference, and chart error against time (CSV, PNG, SVG).
     Compare(compare::CompareArgs),
+    /// Print what a scene holds: geometry counts, materials by model, lights, the
+    /// environment, the memory its arrays take and its bounds.
+    Info(InfoArgs),
+}
+
+#[derive(Args)]
+struct InfoArgs {
+    /// The scene: an .obj file (with its .mtl), or a built-in scene `builtin:NAME`.
+    scene: PathBuf,
+}
+
+/// `spt info`: a scene's contents, as loaded (before any default sky is added).
+fn run_info(args: InfoArgs) -> Result<()> {
+    let scene = load_scene(&args.scene)?;
+    println!("{}", args.scene.display());
+    println!(
+        "  geometry: {} triangles, {} vertices ({} with shading normals, {} with tangents), {} analytic shapes",
+        scene.triangles.len(),
+        scene.positions.len(),
+        scene.normals.len(),
+        scene.tangents.len(),
+        scene.shapes.len()
+    );
+    let mut shape_kinds: std::collections::BTreeMap<&str, usize> = Default::default();
+    for s in &scene.shapes {
+        *shape_kinds.entry(s.shape.name()).or_default() += 1;
+    }
+    for (kind, n) in &shape_kinds {
+        println!("    {n} × {kind}");
+    }
+    // Per model, each name once (OBJ files repeat materials), with how often it occurs.
+    let mut by_model: std::collections::BTreeMap<String, Vec<(&str, usize)>> = Default::default();
+    for m in &scene.materials {
+        let model = m.model().map_or("custom".to_string(), |id| id.name().to_string());
+        let names = by_model.entry(model).or_default();
+        match names.iter_mut().find(|(n, _)| *n == m.name) {
+            Some((_, k)) => *k += 1,
+            None => names.push((&m.name, 1)),
+        }
+    }
+    println!("  materials: {}", scene.materials.len());
+    for (model, names) in &by_model {
+        let listed: Vec<String> =
+            names.iter().map(|&(n, k)| if k > 1 { format!("{n} ×{k}") } else { n.to_string() }).collect();
+        println!("    {model}: {}", listed.join(", "));
+    }
+    let emissive: Vec<&str> =
+        scene.materials.iter().filter(|m| m.emission.is_some()).map(|m| m.name.as_str()).collect();
+    let emits = |id: u32| scene.materials.get(id as usize).is_some_and(|m| m.emission.is_some());
+    let emitting_triangles = scene.material_ids.iter().filter(|&&id| emits(id)).count();
+    let emitting_shapes = scene.shapes.iter().filter(|s| emits(s.material)).count();
+    println!(
+        "  lights: {emitting_triangles} emissive triangles, {emitting_shapes} emissive shapes ({} emissive \
+         materials{}), environment: {}",
+        emissive.len(),
+        if emissive.is_empty() { String::new() } else { format!(": {}", emissive.join(", ")) },
+        if scene.environment.is_some() { "yes" } else { "none" }
+    );
+    if !scene.has_lights() {
+        println!("    no light: renders get the default white sky (--sky)");
+    }
+    let bytes = std::mem::size_of_val(scene.positions.as_slice())
+        + std::mem::size_of_val(scene.normals.as_slice())
+        + std::mem::size_of_val(scene.tangents.as_slice())
+        + std::mem::size_of_val(scene.triangles.as_slice())
+        + std::mem::size_of_val(scene.material_ids.as_slice())
+        + std::mem::size_of_val(scene.shapes.as_slice());
+    println!("  memory: {:.1} kB of vertex, triangle and shape arrays (before any BVH)", bytes as f64 / 1e3);
+    let b = scene.bounds();
+    if b.is_empty() {
+        println!("  bounds: empty");
+    } else {
+        println!("  bounds: {:?} – {:?} (extent {:?})", b.min.to_array(), b.max.to_array(), b.extent().to_array());
+    }
+    if let Some(c) = &scene.camera {
+        println!("  camera: eye {:?}, centre {:?}, fov {}°", c.eye.to_array(), c.center.to_array(), c.fov_y_deg);
+    }
+    Ok(())
 }
 
 #[derive(Args)]
@@ -811,6 +889,7 @@ fn main() -> ExitCode {
         Command::Rays(c) => rays::run(c).context("rays failed"),
         Command::Merge(a) => shards::run_merge(a).context("merge failed"),
         Command::Compare(a) => compare::run(a).context("compare failed"),
+        Command::Info(a) => run_info(a).context("info failed"),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -526,3 +526,24 @@ fn render_measures_its_error_against_a_reference_as_it_goes() {
     ]);
     assert!(!o.status.success() && stderr(&o).contains("does not combine with --shard"), "{}", stderr(&o));
 }
+
+/// `spt info` lists what a scene holds: its triangles, its materials under their models,
+/// its lights (or that it has none and will get the white sky), and names a missing file.
+#[test]
+fn info_lists_geometry_materials_and_lights() {
+    let dir = temp_dir("info");
+    let scene = write_scene(&dir, OBJ);
+    let o = spt(&["info", scene.to_str().unwrap()]);
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(out.contains("geometry: 4 triangles, 8 vertices"), "{out}");
+    assert!(out.contains("lambert: white, lamp"), "{out}");
+    assert!(out.contains("lights: 2 emissive triangles, 0 emissive shapes (1 emissive materials: lamp)"), "{out}");
+    assert!(!out.contains("no light"), "{out}");
+    let dark = dir.join("dark.obj");
+    std::fs::write(&dark, OBJ.replace("usemtl lamp\n", "usemtl white\n")).unwrap();
+    let o = spt(&["info", dark.to_str().unwrap()]);
+    assert!(String::from_utf8_lossy(&o.stdout).contains("no light: renders get the default white sky"));
+    let o = spt(&["info", dir.join("missing.obj").to_str().unwrap()]);
+    assert!(!o.status.success() && stderr(&o).contains("missing.obj"), "{}", stderr(&o));
+}
