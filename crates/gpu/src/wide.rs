@@ -32,10 +32,6 @@ pub struct WideBvh {
     pub stack_bound: u32,
 }
 
-/// A child slot while collapsing: a binary node's index.
-#[derive(Clone, Copy)]
-struct Slot(u32);
-
 fn area(n: &BvhNode) -> f32 {
     Aabb { min: glam::Vec3::from_array(n.min), max: glam::Vec3::from_array(n.max) }.surface_area()
 }
@@ -50,26 +46,25 @@ impl WideBvh {
             return wide;
         }
         // The root is always a wide node, even over a single leaf.
-        let root_children = if binary[0].count > 0 { vec![Slot(0)] } else { Self::children(binary, 0) };
+        let root_children = if binary[0].count > 0 { vec![0] } else { Self::children(binary, 0) };
         let need = wide.emit(binary, &root_children);
         wide.stack_bound = need.max(1);
         wide
     }
 
-    /// Up to four binary nodes under internal node `b`, larger boxes opened first.
-    fn children(binary: &[BvhNode], b: u32) -> Vec<Slot> {
-        let n = &binary[b as usize];
-        let mut slots = vec![Slot(b + 1), Slot(n.index)];
+    /// Up to four binary nodes (indices) under internal node `b`, larger boxes opened
+    /// first.
+    fn children(binary: &[BvhNode], b: u32) -> Vec<u32> {
+        let mut slots = vec![b + 1, binary[b as usize].index];
         while slots.len() < WIDTH {
             let open = slots
                 .iter()
                 .enumerate()
-                .filter(|(_, s)| binary[s.0 as usize].count == 0)
-                .max_by(|(_, a), (_, b)| area(&binary[a.0 as usize]).total_cmp(&area(&binary[b.0 as usize])));
-            let Some((i, &Slot(c))) = open else { break };
-            let inner = &binary[c as usize];
-            slots[i] = Slot(c + 1);
-            slots.push(Slot(inner.index));
+                .filter(|&(_, &s)| binary[s as usize].count == 0)
+                .max_by(|&(_, &a), &(_, &b)| area(&binary[a as usize]).total_cmp(&area(&binary[b as usize])));
+            let Some((i, &c)) = open else { break };
+            slots[i] = c + 1;
+            slots.push(binary[c as usize].index);
         }
         slots
     }
@@ -77,12 +72,11 @@ impl WideBvh {
     /// Appends the wide node over `slots` and, depth first, the nodes under it; returns
     /// the most stack entries a traversal from it can hold: at a node, all but one of
     /// its child nodes may be pushed, and the deepest child adds its own.
-    fn emit(&mut self, binary: &[BvhNode], slots: &[Slot]) -> u32 {
+    fn emit(&mut self, binary: &[BvhNode], slots: &[u32]) -> u32 {
         let me = self.nodes.len();
         let mut node = WideNode { count: [WIDE_EMPTY; 4], index: [0; 4], ..WideNode::default() };
-        // Empty slots: boxes that no ray enters are not needed (the count marks them), but
-        // keep them finite.
-        for (i, &Slot(b)) in slots.iter().enumerate() {
+        // Empty slots keep finite (zero) boxes: their count marks them.
+        for (i, &b) in slots.iter().enumerate() {
             let c = &binary[b as usize];
             node.lo_x[i] = c.min[0];
             node.lo_y[i] = c.min[1];
@@ -90,16 +84,13 @@ impl WideBvh {
             node.hi_x[i] = c.max[0];
             node.hi_y[i] = c.max[1];
             node.hi_z[i] = c.max[2];
-            if c.count > 0 {
-                node.index[i] = c.index;
-                node.count[i] = c.count;
-            } else {
-                node.count[i] = 0;
-            }
+            // A leaf's triangle range; a child node's index is set once it is emitted.
+            node.index[i] = c.index;
+            node.count[i] = c.count;
         }
         self.nodes.push(node);
         let inner: Vec<(usize, u32)> =
-            slots.iter().enumerate().filter(|(_, s)| binary[s.0 as usize].count == 0).map(|(i, s)| (i, s.0)).collect();
+            slots.iter().enumerate().filter(|&(_, &s)| binary[s as usize].count == 0).map(|(i, &s)| (i, s)).collect();
         let mut deepest = 0;
         for &(i, b) in &inner {
             let child = self.nodes.len() as u32;

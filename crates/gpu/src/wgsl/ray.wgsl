@@ -43,3 +43,31 @@ fn pt_make_ray(o: vec3f, d: vec3f, t_min: f32) -> PtRay {
     let shear = vec3f(d[kx] / d[kz], d[ky] / d[kz], 1.0 / d[kz]);
     return PtRay(o, d, 1.0 / dd, kx, ky, kz, shear, t_min);
 }
+
+// A traversal stack (both traversals'): nodes still to visit with their entry distances.
+struct PtStack {
+    node: array<u32, PT_STACK>,
+    t: array<f32, PT_STACK>,
+    sp: u32,
+}
+
+fn pt_push(s: ptr<function, PtStack>, node: u32, t: f32) {
+    (*s).node[(*s).sp] = node;
+    (*s).t[(*s).sp] = t;
+    (*s).sp += 1u;
+}
+
+// Pops until a node whose entry distance is within `t_max` (it may hold a closer hit);
+// PT_NO_HIT once the stack is empty.
+fn pt_pop(s: ptr<function, PtStack>, t_max: f32) -> u32 {
+    loop {
+        if (*s).sp == 0u {
+            return PT_NO_HIT;
+        }
+        (*s).sp -= 1u;
+        if (*s).t[(*s).sp] <= t_max {
+            return (*s).node[(*s).sp];
+        }
+    }
+    return PT_NO_HIT; // (naga wants a return after the loop)
+}

@@ -63,12 +63,6 @@ fn pt_rng_f32(r: ptr<function, PtRng>) -> f32 {
     return f32(pt_rng_next(r) >> 8u) * (1.0 / 16777216.0);
 }
 
-fn pt_rng_2d(r: ptr<function, PtRng>) -> vec2f {
-    let a = pt_rng_f32(r);
-    let b = pt_rng_f32(r);
-    return vec2f(a, b);
-}
-
 // `Pcg32::for_sample`: key = mix64(seed ^ mix64(pixel << 32 | sample)), then
 // `Pcg32::new(key, mix64(key ^ 0xDA94_2042_E4DD_58B5))`.
 fn pt_rng_for_sample(pixel: u32, sample: u32) -> PtRng {

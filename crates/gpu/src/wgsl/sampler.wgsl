@@ -135,10 +135,10 @@ fn pt_next_1d(s: ptr<function, PtSampler>) -> f32 {
 
 fn pt_next_2d(s: ptr<function, PtSampler>) -> vec2f {
     if PT_SAMPLER == PT_SAMPLER_INDEPENDENT {
-        var r = (*s).rng;
-        let v = pt_rng_2d(&r);
-        (*s).rng = r;
-        return v;
+        // `Pcg32::next_2d`: two values in order.
+        let a = pt_next_1d(s);
+        let b = pt_next_1d(s);
+        return vec2f(a, b);
     }
     let dr = pt_sobol_draw(s, 2u);
     let a = pt_to_unit(reverseBits(pt_laine_karras(dr[0].x, dr[1].x)));

@@ -28,9 +28,7 @@ fn pt_trace(o: vec3f, d: vec3f, t_min: f32, t_max_in: f32, any_hit: bool) -> PtH
     if pt_slab_enter(pt_nodes[0], r, t_max) >= PT_MISS {
         return best;
     }
-    var stack_node: array<u32, PT_STACK>;
-    var stack_t: array<f32, PT_STACK>;
-    var sp = 0u;
+    var stack: PtStack;
     var node = 0u;
     loop {
         let n = pt_nodes[node];
@@ -63,30 +61,16 @@ fn pt_trace(o: vec3f, d: vec3f, t_min: f32, t_max_in: f32, any_hit: bool) -> PtH
                 t_far = tl;
             }
             if t_near < PT_MISS {
-                if t_far < PT_MISS && sp < PT_STACK {
-                    stack_node[sp] = far;
-                    stack_t[sp] = t_far;
-                    sp += 1u;
+                if t_far < PT_MISS && stack.sp < PT_STACK {
+                    pt_push(&stack, far, t_far);
                 }
                 node = near;
                 descended = true;
             }
         }
         if !descended {
-            // Pop until a node that may still hold a closer hit.
-            var found = false;
-            loop {
-                if sp == 0u {
-                    break;
-                }
-                sp -= 1u;
-                if stack_t[sp] <= t_max {
-                    node = stack_node[sp];
-                    found = true;
-                    break;
-                }
-            }
-            if !found {
+            node = pt_pop(&stack, t_max);
+            if node == PT_NO_HIT {
                 return best;
             }
         }

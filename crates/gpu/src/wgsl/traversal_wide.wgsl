@@ -33,9 +33,7 @@ fn pt_trace(o: vec3f, d: vec3f, t_min: f32, t_max_in: f32, any_hit: bool) -> PtH
         return s.best;
     }
     let r = pt_make_ray(o, d, t_min);
-    var stack_node: array<u32, PT_STACK>;
-    var stack_t: array<f32, PT_STACK>;
-    var sp = 0u;
+    var stack: PtStack;
     var node = 0u;
     loop {
         let n = pt_nodes[node];
@@ -77,37 +75,19 @@ fn pt_trace(o: vec3f, d: vec3f, t_min: f32, t_max_in: f32, any_hit: bool) -> PtH
         if t.x < PT_MISS {
             // Push the farther ones farthest first; visit the nearest.
             if t.w < PT_MISS {
-                stack_node[sp] = c.w;
-                stack_t[sp] = t.w;
-                sp += 1u;
+                pt_push(&stack, c.w, t.w);
             }
             if t.z < PT_MISS {
-                stack_node[sp] = c.z;
-                stack_t[sp] = t.z;
-                sp += 1u;
+                pt_push(&stack, c.z, t.z);
             }
             if t.y < PT_MISS {
-                stack_node[sp] = c.y;
-                stack_t[sp] = t.y;
-                sp += 1u;
+                pt_push(&stack, c.y, t.y);
             }
             node = c.x;
             continue;
         }
-        // Pop until a node that may still hold a closer hit.
-        var popped = false;
-        loop {
-            if sp == 0u {
-                break;
-            }
-            sp -= 1u;
-            if stack_t[sp] <= s.t_max {
-                node = stack_node[sp];
-                popped = true;
-                break;
-            }
-        }
-        if !popped {
+        node = pt_pop(&stack, s.t_max);
+        if node == PT_NO_HIT {
             return s.best;
         }
     }
