@@ -156,11 +156,7 @@ impl DeviceAccumulation {
             device.create_buffer(&wgpu::BufferDescriptor { label: Some(label), size, usage, mapped_at_creation: false })
         };
         use wgpu::BufferUsages as U;
-        let params = buffer(
-            "accumulation params",
-            std::mem::size_of::<crate::kernel::Params>() as u64,
-            U::UNIFORM | U::COPY_DST,
-        );
+        let params = buffer("accumulation params", crate::kernel::UNIFORM_BYTES, U::UNIFORM | U::COPY_DST);
         let accum = buffer("accumulation", accum_bytes, U::STORAGE | U::COPY_SRC | U::COPY_DST);
         let accum_readback = buffer("accumulation read-back", accum_bytes, U::MAP_READ | U::COPY_DST);
         let folded = buffer("folded means", pixels.max(1) * 16, U::STORAGE | U::COPY_DST);
@@ -246,6 +242,7 @@ impl DeviceAccumulation {
         let per_dispatch = (DISPATCH_BUDGET / pixels.max(1)).clamp(1, MAX_SAMPLES_PER_DISPATCH) as u32;
         let mut params = scene.kernel_params(&self.settings);
         let pipeline = scene.pipeline(self.settings.sampler)?;
+        scene.write_seeds(&self.buffers.params, &self.settings);
         params.band_y0 = 0;
         params.band_rows = height;
         let scope = ctx.device.push_error_scope(wgpu::ErrorFilter::Validation);

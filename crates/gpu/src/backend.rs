@@ -68,7 +68,7 @@
 use crate::accumulation::DeviceAccumulation;
 use crate::kernel::{
     FILM_HEADER_BYTES, GpuIntegrator, HAS_ENVIRONMENT, HAS_NORMALS, HAS_TANGENTS, KernelOptions, LIGHT_FLOATS,
-    NodeLayout, Params, PixelAccum, WideNode,
+    NodeLayout, Params, PixelAccum, SEEDS_OFFSET, UNIFORM_BYTES, WideNode,
 };
 use crate::wide::WideBvh;
 use crate::{GpuContext, GpuError};
@@ -516,13 +516,13 @@ impl GpuBackend {
         ];
         let params = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("params"),
-            size: std::mem::size_of::<Params>() as u64,
+            size: UNIFORM_BYTES,
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
 
         let read = wgpu::BufferBindingType::Storage { read_only: true };
-        let entries: Vec<_> = [(0, wgpu::BufferBindingType::Uniform)]
+        let entries: Vec<_> = [(0, wgpu::BufferBindingType::Uniform), (7, wgpu::BufferBindingType::Uniform)]
             .into_iter()
             .chain([1, 2, 3, 4, 5, 10, 11].map(|b| (b, read)))
             .chain([(6, wgpu::BufferBindingType::Storage { read_only: false })])
@@ -588,6 +588,15 @@ impl GpuScene {
     /// generation), upload and compilation.
     pub fn prepare_time(&self) -> Duration {
         self.stats.total
+    }
+
+    /// Writes the render's ZSobol dimension seeds into the uniform buffer `params` (after
+    /// the parameters), where the ZSobol kernel reads them.
+    pub(crate) fn write_seeds(&self, params: &wgpu::Buffer, settings: &RenderSettings) {
+        if settings.sampler == SamplerKind::ZSobol {
+            let words = crate::kernel::zsobol_seed_words(settings);
+            self.ctx.queue.write_buffer(params, SEEDS_OFFSET, bytemuck::cast_slice(&words));
+        }
     }
 
     /// The kernel's uniforms for `settings` (the band and the samples are the caller's).
@@ -670,6 +679,7 @@ impl GpuScene {
 
         let mut params = self.kernel_params(settings);
         let pipeline = self.pipeline(settings.sampler)?;
+        self.write_seeds(&self.params, settings);
 
         // A crop window renders its rows whole; only its columns reach the film.
         let region = settings.region();
@@ -715,24 +725,31 @@ impl GpuScene {
         Ok(counters)
     }
 
-    /// The path kernel's bind group: the scene's buffers with `params` and the
-    /// accumulators `accum`.
+    /// The path kernel's bind group: the scene's buffers with the uniforms `params`
+    /// ([`UNIFORM_BYTES`]: the parameters, then the ZSobol seeds) and the accumulators
+    /// `accum`.
     pub(crate) fn bind_group(&self, params: &wgpu::Buffer, accum: &wgpu::Buffer) -> wgpu::BindGroup {
         let b = &self.buffers;
-        let bindings = [
-            (0, params),
-            (1, &b[0]),
-            (2, &b[1]),
-            (3, &b[2]),
-            (4, &b[3]),
-            (5, &b[4]),
-            (6, accum),
-            (10, &b[5]),
-            (11, &b[6]),
+        let range = |offset: u64, size: u64| {
+            wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                buffer: params,
+                offset,
+                size: wgpu::BufferSize::new(size),
+            })
+        };
+        let uniforms = [
+            wgpu::BindGroupEntry { binding: 0, resource: range(0, std::mem::size_of::<Params>() as u64) },
+            wgpu::BindGroupEntry { binding: 7, resource: range(SEEDS_OFFSET, UNIFORM_BYTES - SEEDS_OFFSET) },
         ];
-        let entries: Vec<_> = bindings
-            .iter()
-            .map(|&(binding, buffer)| wgpu::BindGroupEntry { binding, resource: buffer.as_entire_binding() })
+        let bindings =
+            [(1, &b[0]), (2, &b[1]), (3, &b[2]), (4, &b[3]), (5, &b[4]), (6, accum), (10, &b[5]), (11, &b[6])];
+        let entries: Vec<_> = uniforms
+            .into_iter()
+            .chain(
+                bindings
+                    .iter()
+                    .map(|&(binding, buffer)| wgpu::BindGroupEntry { binding, resource: buffer.as_entire_binding() }),
+            )
             .collect();
         self.ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("spt"),

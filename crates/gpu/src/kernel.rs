@@ -248,6 +248,32 @@ wgsl_struct! {
     }
 }
 
+/// Where the ZSobol dimension seeds start in the uniform buffer, after [`Params`] (a
+/// multiple of every device's uniform-offset alignment).
+pub const SEEDS_OFFSET: u64 = 256;
+
+/// Bytes of the uniform buffer: [`Params`], then one (index seed, value seed) word
+/// quadruple per precomputed ZSobol dimension.
+pub const UNIFORM_BYTES: u64 = SEEDS_OFFSET + 16 * tracer::sampler::PRECOMPUTED_DIMENSIONS as u64;
+
+const _: () = assert!(std::mem::size_of::<Params>() as u64 <= SEEDS_OFFSET);
+
+/// The ZSobol dimension seeds of a render as the kernel reads them (`pt_dims`): per
+/// dimension the index seed's and the value seed's (lo, hi) words — computed once per
+/// render, as the CPU's `ZSobolLayout` does, instead of hashed in every draw.
+pub fn zsobol_seed_words(settings: &tracer::RenderSettings) -> Vec<[u32; 4]> {
+    let layout = tracer::sampler::ZSobolLayout::new(settings.width, settings.height, settings.spp, settings.seed);
+    let words = |v: u64| [v as u32, (v >> 32) as u32];
+    layout
+        .precomputed_seeds()
+        .iter()
+        .map(|&(i, v)| {
+            let (i, v) = (words(i), words(v));
+            [i[0], i[1], v[0], v[1]]
+        })
+        .collect()
+}
+
 /// [`WideNode::count`] of an unused child slot.
 pub const WIDE_EMPTY: u32 = u32::MAX;
 
@@ -336,7 +362,8 @@ pub fn header(options: &KernelOptions) -> String {
          @group(0) @binding(3) var<storage, read> pt_tri_vidx: array<vec4u>;\n\
          @group(0) @binding(4) var<storage, read> pt_attrs: array<vec4f>;\n\
          @group(0) @binding(5) var<storage, read> pt_tables: array<f32>;\n\
-         @group(0) @binding(6) var<storage, read_write> pt_film: PtFilm;\n\n"
+         @group(0) @binding(6) var<storage, read_write> pt_film: PtFilm;\n\
+         @group(0) @binding(7) var<uniform> pt_dims: array<vec4u, PT_SEED_DIMENSIONS>;\n\n"
             .replace("NODE_STRUCT", node_struct),
     );
     let mut u = |name: &str, v: u32| {
@@ -356,6 +383,7 @@ pub fn header(options: &KernelOptions) -> String {
     u("PT_STACK", stack);
     u("PT_INTEGRATOR", options.integrator.code());
     u("PT_SAMPLER", sampler_code(options.sampler));
+    u("PT_SEED_DIMENSIONS", tracer::sampler::PRECOMPUTED_DIMENSIONS);
     for kind in SamplerKind::ALL {
         u(&format!("PT_SAMPLER_{}", kind.name().to_ascii_uppercase()), sampler_code(kind));
     }

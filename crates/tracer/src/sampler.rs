@@ -171,7 +171,7 @@ pub struct ZSobolLayout {
 
 /// Dimensions whose seeds a [`ZSobolLayout`] precomputes (paths of ~30 bounces); deeper
 /// dimensions hash theirs when drawn.
-const PRECOMPUTED_DIMENSIONS: u32 = 256;
+pub const PRECOMPUTED_DIMENSIONS: u32 = 256;
 
 impl ZSobolLayout {
     /// The layout for `spp` samples per pixel (rounded up to a power of two) on an image
@@ -191,6 +191,12 @@ impl ZSobolLayout {
         // A 1×1 image at 1 spp has no index bits at all (and a shift by 64 would overflow).
         let reversed = if self.unused_bits == 64 { 0 } else { (morton << self.unused_bits).reverse_bits() };
         ZSobol { layout: self, reversed, dimension: 0 }
+    }
+
+    /// The (index scramble, value scramble) seeds of the first
+    /// [`PRECOMPUTED_DIMENSIONS`] dimensions (the GPU uploads them per render).
+    pub fn precomputed_seeds(&self) -> &[(u64, u64)] {
+        &self.seeds
     }
 
     /// The seeds of `dimension`.

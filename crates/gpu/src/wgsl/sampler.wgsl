@@ -106,9 +106,18 @@ fn pt_sobol_draw(s: ptr<function, PtSampler>, dims: u32) -> array<vec2u, 2> {
     let d = vec2u((*s).dimension, 0u);
     (*s).dimension += dims;
     if PT_SAMPLER == PT_SAMPLER_ZSOBOL {
-        let seed = vec2u(pt_params.zseed_lo, pt_params.zseed_hi);
-        let index_seed = pt_mix64(seed ^ pt_mul64(d, PT_DIMENSION_MUL));
-        let value_seed = pt_mix64(vec2u(0u, d.x) ^ seed ^ PT_VALUE_SEED_KEY);
+        // `ZSobolLayout::seeds`: the render's table, hashed beyond it.
+        var index_seed: vec2u;
+        var value_seed: vec2u;
+        if d.x < PT_SEED_DIMENSIONS {
+            let e = pt_dims[d.x];
+            index_seed = e.xy;
+            value_seed = e.zw;
+        } else {
+            let seed = vec2u(pt_params.zseed_lo, pt_params.zseed_hi);
+            index_seed = pt_mix64(seed ^ pt_mul64(d, PT_DIMENSION_MUL));
+            value_seed = pt_mix64(vec2u(0u, d.x) ^ seed ^ PT_VALUE_SEED_KEY);
+        }
         let index = pt_shr64_any(pt_reverse64(pt_laine_karras_64((*s).reversed, index_seed)), pt_params.unused_bits);
         return array<vec2u, 2>(index, value_seed);
     }
