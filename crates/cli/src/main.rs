@@ -2,6 +2,7 @@
 
 mod bvh_table;
 mod compare;
+mod light_arg;
 mod rays;
 mod shards;
 mod sheet;
@@ -118,6 +119,12 @@ fn run_info(args: InfoArgs) -> Result<()> {
         if emissive.is_empty() { String::new() } else { format!(": {}", emissive.join(", ")) },
         if scene.environment.is_some() { "yes" } else { "none" }
     );
+    if !scene.punctual_lights.is_empty() {
+        let mut kinds: Vec<&str> = scene.punctual_lights.iter().map(|l| l.kind()).collect();
+        kinds.sort_unstable();
+        kinds.dedup();
+        println!("    {} point, spot or directional lights ({})", scene.punctual_lights.len(), kinds.join(", "));
+    }
     if !scene.has_lights() {
         println!("    no light: renders get the default white sky (--sky)");
     }
@@ -353,6 +360,12 @@ struct SceneArgs {
     /// scene's), white or white:LUMINANCE (a uniform white sky replacing the scene's).
     #[arg(long, default_value = "auto", value_parser = parse_sky)]
     sky: Sky,
+    /// Adds a light (repeatable): point:X,Y,Z:I, spot:X,Y,Z:DX,DY,DZ:INNER,OUTER:I or
+    /// sun:DX,DY,DZ:E, with I (radiant intensity) or E (irradiance) one value for white or
+    /// R,G,B in linear sRGB, cone half-angles in degrees, D the direction it shines in.
+    /// CPU backend only. A scene so lit gets no default sky.
+    #[arg(long = "light", value_name = "LIGHT", value_parser = light_arg::parse_light, allow_hyphen_values = true)]
+    lights: Vec<tracer::PunctualLight>,
 }
 
 /// `--sky`: what lights a scene from infinitely far away.
@@ -574,6 +587,7 @@ fn prepare(
     if scene.triangles.is_empty() && scene.shapes.is_empty() {
         bail!("{}: the scene has no geometry", args.scene.display());
     }
+    scene.punctual_lights.extend(args.lights.iter().cloned());
     apply_sky(&mut scene, args.sky);
     let backend = make_backend(args)?;
     let sampler = args.sampler.unwrap_or_else(|| default_sampler(&backend.capabilities()));

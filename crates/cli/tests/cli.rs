@@ -345,6 +345,54 @@ fn scenes_without_lights_get_the_white_sky_unless_told_otherwise() {
     }
 }
 
+/// `--light`: a sun shining straight at a grey square (ρ 0.5) gives it the radiance
+/// ρ/π · E everywhere, with no default sky added; a point light lights it too; malformed
+/// lights are refused with the syntax, and the GPU refuses lights it cannot sample.
+#[test]
+fn lights_from_the_command_line() {
+    let dir = temp_dir("lights");
+    std::fs::write(dir.join("grey.mtl"), "newmtl grey\nKd 0.5 0.5 0.5\n").unwrap();
+    let scene = dir.join("square.obj");
+    std::fs::write(&scene, "mtllib grey.mtl\nv -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\nusemtl grey\nf 1 2 3 4\n")
+        .unwrap();
+    let out = dir.join("sun.exr");
+    let o =
+        render_small(&scene, (24, 16, 16), &out, &["--eye", "0,0,1", "--center", "0,0,0", "--light", "sun:0,0,-1:2"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(!stderr(&o).contains("warning"), "{}", stderr(&o));
+    let expected = 0.5 / std::f64::consts::PI * 2.0;
+    for m in exr_means(&out) {
+        assert!((m - expected).abs() < 0.02 * expected, "sun: {:?}, expected {expected}", exr_means(&out));
+    }
+    let o = render_small(
+        &scene,
+        (8, 8, 4),
+        &out,
+        &[
+            "--eye",
+            "0,0,1",
+            "--center",
+            "0,0,0",
+            "--light",
+            "point:0,0,0.5:1,0.5,0.25",
+            "--light=spot:0,0,1:0,0,-1:5,10:1",
+        ],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let means = exr_means(&out);
+    assert!(means[0] > means[1] && means[1] > means[2] && means[2] > 0.0, "{means:?}");
+    for (bad, says) in [("torch:0,0,0:1", "unknown light kind"), ("point:0,0,0:x", "not a number")] {
+        let o = render_small(&scene, (4, 4, 1), &out, &["--light", bad]);
+        let msg = stderr(&o);
+        assert!(!o.status.success() && msg.contains(says) && msg.contains("point:X,Y,Z:I"), "{bad}: {msg}");
+    }
+    if gpu::require_gpu().is_some() {
+        let o = render_small(&scene, (4, 4, 1), &out, &["--light", "sun:0,0,-1:2", "--backend", "gpu"]);
+        let msg = stderr(&o);
+        assert!(!o.status.success() && msg.contains("directional lights"), "{msg}");
+    }
+}
+
 /// `--integrator path|direct|ao` from the command line: each renders; ao of the open
 /// scene is grey and grows as its reach shrinks, direct of the lit scene is darker than path
 /// (no indirect light) but not black; unknown names, bad distances and a backend without

@@ -202,6 +202,7 @@ pub fn scene_hash(scene: &Scene) -> String {
     section("materials", format!("{:?}", scene.materials).as_bytes());
     section("camera", format!("{:?}", scene.camera).as_bytes());
     section("environment", format!("{:?}", scene.environment).as_bytes());
+    section("punctual_lights", format!("{:?}", scene.punctual_lights).as_bytes());
     hex(&h.finalize())
 }
 

@@ -90,6 +90,7 @@ fn cpu_capabilities(integrator: &'static str) -> Capabilities {
         samplers: vec![SamplerKind::ZSobol, SamplerKind::Sobol, SamplerKind::Independent],
         analytic_shapes: true,
         custom_bsdfs: true,
+        punctual_lights: true,
         triangle_tests: vec![TriangleTest::Watertight, TriangleTest::MollerTrumbore],
         bvh_widths: BvhWidth::CPU.to_vec(),
         integrator,

@@ -6,8 +6,9 @@
 //! spectral transport at N sampled wavelengths.
 
 use crate::geometry::{Geometry, HitSurface, SceneHit};
-use crate::lights::Lights;
+use crate::lights::{LightSource, Lights};
 use crate::material::Material;
+use crate::punctual::PunctualLight;
 use crate::sampler::Sampler;
 use crate::scene::Scene;
 use brdf::{Bsdf, Frame, ScatterFlags};
@@ -268,8 +269,9 @@ fn next_event<const N: usize, B: Bsdf<N>>(
     let scene = view.scene;
     let it = at.it;
     let ls = view.lights.sample(scene, u)?;
-    let (wi_world, dist, light_pdf, le) = match ls.prim {
-        Some(t) => {
+    // (direction, distance, pdf, radiance or its delta equivalent, whether a delta light)
+    let (wi_world, dist, light_pdf, le, delta) = match ls.source {
+        LightSource::Primitive(t) => {
             let d = ls.point - it.p;
             let dist2 = d.length_squared();
             let dist = dist2.sqrt();
@@ -277,14 +279,37 @@ fn next_event<const N: usize, B: Bsdf<N>>(
             let cos_l = -wi.dot(ls.normal);
             let emission = view.material(t).emission.as_ref();
             match emission {
-                Some(e) if cos_l > 0.0 => (wi, dist, ls.pdf * dist2 / cos_l, e.sample(wl)),
-                _ => (wi, dist, 0.0, SampledSpectrum::zero()),
+                Some(e) if cos_l > 0.0 => (wi, dist, ls.pdf * dist2 / cos_l, e.sample(wl), false),
+                _ => (wi, dist, 0.0, SampledSpectrum::zero(), false),
             }
         }
-        None => {
+        LightSource::Environment => {
             let le = scene.environment.as_ref().map_or(SampledSpectrum::zero(), |e| e.radiance.sample(wl));
-            (ls.point, f32::INFINITY, ls.pdf, le)
+            (ls.point, f32::INFINITY, ls.pdf, le, false)
         }
+        // A delta light: I·falloff/d² (or E) stands for the radiance and the pdf is the
+        // probability of choosing it, so f·Le·|cos θ|/pdf is the usual estimate.
+        LightSource::Punctual(k) => match &scene.punctual_lights[k as usize] {
+            PunctualLight::Directional { irradiance, .. } => {
+                (ls.point, f32::INFINITY, ls.pdf, irradiance.sample(wl), true)
+            }
+            light @ (PunctualLight::Point { intensity, .. } | PunctualLight::Spot { intensity, .. }) => {
+                let d = ls.point - it.p;
+                let dist2 = d.length_squared();
+                if !(dist2 > 0.0 && dist2.is_finite()) {
+                    return None; // a light on the surface itself: no direction
+                }
+                let dist = dist2.sqrt();
+                let wi = d / dist;
+                let falloff = match *light {
+                    PunctualLight::Spot { direction, cos_inner, cos_outer, .. } => {
+                        PunctualLight::spot_falloff(-wi.dot(direction), cos_inner, cos_outer)
+                    }
+                    _ => 1.0,
+                };
+                (wi, dist, ls.pdf, intensity.sample(wl) * (falloff / dist2), true)
+            }
+        },
     };
     let wi = at.frame.to_local(wi_world);
     // Reflection must stay on the geometric side it came from (no light leaks).
@@ -309,8 +334,9 @@ fn next_event<const N: usize, B: Bsdf<N>>(
         return None;
     }
     let w = match mis {
-        Mis::Power => power_heuristic(light_pdf, bsdf.pdf(at.wo, wi)),
-        Mis::None => 1.0,
+        // A BSDF-sampled ray can never find a delta light: its sample takes all the weight.
+        Mis::Power if !delta => power_heuristic(light_pdf, bsdf.pdf(at.wo, wi)),
+        _ => 1.0,
     };
     Some((f, le, wi.z.abs() * w / light_pdf))
 }

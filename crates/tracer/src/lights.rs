@@ -1,23 +1,38 @@
-//! Light sources for next-event estimation: emissive triangles and analytic shapes
-//! chosen in proportion to their power, plus the uniform environment.
+//! Light sources for next-event estimation: emissive triangles and analytic shapes,
+//! point, spot and directional lights, chosen in proportion to their power, plus the
+//! uniform environment.
 
+use crate::punctual::PunctualLight;
 use crate::scene::Scene;
 use brdf::sampling::{UNIFORM_SPHERE_PDF, uniform_sphere, uniform_triangle};
 use glam::{Vec2, Vec3};
 use std::f32::consts::PI;
 
-/// A point (or direction, for the environment) chosen on a light.
+/// What a light sample was taken on.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LightSource {
+    /// An emissive triangle or shape (its primitive id).
+    Primitive(u32),
+    /// The environment.
+    Environment,
+    /// A point, spot or directional light (its index in [`Scene::punctual_lights`]).
+    Punctual(u32),
+}
+
+/// A point (or direction, for the environment and directional lights) chosen on a light.
 #[derive(Clone, Copy, Debug)]
 pub struct LightSample {
-    /// The sampled point, or a unit direction for the environment.
+    /// The sampled point (a point or spot light's position), or the unit direction
+    /// towards the light for the environment and directional lights.
     pub point: Vec3,
-    /// The light's front-face normal at the point (zero for the environment).
+    /// The light's front-face normal at the point (zero for the others).
     pub normal: Vec3,
     /// Probability density: per unit area for triangles and shapes (including the choice
-    /// of the primitive), per solid angle for the environment.
+    /// of the primitive), per solid angle for the environment; for a punctual light the
+    /// probability of choosing it (a delta light has no density).
     pub pdf: f32,
-    /// The emitting primitive (triangle or shape id), or `None` for the environment.
-    pub prim: Option<u32>,
+    /// What was sampled.
+    pub source: LightSource,
 }
 
 /// An emissive triangle as light sampling needs it, computed once per scene instead of
@@ -41,13 +56,17 @@ pub struct Lights {
     /// Probability of choosing each primitive (0 for non-emitters), for MIS when a
     /// BSDF-sampled ray hits an emitter.
     prim_pmf: Vec<f32>,
+    /// Probability of choosing each of the scene's punctual lights (their entries follow
+    /// the primitives' in `cdf`).
+    punctual_pmf: Vec<f32>,
     environment_pmf: f32,
 }
 
 impl Lights {
     /// Collects emitters and weights them by power: π·A·Y(Le) for a one-sided triangle
     /// or shape (emitting from its front or outside), 4π²·r²·Y(Le) for the environment
-    /// seen by a scene of bounding radius r (pbrt-v4's uniform infinite light). Shapes
+    /// seen by a scene of bounding radius r (pbrt-v4's uniform infinite light), and
+    /// [`PunctualLight::power`] for point, spot and directional lights. Shapes
     /// that cannot be sampled by area (implicit surfaces, self-intersecting polygons)
     /// still glow when a path hits them, but are never sampled: their MIS weight is 1.
     pub fn new(scene: &Scene) -> Self {
@@ -74,23 +93,37 @@ impl Lights {
                 push(triangles + k, shape.area(), s.material);
             }
         }
-        let env_power = scene.environment.as_ref().map_or(0.0, |env| {
-            let r = 0.5 * scene.bounds().extent().length().max(1e-3);
-            (4.0 * PI * PI * r * r * env.radiance.luminance().max(0.0)) as f64
-        });
-        let total: f64 = power.iter().sum::<f64>() + env_power;
+        let needs_radius = scene.environment.is_some()
+            || scene.punctual_lights.iter().any(|l| matches!(l, PunctualLight::Directional { .. }));
+        let r = if needs_radius { 0.5 * scene.bounds().extent().length().max(1e-3) } else { 1.0 };
+        let env_power = scene
+            .environment
+            .as_ref()
+            .map_or(0.0, |env| (4.0 * PI * PI * r * r * env.radiance.luminance().max(0.0)) as f64);
+        let punctual_power: Vec<f64> = scene
+            .punctual_lights
+            .iter()
+            .map(|l| {
+                let p = l.power(r);
+                if p > 0.0 && p.is_finite() { p as f64 } else { 0.0 }
+            })
+            .collect();
+        let total: f64 = power.iter().sum::<f64>() + punctual_power.iter().sum::<f64>() + env_power;
         if total <= 0.0 {
             return Self { prim_pmf, ..Default::default() };
         }
-        // The environment owns [0, pmf_env) of the unit interval, primitives the rest.
+        // The environment owns [0, pmf_env) of the unit interval, primitives the next
+        // stretch, punctual lights the rest.
         let mut acc = env_power;
         let cdf = power
             .iter()
+            .chain(&punctual_power)
             .map(|p| {
                 acc += p;
                 (acc / total) as f32
             })
             .collect();
+        let punctual_pmf = punctual_power.iter().map(|p| (p / total) as f32).collect();
         for (&t, p) in prims.iter().zip(&power) {
             prim_pmf[t as usize] = (p / total) as f32;
         }
@@ -103,12 +136,17 @@ impl Lights {
                 LightTriangle { vertices, normal: cross.normalize(), area: 0.5 * cross.length() }
             })
             .collect();
-        Self { prims, triangles, cdf, prim_pmf, environment_pmf: (env_power / total) as f32 }
+        Self { prims, triangles, cdf, prim_pmf, punctual_pmf, environment_pmf: (env_power / total) as f32 }
     }
 
     /// True if there is nothing to sample.
     pub fn is_empty(&self) -> bool {
-        self.prims.is_empty() && self.environment_pmf == 0.0
+        self.cdf.is_empty() && self.environment_pmf == 0.0
+    }
+
+    /// The probability that [`Lights::sample`] picks punctual light `index`.
+    pub fn punctual_pmf(&self, index: usize) -> f32 {
+        self.punctual_pmf.get(index).copied().unwrap_or(0.0)
     }
 
     /// Number of emissive primitives that are sampled.
@@ -122,10 +160,10 @@ impl Lights {
         &self.prims
     }
 
-    /// The cumulative distribution over [`Lights::prims`]: entry k is the probability of
-    /// picking the environment or one of primitives 0..=k (the environment owns
-    /// [0, [`Lights::environment_pmf`])). [`Lights::sample`] picks the first k with
-    /// `cdf[k] > u` (clamped to the last).
+    /// The cumulative distribution over [`Lights::prims`], then the scene's punctual
+    /// lights: entry k is the probability of picking the environment or one of entries
+    /// 0..=k (the environment owns [0, [`Lights::environment_pmf`])). [`Lights::sample`]
+    /// picks the first k with `cdf[k] > u` (clamped to the last).
     pub fn cdf(&self) -> &[f32] {
         &self.cdf
     }
@@ -164,29 +202,43 @@ impl Lights {
         if self.is_empty() {
             return None;
         }
-        if u.x < self.environment_pmf || self.prims.is_empty() {
-            // Without primitives the environment's share is the whole interval (pmf 1).
+        if u.x < self.environment_pmf || self.cdf.is_empty() {
+            // Without other lights the environment's share is the whole interval (pmf 1).
             return Some(LightSample {
                 point: uniform_sphere(Vec2::new(rescale(u.x, 0.0, self.environment_pmf), u.y)),
                 normal: Vec3::ZERO,
                 pdf: self.environment_pdf(),
-                prim: None,
+                source: LightSource::Environment,
             });
         }
-        let k = self.cdf.partition_point(|&c| c <= u.x).min(self.prims.len() - 1);
+        let k = self.cdf.partition_point(|&c| c <= u.x).min(self.cdf.len() - 1);
+        if k >= self.prims.len() {
+            let index = k - self.prims.len();
+            let point = match &scene.punctual_lights[index] {
+                PunctualLight::Point { position, .. } | PunctualLight::Spot { position, .. } => *position,
+                PunctualLight::Directional { direction, .. } => -*direction,
+            };
+            return Some(LightSample {
+                point,
+                normal: Vec3::ZERO,
+                pdf: self.punctual_pmf[index],
+                source: LightSource::Punctual(index as u32),
+            });
+        }
         let below = if k == 0 { self.environment_pmf } else { self.cdf[k - 1] };
         let u = Vec2::new(rescale(u.x, below, self.cdf[k]), u.y);
         let prim = self.prims[k];
         let pmf = self.prim_pmf[prim as usize];
+        let source = LightSource::Primitive(prim);
         if let Some(t) = self.triangles.get(k) {
             let v = &t.vertices;
             let (b0, b1) = uniform_triangle(u);
             let point = b0 * v[0] + b1 * v[1] + (1.0 - b0 - b1) * v[2];
-            return Some(LightSample { point, normal: t.normal, pdf: pmf / t.area, prim: Some(prim) });
+            return Some(LightSample { point, normal: t.normal, pdf: pmf / t.area, source });
         }
         let shape = scene.shapes[prim as usize - scene.triangles.len()].shape.shape();
         let (point, normal) = shape.sample_area(u)?;
-        Some(LightSample { point, normal, pdf: pmf / shape.area(), prim: Some(prim) })
+        Some(LightSample { point, normal, pdf: pmf / shape.area(), source })
     }
 }
 
@@ -238,12 +290,13 @@ mod tests {
                 let u = Vec2::new((i as f32 + rng.next_f32()) / n as f32, (j as f32 + rng.next_f32()) / n as f32);
                 let ls = lights.sample(&scene, u).unwrap();
                 assert!(ls.pdf > 0.0 && ls.pdf.is_finite() && ls.point.is_finite());
-                match ls.prim {
-                    None => {
+                match ls.source {
+                    LightSource::Punctual(_) => unreachable!("the scene has none"),
+                    LightSource::Environment => {
                         env += 1;
                         assert!((ls.point.length() - 1.0).abs() < 1e-5, "a unit direction");
                     }
-                    Some(p) => {
+                    LightSource::Primitive(p) => {
                         per_prim[p as usize] += 1;
                         assert_eq!(ls.pdf, lights.prim_pmf(p) / if p < 2 { 0.5 } else { 0.125 });
                         if p < 2 {
@@ -277,7 +330,40 @@ mod tests {
         assert_eq!(lights.environment_pmf(), 1.0);
         for u in [Vec2::new(0.0, 0.3), Vec2::new(0.37, 0.9), Vec2::new(ONE_MINUS_EPSILON, 0.5)] {
             let ls = lights.sample(&scene, u).unwrap();
-            assert_eq!((ls.point, ls.prim), (uniform_sphere(u), None));
+            assert_eq!((ls.point, ls.source), (uniform_sphere(u), LightSource::Environment));
+        }
+    }
+
+    #[test]
+    fn punctual_lights_are_chosen_by_power_beside_the_emitters() {
+        let mut scene = scene();
+        // A point light of intensity 1 (power 4π) and a sun of irradiance 2 over the
+        // scene's disc (power 2πr²).
+        scene.punctual_lights.push(PunctualLight::point(Vec3::new(0.0, 5.0, 0.0), Colour::constant(1.0)));
+        scene.punctual_lights.push(PunctualLight::directional(Vec3::new(0.0, -2.0, 0.0), Colour::constant(2.0)));
+        let lights = Lights::new(&scene);
+        let r = 0.5 * scene.bounds().extent().length();
+        let powers = [4.0 * PI, 2.0 * PI * r * r];
+        let emitters = PI * (1.0 * 4.0 + 0.25 * 2.0);
+        let sky = 4.0 * PI * PI * r * r * 0.01;
+        let total = powers[0] + powers[1] + emitters + sky;
+        for (i, p) in powers.iter().enumerate() {
+            assert!((lights.punctual_pmf(i) - p / total).abs() < 1e-5, "{i}: {}", lights.punctual_pmf(i));
+        }
+        let n = 4096;
+        let mut picked = [0usize; 2];
+        for i in 0..n {
+            let ls = lights.sample(&scene, Vec2::new((i as f32 + 0.5) / n as f32, 0.5)).unwrap();
+            if let LightSource::Punctual(k) = ls.source {
+                picked[k as usize] += 1;
+                assert_eq!(ls.pdf, lights.punctual_pmf(k as usize));
+                let expect = if k == 0 { Vec3::new(0.0, 5.0, 0.0) } else { Vec3::Y };
+                assert!((ls.point - expect).length() < 1e-6, "towards the light: {}", ls.point);
+            }
+        }
+        for k in 0..2 {
+            let share = picked[k] as f32 / n as f32;
+            assert!((share - lights.punctual_pmf(k)).abs() < 2.0 / n as f32, "{k}: {share}");
         }
     }
 

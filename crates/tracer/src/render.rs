@@ -170,6 +170,8 @@ pub struct Capabilities {
     pub analytic_shapes: bool,
     /// Whether it runs BSDFs written outside the workspace ([`brdf::DynBsdfBuilder`]).
     pub custom_bsdfs: bool,
+    /// Whether it samples point, spot and directional lights ([`crate::PunctualLight`]).
+    pub punctual_lights: bool,
     /// Ray–triangle tests it implements.
     pub triangle_tests: Vec<TriangleTest>,
     /// Triangle-BVH node widths it can be asked for ([`BvhWidth::Auto`] = its own choice).
@@ -201,6 +203,18 @@ impl Capabilities {
             return Err(unsupported(
                 format!("analytic shapes ({} in this scene: {})", scene.shapes.len(), kinds.join(", ")),
                 "tessellate them into triangles, or use --backend cpu",
+            ));
+        }
+        if !self.punctual_lights
+            && let Some(light) = scene.punctual_lights.first()
+        {
+            return Err(unsupported(
+                format!(
+                    "point, spot and directional lights ({} in this scene, the first a {} light)",
+                    scene.punctual_lights.len(),
+                    light.kind()
+                ),
+                "use --backend cpu",
             ));
         }
         if !self.custom_bsdfs

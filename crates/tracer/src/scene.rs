@@ -4,6 +4,7 @@ use crate::camera::Camera;
 use crate::geometry::{SceneShape, ShapeKind};
 use crate::material::Material;
 use crate::mesh::Mesh;
+use crate::punctual::PunctualLight;
 use crate::{Error, Result};
 use bvh::Aabb;
 use glam::Vec3;
@@ -42,6 +43,8 @@ pub struct Scene {
     pub camera: Option<Camera>,
     /// Uniform environment light, if any.
     pub environment: Option<Environment>,
+    /// Point, spot and directional lights (no geometry: seen only by light sampling).
+    pub punctual_lights: Vec<PunctualLight>,
 }
 
 /// The luminance of the default sky ([`Environment::white_sky`]) that lights scenes
@@ -57,14 +60,16 @@ impl Environment {
 }
 
 impl Scene {
-    /// Whether anything emits: a non-black environment, or a triangle or shape whose
-    /// material has a non-black emission. A scene without lights renders black.
+    /// Whether anything emits: a non-black environment or punctual light, or a triangle
+    /// or shape whose material has a non-black emission. A scene without lights renders
+    /// black.
     pub fn has_lights(&self) -> bool {
         let emits =
             |m: u32| self.materials.get(m as usize).and_then(|m| m.emission.as_ref()).is_some_and(|e| !e.is_black());
         self.environment.as_ref().is_some_and(|e| !e.radiance.is_black())
             || self.material_ids.iter().any(|&m| emits(m))
             || self.shapes.iter().any(|s| emits(s.material))
+            || self.punctual_lights.iter().any(|l| !l.colour().is_black())
     }
 
     /// Appends a mesh with one material (flat-shaded if its normals are empty; tangents
@@ -154,6 +159,9 @@ impl Scene {
         if let Some(camera) = &self.camera {
             camera.validate().map_err(Error::Setting)?;
         }
+        for light in &self.punctual_lights {
+            light.validate().map_err(Error::Setting)?;
+        }
         Ok(())
     }
 }
@@ -193,6 +201,11 @@ mod tests {
         let mut sky = scene.clone();
         sky.environment = Some(Environment::white_sky(2.0));
         assert!(sky.has_lights());
+        let mut point = scene.clone();
+        point.punctual_lights.push(PunctualLight::point(Vec3::Y, Colour::constant(1.0)));
+        assert!(point.has_lights());
+        point.punctual_lights[0] = PunctualLight::point(Vec3::Y, Colour::constant(0.0));
+        assert!(!point.has_lights());
         let mut sphere = scene;
         sphere.add_shape(
             crate::ShapeKind::Sphere(
