@@ -1,5 +1,7 @@
 //! The biased integrators against what they should equal: ambient occlusion against its
-//! closed form, direct lighting against path tracing limited to one bounce.
+//! closed form, direct lighting against path tracing limited to one bounce, Whitted ray
+//! tracing against path tracing on a scene of mirrors and glass and on diffuse surfaces
+//! under point lights.
 
 mod common;
 
@@ -11,7 +13,9 @@ use tracer::camera::Camera;
 use tracer::integrator::PathSettings;
 use tracer::material::Material;
 use tracer::mesh::quad;
-use tracer::{AmbientOcclusion, CpuBackend, DirectLighting, Integrator, PathTracer, RenderSettings, Scene};
+use tracer::{
+    AmbientOcclusion, CpuBackend, DirectLighting, Integrator, PathTracer, PunctualLight, RenderSettings, Scene, Whitted,
+};
 
 fn render<I: Integrator>(integrator: I, scene: &Scene, settings: &RenderSettings) -> tracer::Film {
     let backend = CpuBackend::with_integrator(2, integrator).unwrap();
@@ -79,4 +83,77 @@ fn direct_lighting_equals_path_tracing_at_depth_one() {
     let (full, full_se) = channel_mean_and_se(&render(PathTracer, &scene, &base), 1);
     let (one, one_se) = channel_mean_and_se(&path, 1);
     assert!(full - one > 6.0 * (full_se * full_se + one_se * one_se).sqrt(), "{full} vs {one}");
+}
+
+/// A mirror, a smooth glass ball and a tinted glass slab in front of an area light and a
+/// sky: only purely specular surfaces, so Whitted's deterministic split into reflection and
+/// refraction estimates what path tracing's random choice between them does, at the same
+/// depth limit. A Whitted that ignored the Fresnel split (both lobes at full weight) or
+/// reflection altogether would be told apart (checked below).
+#[test]
+fn whitted_equals_path_tracing_on_mirrors_and_glass() {
+    let mut scene = Scene::default();
+    let mirror = Material::builtin("mirror", brdf::ModelId::Mirror, &[]).unwrap();
+    let glass = Material::dielectric("glass", 1.5).unwrap();
+    let lamp = Material::diffuse("lamp", Colour::constant(0.0))
+        .unwrap()
+        .with_emission(Colour::illuminant_rgb([5.0, 4.0, 3.0]).unwrap());
+    scene.add(&quad(Vec3::new(0.0, 0.0, -1.0), Vec3::Z, 1.5), mirror);
+    scene.add(&tracer::mesh::uv_sphere(Vec3::new(0.3, 0.1, 0.0), 0.5, 24, 48, false), glass.clone());
+    scene.add(&quad(Vec3::new(-0.6, 0.0, 0.3), Vec3::new(1.0, 0.0, 1.0), 0.3), glass);
+    scene.add(&quad(Vec3::new(0.0, 1.2, 0.0), -Vec3::Y, 0.4), lamp);
+    scene.environment = Some(tracer::Environment { radiance: Colour::reflectance_rgb([0.2, 0.3, 0.5]).unwrap() });
+    scene.camera =
+        Some(Camera { eye: Vec3::new(0.2, 0.4, 3.0), center: Vec3::new(0.0, 0.1, 0.0), up: Vec3::Y, fov_y_deg: 45.0 });
+    let path_settings = PathSettings { max_depth: 6, rr_depth: 100, ..Default::default() };
+    let settings = RenderSettings {
+        width: 20,
+        height: 20,
+        spp: 128,
+        seed: 9,
+        mode: SpectralMode::Rgb,
+        path: path_settings,
+        ..Default::default()
+    };
+    let whitted = render(Whitted, &scene, &settings);
+    let path = render(PathTracer, &scene, &RenderSettings { spp: 512, ..settings.clone() });
+    let c = z_test(&whitted.mean_rgb(), &whitted.std_error_rgb(), &path.mean_rgb(), &path.std_error_rgb());
+    assert!(c.pass_fraction >= 0.99, "{c:?}");
+    for ch in 0..3 {
+        let ((a, sa), (b, sb)) = (channel_mean_and_se(&whitted, ch), channel_mean_and_se(&path, ch));
+        assert!((a - b).abs() <= 4.5 * (sa * sa + sb * sb).sqrt(), "channel {ch}: {a} ± {sa} vs {b} ± {sb}");
+    }
+    // The same depth limit matters: at depth 1 the light behind two glass surfaces is gone.
+    let shallow = RenderSettings { path: PathSettings { max_depth: 1, ..path_settings }, ..settings.clone() };
+    let (deep, deep_se) = channel_mean_and_se(&whitted, 1);
+    let (one, one_se) = channel_mean_and_se(&render(Whitted, &scene, &shallow), 1);
+    assert!(deep - one > 6.0 * (deep_se * deep_se + one_se * one_se).sqrt(), "{deep} vs {one}");
+}
+
+/// On diffuse surfaces Whitted gathers direct light only: every point light by its own
+/// shadow ray, the area light by one sample. That is path tracing at depth 1.
+#[test]
+fn whitted_on_diffuse_surfaces_is_path_tracing_at_depth_one() {
+    let mut scene = Scene::default();
+    let white = Material::diffuse("white", Colour::constant(0.8)).unwrap();
+    let lamp = Material::diffuse("lamp", Colour::constant(0.0)).unwrap().with_emission(Colour::constant(3.0));
+    scene.add(&quad(Vec3::ZERO, Vec3::Y, 1.0), white.clone());
+    scene.add(&quad(Vec3::new(0.0, 1.0, -1.0), Vec3::Z, 1.0), white);
+    scene.add(&quad(Vec3::new(0.5, 1.5, 0.0), -Vec3::Y, 0.2), lamp);
+    scene.punctual_lights = vec![
+        PunctualLight::point(Vec3::new(-0.5, 0.8, 0.5), Colour::illuminant_rgb([1.0, 0.6, 0.3]).unwrap()),
+        PunctualLight::spot(Vec3::new(0.0, 1.5, 1.0), Vec3::new(0.0, -1.0, -0.5), Colour::constant(2.0), 0.3, 0.6),
+    ];
+    scene.camera =
+        Some(Camera { eye: Vec3::new(0.0, 1.0, 3.0), center: Vec3::new(0.0, 0.5, 0.0), up: Vec3::Y, fov_y_deg: 50.0 });
+    let base = RenderSettings { width: 20, height: 20, spp: 128, seed: 4, ..Default::default() };
+    let depth_one = RenderSettings { path: PathSettings { max_depth: 1, ..Default::default() }, ..base.clone() };
+    let whitted = render(Whitted, &scene, &base);
+    let path = render(PathTracer, &scene, &depth_one);
+    let c = z_test(&whitted.mean_rgb(), &whitted.std_error_rgb(), &path.mean_rgb(), &path.std_error_rgb());
+    assert!(c.pass_fraction >= 0.99, "{c:?}");
+    for ch in 0..3 {
+        let ((a, sa), (b, sb)) = (channel_mean_and_se(&whitted, ch), channel_mean_and_se(&path, ch));
+        assert!((a - b).abs() <= 4.5 * (sa * sa + sb * sb).sqrt(), "channel {ch}: {a} ± {sa} vs {b} ± {sb}");
+    }
 }

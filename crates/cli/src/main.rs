@@ -344,7 +344,9 @@ struct SceneArgs {
     /// Light transport: path (path tracing with next-event estimation and MIS), direct
     /// (emission plus light sampled at the first surface: path tracing's --max-depth 1
     /// without BSDF-sampled light), ao (ambient occlusion within --ao-distance; not
-    /// light). direct and ao are biased by design.
+    /// light), whitted (recursive ray tracing: mirrors and glass split into their Fresnel-
+    /// weighted reflections and refractions, direct light only elsewhere; depth
+    /// --max-depth, 8 when unbounded). direct, ao and whitted are biased by design.
     #[arg(long, default_value = "path", value_parser = INTEGRATORS)]
     integrator: String,
     /// The ao integrator's reach: occluders farther than this from the surface do not
@@ -565,7 +567,7 @@ fn best_sampler(caps: &Capabilities) -> SamplerKind {
 const BACKENDS: [&str; 2] = ["cpu", "gpu"];
 
 /// The integrators `--integrator` accepts.
-const INTEGRATORS: [&str; 3] = ["path", "direct", "ao"];
+const INTEGRATORS: [&str; 4] = ["path", "direct", "ao", "whitted"];
 
 fn parse_distance(s: &str) -> Result<f32, String> {
     match s.trim().parse::<f32>() {
@@ -614,6 +616,7 @@ fn make_backend(args: &SceneArgs) -> Result<Box<dyn Backend>> {
                 "path" => gpu::kernel::GpuIntegrator::Path,
                 "direct" => gpu::kernel::GpuIntegrator::Direct,
                 "ao" => gpu::kernel::GpuIntegrator::AmbientOcclusion { max_distance: args.ao_distance },
+                "whitted" => bail!("the gpu backend has no whitted integrator yet: use --backend cpu"),
                 other => bail!("unknown integrator '{other}' (known: {})", INTEGRATORS.join(", ")),
             };
             let gpu = gpu::GpuBackend::new()?.with_integrator(integrator);
@@ -624,6 +627,7 @@ fn make_backend(args: &SceneArgs) -> Result<Box<dyn Backend>> {
         _ => match args.integrator.as_str() {
             "path" => Box::new(CpuBackend::with_integrator(args.threads, PathTracer)?),
             "direct" => Box::new(CpuBackend::with_integrator(args.threads, tracer::DirectLighting)?),
+            "whitted" => Box::new(CpuBackend::with_integrator(args.threads, tracer::Whitted)?),
             "ao" => {
                 Box::new(CpuBackend::with_integrator(args.threads, tracer::AmbientOcclusion::new(args.ao_distance))?)
             }

@@ -402,14 +402,16 @@ fn integrators_are_chosen_by_name() {
     let dir = temp_dir("integrators");
     let scene = write_scene(&dir, OBJ);
     let mut means = Vec::new();
-    for name in ["path", "direct", "ao"] {
+    for name in ["path", "direct", "ao", "whitted"] {
         let out = dir.join(format!("{name}.exr"));
         let o = render_small(&scene, (16, 16, 32), &out, &["--integrator", name, "--spectral", "rgb"]);
         assert!(o.status.success(), "{name}: {}", stderr(&o));
         means.push(exr_means(&out)[1]);
     }
-    let (path, direct, ao) = (means[0], means[1], means[2]);
+    let (path, direct, ao, whitted) = (means[0], means[1], means[2], means[3]);
     assert!(0.0 < direct && direct < path, "direct {direct} vs path {path}");
+    // Whitted sees direct light only on this scene's diffuse surfaces.
+    assert!(0.0 < whitted && whitted < path, "whitted {whitted} vs path {path}");
     assert!(ao > 0.0 && ao <= 1.0, "ao {ao}");
     // A short reach sees fewer occluders.
     let near = dir.join("near.exr");
@@ -437,10 +439,12 @@ fn integrators_are_chosen_by_name() {
             let o = render_small(&scene, (8, 8, 4), &out, &["--integrator", integrator, "--backend", "gpu"]);
             assert!(o.status.success(), "{integrator}: {}", stderr(&o));
         }
+        let o = render_small(&scene, (8, 8, 4), &out, &["--integrator", "whitted", "--backend", "gpu"]);
+        assert!(!o.status.success() && stderr(&o).contains("use --backend cpu"), "{}", stderr(&o));
     }
 }
 
-/// `spt compare` end to end: a rendered reference, two configurations at 1, 2, 4, 8 spp,
+/// `spt compare` end to end: a rendered reference, three configurations at 1, 2, 4, 8 spp,
 /// a CSV row per render with falling error for the unbiased one, and both charts; a
 /// reference of the wrong size and unknown configurations are refused.
 #[test]
@@ -455,7 +459,7 @@ fn compare_charts_error_against_time() {
     assert!(o.status.success(), "{}", stderr(&o));
     let csv = std::fs::read_to_string(out.join("compare.csv")).unwrap();
     let rows: Vec<Vec<&str>> = csv.lines().skip(1).map(|l| l.split(',').collect()).collect();
-    assert_eq!(rows.len(), 8, "{csv}");
+    assert_eq!(rows.len(), 12, "{csv}");
     let error = |config: &str, spp: &str| -> f64 {
         rows.iter().find(|r| r[0] == config && r[1] == spp).unwrap()[4].parse().unwrap()
     };
@@ -468,7 +472,7 @@ fn compare_charts_error_against_time() {
     assert!(image::open(out.join("compare.png")).is_ok());
     // A convergence strip per configuration (a 16-pixel crop at 1, 2, 4, 8 spp and the
     // reference) and a heat map of its error at the largest budget.
-    for config in ["path", "direct"] {
+    for config in ["path", "direct", "whitted"] {
         let strip = image::open(out.join(format!("strip-{config}.png"))).unwrap();
         assert_eq!((strip.width(), strip.height()), (5 * 16, 16), "{config}");
         let heat = image::open(out.join(format!("heat-{config}.png"))).unwrap().into_rgb8();

@@ -6,7 +6,7 @@
 //! spectral transport at N sampled wavelengths.
 
 use crate::geometry::{Geometry, HitSurface, SceneHit};
-use crate::lights::{LightSource, Lights};
+use crate::lights::{LightSample, LightSource, Lights};
 use crate::material::Material;
 use crate::punctual::PunctualLight;
 use crate::sampler::Sampler;
@@ -20,8 +20,10 @@ use spectral::{SampledSpectrum, SampledWavelengths};
 
 pub use crate::shading::{ShadingNormals, adapt_shading_normal, shading_normals};
 pub use simple::{AmbientOcclusion, DirectLighting};
+pub use whitted::{WHITTED_DEFAULT_DEPTH, Whitted};
 
 mod simple;
+mod whitted;
 
 /// Integrator settings.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -266,9 +268,24 @@ fn next_event<const N: usize, B: Bsdf<N>>(
     u: Vec2,
     counters: &mut PathCounters,
 ) -> Option<(SampledSpectrum<N>, SampledSpectrum<N>, f32)> {
+    let ls = view.lights.sample(view.scene, u)?;
+    light_contribution(view, at, bsdf, wl, mis, &ls, counters)
+}
+
+/// [`next_event`]'s estimate for a given light sample (its pdf may be 1 for a punctual
+/// light taken deliberately rather than sampled, as the Whitted integrator does).
+#[inline(always)]
+fn light_contribution<const N: usize, B: Bsdf<N>>(
+    view: &SceneView,
+    at: &Shading,
+    bsdf: &B,
+    wl: &SampledWavelengths<N>,
+    mis: Mis,
+    ls: &LightSample,
+    counters: &mut PathCounters,
+) -> Option<(SampledSpectrum<N>, SampledSpectrum<N>, f32)> {
     let scene = view.scene;
     let it = at.it;
-    let ls = view.lights.sample(scene, u)?;
     // (direction, distance, pdf, radiance or its delta equivalent, whether a delta light)
     let (wi_world, dist, light_pdf, le, delta) = match ls.source {
         LightSource::Primitive(t) => {
