@@ -306,27 +306,10 @@ fn light_contribution<const N: usize, B: Bsdf<N>>(
         }
         // A delta light: I·falloff/d² (or E) stands for the radiance and the pdf is the
         // probability of choosing it, so f·Le·|cos θ|/pdf is the usual estimate.
-        LightSource::Punctual(k) => match &scene.punctual_lights[k as usize] {
-            PunctualLight::Directional { irradiance, .. } => {
-                (ls.point, f32::INFINITY, ls.pdf, irradiance.sample(wl), true)
-            }
-            light @ (PunctualLight::Point { intensity, .. } | PunctualLight::Spot { intensity, .. }) => {
-                let d = ls.point - it.p;
-                let dist2 = d.length_squared();
-                if !(dist2 > 0.0 && dist2.is_finite()) {
-                    return None; // a light on the surface itself: no direction
-                }
-                let dist = dist2.sqrt();
-                let wi = d / dist;
-                let falloff = match *light {
-                    PunctualLight::Spot { direction, cos_inner, cos_outer, .. } => {
-                        PunctualLight::spot_falloff(-wi.dot(direction), cos_inner, cos_outer)
-                    }
-                    _ => 1.0,
-                };
-                (wi, dist, ls.pdf, intensity.sample(wl) * (falloff / dist2), true)
-            }
-        },
+        LightSource::Punctual(k) => {
+            let (wi, dist, le) = punctual_incidence(&scene.punctual_lights[k as usize], ls.point, it.p, wl)?;
+            (wi, dist, ls.pdf, le, true)
+        }
     };
     let wi = at.frame.to_local(wi_world);
     // Reflection must stay on the geometric side it came from (no light leaks).
@@ -356,6 +339,38 @@ fn light_contribution<const N: usize, B: Bsdf<N>>(
         _ => 1.0,
     };
     Some((f, le, wi.z.abs() * w / light_pdf))
+}
+
+/// The light a punctual light sends to `p`: direction, distance (∞ for a directional
+/// light) and I·falloff/d² (or E), the stand-in for radiance a delta light's estimate
+/// uses; `None` for a point light at `p` itself. Out of line and cold: scenes with such
+/// lights are rare, and keeping this out of the path tracer's loop kept its speed.
+#[cold]
+#[inline(never)]
+fn punctual_incidence<const N: usize>(
+    light: &PunctualLight,
+    point: Vec3,
+    p: Vec3,
+    wl: &SampledWavelengths<N>,
+) -> Option<(Vec3, f32, SampledSpectrum<N>)> {
+    let (intensity, falloff_of) = match light {
+        PunctualLight::Directional { irradiance, .. } => {
+            return Some((point, f32::INFINITY, irradiance.sample(wl)));
+        }
+        PunctualLight::Point { intensity, .. } => (intensity, None),
+        PunctualLight::Spot { intensity, direction, cos_inner, cos_outer, .. } => {
+            (intensity, Some((*direction, *cos_inner, *cos_outer)))
+        }
+    };
+    let d = point - p;
+    let dist2 = d.length_squared();
+    if !(dist2 > 0.0 && dist2.is_finite()) {
+        return None; // a light on the surface itself: no direction
+    }
+    let dist = dist2.sqrt();
+    let wi = d / dist;
+    let falloff = falloff_of.map_or(1.0, |(axis, ci, co)| PunctualLight::spot_falloff(-wi.dot(axis), ci, co));
+    Some((wi, dist, intensity.sample(wl) * (falloff / dist2)))
 }
 
 /// [`PathTracer`]'s estimate.
