@@ -25,6 +25,17 @@ fn render<I: Integrator>(integrator: I, scene: &Scene, settings: &RenderSettings
     film
 }
 
+/// Two estimates of the same image: per-pixel z-tests (at least `min_pass` of the
+/// pixel-channels within the Šidák-corrected bound) and channel means within 4.5σ.
+fn assert_images_agree(a: &tracer::Film, b: &tracer::Film, min_pass: f64) {
+    let c = z_test(&a.mean_rgb(), &a.std_error_rgb(), &b.mean_rgb(), &b.std_error_rgb());
+    assert!(c.pass_fraction >= min_pass, "{c:?}");
+    for ch in 0..3 {
+        let ((x, sx), (y, sy)) = (channel_mean_and_se(a, ch), channel_mean_and_se(b, ch));
+        assert!((x - y).abs() <= 4.5 * (sx * sx + sy * sy).sqrt(), "channel {ch}: {x} ± {sx} vs {y} ± {sy}");
+    }
+}
+
 /// A floor under a ceiling at height h, both 100 wide (infinite for these purposes), the
 /// camera between them looking down. A cosine-distributed direction from the floor
 /// reaches the ceiling within distance d iff cos θ ≥ h/d, which has probability
@@ -72,12 +83,7 @@ fn direct_lighting_equals_path_tracing_at_depth_one() {
     let depth_one = RenderSettings { path: PathSettings { max_depth: 1, ..Default::default() }, ..base.clone() };
     let direct = render(DirectLighting, &scene, &base);
     let path = render(PathTracer, &scene, &depth_one);
-    let c = z_test(&direct.mean_rgb(), &direct.std_error_rgb(), &path.mean_rgb(), &path.std_error_rgb());
-    assert!(c.pass_fraction >= 0.995, "{c:?}");
-    for ch in 0..3 {
-        let ((a, sa), (b, sb)) = (channel_mean_and_se(&direct, ch), channel_mean_and_se(&path, ch));
-        assert!((a - b).abs() <= 4.5 * (sa * sa + sb * sb).sqrt(), "channel {ch}: {a} ± {sa} vs {b} ± {sb}");
-    }
+    assert_images_agree(&direct, &path, 0.995);
     // Indirect light exists in this scene: full path tracing is brighter, so the test can
     // tell the two apart.
     let (full, full_se) = channel_mean_and_se(&render(PathTracer, &scene, &base), 1);
@@ -117,12 +123,7 @@ fn whitted_equals_path_tracing_on_mirrors_and_glass() {
     };
     let whitted = render(Whitted, &scene, &settings);
     let path = render(PathTracer, &scene, &RenderSettings { spp: 512, ..settings.clone() });
-    let c = z_test(&whitted.mean_rgb(), &whitted.std_error_rgb(), &path.mean_rgb(), &path.std_error_rgb());
-    assert!(c.pass_fraction >= 0.99, "{c:?}");
-    for ch in 0..3 {
-        let ((a, sa), (b, sb)) = (channel_mean_and_se(&whitted, ch), channel_mean_and_se(&path, ch));
-        assert!((a - b).abs() <= 4.5 * (sa * sa + sb * sb).sqrt(), "channel {ch}: {a} ± {sa} vs {b} ± {sb}");
-    }
+    assert_images_agree(&whitted, &path, 0.99);
     // The same depth limit matters: at depth 1 the light behind two glass surfaces is gone.
     let shallow = RenderSettings { path: PathSettings { max_depth: 1, ..path_settings }, ..settings.clone() };
     let (deep, deep_se) = channel_mean_and_se(&whitted, 1);
@@ -150,10 +151,5 @@ fn whitted_on_diffuse_surfaces_is_path_tracing_at_depth_one() {
     let depth_one = RenderSettings { path: PathSettings { max_depth: 1, ..Default::default() }, ..base.clone() };
     let whitted = render(Whitted, &scene, &base);
     let path = render(PathTracer, &scene, &depth_one);
-    let c = z_test(&whitted.mean_rgb(), &whitted.std_error_rgb(), &path.mean_rgb(), &path.std_error_rgb());
-    assert!(c.pass_fraction >= 0.99, "{c:?}");
-    for ch in 0..3 {
-        let ((a, sa), (b, sb)) = (channel_mean_and_se(&whitted, ch), channel_mean_and_se(&path, ch));
-        assert!((a - b).abs() <= 4.5 * (sa * sa + sb * sb).sqrt(), "channel {ch}: {a} ± {sa} vs {b} ± {sb}");
-    }
+    assert_images_agree(&whitted, &path, 0.99);
 }
