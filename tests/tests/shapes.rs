@@ -40,11 +40,7 @@ fn render(scene: Scene, size: u32, spp: u32, path: PathSettings) -> (CpuScene, F
 /// Pixels whose four corners all see the object (primary rays hit primitive `prim`).
 fn interior_pixels(prepared: &CpuScene, size: u32, prim_of_interest: impl Fn(u32) -> bool) -> Vec<usize> {
     let camera = prepared.scene().camera.unwrap().rays(size, size);
-    let view = tracer::integrator::SceneView {
-        scene: prepared.scene(),
-        geometry: prepared.geometry(),
-        lights: prepared.lights(),
-    };
+    let view = prepared.view();
     let sees =
         |x: f32, y: f32| view.intersect(&camera.ray(glam::Vec2::new(x, y))).is_some_and(|h| prim_of_interest(h.prim));
     (0..size * size)

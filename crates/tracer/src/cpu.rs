@@ -124,7 +124,7 @@ pub struct CpuScene<I: Integrator = PathTracer> {
 impl<I: Integrator> CpuScene<I> {
     /// Everything the integrator reads.
     pub fn view(&self) -> SceneView<'_> {
-        SceneView { scene: &self.scene, geometry: &self.geometry, lights: &self.lights }
+        SceneView::new(&self.scene, &self.geometry, &self.lights)
     }
 
     /// The scene's accelerators.

@@ -130,6 +130,8 @@ pub struct SceneView<'a> {
     pub geometry: &'a Geometry,
     /// Its emitters.
     pub lights: &'a Lights,
+    /// Whether any material disperses (looked up once here, not per sample).
+    dispersive: bool,
 }
 
 /// Surface data at a hit.
@@ -146,7 +148,34 @@ struct Interaction {
     area: f32,
 }
 
-impl SceneView<'_> {
+impl Interaction {
+    /// The origin of a ray leaving the surface towards `dir`, moved off it on that side of
+    /// the geometric normal (Wächter & Binder's offset).
+    #[inline(always)]
+    fn spawn_origin(&self, dir: Vec3) -> Vec3 {
+        offset_ray_origin(self.p, if dir.dot(self.ng) > 0.0 { self.ng } else { -self.ng })
+    }
+}
+
+impl<'a> SceneView<'a> {
+    /// The view of a scene with its accelerators and emitters.
+    pub fn new(scene: &'a Scene, geometry: &'a Geometry, lights: &'a Lights) -> Self {
+        let dispersive = scene.materials.iter().any(|m| m.is_dispersive());
+        Self { scene, geometry, lights, dispersive }
+    }
+
+    /// Whether any of the scene's materials disperses light.
+    #[inline]
+    pub fn has_dispersion(&self) -> bool {
+        self.dispersive
+    }
+
+    /// The environment's radiance at the sampled wavelengths (zero without one).
+    #[inline]
+    pub fn environment_radiance<const N: usize>(&self, wl: &SampledWavelengths<N>) -> SampledSpectrum<N> {
+        self.scene.environment.as_ref().map_or(SampledSpectrum::zero(), |e| e.radiance.sample(wl))
+    }
+
     /// The closest hit along `ray`.
     #[inline]
     pub fn intersect(&self, ray: &Ray) -> Option<SceneHit> {
@@ -300,10 +329,7 @@ fn light_contribution<const N: usize, B: Bsdf<N>>(
                 _ => (wi, dist, 0.0, SampledSpectrum::zero(), false),
             }
         }
-        LightSource::Environment => {
-            let le = scene.environment.as_ref().map_or(SampledSpectrum::zero(), |e| e.radiance.sample(wl));
-            (ls.point, f32::INFINITY, ls.pdf, le, false)
-        }
+        LightSource::Environment => (ls.point, f32::INFINITY, ls.pdf, view.environment_radiance(wl), false),
         // A delta light: I·falloff/d² (or E) stands for the radiance and the pdf is the
         // probability of choosing it, so f·Le·|cos θ|/pdf is the usual estimate.
         LightSource::Punctual(k) => {
@@ -323,7 +349,7 @@ fn light_contribution<const N: usize, B: Bsdf<N>>(
     if f.is_black() {
         return None;
     }
-    let origin = offset_ray_origin(it.p, if wi_world.dot(it.ng) > 0.0 { it.ng } else { -it.ng });
+    let origin = it.spawn_origin(wi_world);
     let shadow = if dist.is_finite() {
         Ray::segment(origin, ls.point - origin, 0.0, SHADOW_T_MAX)
     } else {
@@ -373,6 +399,41 @@ fn punctual_incidence<const N: usize>(
     Some((wi, dist, intensity.sample(wl) * (falloff / dist2)))
 }
 
+/// Beer–Lambert: a ray reaching the back of an absorbing transmissive surface travelled
+/// inside it (rays are unit length, so `t` is the distance), and arrives with exp(−α·t)
+/// of its radiance; `None` where nothing absorbs.
+#[inline(always)]
+fn interior_transmittance<const N: usize>(
+    material: &Material,
+    front: bool,
+    t: f32,
+    wl: &SampledWavelengths<N>,
+) -> Option<SampledSpectrum<N>> {
+    if front || material.is_two_sided() {
+        return None;
+    }
+    material.absorption().map(|alpha| alpha.sample(wl).map(|a| (-a * t).exp()))
+}
+
+/// Whether a sampled lobe disagrees with the geometry, the direction a path must not go:
+/// a reflection must stay on ω_o's side of the surface and a transmission cross it
+/// (otherwise the shading normal has sent the path through the surface the wrong way, a
+/// light leak; face-forwarded normals are exempt, that being their documented flaw), and
+/// a two-sided surface never transmits.
+#[inline(always)]
+fn lobe_leaks(
+    material: &Material,
+    shading: ShadingNormals,
+    ng: Vec3,
+    wo_world: Vec3,
+    wi_world: Vec3,
+    flags: ScatterFlags,
+) -> bool {
+    let crosses = wi_world.dot(ng) * wo_world.dot(ng) <= 0.0;
+    (crosses != flags.contains(ScatterFlags::TRANSMISSION) && shading != ShadingNormals::FaceForward)
+        || (material.is_two_sided() && crosses)
+}
+
 /// [`PathTracer`]'s estimate.
 fn path_radiance<const N: usize, S: Sampler>(
     view: &SceneView,
@@ -407,14 +468,8 @@ fn path_radiance<const N: usize, S: Sampler>(
         let wo_world = -ray.dir;
         let front = wo_world.dot(it.ng) > 0.0;
 
-        // Beer–Lambert: a ray reaching the back of a transmissive surface travelled
-        // inside it (rays are unit length, so t is the distance).
-        if !front
-            && !material.is_two_sided()
-            && let Some(alpha) = material.absorption()
-        {
-            let a = alpha.sample(wl);
-            beta *= a.map(|a| (-a * hit.t).exp());
+        if let Some(transmittance) = interior_transmittance(material, front, hit.t, wl) {
+            beta *= transmittance;
         }
 
         // Emission seen by this path (one-sided: front face only).
@@ -477,24 +532,14 @@ fn path_radiance<const N: usize, S: Sampler>(
             break;
         }
         let wi_world = frame.to_world(s.wi);
-        // The sampled lobe must agree with the geometry: a reflection stays on ω_o's side
-        // of the surface, a transmission crosses it (otherwise the shading normal has
-        // sent the path through the surface the wrong way: a light leak).
-        let crosses = wi_world.dot(it.ng) * wo_world.dot(it.ng) <= 0.0;
-        if crosses != s.flags.contains(ScatterFlags::TRANSMISSION)
-            && settings.shading_normals != ShadingNormals::FaceForward
-        {
-            break;
-        }
-        if material.is_two_sided() && crosses {
+        if lobe_leaks(material, settings.shading_normals, it.ng, wo_world, wi_world, s.flags) {
             break;
         }
         beta *= s.f * (s.wi.z.abs() / s.pdf);
         prev_pdf = s.pdf;
         prev_specular = s.flags.is_specular();
         prev_p = it.p;
-        let origin = offset_ray_origin(it.p, if wi_world.dot(it.ng) > 0.0 { it.ng } else { -it.ng });
-        ray = Ray::new(origin, wi_world);
+        ray = Ray::new(it.spawn_origin(wi_world), wi_world);
         bounce += 1;
 
         // Russian roulette (Arvo & Kirk 1990): unbiased termination of dim paths.

@@ -214,12 +214,8 @@ impl Lights {
         let k = self.cdf.partition_point(|&c| c <= u.x).min(self.cdf.len() - 1);
         if k >= self.prims.len() {
             let index = k - self.prims.len();
-            let point = match &scene.punctual_lights[index] {
-                PunctualLight::Point { position, .. } | PunctualLight::Spot { position, .. } => *position,
-                PunctualLight::Directional { direction, .. } => -*direction,
-            };
             return Some(LightSample {
-                point,
+                point: scene.punctual_lights[index].towards(),
                 normal: Vec3::ZERO,
                 pdf: self.punctual_pmf[index],
                 source: LightSource::Punctual(index as u32),

@@ -67,6 +67,15 @@ impl PunctualLight {
         Self::Directional { direction: direction.normalize_or_zero(), irradiance }
     }
 
+    /// Where a light sample points: a point or spot light's position, or the unit
+    /// direction towards a directional light (as [`crate::lights::LightSample::point`]).
+    pub fn towards(&self) -> Vec3 {
+        match self {
+            Self::Point { position, .. } | Self::Spot { position, .. } => *position,
+            Self::Directional { direction, .. } => -*direction,
+        }
+    }
+
     /// The light's name in messages and `spt info`.
     pub fn kind(&self) -> &'static str {
         match self {

@@ -38,7 +38,7 @@ impl Integrator for DirectLighting {
     ) -> SampledSpectrum<N> {
         counters.rays += 1;
         let Some(hit) = view.intersect(&ray) else {
-            return view.scene.environment.as_ref().map_or(SampledSpectrum::zero(), |e| e.radiance.sample(wl));
+            return view.environment_radiance(wl);
         };
         let it = view.interaction(&hit, settings.shading_normals);
         let material = view.material(hit.prim);

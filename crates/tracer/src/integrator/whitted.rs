@@ -1,14 +1,15 @@
 //! Whitted-style recursive ray tracing (T. Whitted, "An Improved Illumination Model for
 //! Shaded Display", CACM 23(6), 1980; the lecture's `traceRay`).
 
-use super::{Integrator, Mis, PathCounters, PathSettings, SceneView, Shading, light_contribution};
-use crate::lights::{LightSample, LightSource};
-use crate::punctual::PunctualLight;
+use super::{
+    Integrator, Mis, PathCounters, PathSettings, SceneView, Shading, interior_transmittance, light_contribution,
+    lobe_leaks,
+};
+use crate::lights::{LightSample, LightSource, ONE_MINUS_EPSILON};
 use crate::sampler::Sampler;
 use brdf::{Bsdf, Frame};
 use bvh::Ray;
 use glam::{Vec2, Vec3};
-use shapes::offset::offset_ray_origin;
 use spectral::{SampledSpectrum, SampledWavelengths};
 
 /// The recursion depth when the settings leave it unbounded (`max_depth` 0): a ray may
@@ -48,7 +49,7 @@ impl Integrator for Whitted {
         sampler: &mut S,
         counters: &mut PathCounters,
     ) -> SampledSpectrum<N> {
-        if !wl.is_rgb() && !wl.is_collapsed() && view.scene.materials.iter().any(|m| m.is_dispersive()) {
+        if view.has_dispersion() && !wl.is_rgb() && !wl.is_collapsed() {
             let k = ((sampler.next_1d() * N as f32) as usize).min(N - 1);
             wl.collapse_to(k);
         }
@@ -72,7 +73,7 @@ fn trace<const N: usize, S: Sampler>(
     counters.rays += 1;
     let scene = view.scene;
     let Some(hit) = view.intersect(&ray) else {
-        return scene.environment.as_ref().map_or(SampledSpectrum::zero(), |e| e.radiance.sample(wl));
+        return view.environment_radiance(wl);
     };
     let it = view.interaction(&hit, settings.shading_normals);
     let material = view.material(hit.prim);
@@ -80,10 +81,7 @@ fn trace<const N: usize, S: Sampler>(
     let front = wo_world.dot(it.ng) > 0.0;
     let mut l = SampledSpectrum::<N>::zero();
     // Beer–Lambert inside absorbing glass, as in the path tracer.
-    let attenuation = match material.absorption() {
-        Some(alpha) if !front && !material.is_two_sided() => alpha.sample(wl).map(|a| (-a * hit.t).exp()),
-        _ => SampledSpectrum::one(),
-    };
+    let attenuation = interior_transmittance(material, front, hit.t, wl).unwrap_or(SampledSpectrum::one());
     if let Some(e) = &material.emission
         && front
     {
@@ -101,11 +99,8 @@ fn trace<const N: usize, S: Sampler>(
         let at = Shading { it: &it, material, ng, wo_world, frame: &frame, wo };
         // Every punctual light deterministically (probability 1 each)…
         for (k, light) in scene.punctual_lights.iter().enumerate() {
-            let point = match light {
-                PunctualLight::Point { position, .. } | PunctualLight::Spot { position, .. } => *position,
-                PunctualLight::Directional { direction, .. } => -*direction,
-            };
-            let ls = LightSample { point, normal: Vec3::ZERO, pdf: 1.0, source: LightSource::Punctual(k as u32) };
+            let source = LightSource::Punctual(k as u32);
+            let ls = LightSample { point: light.towards(), normal: Vec3::ZERO, pdf: 1.0, source };
             if let Some((f, le, w)) = light_contribution(view, &at, &bsdf, wl, Mis::None, &ls, counters) {
                 l += f * le * w;
             }
@@ -129,7 +124,7 @@ fn trace<const N: usize, S: Sampler>(
     // ends give both; f·|cos θ| is a lobe's deterministic weight (f·|cos θ|/pdf would be
     // its weight when chosen with probability pdf).
     let first = bsdf.sample(wo, 0.0, Vec2::ZERO);
-    let last = bsdf.sample(wo, crate::lights::ONE_MINUS_EPSILON, Vec2::ZERO);
+    let last = bsdf.sample(wo, ONE_MINUS_EPSILON, Vec2::ZERO);
     let lobes: [Option<_>; 2] = match (first, last) {
         (Some(a), Some(b)) if a.flags == b.flags => [Some(a), None],
         pair => [pair.0, pair.1],
@@ -141,16 +136,11 @@ fn trace<const N: usize, S: Sampler>(
         }
         let weight = if split { s.f * s.wi.z.abs() } else { s.f * (s.wi.z.abs() / s.pdf) };
         let wi_world = frame.to_world(s.wi);
-        // As in the path tracer: a lobe must agree with the geometry (no light leaks).
-        let crosses = wi_world.dot(it.ng) * wo_world.dot(it.ng) <= 0.0;
-        if (material.is_two_sided() && crosses)
-            || (crosses != s.flags.contains(brdf::ScatterFlags::TRANSMISSION)
-                && settings.shading_normals != super::ShadingNormals::FaceForward)
-        {
+        if lobe_leaks(material, settings.shading_normals, it.ng, wo_world, wi_world, s.flags) {
             continue;
         }
-        let origin = offset_ray_origin(it.p, if wi_world.dot(it.ng) > 0.0 { it.ng } else { -it.ng });
-        let child = trace(view, Ray::new(origin, wi_world), wl, settings, max_depth, depth + 1, sampler, counters);
+        let child_ray = Ray::new(it.spawn_origin(wi_world), wi_world);
+        let child = trace(view, child_ray, wl, settings, max_depth, depth + 1, sampler, counters);
         l += weight * child;
     }
     l * attenuation
