@@ -3,7 +3,7 @@
 mod common;
 
 use common::*;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 #[test]
 fn renders_png_exr_and_standard_error() {
@@ -310,6 +310,15 @@ fn exr_means(path: &Path) -> [f64; 3] {
     sum.map(|s| s / n)
 }
 
+/// A 2×2 square of grey (ρ 0.5) at z = 0 facing +z, with no light: `DIR/square.obj`.
+fn grey_square(dir: &Path) -> PathBuf {
+    std::fs::write(dir.join("grey.mtl"), "newmtl grey\nKd 0.5 0.5 0.5\n").unwrap();
+    let scene = dir.join("square.obj");
+    std::fs::write(&scene, "mtllib grey.mtl\nv -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\nusemtl grey\nf 1 2 3 4\n")
+        .unwrap();
+    scene
+}
+
 /// A scene without lights (here a grey square, as most downloaded OBJs are unlit) is lit
 /// by the documented default — a uniform white sky of luminance 1, under which a
 /// Lambertian surface of albedo ρ has radiance ρ — with a warning; `--sky none` leaves it
@@ -317,10 +326,7 @@ fn exr_means(path: &Path) -> [f64; 3] {
 #[test]
 fn scenes_without_lights_get_the_white_sky_unless_told_otherwise() {
     let dir = temp_dir("sky");
-    std::fs::write(dir.join("grey.mtl"), "newmtl grey\nKd 0.5 0.5 0.5\n").unwrap();
-    let scene = dir.join("square.obj");
-    std::fs::write(&scene, "mtllib grey.mtl\nv -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\nusemtl grey\nf 1 2 3 4\n")
-        .unwrap();
+    let scene = grey_square(&dir);
     let out = dir.join("square.exr");
     for (sky, expected) in [(None, 0.5), (Some("white"), 0.5), (Some("white:2"), 1.0), (Some("none"), 0.0)] {
         // Close enough that the square fills the frame.
@@ -351,10 +357,7 @@ fn scenes_without_lights_get_the_white_sky_unless_told_otherwise() {
 #[test]
 fn lights_from_the_command_line() {
     let dir = temp_dir("lights");
-    std::fs::write(dir.join("grey.mtl"), "newmtl grey\nKd 0.5 0.5 0.5\n").unwrap();
-    let scene = dir.join("square.obj");
-    std::fs::write(&scene, "mtllib grey.mtl\nv -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\nusemtl grey\nf 1 2 3 4\n")
-        .unwrap();
+    let scene = grey_square(&dir);
     let out = dir.join("sun.exr");
     let o =
         render_small(&scene, (24, 16, 16), &out, &["--eye", "0,0,1", "--center", "0,0,0", "--light", "sun:0,0,-1:2"]);
