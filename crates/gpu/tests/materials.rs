@@ -141,6 +141,21 @@ fn test_materials() -> Vec<Material> {
             vec![("nu", Scalar(1.0e4)), ("nv", Scalar(10.0)), ("rs", Scalar(0.9)), ("rd", Scalar(0.0))],
         ),
         ("sa metal", B::Ashikhmin, vec![("rs", Scalar(1.0)), ("rd", Rgb([0.2, 0.5, 0.8]))]),
+        (
+            "gltf plastic",
+            B::MetallicRoughness,
+            vec![("metallic", Scalar(0.0)), ("roughness", Scalar(0.4)), ("base_color", Rgb([0.8, 0.3, 0.1]))],
+        ),
+        (
+            "gltf rough gold",
+            B::MetallicRoughness,
+            vec![("roughness", Scalar(0.7)), ("base_color", Rgb([1.0, 0.78, 0.34]))],
+        ),
+        (
+            "gltf half metal",
+            B::MetallicRoughness,
+            vec![("metallic", Scalar(0.5)), ("roughness", Scalar(0.1)), ("ior", Scalar(1.8))],
+        ),
         ("oren-nayar rough", B::OrenNayar, vec![("sigma", Scalar(1.2)), ("reflectance", Rgb([0.9, 0.5, 0.3]))]),
     ];
     for (name, model, params) in extras {

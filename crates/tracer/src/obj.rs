@@ -6,6 +6,7 @@
 //! * `bsdf NAME` (our extension) picks any built-in model by name;
 //! * the thesis's extensions: `rough`/`p` → Schlick 1994, `nu`/`nv`/`Rs`/`Rd` →
 //!   Shirley–Ashikhmin 2000;
+//! * the PBR extension's `Pr`/`Pm` → glTF's metallic–roughness model (`Kd` its base colour);
 //! * else `illum` 4, 6, 7, or opacity < 1 (`d`, else 1 − `Tr`) → smooth dielectric;
 //! * `illum` 3 or 5 → perfect mirror;
 //! * otherwise → Lambertian.
@@ -211,6 +212,10 @@ fn to_material(lib: &Path, m: &MtlMaterial) -> Result<Material> {
         ModelId::Ashikhmin
     } else if ["rough", "p"].iter().any(|k| m.has(k)) {
         ModelId::Schlick
+    } else if ["Pr", "Pm"].iter().any(|k| m.has(k)) {
+        // The PBR extension of MTL (roughness `Pr`, metalness `Pm`, as Blender and
+        // Clara.io write them) is glTF's metallic–roughness model.
+        ModelId::MetallicRoughness
     } else {
         let illum = m.get("illum").map(Statement::illum).transpose().map_err(syntax)?.unwrap_or(2);
         let opacity = m.dissolve().map_err(syntax)?.unwrap_or(1.0);
@@ -526,6 +531,10 @@ mod mtl_tests {
         assert_eq!(model(&s), ModelId::OrenNayar);
         let s = load("newmtl a\nillum 7\nNi 1.33\n").unwrap();
         assert_eq!(model(&s), ModelId::Dielectric);
+        let s = load("newmtl a\nKd 0.8 0.2 0.1\nPr 0.4\nPm 0\n").unwrap();
+        assert_eq!(model(&s), ModelId::MetallicRoughness);
+        let Some(ModelParams::MetallicRoughness(params)) = s.materials[0].params() else { unreachable!() };
+        assert_eq!((params.roughness, params.metallic, params.base_color.rgb), (0.4, 0.0, [0.8, 0.2, 0.1]));
     }
 
     #[test]

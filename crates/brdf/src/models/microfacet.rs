@@ -165,7 +165,7 @@ impl Ggx {
 
     /// s(ω) = √(α_x² ω_x² + α_y² ω_y² + ω_z²): |ω_z| (1 + 2Λ(ω)).
     #[inline]
-    fn s(&self, w: Vec3) -> f32 {
+    pub(crate) fn s(&self, w: Vec3) -> f32 {
         let (x, y) = (self.alpha_x * w.x, self.alpha_y * w.y);
         (x * x + y * y + w.z * w.z).sqrt()
     }
@@ -233,7 +233,7 @@ impl Ggx {
     /// pdf of the reflected direction when h is drawn from D_ωo and ωi = reflect(ωo, h):
     /// D_ωo(h) / (4 ωo·h) = D(h) / (2 (|z_o| + s(ωo))) (ωo, ωi in the upper hemisphere).
     #[inline]
-    fn reflection_pdf(&self, wo: Vec3, h: Vec3) -> f32 {
+    pub(crate) fn reflection_pdf(&self, wo: Vec3, h: Vec3) -> f32 {
         let d = wo.z.abs() + self.s(wo);
         if d > 0.0 { self.d(h) / (2.0 * d) } else { 0.0 }
     }

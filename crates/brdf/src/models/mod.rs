@@ -8,6 +8,7 @@ pub mod dielectric;
 pub mod dispersion;
 pub mod lambert;
 pub mod metal;
+pub mod metallic_roughness;
 pub mod microfacet;
 pub mod mirror;
 pub mod oren_nayar;
@@ -19,6 +20,7 @@ pub use dielectric::{Dielectric, DielectricParams, FresnelModel};
 pub use dispersion::{Dispersion, DispersionPreset};
 pub use lambert::{Lambert, LambertParams};
 pub use metal::{Metal, MetalPreset, fresnel_conductor};
+pub use metallic_roughness::{MetallicRoughness, MetallicRoughnessParams};
 pub use microfacet::{Ggx, RoughConductor, RoughConductorParams, RoughDielectric, RoughDielectricParams};
 pub use mirror::{Mirror, MirrorParams};
 pub use oren_nayar::{OrenNayar, OrenNayarParams};
@@ -41,6 +43,7 @@ macro_rules! with_builtin_models {
             OrenNayar($crate::models::OrenNayarParams),
             Schlick($crate::models::SchlickParams),
             Ashikhmin($crate::models::AshikhminParams),
+            MetallicRoughness($crate::models::MetallicRoughnessParams),
             $($($extra)*)?
         }
     };
