@@ -68,13 +68,19 @@ enum Command {
 
 #[derive(Args)]
 struct InfoArgs {
-    /// The scene: an .obj file (with its .mtl), or a built-in scene `builtin:NAME`.
+    /// The scene: an .obj file (with its .mtl), a .gltf or .glb file, or a built-in scene
+    /// `builtin:NAME`.
     scene: PathBuf,
 }
 
 /// `spt info`: a scene's contents, as loaded (before any default sky is added).
 fn run_info(args: InfoArgs) -> Result<()> {
-    let scene = load_scene(&args.scene)?;
+    let (scene, cameras) = if is_gltf(&args.scene) {
+        let loaded = load_gltf(&args.scene, None)?;
+        (loaded.scene, loaded.cameras)
+    } else {
+        (load_scene(&args.scene)?, Vec::new())
+    };
     println!("{}", args.scene.display());
     println!(
         "  geometry: {} triangles, {} vertices ({} with shading normals, {} with tangents), {} analytic shapes",
@@ -127,6 +133,16 @@ fn run_info(args: InfoArgs) -> Result<()> {
     }
     if !scene.has_lights() {
         println!("    no light: renders get the default white sky (--sky)");
+    }
+    for c in &cameras {
+        let name = c.name.as_deref().map(|n| format!(" ({n})")).unwrap_or_default();
+        match &c.camera {
+            Some(v) => println!(
+                "  camera {}{name}: eye {:.3}, looking at {:.3}, vertical field of view {:.1}°",
+                c.index, v.eye, v.center, v.fov_y_deg
+            ),
+            None => println!("  camera {}{name}: orthographic (not supported)", c.index),
+        }
     }
     let bytes = std::mem::size_of_val(scene.positions.as_slice())
         + std::mem::size_of_val(scene.normals.as_slice())
@@ -285,8 +301,8 @@ fn run_sheet(args: SheetArgs) -> Result<()> {
 
 #[derive(Args, Clone)]
 struct SceneArgs {
-    /// The scene: an .obj file (with its .mtl), or a built-in scene `builtin:NAME`
-    /// (sphereflake[:LEVEL], glass-torus, glass-torus-laguerre, glass-bunny[:OBJ]).
+    /// The scene: an .obj file (with its .mtl), a .gltf or .glb file, or a built-in scene
+    /// `builtin:NAME` (sphereflake[:LEVEL], glass-torus, glass-torus-laguerre, glass-bunny[:OBJ]).
     scene: PathBuf,
     /// Image width in pixels.
     #[arg(long, default_value_t = 512)]
@@ -310,7 +326,11 @@ struct SceneArgs {
     /// (mirrors, glass): the thesis's path extension.
     #[arg(long, default_value_t = 0)]
     extension: u32,
-    /// Camera position x,y,z (default: frame the scene's bounding box).
+    /// A glTF scene's camera, by index or name (default: the first camera the scene
+    /// places; --eye, --center and --fov start from it).
+    #[arg(long, value_name = "N|NAME")]
+    camera: Option<String>,
+    /// Camera position x,y,z (default: the scene's camera, else frame its bounding box).
     #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true)]
     eye: Option<Vec3>,
     /// Point the camera looks at, x,y,z.
@@ -504,13 +524,39 @@ pub(crate) fn parse_vec3(s: &str) -> Result<Vec3, String> {
 }
 
 pub(crate) fn load_scene(path: &Path) -> Result<Scene> {
+    load_scene_with_camera(path, None)
+}
+
+/// Whether `path` names a glTF file (by its extension).
+fn is_gltf(path: &Path) -> bool {
+    matches!(path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref(), Some("gltf" | "glb"))
+}
+
+/// A glTF file converted, its notes (what the conversion ignored) printed as warnings.
+fn load_gltf(path: &Path, camera: Option<&str>) -> Result<tracer::gltf_scene::GltfScene> {
+    let options = tracer::gltf_scene::GltfOptions { camera: camera.map(str::to_string) };
+    let loaded = tracer::gltf_scene::load_gltf(path, &options)?;
+    for note in &loaded.notes {
+        eprintln!("warning: {}: {note}", path.display());
+    }
+    Ok(loaded)
+}
+
+/// Loads a scene; `camera` picks a glTF file's camera by index or name.
+pub(crate) fn load_scene_with_camera(path: &Path, camera: Option<&str>) -> Result<Scene> {
+    if is_gltf(path) {
+        return Ok(load_gltf(path, camera)?.scene);
+    }
+    if let Some(camera) = camera {
+        bail!("--camera {camera}: {} has no cameras (only glTF scenes do)", path.display());
+    }
     if let Some(name) = path.to_str().and_then(|p| p.strip_prefix("builtin:")) {
         return Ok(tracer::scenes::builtin(name)?);
     }
     match path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref() {
         Some("obj") => Ok(tracer::obj::load_obj(path)?),
         _ => bail!(
-            "{}: unsupported scene format (supported: .obj, or builtin:NAME with NAME one of {})",
+            "{}: unsupported scene format (supported: .obj, .gltf, .glb, or builtin:NAME with NAME one of {})",
             path.display(),
             tracer::scenes::BUILTIN_SCENES.join(", ")
         ),
@@ -585,7 +631,7 @@ fn prepare(
     mode: SpectralMode,
     default_sampler: fn(&Capabilities) -> SamplerKind,
 ) -> Result<(Box<dyn PreparedScene>, RenderSettings)> {
-    let mut scene = load_scene(&args.scene)?;
+    let mut scene = load_scene_with_camera(&args.scene, args.camera.as_deref())?;
     if scene.triangles.is_empty() && scene.shapes.is_empty() {
         bail!("{}: the scene has no geometry", args.scene.display());
     }

@@ -602,3 +602,42 @@ fn info_lists_geometry_materials_and_lights() {
     let o = spt(&["info", dir.join("missing.obj").to_str().unwrap()]);
     assert!(!o.status.success() && stderr(&o).contains("missing.obj"), "{}", stderr(&o));
 }
+
+#[test]
+fn gltf_scenes_render_through_their_cameras_and_report_what_they_ignore() {
+    let shared = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/scenes");
+    let (glass, cornell) = (
+        shared.join("gltf-transmission-test/TransmissionTest.glb"),
+        shared.join("cornell-box/CornellBox-Original.obj"),
+    );
+    if !glass.exists() || !cornell.exists() {
+        eprintln!("SKIPPED: {} or {} is absent", glass.display(), cornell.display());
+        return;
+    }
+    let o = spt(&["info", glass.to_str().unwrap()]);
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(out.contains("geometry: 128775 triangles"), "{out}");
+    assert!(out.contains("camera 0 (render_camera): eye [-0.077, 0.339, 1.803]"), "{out}");
+    assert!(out.contains("roughdielectric: ") && out.contains("metallicroughness: "), "{out}");
+    assert!(stderr(&o).contains("9 textures not applied"), "{}", stderr(&o));
+
+    let dir = temp_dir("gltf");
+    let png = dir.join("glass.png");
+    let args = |camera: &str| {
+        let mut a = vec!["render", glass.to_str().unwrap(), "--width", "12", "--height", "8", "--spp", "1"];
+        a.extend(["--camera", camera, "-o", png.to_str().unwrap()]);
+        a.into_iter().map(String::from).collect::<Vec<_>>()
+    };
+    let run = |a: Vec<String>| spt(&a.iter().map(String::as_str).collect::<Vec<_>>());
+    let o = run(args("render_camera"));
+    assert!(o.status.success() && png.exists(), "{}", stderr(&o));
+    let o = run(args("7"));
+    assert!(!o.status.success() && stderr(&o).contains("no camera '7'") && stderr(&o).contains("0 (render_camera)"));
+    let o = spt(&["render", cornell.to_str().unwrap(), "--camera", "0", "-o", png.to_str().unwrap()]);
+    assert!(!o.status.success() && stderr(&o).contains("has no cameras (only glTF scenes do)"), "{}", stderr(&o));
+    let broken = dir.join("broken.glb");
+    std::fs::write(&broken, &std::fs::read(&glass).unwrap()[..1000]).unwrap();
+    let o = spt(&["render", broken.to_str().unwrap(), "-o", png.to_str().unwrap()]);
+    assert!(!o.status.success() && stderr(&o).contains("broken.glb: not a valid glTF file"), "{}", stderr(&o));
+}

@@ -15,6 +15,7 @@ pub mod camera;
 pub mod cpu;
 pub mod film;
 pub mod geometry;
+pub mod gltf_scene;
 pub mod integrator;
 pub mod lights;
 pub mod material;

@@ -75,16 +75,22 @@ impl Scene {
     /// Appends a mesh with one material (flat-shaded if its normals are empty; tangents
     /// derived from the normal if its tangents are empty); returns the material's index.
     pub fn add(&mut self, mesh: &Mesh, material: Material) -> u32 {
+        let id = self.materials.len() as u32;
+        self.materials.push(material);
+        self.add_with_material(mesh, id);
+        id
+    }
+
+    /// Appends a mesh using material `material` (an index into [`Self::materials`]), as
+    /// [`Self::add`] does: for many meshes sharing one material.
+    pub fn add_with_material(&mut self, mesh: &Mesh, material: u32) {
         let base = self.positions.len();
         let count = mesh.positions.len();
         self.positions.extend(mesh.positions.iter().map(|p| p.to_array()));
         extend_attribute(&mut self.normals, base, &mesh.normals, count);
         extend_attribute(&mut self.tangents, base, &mesh.tangents, count);
-        let id = self.materials.len() as u32;
-        self.materials.push(material);
         self.triangles.extend(mesh.triangles.iter().map(|t| t.map(|i| i + base as u32)));
-        self.material_ids.extend(std::iter::repeat_n(id, mesh.triangles.len()));
-        id
+        self.material_ids.extend(std::iter::repeat_n(material, mesh.triangles.len()));
     }
 
     /// Appends an analytic shape with its own material; returns the material's index.

@@ -1,0 +1,526 @@
+//! glTF 2.0 scenes (`.gltf` with `.bin` files or data URIs, and `.glb`), read with the
+//! `gltf` crate.
+//!
+//! What is converted:
+//! * the default scene's node hierarchy, each node's mesh placed by its world transform
+//!   (a mirroring transform reverses the winding, so fronts stay fronts); primitives in
+//!   triangle, strip and fan modes, indexed or not, with their normals;
+//! * materials: `pbrMetallicRoughness` factors with `KHR_materials_ior` → the
+//!   metallic–roughness BSDF ([`brdf::models::MetallicRoughness`], the specification's
+//!   Appendix B); `KHR_materials_transmission` × (1 − metallic) ≥ ½ → a dielectric of
+//!   that index (smooth at roughness 0, else GGX with α = roughness²), tinted by the base
+//!   colour, absorbing by `KHR_materials_volume`'s attenuation when smooth;
+//!   `emissiveFactor` × `KHR_materials_emissive_strength` → an area light (not where an
+//!   emissive texture would modulate it);
+//! * perspective cameras, chosen by index or name ([`GltfOptions::camera`]; the first in
+//!   the scene otherwise); the film's width and height set the aspect ratio;
+//! * `KHR_lights_punctual` point, spot and directional lights as delta lights.
+//!
+//! Units: the renderer's radiance is read as luminance in cd/m² (nits), so glTF's candela
+//! (point, spot), lux (directional) and emissive nits carry over unchanged.
+//!
+//! Not yet converted, and reported in [`GltfScene::notes`]: textures (every material uses
+//! its factors), alpha modes, orthographic cameras, points and lines, light `range`. Repeated
+//! meshes are copied per instance (not instanced in the two-level BVH).
+//!
+//! Bad input is an error naming the file and what is wrong, never a panic: the buffers
+//! are read only from regular files next to the glTF or from the file itself, indices are
+//! checked against the vertices, the node graph is walked with a depth limit (a cycle is
+//! an error) and the instanced triangle count is bounded before anything is allocated.
+
+use crate::camera::Camera;
+use crate::material::{Material, ModelId};
+use crate::mesh::Mesh;
+use crate::punctual::PunctualLight;
+use crate::scene::Scene;
+use crate::{Error, Result};
+use brdf::params::ParamValue;
+use glam::{Mat3, Mat4, Vec3};
+use spectral::spectrum::Colour;
+use std::collections::HashMap;
+use std::panic::{AssertUnwindSafe, catch_unwind};
+use std::path::{Path, PathBuf};
+
+/// How a glTF file is turned into a scene.
+#[derive(Clone, Debug, Default)]
+pub struct GltfOptions {
+    /// The camera to look through: its index among the glTF's cameras, or its name;
+    /// `None` picks the first camera the scene places (if any).
+    pub camera: Option<String>,
+}
+
+/// A camera of the file's scene, as placed by its node.
+#[derive(Clone, Debug, PartialEq)]
+pub struct GltfCamera {
+    /// Its index among the file's cameras.
+    pub index: usize,
+    /// Its name, if it has one.
+    pub name: Option<String>,
+    /// The view it gives (perspective cameras only).
+    pub camera: Option<Camera>,
+}
+
+/// A converted glTF scene.
+#[derive(Clone, Debug)]
+pub struct GltfScene {
+    /// The scene, its camera set to the chosen one.
+    pub scene: Scene,
+    /// The cameras the scene places, in node order.
+    pub cameras: Vec<GltfCamera>,
+    /// What the file uses that the conversion ignored, one line each.
+    pub notes: Vec<String>,
+}
+
+/// The deepest node hierarchy walked: deeper is taken for a cycle.
+pub const MAX_NODE_DEPTH: usize = 256;
+/// The most triangles a scene may expand to with its instances.
+pub const MAX_TRIANGLES: u64 = 1 << 28;
+
+/// Loads a `.gltf` or `.glb` file and the buffers it names.
+pub fn load_gltf(path: &Path, options: &GltfOptions) -> Result<GltfScene> {
+    let bytes = read_file(path).map_err(|source| Error::Io { path: path.to_path_buf(), source })?;
+    load_gltf_bytes(&bytes, path, options, &read_file)
+}
+
+/// A regular file's bytes: a buffer URI can name anything, and a FIFO would block and
+/// `/dev/zero` never end.
+fn read_file(path: &Path) -> std::io::Result<Vec<u8>> {
+    if !std::fs::metadata(path)?.is_file() {
+        return Err(std::io::Error::new(std::io::ErrorKind::InvalidInput, "not a regular file"));
+    }
+    std::fs::read(path)
+}
+
+/// Converts a glTF file's bytes (JSON or binary): `path` names it in messages and is what
+/// buffer URIs are resolved against; `read` returns the bytes of such a resolved path
+/// ([`load_gltf`] reads files; a fuzzer or a test drives the loader from memory). Never
+/// panics: malformed input is an error.
+pub fn load_gltf_bytes(
+    bytes: &[u8],
+    path: &Path,
+    options: &GltfOptions,
+    read: &dyn Fn(&Path) -> std::io::Result<Vec<u8>>,
+) -> Result<GltfScene> {
+    let fail = |message: String| Error::Parse { path: path.to_path_buf(), line: None, message };
+    // The last line of defence, as for tobj: should the gltf crate panic on some input,
+    // the panic becomes an error naming the file.
+    match catch_unwind(AssertUnwindSafe(|| convert(bytes, path, options, read))) {
+        Ok(result) => result,
+        Err(panic) => {
+            let what = panic
+                .downcast_ref::<&str>()
+                .map(|s| s.to_string())
+                .or_else(|| panic.downcast_ref::<String>().cloned())
+                .unwrap_or_default();
+            Err(fail(format!("the glTF reader panicked: {what}")))
+        }
+    }
+}
+
+fn convert(
+    bytes: &[u8],
+    path: &Path,
+    options: &GltfOptions,
+    read: &dyn Fn(&Path) -> std::io::Result<Vec<u8>>,
+) -> Result<GltfScene> {
+    let fail = |message: String| Error::Parse { path: path.to_path_buf(), line: None, message };
+    let gltf = gltf::Gltf::from_slice(bytes).map_err(|e| fail(format!("not a valid glTF file: {e}")))?;
+    let gltf::Gltf { document, blob } = gltf;
+    let buffers = load_buffers(&document, blob, path, read)?;
+    let Some(gltf_scene) = document.default_scene().or_else(|| document.scenes().next()) else {
+        return Err(fail("the file has no scene".into()));
+    };
+
+    let mut converter = Converter { path, buffers: &buffers, out: GltfScene::empty(), materials: HashMap::new() };
+    // Count the triangles the scene expands to before converting any.
+    let mut triangles = 0u64;
+    walk(&gltf_scene, &mut |node, _| {
+        if let Some(mesh) = node.mesh() {
+            for p in mesh.primitives() {
+                triangles += primitive_triangle_bound(&p);
+            }
+        }
+        if triangles > MAX_TRIANGLES {
+            return Err(fail(format!("the scene expands to more than {MAX_TRIANGLES} triangles")));
+        }
+        Ok(())
+    })
+    .map_err(|e| match e {
+        WalkError::TooDeep(node) => fail(too_deep(node)),
+        WalkError::Visit(e) => e,
+    })?;
+    walk(&gltf_scene, &mut |node, world| converter.node(node, world)).map_err(|e| match e {
+        WalkError::TooDeep(node) => fail(too_deep(node)),
+        WalkError::Visit(e) => e,
+    })?;
+
+    let mut out = converter.out;
+    let camera_count = document.cameras().count();
+    if let Some(wanted) = &options.camera {
+        let chosen = out.cameras.iter().find(|c| {
+            wanted.parse::<usize>().is_ok_and(|i| i == c.index) || c.name.as_deref() == Some(wanted.as_str())
+        });
+        let Some(chosen) = chosen else {
+            let known: Vec<String> = out
+                .cameras
+                .iter()
+                .map(|c| match &c.name {
+                    Some(n) => format!("{} ({n})", c.index),
+                    None => c.index.to_string(),
+                })
+                .collect();
+            let known = if known.is_empty() { "none".to_string() } else { known.join(", ") };
+            return Err(fail(format!("no camera '{wanted}' in the scene (its cameras: {known})")));
+        };
+        let Some(camera) = chosen.camera else {
+            return Err(fail(format!("camera '{wanted}' is orthographic; only perspective cameras are supported")));
+        };
+        out.scene.camera = Some(camera);
+    } else {
+        out.scene.camera = out.cameras.iter().find_map(|c| c.camera);
+    }
+    if out.cameras.len() < camera_count {
+        out.notes
+            .push(format!("{} of {camera_count} cameras are not placed by any node", camera_count - out.cameras.len()));
+    }
+    let textures = document.textures().count();
+    if textures > 0 {
+        out.notes.push(format!("{textures} textures not applied (materials use their factors)"));
+    }
+    if out.scene.triangles.is_empty() {
+        return Err(fail("the scene has no triangles".into()));
+    }
+    out.scene.validate().map_err(|e| fail(e.to_string()))?;
+    Ok(out)
+}
+
+fn too_deep(node: usize) -> String {
+    format!("node {node}: the node hierarchy is deeper than {MAX_NODE_DEPTH} (a cycle?)")
+}
+
+impl GltfScene {
+    fn empty() -> Self {
+        Self { scene: Scene::default(), cameras: Vec::new(), notes: Vec::new() }
+    }
+
+    fn note(&mut self, note: String) {
+        if !self.notes.contains(&note) {
+            self.notes.push(note);
+        }
+    }
+}
+
+/// Reads each buffer: the binary chunk, a data URI, or a regular file next to the glTF.
+fn load_buffers(
+    document: &gltf::Document,
+    mut blob: Option<Vec<u8>>,
+    path: &Path,
+    read: &dyn Fn(&Path) -> std::io::Result<Vec<u8>>,
+) -> Result<Vec<gltf::buffer::Data>> {
+    let fail = |message: String| Error::Parse { path: path.to_path_buf(), line: None, message };
+    let dir = path.parent().unwrap_or(Path::new(""));
+    let mut buffers = Vec::new();
+    for buffer in document.buffers() {
+        let i = buffer.index();
+        let mut data = match buffer.source() {
+            gltf::buffer::Source::Uri(uri) if !uri.starts_with("data:") => {
+                let file: PathBuf = dir.join(percent_decode(uri));
+                read(&file).map_err(|e| fail(format!("buffer {i}: cannot read {}: {e}", file.display())))?
+            }
+            source => {
+                gltf::buffer::Data::from_source_and_blob(source, None, &mut blob)
+                    .map_err(|e| fail(format!("buffer {i}: {e}")))?
+                    .0
+            }
+        };
+        if data.len() < buffer.length() {
+            return Err(fail(format!("buffer {i}: {} bytes, but the file declares {}", data.len(), buffer.length())));
+        }
+        while data.len() % 4 != 0 {
+            data.push(0);
+        }
+        buffers.push(gltf::buffer::Data(data));
+    }
+    Ok(buffers)
+}
+
+/// A URI's percent-escapes decoded (RFC 3986); a malformed escape is kept as written.
+fn percent_decode(uri: &str) -> String {
+    let bytes = uri.as_bytes();
+    let mut out = Vec::with_capacity(bytes.len());
+    let mut i = 0;
+    while i < bytes.len() {
+        let hex = |b: u8| (b as char).to_digit(16);
+        if bytes[i] == b'%'
+            && i + 2 < bytes.len()
+            && let (Some(h), Some(l)) = (hex(bytes[i + 1]), hex(bytes[i + 2]))
+        {
+            out.push((h * 16 + l) as u8);
+            i += 3;
+            continue;
+        }
+        out.push(bytes[i]);
+        i += 1;
+    }
+    String::from_utf8_lossy(&out).into_owned()
+}
+
+/// Why a walk stopped.
+enum WalkError {
+    /// The hierarchy is deeper than [`MAX_NODE_DEPTH`] at this node.
+    TooDeep(usize),
+    /// The visitor failed.
+    Visit(Error),
+}
+
+/// Visits every node of `scene` depth-first with its world transform.
+fn walk(
+    scene: &gltf::Scene,
+    visit: &mut dyn FnMut(&gltf::Node, Mat4) -> Result<()>,
+) -> std::result::Result<(), WalkError> {
+    let mut stack: Vec<(gltf::Node, Mat4, usize)> = scene.nodes().map(|n| (n, Mat4::IDENTITY, 0)).collect();
+    stack.reverse();
+    while let Some((node, parent, depth)) = stack.pop() {
+        if depth >= MAX_NODE_DEPTH {
+            return Err(WalkError::TooDeep(node.index()));
+        }
+        let world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
+        visit(&node, world).map_err(WalkError::Visit)?;
+        let children: Vec<_> = node.children().collect();
+        stack.extend(children.into_iter().rev().map(|c| (c, world, depth + 1)));
+    }
+    Ok(())
+}
+
+/// An upper bound on the triangles a primitive makes (from its accessor counts).
+fn primitive_triangle_bound(p: &gltf::Primitive) -> u64 {
+    let count = p.indices().or_else(|| p.get(&gltf::Semantic::Positions)).map_or(0, |a| a.count()) as u64;
+    match p.mode() {
+        gltf::mesh::Mode::Triangles => count / 3,
+        gltf::mesh::Mode::TriangleStrip | gltf::mesh::Mode::TriangleFan => count.saturating_sub(2),
+        _ => 0,
+    }
+}
+
+/// The conversion's state.
+struct Converter<'a> {
+    path: &'a Path,
+    buffers: &'a [gltf::buffer::Data],
+    out: GltfScene,
+    /// The scene's material index for each glTF material (None: glTF's default material).
+    materials: HashMap<Option<usize>, u32>,
+}
+
+impl Converter<'_> {
+    fn fail(&self, message: String) -> Error {
+        Error::Parse { path: self.path.to_path_buf(), line: None, message }
+    }
+
+    /// Converts what `node` holds, placed by `world`.
+    fn node(&mut self, node: &gltf::Node, world: Mat4) -> Result<()> {
+        if !world.is_finite() {
+            return Err(self.fail(format!("node {}: its transform is not finite", node.index())));
+        }
+        if let Some(mesh) = node.mesh() {
+            for p in mesh.primitives() {
+                self.primitive(&mesh, &p, world)?;
+            }
+        }
+        if let Some(camera) = node.camera() {
+            let view = match camera.projection() {
+                gltf::camera::Projection::Perspective(p) => {
+                    let eye = world.transform_point3(Vec3::ZERO);
+                    let forward = world.transform_vector3(-Vec3::Z).normalize_or_zero();
+                    let up = world.transform_vector3(Vec3::Y).normalize_or_zero();
+                    let c = Camera { eye, center: eye + forward, up, fov_y_deg: p.yfov().to_degrees() };
+                    c.validate().map_err(|e| self.fail(format!("camera {}: {e}", camera.index())))?;
+                    Some(c)
+                }
+                gltf::camera::Projection::Orthographic(_) => {
+                    self.out.note("orthographic cameras are not supported".into());
+                    None
+                }
+            };
+            self.out.cameras.push(GltfCamera {
+                index: camera.index(),
+                name: camera.name().map(str::to_string),
+                camera: view,
+            });
+        }
+        if let Some(light) = node.light() {
+            let at = |what: &str| format!("light {} ({}): {what}", light.index(), light.name().unwrap_or("unnamed"));
+            let position = world.transform_point3(Vec3::ZERO);
+            let direction = world.transform_vector3(-Vec3::Z);
+            let rgb = light.color().map(|c| c * light.intensity());
+            let colour = Colour::illuminant_rgb(rgb).map_err(|e| self.fail(at(&e.to_string())))?;
+            let l = match light.kind() {
+                gltf::khr_lights_punctual::Kind::Point => PunctualLight::point(position, colour),
+                gltf::khr_lights_punctual::Kind::Directional => PunctualLight::directional(direction, colour),
+                gltf::khr_lights_punctual::Kind::Spot { inner_cone_angle, outer_cone_angle } => {
+                    PunctualLight::spot(position, direction, colour, inner_cone_angle, outer_cone_angle)
+                }
+            };
+            l.validate().map_err(|e| self.fail(at(&e)))?;
+            if light.range().is_some() {
+                self.out.note("light ranges are ignored (lights fall off by the inverse square law)".into());
+            }
+            self.out.scene.punctual_lights.push(l);
+        }
+        Ok(())
+    }
+
+    /// Converts one primitive of `mesh` into world-space triangles.
+    fn primitive(&mut self, mesh: &gltf::Mesh, p: &gltf::Primitive, world: Mat4) -> Result<()> {
+        let at = |what: String| {
+            format!("mesh {} ({}) primitive {}: {what}", mesh.index(), mesh.name().unwrap_or("unnamed"), p.index())
+        };
+        let mode = p.mode();
+        if !matches!(
+            mode,
+            gltf::mesh::Mode::Triangles | gltf::mesh::Mode::TriangleStrip | gltf::mesh::Mode::TriangleFan
+        ) {
+            self.out.note(format!("{mode:?} primitives are skipped (only triangles render)"));
+            return Ok(());
+        }
+        let buffers = self.buffers;
+        let reader = p.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
+        let Some(positions) = reader.read_positions() else {
+            return Err(self.fail(at("no POSITION attribute (or its accessor is not 32-bit float)".into())));
+        };
+        let positions: Vec<Vec3> = positions.map(|p| world.transform_point3(Vec3::from_array(p))).collect();
+        if positions.iter().any(|p| !p.is_finite()) {
+            return Err(self.fail(at("a position is not finite".into())));
+        }
+        let n = positions.len();
+        let indices: Vec<u32> = match reader.read_indices() {
+            Some(i) => i.into_u32().collect(),
+            None => (0..n as u32).collect(),
+        };
+        if let Some(bad) = indices.iter().find(|&&i| i as usize >= n) {
+            return Err(self.fail(at(format!("index {bad} is out of range ({n} vertices)"))));
+        }
+        let linear = Mat3::from_mat4(world);
+        let mirrored = linear.determinant() < 0.0;
+        let mut triangles = triangulate(mode, &indices);
+        if mirrored {
+            for t in &mut triangles {
+                t.swap(1, 2);
+            }
+        }
+        let normal_matrix = linear.inverse().transpose();
+        let normals: Vec<Vec3> = match reader.read_normals() {
+            Some(normals) => normals.map(|v| (normal_matrix * Vec3::from_array(v)).normalize_or_zero()).collect(),
+            None => Vec::new(),
+        };
+        // Unusable normals (wrong count, zero or not finite) leave the primitive flat-shaded.
+        let normals = if normals.len() == n && normals.iter().all(|v| v.is_finite() && *v != Vec3::ZERO) {
+            normals
+        } else {
+            Vec::new()
+        };
+        let material = self.material(p.material())?;
+        let m = Mesh { positions, normals, tangents: Vec::new(), triangles };
+        if !m.triangles.is_empty() {
+            self.out.scene.add_with_material(&m, material);
+        }
+        Ok(())
+    }
+
+    /// The scene's index of a glTF material, converting it on first use.
+    fn material(&mut self, m: gltf::Material) -> Result<u32> {
+        if let Some(&id) = self.materials.get(&m.index()) {
+            return Ok(id);
+        }
+        let material = self.convert_material(&m)?;
+        let id = self.out.scene.materials.len() as u32;
+        self.out.scene.materials.push(material);
+        self.materials.insert(m.index(), id);
+        Ok(id)
+    }
+
+    fn convert_material(&mut self, m: &gltf::Material) -> Result<Material> {
+        let name = match (m.index(), m.name()) {
+            (_, Some(name)) => name.to_string(),
+            (Some(i), None) => format!("material {i}"),
+            (None, None) => "(default)".to_string(),
+        };
+        let fail = |what: String| self.fail(format!("material '{name}': {what}"));
+        let pbr = m.pbr_metallic_roughness();
+        let [r, g, b, alpha] = pbr.base_color_factor();
+        let base = [r, g, b];
+        let roughness = pbr.roughness_factor();
+        let ior = m.ior().unwrap_or(1.5);
+        let metallic = pbr.metallic_factor();
+        // Transmission applies to the dielectric part only (the specification mixes it
+        // under `metallic`): a surface mostly transmissive renders as a dielectric.
+        let transmission = m.transmission().map_or(0.0, |t| t.transmission_factor());
+        let transmissive = transmission * (1.0 - metallic) >= 0.5;
+        let (model, params) = if transmissive {
+            let mut params = vec![("ior", ParamValue::Scalar(ior)), ("tint", ParamValue::Rgb(base))];
+            if roughness > 0.0 {
+                params.push(("alpha", ParamValue::Scalar(roughness * roughness)));
+                (ModelId::RoughDielectric, params)
+            } else {
+                if let Some(volume) = m.volume() {
+                    let distance = volume.attenuation_distance();
+                    let colour = volume.attenuation_color();
+                    if distance.is_finite() && distance > 0.0 && colour.iter().any(|&c| c < 1.0) {
+                        // Beer–Lambert: the colour remains after `distance`, σ = −ln(c)/d.
+                        let sigma = colour.map(|c| -(c.max(1e-6)).ln() / distance);
+                        params.push(("absorption", ParamValue::Rgb(sigma)));
+                    }
+                }
+                (ModelId::Dielectric, params)
+            }
+        } else {
+            let params = vec![
+                ("base_color", ParamValue::Rgb(base)),
+                ("metallic", ParamValue::Scalar(metallic)),
+                ("roughness", ParamValue::Scalar(roughness)),
+                ("ior", ParamValue::Scalar(ior)),
+            ];
+            (ModelId::MetallicRoughness, params)
+        };
+        let mut material = Material::builtin(&name, model, &params).map_err(|e| fail(e.to_string()))?;
+        let strength = m.emissive_strength().unwrap_or(1.0);
+        let emissive = m.emissive_factor().map(|c| c * strength);
+        if m.emissive_texture().is_some() {
+            // The factor scales a texture that is mostly black: alone, it would make the
+            // whole surface glow.
+            self.out.note(format!("material '{name}': emissive texture not applied, so it does not emit"));
+        } else if emissive.iter().any(|&c| c != 0.0) {
+            material.emission = Some(Colour::illuminant_rgb(emissive).map_err(|e| fail(format!("emission: {e}")))?);
+        }
+        let mixed = transmission * (1.0 - metallic);
+        if mixed > 0.0 && mixed < 1.0 {
+            let as_what = if transmissive { "fully transmissive" } else { "opaque" };
+            self.out.note(format!(
+                "material '{name}': transmission {transmission} at metallic {metallic} rendered {as_what} (no partial mix yet)"
+            ));
+        }
+        if m.alpha_mode() != gltf::material::AlphaMode::Opaque || alpha < 1.0 {
+            self.out.note("alpha modes (MASK, BLEND) are ignored: surfaces render opaque".into());
+        }
+        Ok(material)
+    }
+}
+
+/// Triangles from a primitive's index list: lists as they are, strips with alternating
+/// winding fixed (glTF/OpenGL order), fans around the first vertex; degenerate triangles
+/// (a repeated vertex) dropped.
+fn triangulate(mode: gltf::mesh::Mode, indices: &[u32]) -> Vec<[u32; 3]> {
+    let tris: Vec<[u32; 3]> = match mode {
+        gltf::mesh::Mode::TriangleStrip => (2..indices.len())
+            .map(|i| {
+                let (a, b, c) = (indices[i - 2], indices[i - 1], indices[i]);
+                if i % 2 == 0 { [a, b, c] } else { [b, a, c] }
+            })
+            .collect(),
+        gltf::mesh::Mode::TriangleFan => (2..indices.len()).map(|i| [indices[0], indices[i - 1], indices[i]]).collect(),
+        _ => indices.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect(),
+    };
+    tris.into_iter().filter(|t| t[0] != t[1] && t[1] != t[2] && t[0] != t[2]).collect()
+}
+
+#[cfg(test)]
+mod tests;
