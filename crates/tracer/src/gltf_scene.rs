@@ -25,8 +25,8 @@
 //!
 //! Bad input is an error naming the file and what is wrong, never a panic: the buffers
 //! are read only from regular files next to the glTF or from the file itself, indices are
-//! checked against the vertices, the node graph is walked with a depth limit (a cycle is
-//! an error) and the instanced triangle count is bounded before anything is allocated.
+//! checked against the vertices, a node reached twice (a cycle or a second parent) is an
+//! error, and the instanced triangle count is bounded before anything is allocated.
 
 use crate::camera::Camera;
 use crate::material::{Material, ModelId};
@@ -71,10 +71,9 @@ pub struct GltfScene {
     pub notes: Vec<String>,
 }
 
-/// The deepest node hierarchy walked: deeper is taken for a cycle.
-pub const MAX_NODE_DEPTH: usize = 256;
-/// The most triangles a scene may expand to with its instances.
-pub const MAX_TRIANGLES: u64 = 1 << 28;
+/// The most triangles a scene may expand to with its instances (67 M, about 6 GB as
+/// copied meshes): a small file can place a large mesh many times.
+pub const MAX_TRIANGLES: u64 = 1 << 26;
 
 /// Loads a `.gltf` or `.glb` file and the buffers it names.
 pub fn load_gltf(path: &Path, options: &GltfOptions) -> Result<GltfScene> {
@@ -124,8 +123,28 @@ fn convert(
     read: &dyn Fn(&Path) -> std::io::Result<Vec<u8>>,
 ) -> Result<GltfScene> {
     let fail = |message: String| Error::Parse { path: path.to_path_buf(), line: None, message };
-    let gltf = gltf::Gltf::from_slice(bytes).map_err(|e| fail(format!("not a valid glTF file: {e}")))?;
+    let invalid = |e: String| fail(format!("not a valid glTF file: {e}"));
+    // gltf 1.4.1 subtracts the 12-byte header from a GLB's declared length unchecked (an
+    // overflow panic in builds with overflow checks, found by `examples/fuzz_gltf.rs`).
+    if bytes.starts_with(b"glTF") {
+        let declared = bytes.get(8..12).map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]));
+        if declared.is_none_or(|n| n < 12) {
+            return Err(invalid(format!("GLB header: declared length {declared:?} is shorter than the header")));
+        }
+    }
+    let gltf = gltf::Gltf::from_slice_without_validation(bytes).map_err(|e| invalid(e.to_string()))?;
     let gltf::Gltf { document, blob } = gltf;
+    // gltf-json 1.4.1's validation indexes a primitive's POSITION accessor before it
+    // checks that it exists (a panic found by `examples/fuzz_gltf.rs`): check that first.
+    let json = document.into_json();
+    for (m, mesh) in json.meshes.iter().enumerate() {
+        for (p, primitive) in mesh.primitives.iter().enumerate() {
+            if let Some(bad) = primitive.attributes.values().find(|a| a.value() >= json.accessors.len()) {
+                return Err(invalid(format!("meshes[{m}].primitives[{p}]: accessor {} does not exist", bad.value())));
+            }
+        }
+    }
+    let document = gltf::Document::from_json(json).map_err(|e| invalid(e.to_string()))?;
     let buffers = load_buffers(&document, blob, path, read)?;
     let Some(gltf_scene) = document.default_scene().or_else(|| document.scenes().next()) else {
         return Err(fail("the file has no scene".into()));
@@ -146,11 +165,11 @@ fn convert(
         Ok(())
     })
     .map_err(|e| match e {
-        WalkError::TooDeep(node) => fail(too_deep(node)),
+        WalkError::Revisited(node) => fail(revisited(node)),
         WalkError::Visit(e) => e,
     })?;
     walk(&gltf_scene, &mut |node, world| converter.node(node, world)).map_err(|e| match e {
-        WalkError::TooDeep(node) => fail(too_deep(node)),
+        WalkError::Revisited(node) => fail(revisited(node)),
         WalkError::Visit(e) => e,
     })?;
 
@@ -194,8 +213,8 @@ fn convert(
     Ok(out)
 }
 
-fn too_deep(node: usize) -> String {
-    format!("node {node}: the node hierarchy is deeper than {MAX_NODE_DEPTH} (a cycle?)")
+fn revisited(node: usize) -> String {
+    format!("node {node} is reached twice: the node hierarchy must be trees (one parent per node, no cycles)")
 }
 
 impl GltfScene {
@@ -267,27 +286,30 @@ fn percent_decode(uri: &str) -> String {
 
 /// Why a walk stopped.
 enum WalkError {
-    /// The hierarchy is deeper than [`MAX_NODE_DEPTH`] at this node.
-    TooDeep(usize),
+    /// This node is reached a second time (a cycle, or a second parent).
+    Revisited(usize),
     /// The visitor failed.
     Visit(Error),
 }
 
-/// Visits every node of `scene` depth-first with its world transform.
+/// Visits every node of `scene` depth-first with its world transform. The specification
+/// requires the hierarchy to be disjoint trees; a node reached twice (a cycle or a second
+/// parent, which could make a small file expand exponentially) stops the walk.
 fn walk(
     scene: &gltf::Scene,
     visit: &mut dyn FnMut(&gltf::Node, Mat4) -> Result<()>,
 ) -> std::result::Result<(), WalkError> {
-    let mut stack: Vec<(gltf::Node, Mat4, usize)> = scene.nodes().map(|n| (n, Mat4::IDENTITY, 0)).collect();
+    let mut seen = std::collections::HashSet::new();
+    let mut stack: Vec<(gltf::Node, Mat4)> = scene.nodes().map(|n| (n, Mat4::IDENTITY)).collect();
     stack.reverse();
-    while let Some((node, parent, depth)) = stack.pop() {
-        if depth >= MAX_NODE_DEPTH {
-            return Err(WalkError::TooDeep(node.index()));
+    while let Some((node, parent)) = stack.pop() {
+        if !seen.insert(node.index()) {
+            return Err(WalkError::Revisited(node.index()));
         }
         let world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
         visit(&node, world).map_err(WalkError::Visit)?;
         let children: Vec<_> = node.children().collect();
-        stack.extend(children.into_iter().rev().map(|c| (c, world, depth + 1)));
+        stack.extend(children.into_iter().rev().map(|c| (c, world)));
     }
     Ok(())
 }
@@ -382,6 +404,28 @@ impl Converter<'_> {
             self.out.note(format!("{mode:?} primitives are skipped (only triangles render)"));
             return Ok(());
         }
+        // The gltf crate's reader trusts an accessor's type (it asserts or hits
+        // `unreachable!` on others: found by `examples/fuzz_gltf.rs`): check it first.
+        use gltf::accessor::{DataType, Dimensions};
+        let vec3_f32 = |a: &gltf::Accessor| a.data_type() == DataType::F32 && a.dimensions() == Dimensions::Vec3;
+        for (semantic, accessor) in p.attributes() {
+            let needs_vec3 = matches!(semantic, gltf::Semantic::Positions | gltf::Semantic::Normals);
+            if needs_vec3 && !vec3_f32(&accessor) {
+                let (t, d) = (accessor.data_type(), accessor.dimensions());
+                return Err(self.fail(at(format!("{semantic:?} must be VEC3 of 32-bit floats, not {d:?} of {t:?}"))));
+            }
+        }
+        if let Some(a) = p.indices() {
+            let integer = matches!(a.data_type(), DataType::U8 | DataType::U16 | DataType::U32);
+            if !integer || a.dimensions() != Dimensions::Scalar {
+                let (t, d) = (a.data_type(), a.dimensions());
+                return Err(self.fail(at(format!("indices must be unsigned integer scalars, not {d:?} of {t:?}"))));
+            }
+        }
+        for a in [p.get(&gltf::Semantic::Positions), p.get(&gltf::Semantic::Normals), p.indices()].into_iter().flatten()
+        {
+            self.accessor_in_bounds(&a).map_err(|e| self.fail(at(format!("accessor {}: {e}", a.index()))))?;
+        }
         let buffers = self.buffers;
         let reader = p.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
         let Some(positions) = reader.read_positions() else {
@@ -422,6 +466,42 @@ impl Converter<'_> {
         let m = Mesh { positions, normals, tangents: Vec::new(), triangles };
         if !m.triangles.is_empty() {
             self.out.scene.add_with_material(&m, material);
+        }
+        Ok(())
+    }
+
+    /// Checks that an accessor's bytes lie inside its buffer view and that inside its
+    /// buffer: the gltf crate's reader slices and asserts without checking (panics found
+    /// by `examples/fuzz_gltf.rs`).
+    fn accessor_in_bounds(&self, a: &gltf::Accessor) -> std::result::Result<(), String> {
+        let elem = a.size();
+        if a.count() == 0 {
+            // The specification requires ≥ 1; the reader computes count − 1 unchecked.
+            return Err("count is 0".into());
+        }
+        let span = |view: &gltf::buffer::View, offset: usize, stride: usize, n: usize| {
+            let data = self.buffers.get(view.buffer().index()).map_or(0, |d| d.0.len());
+            if view.offset().checked_add(view.length()).is_none_or(|end| end > data) {
+                return Err(format!("bufferView {} ends past its buffer ({data} bytes)", view.index()));
+            }
+            if stride < elem {
+                return Err(format!("byteStride {stride} is less than the element size {elem}"));
+            }
+            let end = match n {
+                0 => Some(0),
+                n => (n - 1).checked_mul(stride).and_then(|b| b.checked_add(offset)).and_then(|b| b.checked_add(elem)),
+            };
+            match end {
+                Some(end) if end <= view.length() => Ok(()),
+                _ => Err(format!("{n} elements overrun bufferView {} ({} bytes)", view.index(), view.length())),
+            }
+        };
+        if let Some(view) = a.view() {
+            span(&view, a.offset(), view.stride().unwrap_or(elem), a.count())?;
+        }
+        if a.sparse().is_some() {
+            // (Rare in static geometry; the reader's sparse path does unchecked arithmetic.)
+            return Err("sparse accessors are not supported".into());
         }
         Ok(())
     }

@@ -127,7 +127,7 @@ fn world_transforms_place_and_mirror_the_mesh() {
 
 #[test]
 fn materials_map_to_models_and_lights() {
-    let glass = r#"{"name":"glass","pbrMetallicRoughness":{"baseColorFactor":[1,0.9,0.8,1],"roughnessFactor":0},
+    let glass = r#"{"name":"glass","pbrMetallicRoughness":{"baseColorFactor":[1,0.9,0.8,1],"roughnessFactor":0,"metallicFactor":0},
         "extensions":{"KHR_materials_transmission":{"transmissionFactor":1},"KHR_materials_ior":{"ior":1.33},
         "KHR_materials_volume":{"attenuationDistance":2,"attenuationColor":[0.5,1,1]}}}"#;
     let ext = r#","extensionsUsed":["KHR_materials_transmission","KHR_materials_ior","KHR_materials_volume"]"#;
@@ -138,6 +138,11 @@ fn materials_map_to_models_and_lights() {
     // σ = −ln(0.5)/2 in red, 0 elsewhere.
     let sigma = p.absorption.rgb;
     assert!((sigma[0] - std::f32::consts::LN_2 / 2.0).abs() < 1e-6 && sigma[1] == 0.0, "{sigma:?}");
+    // Transmission applies to the dielectric part: at glTF's default metallic = 1 the
+    // surface is a metal.
+    let metal = glass.replace(r#","metallicFactor":0"#, "");
+    let s = load(&triangle_gltf(r#"[{"mesh":0}]"#, &metal, ext)).unwrap().scene;
+    assert_eq!(s.materials[0].model(), Some(ModelId::MetallicRoughness));
 
     let lamp = r#"{"name":"lamp","emissiveFactor":[1,0.5,0.25],
         "extensions":{"KHR_materials_emissive_strength":{"emissiveStrength":4}}}"#;
@@ -224,6 +229,10 @@ fn bad_files_are_errors_that_say_what_is_wrong() {
         (ok.replace(r#""byteLength":44"#, r#""byteLength":4400"#), "declares 4400"),
         (ok.replace(r#""scene":0,"scenes":[{"nodes":[0]}]"#, r#""scenes":[]"#), "no scene"),
         (ok.replace(r#""nodes":[{"mesh":0}]"#, r#""nodes":[{"children":[1]},{"children":[0],"mesh":0}]"#), ""),
+        (
+            ok.replace(r#""nodes":[{"mesh":0}]"#, r#""nodes":[{"children":[1,2]},{"children":[2]},{"mesh":0}]"#),
+            "",
+        ),
         (ok.replace(r#""nodes":[{"mesh":0}]"#, r#""nodes":[{"mesh":0,"scale":[1e38,1e38,1e38],"children":[1]},{"mesh":0,"scale":[1e38,1,1]}]"#), "not finite"),
         (ok.replace(r#""nodes":[{"mesh":0}]"#, r#""nodes":[{"camera":0,"mesh":0}],"cameras":[{"type":"orthographic","orthographic":{"xmag":1,"ymag":1,"znear":0,"zfar":1}}]"#), ""),
     ];
@@ -241,6 +250,18 @@ fn bad_files_are_errors_that_say_what_is_wrong() {
                 assert!(e.starts_with("t/s.gltf: ") && e.contains(needle), "case {i}: {e}");
             }
         }
+    }
+    // What the fuzzer found the gltf crate panicking on, each now an error.
+    for (from, to, needle) in [
+        (r#""POSITION":0"#, r#""POSITION":9"#, "accessor 9 does not exist"),
+        (r#""byteLength":36}"#, r#""byteLength":36,"byteStride":8}"#, "byteStride 8 is less than the element size 12"),
+        (r#""componentType":5123"#, r#""componentType":5126"#, "indices must be unsigned integer scalars"),
+        (r#""type":"VEC3","min""#, r#""type":"VEC4","min""#, "Positions must be VEC3 of 32-bit floats, not Vec4"),
+        (r#""count":3,"type":"VEC3""#, r#""count":4,"type":"VEC3""#, "4 elements overrun bufferView 0 (36 bytes)"),
+    ] {
+        assert!(ok.contains(from), "{from}");
+        let e = load(&ok.replace(from, to)).unwrap_err().to_string();
+        assert!(e.contains(needle) && !e.contains("panicked"), "{to}: {e}");
     }
     // Indices past the vertices.
     let bad = ok.replace(

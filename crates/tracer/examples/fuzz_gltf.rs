@@ -1,0 +1,340 @@
+//! A dependency-free mutation fuzzer for the glTF reader
+//! ([`tracer::gltf_scene::load_gltf_bytes`], the `gltf` crate underneath): glTF files —
+//! JSON with data URIs, JSON with an external `.bin`, binary `.glb` — are mutated at
+//! random and loaded from memory; every input must load or fail with an error, never
+//! panic (the loader turns a panic of the `gltf` crate into an error that says so, which
+//! this counts), hang, or allocate out of proportion to its size.
+//!
+//! An example rather than a cargo-fuzz target for the reasons `fuzz_obj.rs` gives; its
+//! short run (the default) executes under `cargo test -p tracer`. A long run:
+//!
+//! ```sh
+//! CARGO_PROFILE_RELEASE_OVERFLOW_CHECKS=true CARGO_PROFILE_RELEASE_DEBUG_ASSERTIONS=true \
+//!   CARGO_TARGET_DIR=target/fuzz cargo run --release -p tracer --example fuzz_gltf -- \
+//!   --inputs 10000000 --seed 1
+//! ```
+//!
+//! Options: `--inputs N` (default 20000), `--seed S` (default 1), `--shared DIR` (the
+//! shared scenes, default `../shared` beside the checkout; without them only the
+//! hand-written seeds are used), `--replay K` (run input K alone and write it to
+//! `fuzz-gltf-K.*`). Input K is a function of the seed and K alone.
+
+use rng::Pcg32;
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::time::{Duration, Instant};
+use tracer::gltf_scene::{GltfOptions, load_gltf_bytes};
+
+/// The system allocator, counting live bytes and their high-water mark.
+struct Counting;
+
+static LIVE: AtomicUsize = AtomicUsize::new(0);
+static PEAK: AtomicUsize = AtomicUsize::new(0);
+
+fn grew(bytes: usize) {
+    let live = LIVE.fetch_add(bytes, Ordering::Relaxed) + bytes;
+    PEAK.fetch_max(live, Ordering::Relaxed);
+}
+
+// SAFETY: every call is forwarded to `System` unchanged; only counters are updated.
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        // SAFETY: as the caller guarantees for `GlobalAlloc::alloc`.
+        let p = unsafe { System.alloc(layout) };
+        if !p.is_null() {
+            grew(layout.size());
+        }
+        p
+    }
+    unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
+        // SAFETY: as the caller guarantees for `GlobalAlloc::alloc_zeroed`.
+        let p = unsafe { System.alloc_zeroed(layout) };
+        if !p.is_null() {
+            grew(layout.size());
+        }
+        p
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        // SAFETY: as the caller guarantees for `GlobalAlloc::dealloc`.
+        unsafe { System.dealloc(ptr, layout) };
+        LIVE.fetch_sub(layout.size(), Ordering::Relaxed);
+    }
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        // SAFETY: as the caller guarantees for `GlobalAlloc::realloc`.
+        let p = unsafe { System.realloc(ptr, layout, new_size) };
+        if !p.is_null() {
+            LIVE.fetch_sub(layout.size(), Ordering::Relaxed);
+            grew(new_size);
+        }
+        p
+    }
+}
+
+#[global_allocator]
+static ALLOCATOR: Counting = Counting;
+
+/// A seed: the main file and the files it may name, by file name.
+#[derive(Clone)]
+struct Seed {
+    name: &'static str,
+    main: Vec<u8>,
+    files: Vec<(String, Vec<u8>)>,
+}
+
+/// Standard base64 (RFC 4648), for the hand-written seed's data URI.
+fn base64(bytes: &[u8]) -> String {
+    const A: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    let mut out = String::new();
+    for c in bytes.chunks(3) {
+        let n = (c[0] as u32) << 16 | (*c.get(1).unwrap_or(&0) as u32) << 8 | *c.get(2).unwrap_or(&0) as u32;
+        for k in 0..4 {
+            out.push(if k <= c.len() { A[(n >> (18 - 6 * k) & 63) as usize] as char } else { '=' });
+        }
+    }
+    out
+}
+
+/// A hand-written file using what the converter reads: a strip with normals, a node tree
+/// with every transform form, cameras, the three light kinds and the material extensions.
+fn handwritten() -> Seed {
+    let mut bin = Vec::new();
+    for v in [0.0f32, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 1.0, 1.0, 0.0] {
+        bin.extend_from_slice(&v.to_le_bytes());
+    }
+    for _ in 0..4 {
+        for v in [0.0f32, 0.0, 1.0] {
+            bin.extend_from_slice(&v.to_le_bytes());
+        }
+    }
+    for i in [0u16, 1, 2, 3] {
+        bin.extend_from_slice(&i.to_le_bytes());
+    }
+    let text = format!(
+        r#"{{"asset":{{"version":"2.0"}},"scene":0,"scenes":[{{"nodes":[0,3]}}],
+"nodes":[{{"mesh":0,"children":[1,2],"scale":[1,2,-1]}},{{"camera":0,"translation":[0,0,3]}},
+{{"matrix":[1,0,0,0,0,1,0,0,0,0,1,0,0,1,0,1],"extensions":{{"KHR_lights_punctual":{{"light":0}}}}}},
+{{"rotation":[0,0.7071068,0,0.7071068],"mesh":1,"extensions":{{"KHR_lights_punctual":{{"light":1}}}}}}],
+"meshes":[{{"primitives":[{{"attributes":{{"POSITION":0,"NORMAL":1}},"indices":2,"mode":5,"material":0}}]}},
+{{"primitives":[{{"attributes":{{"POSITION":0}},"mode":6,"material":1}},{{"attributes":{{"POSITION":0}}}}]}}],
+"materials":[{{"pbrMetallicRoughness":{{"baseColorFactor":[1,0.5,0.2,1],"metallicFactor":0,"roughnessFactor":0}},
+"extensions":{{"KHR_materials_transmission":{{"transmissionFactor":1}},"KHR_materials_ior":{{"ior":1.4}},
+"KHR_materials_volume":{{"attenuationDistance":1,"attenuationColor":[0.5,0.5,1]}}}}}},
+{{"emissiveFactor":[1,1,0.5],"extensions":{{"KHR_materials_emissive_strength":{{"emissiveStrength":3}}}}}}],
+"cameras":[{{"type":"perspective","perspective":{{"yfov":0.7,"znear":0.1}}}}],
+"accessors":[{{"bufferView":0,"componentType":5126,"count":4,"type":"VEC3","min":[0,0,0],"max":[1,1,0]}},
+{{"bufferView":1,"componentType":5126,"count":4,"type":"VEC3"}},{{"bufferView":2,"componentType":5123,"count":4,"type":"SCALAR"}}],
+"bufferViews":[{{"buffer":0,"byteLength":48}},{{"buffer":0,"byteOffset":48,"byteLength":48}},{{"buffer":0,"byteOffset":96,"byteLength":8}}],
+"buffers":[{{"byteLength":104,"uri":"data:application/octet-stream;base64,{}"}}],
+"extensionsUsed":["KHR_lights_punctual","KHR_materials_transmission","KHR_materials_ior","KHR_materials_volume","KHR_materials_emissive_strength"],
+"extensions":{{"KHR_lights_punctual":{{"lights":[{{"type":"spot","intensity":5,"spot":{{"innerConeAngle":0.1,"outerConeAngle":0.5}}}},
+{{"type":"directional","color":[1,0.9,0.8],"intensity":2}}]}}}}}}"#,
+        base64(&bin)
+    );
+    Seed { name: "handwritten.gltf", main: text.into_bytes(), files: Vec::new() }
+}
+
+fn seeds(shared: &Path) -> Vec<Seed> {
+    let mut out = vec![handwritten()];
+    let dir = shared.join("scenes/gltf-box");
+    let read = |f: &str| std::fs::read(dir.join(f)).ok();
+    if let (Some(gltf), Some(bin), Some(glb)) = (read("Box.gltf"), read("Box0.bin"), read("Box.glb")) {
+        out.push(Seed { name: "Box.gltf", main: gltf, files: vec![("Box0.bin".into(), bin)] });
+        out.push(Seed { name: "Box.glb", main: glb, files: Vec::new() });
+    } else {
+        eprintln!("note: {} is absent; fuzzing the hand-written seed only", dir.display());
+    }
+    out
+}
+
+/// Values that break parsers: limits, zero, negatives, fractions where integers belong.
+const NUMBERS: [&str; 14] = [
+    "0",
+    "-1",
+    "1",
+    "2",
+    "3",
+    "255",
+    "65535",
+    "4294967295",
+    "2147483648",
+    "1e38",
+    "-1e38",
+    "1e-45",
+    "0.5",
+    "18446744073709551616",
+];
+
+/// Applies 1–4 random mutations to `bytes`.
+fn mutate(rng: &mut Pcg32, bytes: &mut Vec<u8>) {
+    for _ in 0..1 + rng.next_u32() % 4 {
+        let len = bytes.len();
+        let at = if len == 0 { 0 } else { rng.next_u32() as usize % len };
+        match rng.next_u32() % 8 {
+            0 if len > 0 => bytes[at] ^= 1 << (rng.next_u32() % 8),
+            1 if len > 0 => bytes[at] = rng.next_u32() as u8,
+            2 if len > 0 => {
+                let n = (1 + rng.next_u32() as usize % 16).min(len - at);
+                bytes.drain(at..at + n);
+            }
+            3 if len > 0 => {
+                let n = (1 + rng.next_u32() as usize % 64).min(len - at);
+                let span: Vec<u8> = bytes[at..at + n].to_vec();
+                let to = rng.next_u32() as usize % (len + 1);
+                bytes.splice(to..to, span);
+            }
+            4 => bytes.truncate(at),
+            5 | 6 => {
+                // Replace the number (ASCII digits, signs, exponents) around `at`.
+                let is_num = |b: u8| b.is_ascii_digit() || b == b'-' || b == b'.' || b == b'e' || b == b'+';
+                if let Some(start) = (at..len).find(|&i| bytes[i].is_ascii_digit()) {
+                    let end = (start..len).find(|&i| !is_num(bytes[i])).unwrap_or(len);
+                    let value = NUMBERS[rng.next_u32() as usize % NUMBERS.len()].as_bytes();
+                    bytes.splice(start..end, value.iter().copied());
+                }
+            }
+            _ if len >= 4 => {
+                // A little-endian u32 at a 4-aligned offset (GLB headers, chunk lengths,
+                // binary indices).
+                let at = at & !3;
+                if at + 4 <= len {
+                    let v = [0u32, 1, 3, 4, 0xffff, 0x7fff_ffff, 0xffff_ffff, len as u32][rng.next_u32() as usize % 8];
+                    bytes[at..at + 4].copy_from_slice(&v.to_le_bytes());
+                }
+            }
+            _ => {}
+        }
+    }
+}
+
+/// What a run found.
+struct Run {
+    tried: u64,
+    loaded: u64,
+    failures: Vec<String>,
+}
+
+/// Runs inputs 0..`inputs` of `seed`, stopping after 20 failures.
+fn run(seeds: &[Seed], seed: u64, inputs: u64) -> Run {
+    let mut r = Run { tried: 0, loaded: 0, failures: Vec::new() };
+    for k in 0..inputs {
+        r.tried += 1;
+        let s = input(seeds, seed, k);
+        match check(&s, k.is_multiple_of(5)) {
+            Err(what) => r.failures.push(format!("input {k} ({}): {what}", s.name)),
+            Ok(ok) => r.loaded += ok as u64,
+        }
+        if r.failures.len() >= 20 {
+            break;
+        }
+    }
+    r
+}
+
+/// Input `k`: the seed it mutates, and its main and named files.
+fn input(seeds: &[Seed], seed: u64, k: u64) -> Seed {
+    let mut rng = Pcg32::seed_from_u64(seed.wrapping_mul(0x9e37_79b9_7f4a_7c15) ^ k);
+    let mut s = seeds[rng.next_u32() as usize % seeds.len()].clone();
+    if !s.files.is_empty() && rng.next_u32().is_multiple_of(8) {
+        let i = rng.next_u32() as usize % s.files.len();
+        mutate(&mut rng, &mut s.files[i].1);
+    } else {
+        mutate(&mut rng, &mut s.main);
+    }
+    s
+}
+
+/// Whether one input loaded, or what went wrong with it.
+fn check(s: &Seed, camera: bool) -> Result<bool, String> {
+    let path = PathBuf::from("fuzz").join(s.name);
+    let read = |p: &Path| -> std::io::Result<Vec<u8>> {
+        let name = p.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+        match s.files.iter().find(|(n, _)| *n == name) {
+            Some((_, bytes)) => Ok(bytes.clone()),
+            None => Err(std::io::ErrorKind::NotFound.into()),
+        }
+    };
+    let options = GltfOptions { camera: camera.then(|| "0".to_string()) };
+    let size = s.main.len() + s.files.iter().map(|(_, b)| b.len()).sum::<usize>();
+    PEAK.store(LIVE.load(Ordering::Relaxed), Ordering::Relaxed);
+    let before = LIVE.load(Ordering::Relaxed);
+    let start = Instant::now();
+    let result = load_gltf_bytes(&s.main, &path, &options, &read);
+    let took = start.elapsed();
+    let peak = PEAK.load(Ordering::Relaxed).saturating_sub(before);
+    if let Err(e) = &result {
+        let e = e.to_string();
+        if e.contains("panicked") {
+            return Err(format!("panic: {e}"));
+        }
+    }
+    if took > Duration::from_secs(2) {
+        return Err(format!("slow: {took:?}"));
+    }
+    // Everything the converter keeps is proportional to the input (scene arrays are at
+    // most a few hundred bytes per input byte for these small seeds).
+    if peak > (1 << 20) + 1000 * size {
+        return Err(format!("allocated {peak} bytes for a {size}-byte input"));
+    }
+    Ok(result.is_ok())
+}
+
+fn main() {
+    let mut args = std::env::args().skip(1);
+    let (mut inputs, mut seed, mut replay) = (20_000u64, 1u64, None);
+    let mut shared = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared");
+    while let Some(a) = args.next() {
+        let mut value = || args.next().unwrap_or_else(|| panic!("{a} needs a value"));
+        match a.as_str() {
+            "--inputs" => inputs = value().parse().expect("--inputs N"),
+            "--seed" => seed = value().parse().expect("--seed S"),
+            "--shared" => shared = PathBuf::from(value()),
+            "--replay" => replay = Some(value().parse::<u64>().expect("--replay K")),
+            // `cargo test` passes the harness's flags to examples run as tests.
+            _ => {}
+        }
+    }
+    let seeds = seeds(&shared);
+    if let Some(k) = replay {
+        let s = input(&seeds, seed, k);
+        let file = format!("fuzz-gltf-{k}-{}", s.name);
+        std::fs::write(&file, &s.main).expect("write the input");
+        println!("input {k} ({} bytes) written to {file}: {:?}", s.main.len(), check(&s, k.is_multiple_of(5)));
+        return;
+    }
+    // Panics are counted through the loader's error; their messages would flood the run
+    // (a replay keeps them, with the backtrace RUST_BACKTRACE asks for).
+    std::panic::set_hook(Box::new(|_| {}));
+    let start = Instant::now();
+    let Run { tried, loaded, failures } = run(&seeds, seed, inputs);
+    let secs = start.elapsed().as_secs_f64();
+    println!(
+        "fuzz_gltf: {tried} inputs (seed {seed}, {} seeds) in {secs:.1} s ({:.0}/s); {loaded} inputs loaded; {} failures",
+        seeds.len(),
+        tried as f64 / secs,
+        failures.len()
+    );
+    for f in &failures {
+        println!("  {f}");
+    }
+    if !failures.is_empty() {
+        std::process::exit(1);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_seed_loads_and_twenty_thousand_mutations_do_not_panic() {
+        let seeds = seeds(&Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared"));
+        for s in &seeds {
+            assert_eq!(check(s, false), Ok(true), "seed {} does not load", s.name);
+        }
+        let r = run(&seeds, 1, 20_000);
+        assert!(r.failures.is_empty(), "{:#?}", r.failures);
+        // The mutations are not all fatal: some inputs still load.
+        assert!(r.loaded > 200, "only {} of {} inputs loaded", r.loaded, r.tried);
+    }
+}
