@@ -68,8 +68,8 @@ enum Command {
 
 #[derive(Args)]
 struct InfoArgs {
-    /// The scene: an .obj file (with its .mtl), a .gltf or .glb file, or a built-in scene
-    /// `builtin:NAME`.
+    /// The scene: an .obj file (with its .mtl), a .gltf or .glb file, a .toml scene file,
+    /// or a built-in scene `builtin:NAME`.
     scene: PathBuf,
 }
 
@@ -301,8 +301,9 @@ fn run_sheet(args: SheetArgs) -> Result<()> {
 
 #[derive(Args, Clone)]
 struct SceneArgs {
-    /// The scene: an .obj file (with its .mtl), a .gltf or .glb file, or a built-in scene
-    /// `builtin:NAME` (sphereflake[:LEVEL], glass-torus, glass-torus-laguerre, glass-bunny[:OBJ]).
+    /// The scene: an .obj file (with its .mtl), a .gltf or .glb file, a .toml scene file,
+    /// or a built-in scene `builtin:NAME` (sphereflake[:LEVEL], glass-torus,
+    /// glass-torus-laguerre, glass-bunny[:OBJ]).
     scene: PathBuf,
     /// Image width in pixels.
     #[arg(long, default_value_t = 512)]
@@ -555,8 +556,9 @@ pub(crate) fn load_scene_with_camera(path: &Path, camera: Option<&str>) -> Resul
     }
     match path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref() {
         Some("obj") => Ok(tracer::obj::load_obj(path)?),
+        Some("toml") => Ok(tracer::scene_file::load_scene_file(path)?),
         _ => bail!(
-            "{}: unsupported scene format (supported: .obj, .gltf, .glb, or builtin:NAME with NAME one of {})",
+            "{}: unsupported scene format (supported: .obj, .gltf, .glb, .toml, or builtin:NAME with NAME one of {})",
             path.display(),
             tracer::scenes::BUILTIN_SCENES.join(", ")
         ),

@@ -641,3 +641,60 @@ fn gltf_scenes_render_through_their_cameras_and_report_what_they_ignore() {
     let o = spt(&["render", broken.to_str().unwrap(), "-o", png.to_str().unwrap()]);
     assert!(!o.status.success() && stderr(&o).contains("broken.glb: not a valid glTF file"), "{}", stderr(&o));
 }
+
+#[test]
+fn scene_files_render_and_their_errors_name_line_and_column() {
+    let dir = temp_dir("scene-file");
+    let scene = dir.join("spheres.toml");
+    std::fs::write(
+        &scene,
+        "[camera]\neye = [0, 1, 4]\ncenter = [0, 0.5, 0]\n\n[materials.white]\nmodel = \"lambert\"\nreflectance = 0.7\n\n\
+         [[shape]]\ntype = \"sphere\"\ncenter = [0, 0.5, 0]\nradius = 0.5\nmaterial = \"white\"\n\n\
+         [[light]]\ntype = \"point\"\nposition = [0, 3, 2]\nintensity = 10\n",
+    )
+    .unwrap();
+    let out = dir.join("spheres.exr");
+    let o = spt(&[
+        "render",
+        scene.to_str().unwrap(),
+        "--width",
+        "16",
+        "--height",
+        "16",
+        "--spp",
+        "4",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(!stderr(&o).contains("no light"), "{}", stderr(&o));
+    assert!(exr_means(&out).iter().all(|&m| m > 0.0 && m.is_finite()), "{:?}", exr_means(&out));
+    let o = spt(&["info", scene.to_str().unwrap()]);
+    let info = String::from_utf8_lossy(&o.stdout);
+    assert!(info.contains("1 analytic shapes") && info.contains("lambert: white"), "{info}");
+    let bad = dir.join("bad.toml");
+    std::fs::write(&bad, "[materials.white]\nmodel = \"lambert\"\nreflectance = 1.7\n").unwrap();
+    let o = spt(&["render", bad.to_str().unwrap(), "-o", out.to_str().unwrap()]);
+    assert!(!o.status.success(), "{}", stderr(&o));
+    assert!(stderr(&o).contains("bad.toml:3:15: ") && stderr(&o).contains("reflectance = 1.7"), "{}", stderr(&o));
+}
+
+#[test]
+fn the_example_scene_files_load() {
+    let scenes = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes");
+    let shared = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/scenes");
+    if !shared.exists() {
+        eprintln!("SKIPPED: {} is absent (the example scenes use its meshes)", shared.display());
+        return;
+    }
+    let mut n = 0;
+    for entry in std::fs::read_dir(&scenes).unwrap() {
+        let path = entry.unwrap().path();
+        if path.extension().is_some_and(|e| e == "toml") {
+            let o = spt(&["info", path.to_str().unwrap()]);
+            assert!(o.status.success(), "{}: {}", path.display(), stderr(&o));
+            n += 1;
+        }
+    }
+    assert!(n >= 5, "{n} example scene files");
+}

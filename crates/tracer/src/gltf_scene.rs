@@ -125,7 +125,7 @@ fn convert(
     let fail = |message: String| Error::Parse { path: path.to_path_buf(), line: None, message };
     let invalid = |e: String| fail(format!("not a valid glTF file: {e}"));
     // gltf 1.4.1 subtracts the 12-byte header from a GLB's declared length unchecked (an
-    // overflow panic in builds with overflow checks, found by `examples/fuzz_gltf.rs`).
+    // overflow panic in builds with overflow checks, found by `examples/fuzz_scenes.rs`).
     if bytes.starts_with(b"glTF") {
         let declared = bytes.get(8..12).map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]));
         if declared.is_none_or(|n| n < 12) {
@@ -135,7 +135,7 @@ fn convert(
     let gltf = gltf::Gltf::from_slice_without_validation(bytes).map_err(|e| invalid(e.to_string()))?;
     let gltf::Gltf { document, blob } = gltf;
     // gltf-json 1.4.1's validation indexes a primitive's POSITION accessor before it
-    // checks that it exists (a panic found by `examples/fuzz_gltf.rs`): check that first.
+    // checks that it exists (a panic found by `examples/fuzz_scenes.rs`): check that first.
     let json = document.into_json();
     for (m, mesh) in json.meshes.iter().enumerate() {
         for (p, primitive) in mesh.primitives.iter().enumerate() {
@@ -405,7 +405,7 @@ impl Converter<'_> {
             return Ok(());
         }
         // The gltf crate's reader trusts an accessor's type (it asserts or hits
-        // `unreachable!` on others: found by `examples/fuzz_gltf.rs`): check it first.
+        // `unreachable!` on others: found by `examples/fuzz_scenes.rs`): check it first.
         use gltf::accessor::{DataType, Dimensions};
         let vec3_f32 = |a: &gltf::Accessor| a.data_type() == DataType::F32 && a.dimensions() == Dimensions::Vec3;
         for (semantic, accessor) in p.attributes() {
@@ -472,7 +472,7 @@ impl Converter<'_> {
 
     /// Checks that an accessor's bytes lie inside its buffer view and that inside its
     /// buffer: the gltf crate's reader slices and asserts without checking (panics found
-    /// by `examples/fuzz_gltf.rs`).
+    /// by `examples/fuzz_scenes.rs`).
     fn accessor_in_bounds(&self, a: &gltf::Accessor) -> std::result::Result<(), String> {
         let elem = a.size();
         if a.count() == 0 {

@@ -27,6 +27,7 @@ pub mod punctual;
 pub mod render;
 pub mod sampler;
 pub mod scene;
+pub mod scene_file;
 pub mod scenes;
 pub mod shading;
 
@@ -62,6 +63,18 @@ pub enum Error {
         path: PathBuf,
         /// The 1-based line, where known.
         line: Option<usize>,
+        /// What is wrong.
+        message: String,
+    },
+    /// A scene file is malformed at a known line and column.
+    #[error("{path}:{line}:{column}: {message}")]
+    ParseAt {
+        /// The file.
+        path: PathBuf,
+        /// The 1-based line.
+        line: usize,
+        /// The 1-based column (in characters).
+        column: usize,
         /// What is wrong.
         message: String,
     },

@@ -67,6 +67,23 @@ impl PunctualLight {
         Self::Directional { direction: direction.normalize_or_zero(), irradiance }
     }
 
+    /// The light moved by `t` (positions as points, directions as vectors, renormalised);
+    /// its intensity or irradiance is kept.
+    pub fn transformed(self, t: &glam::Mat4) -> Self {
+        let dir = |d: Vec3| t.transform_vector3(d).normalize_or(d);
+        match self {
+            Self::Point { position, intensity } => Self::Point { position: t.transform_point3(position), intensity },
+            Self::Spot { position, direction, intensity, cos_inner, cos_outer } => Self::Spot {
+                position: t.transform_point3(position),
+                direction: dir(direction),
+                intensity,
+                cos_inner,
+                cos_outer,
+            },
+            Self::Directional { direction, irradiance } => Self::Directional { direction: dir(direction), irradiance },
+        }
+    }
+
     /// Where a light sample points: a point or spot light's position, or the unit
     /// direction towards a directional light (as [`crate::lights::LightSample::point`]).
     pub fn towards(&self) -> Vec3 {

@@ -93,6 +93,50 @@ impl Scene {
         self.material_ids.extend(std::iter::repeat_n(material, mesh.triangles.len()));
     }
 
+    /// Appends another scene's triangles placed by `transform` (a mirroring transform
+    /// reverses their winding, so that fronts stay fronts; normals go through its inverse
+    /// transpose), its punctual lights moved by it, and its materials — or, with
+    /// `material`, every appended triangle uses that material of this scene instead. Its
+    /// camera and environment are not taken; analytic shapes only under the identity
+    /// (a transformed shape is not a shape of the same kind in general).
+    pub fn append(&mut self, other: Scene, transform: &glam::Mat4, material: Option<u32>) -> Result<()> {
+        let identity = *transform == glam::Mat4::IDENTITY;
+        if !other.shapes.is_empty() && !identity {
+            return Err(Error::Setting("analytic shapes cannot be transformed".into()));
+        }
+        let linear = glam::Mat3::from_mat4(*transform);
+        let normal_matrix = linear.inverse().transpose();
+        let mirrored = linear.determinant() < 0.0;
+        let base = self.positions.len() as u32;
+        let first_material = self.materials.len() as u32;
+        let count = other.positions.len();
+        let place = |p: &[f32; 3]| transform.transform_point3(Vec3::from_array(*p)).to_array();
+        self.positions.extend(other.positions.iter().map(place));
+        let normals: Vec<Vec3> =
+            other.normals.iter().map(|n| (normal_matrix * Vec3::from_array(*n)).normalize_or(Vec3::Z)).collect();
+        let tangents: Vec<Vec3> =
+            other.tangents.iter().map(|t| (linear * Vec3::from_array(*t)).normalize_or(Vec3::X)).collect();
+        extend_attribute(&mut self.normals, base as usize, &normals, count);
+        extend_attribute(&mut self.tangents, base as usize, &tangents, count);
+        self.triangles.extend(other.triangles.iter().map(|t| {
+            let t = t.map(|i| i + base);
+            if mirrored { [t[0], t[2], t[1]] } else { t }
+        }));
+        match material {
+            Some(id) => self.material_ids.extend(std::iter::repeat_n(id, other.triangles.len())),
+            None => {
+                self.material_ids.extend(other.material_ids.iter().map(|m| m + first_material));
+                self.materials.extend(other.materials);
+            }
+        }
+        for s in other.shapes {
+            let id = material.unwrap_or(s.material + first_material);
+            self.shapes.push(SceneShape { shape: s.shape, material: id });
+        }
+        self.punctual_lights.extend(other.punctual_lights.into_iter().map(|l| l.transformed(transform)));
+        Ok(())
+    }
+
     /// Appends an analytic shape with its own material; returns the material's index.
     pub fn add_shape(&mut self, shape: ShapeKind, material: Material) -> u32 {
         let id = self.materials.len() as u32;

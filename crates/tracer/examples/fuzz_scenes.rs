@@ -1,16 +1,18 @@
 //! A dependency-free mutation fuzzer for the glTF reader
-//! ([`tracer::gltf_scene::load_gltf_bytes`], the `gltf` crate underneath): glTF files —
-//! JSON with data URIs, JSON with an external `.bin`, binary `.glb` — are mutated at
-//! random and loaded from memory; every input must load or fail with an error, never
-//! panic (the loader turns a panic of the `gltf` crate into an error that says so, which
-//! this counts), hang, or allocate out of proportion to its size.
+//! ([`tracer::gltf_scene::load_gltf_bytes`], the `gltf` crate underneath) and the TOML
+//! scene-file reader ([`tracer::scene_file::parse_scene_file`], the `toml` crate
+//! underneath): glTF files — JSON with data URIs, JSON with an external `.bin`, binary
+//! `.glb` — and scene files are mutated at random and loaded from memory; every input must
+//! load or fail with an error, never panic (the glTF loader turns a panic of the `gltf`
+//! crate into an error that says so, which this counts; the scene-file reader runs under
+//! `catch_unwind` here), hang, or allocate out of proportion to its size.
 //!
 //! An example rather than a cargo-fuzz target for the reasons `fuzz_obj.rs` gives; its
 //! short run (the default) executes under `cargo test -p tracer`. A long run:
 //!
 //! ```sh
 //! CARGO_PROFILE_RELEASE_OVERFLOW_CHECKS=true CARGO_PROFILE_RELEASE_DEBUG_ASSERTIONS=true \
-//!   CARGO_TARGET_DIR=target/fuzz cargo run --release -p tracer --example fuzz_gltf -- \
+//!   CARGO_TARGET_DIR=target/fuzz cargo run --release -p tracer --example fuzz_scenes -- \
 //!   --inputs 10000000 --seed 1
 //! ```
 //!
@@ -25,6 +27,7 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::{Duration, Instant};
 use tracer::gltf_scene::{GltfOptions, load_gltf_bytes};
+use tracer::scene_file::parse_scene_file;
 
 /// The system allocator, counting live bytes and their high-water mark.
 struct Counting;
@@ -134,8 +137,73 @@ fn handwritten() -> Seed {
     Seed { name: "handwritten.gltf", main: text.into_bytes(), files: Vec::new() }
 }
 
+/// A scene file with every kind of entry but meshes (which would read files).
+const SCENE_FILE: &str = r#"
+[camera]
+eye = [0, 1, 5]
+center = [0, 1, 0]
+up = [0, 1, 0]
+fov = 45
+
+[materials.gold]
+model = "roughconductor"
+metal = "gold"
+alpha = 0.2
+
+[materials.lamp]
+model = "lambert"
+reflectance = 0
+emission = [4, 3, 2]
+
+[materials.glass]
+model = "dielectric"
+ior = 1.33
+dispersion = "bk7"
+
+[[shape]]
+type = "sphere"
+center = [0, 3, 0]
+radius = 0.25
+material = "lamp"
+
+[[shape]]
+type = "box"
+min = [-1, 0, -1]
+max = [-0.5, 0.5, -0.5]
+material = "gold"
+
+[[shape]]
+type = "polygon"
+vertices = [[-4, 0, -4], [-4, 0, 4], [4, 0, 4], [4, 0, -4]]
+material = "gold"
+
+[[shape]]
+type = "implicit"
+expression = "x^4 + y^2 + z^2 - 0.25"
+min = [-0.5, -0.5, -0.5]
+max = [0.5, 0.5, 0.5]
+material = "glass"
+
+[[light]]
+type = "spot"
+position = [0, 4, 0]
+direction = [0, -1, 0]
+inner = 10
+outer = 20
+intensity = [1, 2, 3]
+
+[[light]]
+type = "sun"
+direction = [-1, -2, -1]
+irradiance = 3
+
+[sky]
+radiance = [0.1, 0.2, 0.3]
+"#;
+
 fn seeds(shared: &Path) -> Vec<Seed> {
-    let mut out = vec![handwritten()];
+    let mut out =
+        vec![handwritten(), Seed { name: "scene.toml", main: SCENE_FILE.as_bytes().to_vec(), files: Vec::new() }];
     let dir = shared.join("scenes/gltf-box");
     let read = |f: &str| std::fs::read(dir.join(f)).ok();
     if let (Some(gltf), Some(bin), Some(glb)) = (read("Box.gltf"), read("Box0.bin"), read("Box.glb")) {
@@ -259,7 +327,17 @@ fn check(s: &Seed, camera: bool) -> Result<bool, String> {
     PEAK.store(LIVE.load(Ordering::Relaxed), Ordering::Relaxed);
     let before = LIVE.load(Ordering::Relaxed);
     let start = Instant::now();
-    let result = load_gltf_bytes(&s.main, &path, &options, &read);
+    let result = if s.name.ends_with(".toml") {
+        // The scene-file reader has no panic guard of its own (it needs none): a panic
+        // here is counted as one.
+        let text = String::from_utf8_lossy(&s.main);
+        match std::panic::catch_unwind(|| parse_scene_file(&text, &path).map(|_| ())) {
+            Ok(r) => r,
+            Err(_) => return Err("panic in the scene-file reader".into()),
+        }
+    } else {
+        load_gltf_bytes(&s.main, &path, &options, &read).map(|_| ())
+    };
     let took = start.elapsed();
     let peak = PEAK.load(Ordering::Relaxed).saturating_sub(before);
     if let Err(e) = &result {
@@ -309,7 +387,7 @@ fn main() {
     let Run { tried, loaded, failures } = run(&seeds, seed, inputs);
     let secs = start.elapsed().as_secs_f64();
     println!(
-        "fuzz_gltf: {tried} inputs (seed {seed}, {} seeds) in {secs:.1} s ({:.0}/s); {loaded} inputs loaded; {} failures",
+        "fuzz_scenes: {tried} inputs (seed {seed}, {} seeds) in {secs:.1} s ({:.0}/s); {loaded} inputs loaded; {} failures",
         seeds.len(),
         tried as f64 / secs,
         failures.len()

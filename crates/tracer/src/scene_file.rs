@@ -1,0 +1,418 @@
+//! The native scene file: TOML, read through serde. One file places meshes from OBJ and
+//! glTF files (with transforms), analytic shapes, materials by model name, point, spot and
+//! sun lights, a sky and a camera:
+//!
+//! ```toml
+//! [camera]
+//! eye = [0, 1, 3.9]
+//! center = [0, 1, 0]
+//! fov = 39.3            # vertical, degrees (default 39.3077); up defaults to [0, 1, 0]
+//!
+//! [materials.gold]
+//! model = "roughconductor"   # any registered model; the rest are its parameters
+//! metal = "gold"
+//! alpha = 0.2
+//!
+//! [materials.lamp]
+//! model = "lambert"
+//! reflectance = 0
+//! emission = [17, 12, 4]     # linear sRGB radiance: an area light
+//!
+//! [[mesh]]
+//! file = "../shared/scenes/bunny/bunny.obj"   # relative to this file; .obj, .gltf or .glb
+//! material = "gold"          # optional: replaces the file's own materials
+//! scale = 10                 # a number or [x, y, z]; then rotate, then translate
+//! rotate = { axis = [0, 1, 0], degrees = 30 }
+//! translate = [0, -0.3, 0]
+//!
+//! [[shape]]
+//! type = "sphere"            # sphere {center, radius}, box {min, max},
+//! center = [0, 1, 0]         # polygon {vertices}, implicit {expression, min, max}
+//! radius = 0.5
+//! material = "lamp"
+//!
+//! [[light]]
+//! type = "sun"               # point {position, intensity}, spot {position, direction,
+//! direction = [-1, -2, -1]   # inner, outer (degrees), intensity}, sun {direction, irradiance}
+//! irradiance = 3
+//!
+//! [sky]
+//! radiance = [0.2, 0.3, 0.5] # a uniform sky (linear sRGB radiance)
+//! ```
+//!
+//! Colours are one number (a grey) or three (linear sRGB). Every error names the file and
+//! the line and column of the offending value (`scene.toml:12:9: …`); unknown keys are
+//! errors, not silently ignored.
+
+use crate::camera::Camera;
+use crate::geometry::ShapeKind;
+use crate::gltf_scene::{GltfOptions, load_gltf};
+use crate::material::{Material, ModelId};
+use crate::obj::load_obj;
+use crate::punctual::PunctualLight;
+use crate::scene::{Environment, Scene};
+use crate::{Error, Result};
+use brdf::params::{ParamError, ParamValue};
+use glam::{Mat3, Mat4, Quat, Vec3};
+use serde::Deserialize;
+use shapes::boxes::Cuboid;
+use shapes::implicit::Implicit;
+use shapes::polygon::{InsideTest, Polygon};
+use shapes::roots::RootSolver;
+use shapes::sphere::{Sphere, SphereMethod};
+use spectral::spectrum::Colour;
+use std::collections::BTreeMap;
+use std::ops::Range;
+use std::path::Path;
+use toml::Spanned;
+
+/// The file as serde reads it.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct FileDef {
+    camera: Option<Spanned<CameraDef>>,
+    #[serde(default)]
+    materials: BTreeMap<String, Spanned<MaterialDef>>,
+    #[serde(default)]
+    mesh: Vec<Spanned<MeshDef>>,
+    #[serde(default)]
+    shape: Vec<Spanned<ShapeDef>>,
+    #[serde(default)]
+    light: Vec<Spanned<LightDef>>,
+    sky: Option<Spanned<SkyDef>>,
+}
+
+/// A material table: each value with where it is, for messages.
+type MaterialDef = BTreeMap<String, Spanned<toml::Value>>;
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct CameraDef {
+    eye: [f32; 3],
+    center: [f32; 3],
+    #[serde(default = "up_y")]
+    up: [f32; 3],
+    #[serde(default = "default_fov")]
+    fov: f32,
+}
+
+fn up_y() -> [f32; 3] {
+    [0.0, 1.0, 0.0]
+}
+
+fn default_fov() -> f32 {
+    crate::camera::DEFAULT_FOV_Y_DEG
+}
+
+/// A grey (one number) or linear-sRGB colour.
+#[derive(Clone, Copy, Deserialize)]
+#[serde(untagged)]
+enum ColourDef {
+    Grey(f32),
+    Rgb([f32; 3]),
+}
+
+impl ColourDef {
+    fn rgb(self) -> [f32; 3] {
+        match self {
+            Self::Grey(v) => [v; 3],
+            Self::Rgb(c) => c,
+        }
+    }
+}
+
+#[derive(Deserialize)]
+#[serde(untagged)]
+enum ScaleDef {
+    Uniform(f32),
+    Axes([f32; 3]),
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RotateDef {
+    axis: [f32; 3],
+    degrees: f32,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct MeshDef {
+    file: String,
+    material: Option<String>,
+    scale: Option<ScaleDef>,
+    rotate: Option<RotateDef>,
+    #[serde(default)]
+    translate: [f32; 3],
+    /// A glTF file's camera to use when the scene file has none.
+    camera: Option<String>,
+}
+
+#[derive(Deserialize)]
+#[serde(tag = "type", rename_all = "lowercase", deny_unknown_fields)]
+enum ShapeDef {
+    Sphere { center: [f32; 3], radius: f32, material: String },
+    Box { min: [f32; 3], max: [f32; 3], material: String },
+    Polygon { vertices: Vec<[f32; 3]>, material: String },
+    Implicit { expression: String, min: [f32; 3], max: [f32; 3], material: String },
+}
+
+#[derive(Deserialize)]
+#[serde(tag = "type", rename_all = "lowercase", deny_unknown_fields)]
+enum LightDef {
+    Point { position: [f32; 3], intensity: ColourDef },
+    Spot { position: [f32; 3], direction: [f32; 3], inner: f32, outer: f32, intensity: ColourDef },
+    Sun { direction: [f32; 3], irradiance: ColourDef },
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SkyDef {
+    radiance: ColourDef,
+}
+
+/// Loads a scene file and the meshes it names.
+pub fn load_scene_file(path: &Path) -> Result<Scene> {
+    let text = std::fs::read_to_string(path).map_err(|source| Error::Io { path: path.to_path_buf(), source })?;
+    parse_scene_file(&text, path)
+}
+
+/// The 1-based line and column of byte `offset` in `text`.
+fn line_column(text: &str, offset: usize) -> (usize, usize) {
+    let before = &text[..offset.min(text.len())];
+    let line = before.matches('\n').count() + 1;
+    let column = before.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
+    (line, column)
+}
+
+/// Builds the scene a scene file's text describes; `path` names it in messages and is
+/// what mesh files are resolved against.
+pub fn parse_scene_file(text: &str, path: &Path) -> Result<Scene> {
+    let at = |span: Range<usize>, message: String| {
+        let (line, column) = line_column(text, span.start);
+        Error::ParseAt { path: path.to_path_buf(), line, column, message }
+    };
+    let file: FileDef = toml::from_str(text).map_err(|e| {
+        let span = e.span().unwrap_or(0..0);
+        at(span, e.message().to_string())
+    })?;
+    let dir = path.parent().unwrap_or(Path::new(""));
+    let mut scene = Scene::default();
+
+    // Materials by name, in the file's (sorted) order.
+    let mut materials: BTreeMap<&str, u32> = BTreeMap::new();
+    for (name, table) in &file.materials {
+        let material = material(name, table).map_err(|(span, m)| at(span, m))?;
+        materials.insert(name, scene.materials.len() as u32);
+        scene.materials.push(material);
+    }
+    let material_id = |name: &str, span: Range<usize>| {
+        materials.get(name).copied().ok_or_else(|| {
+            let known: Vec<&str> = materials.keys().copied().collect();
+            at(
+                span,
+                format!(
+                    "no material '{name}' (defined: {})",
+                    if known.is_empty() { "none".into() } else { known.join(", ") }
+                ),
+            )
+        })
+    };
+
+    let mut mesh_camera = None;
+    for def in &file.mesh {
+        let span = def.span();
+        let m = def.get_ref();
+        let mesh_path = dir.join(&m.file);
+        let ext = mesh_path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
+        let loaded = match ext.as_deref() {
+            Some("obj") => {
+                if m.camera.is_some() {
+                    return Err(at(span, format!("{}: camera: OBJ files have no cameras", m.file)));
+                }
+                load_obj(&mesh_path)?
+            }
+            Some("gltf" | "glb") => load_gltf(&mesh_path, &GltfOptions { camera: m.camera.clone() })?.scene,
+            _ => return Err(at(span, format!("{}: meshes are .obj, .gltf or .glb files", m.file))),
+        };
+        let transform = mesh_transform(m).map_err(|e| at(span.clone(), e))?;
+        let material = m.material.as_deref().map(|name| material_id(name, span.clone())).transpose()?;
+        if mesh_camera.is_none() {
+            mesh_camera = loaded.camera.map(|c| transform_camera(&c, &transform));
+        }
+        scene.append(loaded, &transform, material).map_err(|e| at(span.clone(), e.to_string()))?;
+    }
+
+    for def in &file.shape {
+        let span = def.span();
+        let shape_error = |e: shapes::ShapeError| at(span.clone(), e.to_string());
+        let (shape, material) = match def.get_ref() {
+            ShapeDef::Sphere { center, radius, material } => (
+                ShapeKind::Sphere(
+                    Sphere::new((*center).into(), *radius, SphereMethod::default()).map_err(shape_error)?,
+                ),
+                material,
+            ),
+            ShapeDef::Box { min, max, material } => {
+                (ShapeKind::Cuboid(Cuboid::axis_aligned((*min).into(), (*max).into()).map_err(shape_error)?), material)
+            }
+            ShapeDef::Polygon { vertices, material } => {
+                let vertices = vertices.iter().map(|&v| Vec3::from(v)).collect();
+                (ShapeKind::Polygon(Polygon::new(vertices, InsideTest::default()).map_err(shape_error)?), material)
+            }
+            ShapeDef::Implicit { expression, min, max, material } => {
+                let poly = shapes::implicit::parse(expression).map_err(shape_error)?;
+                let bounds = shapes::Aabb { min: (*min).into(), max: (*max).into() };
+                (
+                    ShapeKind::Implicit(Implicit::new(poly, bounds, RootSolver::ClosedForm).map_err(shape_error)?),
+                    material,
+                )
+            }
+        };
+        let id = material_id(material, span.clone())?;
+        scene.add_shape_with_material(shape, id);
+    }
+
+    for def in &file.light {
+        let span = def.span();
+        let colour = |c: &ColourDef| Colour::illuminant_rgb(c.rgb()).map_err(|e| at(span.clone(), e.to_string()));
+        let light = match def.get_ref() {
+            LightDef::Point { position, intensity } => PunctualLight::point((*position).into(), colour(intensity)?),
+            LightDef::Spot { position, direction, inner, outer, intensity } => PunctualLight::spot(
+                (*position).into(),
+                (*direction).into(),
+                colour(intensity)?,
+                inner.to_radians(),
+                outer.to_radians(),
+            ),
+            LightDef::Sun { direction, irradiance } => {
+                PunctualLight::directional((*direction).into(), colour(irradiance)?)
+            }
+        };
+        light.validate().map_err(|e| at(span.clone(), e))?;
+        scene.punctual_lights.push(light);
+    }
+
+    if let Some(sky) = &file.sky {
+        let radiance =
+            Colour::illuminant_rgb(sky.get_ref().radiance.rgb()).map_err(|e| at(sky.span(), e.to_string()))?;
+        scene.environment = Some(Environment { radiance });
+    }
+
+    scene.camera = match &file.camera {
+        Some(def) => {
+            let c = def.get_ref();
+            let camera = Camera { eye: c.eye.into(), center: c.center.into(), up: c.up.into(), fov_y_deg: c.fov };
+            camera.validate().map_err(|e| at(def.span(), e.to_string()))?;
+            Some(camera)
+        }
+        None => mesh_camera,
+    };
+    scene.validate().map_err(|e| Error::Parse { path: path.to_path_buf(), line: None, message: e.to_string() })?;
+    Ok(scene)
+}
+
+/// A material table: `model`, an optional `emission`, and the model's parameters; an
+/// error comes with the span of the value at fault (the table's for a missing model).
+fn material(name: &str, table: &Spanned<MaterialDef>) -> std::result::Result<Material, (Range<usize>, String)> {
+    let what = |span: Range<usize>, m: String| (span, format!("material '{name}': {m}"));
+    let model = match table.get_ref().get("model") {
+        Some(v) => match v.get_ref() {
+            toml::Value::String(m) => ModelId::by_name(m)
+                .ok_or_else(|| what(v.span(), format!("unknown model '{m}' (known: {})", ModelId::names())))?,
+            _ => return Err(what(v.span(), "model must be a string".into())),
+        },
+        None => return Err(what(table.span(), format!("needs a model (one of {})", ModelId::names()))),
+    };
+    let mut params = Vec::new();
+    let mut emission = None;
+    for (key, spanned) in table.get_ref() {
+        let number = |v: &toml::Value| match v {
+            toml::Value::Float(f) => Some(*f as f32),
+            toml::Value::Integer(i) => Some(*i as f32),
+            _ => None,
+        };
+        let value = match spanned.get_ref() {
+            v @ (toml::Value::Float(_) | toml::Value::Integer(_)) => ParamValue::Scalar(number(v).unwrap_or(0.0)),
+            toml::Value::Boolean(b) => ParamValue::Bool(*b),
+            toml::Value::String(s) => ParamValue::Name(s.clone()),
+            toml::Value::Array(a) if a.len() == 3 && a.iter().all(|v| number(v).is_some()) => {
+                ParamValue::Rgb([0, 1, 2].map(|i| number(&a[i]).unwrap_or(0.0)))
+            }
+            _ => {
+                let m = format!("{key}: expected a number, three numbers, a name or true/false");
+                return Err(what(spanned.span(), m));
+            }
+        };
+        match key.as_str() {
+            "model" => {}
+            "emission" => {
+                let rgb = match value {
+                    ParamValue::Scalar(v) => [v; 3],
+                    ParamValue::Rgb(c) => c,
+                    _ => return Err(what(spanned.span(), "emission: expected a number or three numbers".into())),
+                };
+                let colour = Colour::illuminant_rgb(rgb).map_err(|e| what(spanned.span(), format!("emission: {e}")))?;
+                emission = Some(colour);
+            }
+            _ => params.push((key.as_str(), value)),
+        }
+    }
+    let mut m = Material::builtin(name, model, &params).map_err(|e| {
+        // The message names the material already; point at the parameter's value.
+        let param = match &e {
+            ParamError::OutOfRange { param, .. }
+            | ParamError::WrongKind { param, .. }
+            | ParamError::NotAnOption { param, .. }
+            | ParamError::Spectrum { param, .. } => Some(*param),
+            _ => None,
+        };
+        let span = param.and_then(|p| table.get_ref().get(p)).map_or(table.span(), |v| v.span());
+        (span, e.to_string())
+    })?;
+    m.emission = emission.filter(|e| !e.is_black());
+    Ok(m)
+}
+
+/// The mesh's transform: scale, then rotate, then translate.
+fn mesh_transform(m: &MeshDef) -> std::result::Result<Mat4, String> {
+    let scale = match m.scale {
+        None => Vec3::ONE,
+        Some(ScaleDef::Uniform(s)) => Vec3::splat(s),
+        Some(ScaleDef::Axes(s)) => s.into(),
+    };
+    if !scale.is_finite() || scale.cmpeq(Vec3::ZERO).any() {
+        return Err(format!("scale {scale} must be finite and non-zero"));
+    }
+    let rotation = match &m.rotate {
+        None => Quat::IDENTITY,
+        Some(r) => {
+            let axis = Vec3::from(r.axis)
+                .try_normalize()
+                .ok_or_else(|| format!("rotate: axis {:?} is not a direction", r.axis))?;
+            if !r.degrees.is_finite() {
+                return Err("rotate: degrees must be finite".into());
+            }
+            Quat::from_axis_angle(axis, r.degrees.to_radians())
+        }
+    };
+    let translate = Vec3::from(m.translate);
+    if !translate.is_finite() {
+        return Err("translate must be finite".into());
+    }
+    Ok(Mat4::from_scale_rotation_translation(scale, rotation, translate))
+}
+
+/// A mesh file's camera moved by the mesh's transform.
+fn transform_camera(c: &Camera, t: &Mat4) -> Camera {
+    let linear = Mat3::from_mat4(*t);
+    Camera {
+        eye: t.transform_point3(c.eye),
+        center: t.transform_point3(c.center),
+        up: (linear * c.up).normalize_or(c.up),
+        fov_y_deg: c.fov_y_deg,
+    }
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,176 @@
+//! Tests of `scene_file.rs`.
+
+use super::*;
+use crate::material::ModelParams;
+
+/// A temporary directory with a one-triangle OBJ (`tri.obj`, front facing +z, its own
+/// material `red`) and the scene `text` as `scene.toml`; returns the scene's path.
+fn write(name: &str, text: &str) -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("spt-scene-file-{}-{name}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join("tri.mtl"), "newmtl red\nKd 0.8 0.1 0.1\n").unwrap();
+    std::fs::write(dir.join("tri.obj"), "mtllib tri.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl red\nf 1 2 3\n").unwrap();
+    let path = dir.join("scene.toml");
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+const FULL: &str = r#"
+[camera]
+eye = [0, 1, 5]
+center = [0, 1, 0]
+fov = 45
+
+[materials.gold]
+model = "roughconductor"
+metal = "gold"
+alpha = 0.2
+
+[materials.lamp]
+model = "lambert"
+reflectance = 0
+emission = [4, 3, 2]
+
+[materials.glass]
+model = "dielectric"
+ior = 1.33
+
+[[mesh]]
+file = "tri.obj"
+scale = 2
+rotate = { axis = [0, 1, 0], degrees = 90 }
+translate = [0, 0, -1]
+
+[[mesh]]
+file = "tri.obj"
+material = "gold"
+scale = [-1, 1, 1]
+
+[[shape]]
+type = "sphere"
+center = [0, 3, 0]
+radius = 0.25
+material = "lamp"
+
+[[shape]]
+type = "box"
+min = [-1, 0, -1]
+max = [-0.5, 0.5, -0.5]
+material = "gold"
+
+[[shape]]
+type = "polygon"
+vertices = [[-4, 0, -4], [-4, 0, 4], [4, 0, 4], [4, 0, -4]]
+material = "gold"
+
+[[shape]]
+type = "implicit"
+expression = "x^2 + y^2 + z^2 - 0.25"
+min = [-0.5, -0.5, -0.5]
+max = [0.5, 0.5, 0.5]
+material = "glass"
+
+[[light]]
+type = "point"
+position = [1, 2, 3]
+intensity = 5
+
+[[light]]
+type = "spot"
+position = [0, 4, 0]
+direction = [0, -1, 0]
+inner = 10
+outer = 20
+intensity = [1, 2, 3]
+
+[[light]]
+type = "sun"
+direction = [-1, -2, -1]
+irradiance = 3
+
+[sky]
+radiance = [0.1, 0.2, 0.3]
+"#;
+
+#[test]
+fn a_scene_file_places_everything_it_names() {
+    let s = load_scene_file(&write("full", FULL)).unwrap();
+    // Materials: the three declared (sorted by name), then the first OBJ's own.
+    let names: Vec<&str> = s.materials.iter().map(|m| m.name.as_str()).collect();
+    assert_eq!(names, ["glass", "gold", "lamp", "red"]);
+    assert_eq!(s.materials[2].emission.as_ref().map(|e| e.rgb), Some([4.0, 3.0, 2.0]));
+    let Some(ModelParams::RoughConductor(gold)) = s.materials[1].params() else { unreachable!() };
+    assert_eq!(gold.alpha, 0.2);
+    // The first triangle: scaled by 2, turned 90° about y ((x, y, z) → (z, y, −x)), moved
+    // to z − 1; the second mirrored in x, its winding reversed, in gold.
+    assert_eq!(s.triangles.len(), 2);
+    let close = |a: Vec3, b: Vec3| (a - b).length() < 1e-5;
+    let [a, b, c] = s.triangle_vertices(0);
+    assert!(close(a, Vec3::new(0.0, 0.0, -1.0)) && close(b, Vec3::new(0.0, 0.0, -3.0)), "{a} {b}");
+    assert!(close(c, Vec3::new(0.0, 2.0, -1.0)), "{c}");
+    let [a, b, c] = s.triangle_vertices(1);
+    assert!((b - a).cross(c - a).z > 0.0, "the mirrored triangle's front must still face +z");
+    assert_eq!(s.material_ids, [3, 1]);
+    let kinds: Vec<&str> = s.shapes.iter().map(|x| x.shape.name()).collect();
+    assert_eq!(kinds, ["sphere", "box", "polygon", "implicit surface"]);
+    assert_eq!(s.shapes.iter().map(|x| x.material).collect::<Vec<_>>(), [2, 1, 1, 0]);
+    assert_eq!(s.punctual_lights.len(), 3);
+    assert!(
+        matches!(&s.punctual_lights[1], PunctualLight::Spot { cos_outer, .. } if (cos_outer - 20f32.to_radians().cos()).abs() < 1e-6)
+    );
+    assert_eq!(s.environment.as_ref().map(|e| e.radiance.rgb), Some([0.1, 0.2, 0.3]));
+    let camera = s.camera.unwrap();
+    assert_eq!((camera.eye, camera.fov_y_deg), (Vec3::new(0.0, 1.0, 5.0), 45.0));
+}
+
+#[test]
+fn the_cornell_box_through_a_scene_file_is_the_obj() {
+    let obj = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/scenes/cornell-box/CornellBox-Original.obj");
+    if !obj.exists() {
+        eprintln!("skipped: {} is absent", obj.display());
+        return;
+    }
+    let text = format!("[[mesh]]\nfile = {:?}\n", obj.to_str().unwrap());
+    let from_file = parse_scene_file(&text, Path::new("/elsewhere/scene.toml")).unwrap();
+    let direct = load_obj(&obj).unwrap();
+    assert_eq!(from_file.positions, direct.positions);
+    assert_eq!(from_file.triangles, direct.triangles);
+    assert_eq!(from_file.material_ids, direct.material_ids);
+    assert_eq!(format!("{:?}", from_file.materials), format!("{:?}", direct.materials));
+}
+
+#[test]
+fn errors_name_the_line_and_column_of_what_is_wrong() {
+    for (text, line_col, needle) in [
+        ("[camera]\neye = [0, 1, 5]\ncentre = [0, 0, 0]\n", "scene.toml:3:1: ", "unknown field `centre`"),
+        ("[[shape]]\ntype = \"cone\"\n", "scene.toml:", "unknown variant `cone`"),
+        ("[materials.a]\nmodel = \"velvet\"\n", "scene.toml:2:9: ", "unknown model 'velvet'"),
+        ("[materials.a]\nmodel = \"schlick\"\nroughness = 1.5\n", "scene.toml:3:13: ", "roughness = 1.5"),
+        ("[materials.a]\nreflectance = 0.5\n", "scene.toml:1:1: ", "material 'a': needs a model"),
+        (
+            "[materials.a]\nmodel = \"lambert\"\n\n[[shape]]\ntype = \"sphere\"\ncenter = [0, 0, 0]\nradius = 1\nmaterial = \"b\"\n",
+            "scene.toml:4:1: ",
+            "no material 'b' (defined: a)",
+        ),
+        (
+            "[materials.a]\nmodel = \"lambert\"\n[[shape]]\ntype = \"sphere\"\ncenter = [0, 0, 0]\nradius = -1\nmaterial = \"a\"\n",
+            "scene.toml:3:1: ",
+            "radius",
+        ),
+        ("[[mesh]]\nfile = \"tri.obj\"\nscale = 0\n", "scene.toml:1:1: ", "scale"),
+        ("[[mesh]]\nfile = \"tri.png\"\n", "scene.toml:1:1: ", "meshes are .obj, .gltf or .glb files"),
+        ("[[light]]\ntype = \"point\"\nposition = [0, 0, 0]\nintensity = -1\n", "scene.toml:1:1: ", ""),
+        ("[camera]\neye = [0, 0, 0]\ncenter = [0, 0, 0]\n", "scene.toml:1:1: ", ""),
+        ("[sky]\nradiance = \"blue\"\n", "scene.toml:2:12: ", ""),
+        ("sky = 3 3\n", "scene.toml:1:", ""),
+    ] {
+        let path = write("errors", text);
+        let e = load_scene_file(&path).unwrap_err().to_string();
+        let shown =
+            e.strip_prefix(&format!("{}", path.parent().unwrap().display())).unwrap_or(&e).trim_start_matches('/');
+        assert!(shown.starts_with(line_col) && shown.contains(needle), "{text}\n→ {e}");
+    }
+    // A missing mesh file names itself.
+    let e = load_scene_file(&write("missing", "[[mesh]]\nfile = \"gone.obj\"\n")).unwrap_err().to_string();
+    assert!(e.contains("gone.obj") && e.to_lowercase().contains("no such file"), "{e}");
+}
