@@ -380,9 +380,15 @@ struct SceneArgs {
     shading_normals: ShadingNormals,
     /// Light from everywhere that hits nothing: auto (the scene's own; a uniform white sky
     /// — CIE D65, luminance 1 — if the scene has no light at all), none (no sky, even the
-    /// scene's), white or white:LUMINANCE (a uniform white sky replacing the scene's).
+    /// scene's), white or white:LUMINANCE (a uniform white sky replacing the scene's), or
+    /// FILE.spec (the `sky` SPD of a SPEC file in the thesis's format).
     #[arg(long, default_value = "auto", value_parser = parse_sky)]
     sky: Sky,
+    /// A SPEC file (the thesis's JSON of SPDs) giving the scene's materials diffuse and
+    /// specular spectra and its sky; default for an OBJ: the SPEC file of the same name
+    /// beside it, if any.
+    #[arg(long, value_name = "FILE.spec")]
+    spec: Option<PathBuf>,
     /// Adds a light (repeatable): point:X,Y,Z:I, spot:X,Y,Z:DX,DY,DZ:INNER,OUTER:I or
     /// sun:DX,DY,DZ:E, with I (radiant intensity) or E (irradiance) one value for white or
     /// R,G,B in linear sRGB, cone half-angles in degrees, D the direction it shines in.
@@ -392,7 +398,7 @@ struct SceneArgs {
 }
 
 /// `--sky`: what lights a scene from infinitely far away.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 enum Sky {
     /// The scene's own environment, or the default white sky if nothing emits.
     Auto,
@@ -400,10 +406,16 @@ enum Sky {
     None,
     /// A uniform D65 sky of this luminance.
     White(f32),
+    /// The `sky` SPD of a SPEC file.
+    Spec(PathBuf),
 }
 
 fn parse_sky(s: &str) -> Result<Sky, String> {
-    let bad = || format!("unknown sky '{s}' (known: auto, none, white, white:LUMINANCE with LUMINANCE > 0)");
+    let bad =
+        || format!("unknown sky '{s}' (known: auto, none, white, white:LUMINANCE with LUMINANCE > 0, or FILE.spec)");
+    if s.to_ascii_lowercase().ends_with(".spec") {
+        return Ok(Sky::Spec(PathBuf::from(s)));
+    }
     match s {
         "auto" => Ok(Sky::Auto),
         "none" => Ok(Sky::None),
@@ -417,7 +429,7 @@ fn parse_sky(s: &str) -> Result<Sky, String> {
 
 /// Applies `--sky` to a loaded scene (warning when the default sky stands in for missing
 /// lights, as `spt render` and `spt view` would otherwise show black).
-fn apply_sky(scene: &mut Scene, sky: Sky) {
+fn apply_sky(scene: &mut Scene, sky: &Sky) -> Result<()> {
     match sky {
         Sky::Auto if !scene.has_lights() => {
             let l = tracer::scene::DEFAULT_SKY_LUMINANCE;
@@ -429,8 +441,18 @@ fn apply_sky(scene: &mut Scene, sky: Sky) {
         }
         Sky::Auto => {}
         Sky::None => scene.environment = None,
-        Sky::White(l) => scene.environment = Some(tracer::Environment::white_sky(l)),
+        Sky::White(l) => scene.environment = Some(tracer::Environment::white_sky(*l)),
+        Sky::Spec(path) => {
+            let spec = tracer::spec::load_spec(path)?;
+            let Some((_, table)) = spec.sky else { bail!("--sky {}: the SPEC file names no sky", path.display()) };
+            let radiance = spectral::spectrum::Colour::from_spectrum(
+                spectral::spectrum::Spectrum::Tabulated(table),
+                spectral::spectrum::ColourRole::Illuminant,
+            );
+            scene.environment = Some(tracer::Environment { radiance });
+        }
     }
+    Ok(())
 }
 
 pub(crate) fn parse_triangle_test(s: &str) -> Result<TriangleTest, String> {
@@ -525,7 +547,28 @@ pub(crate) fn parse_vec3(s: &str) -> Result<Vec3, String> {
 }
 
 pub(crate) fn load_scene(path: &Path) -> Result<Scene> {
-    load_scene_with_camera(path, None)
+    load_scene_with(path, None, None)
+}
+
+/// Loads a scene and applies a SPEC file: `spec`, else (for an OBJ) the one beside it.
+pub(crate) fn load_scene_with(path: &Path, camera: Option<&str>, spec: Option<&Path>) -> Result<Scene> {
+    let mut scene = load_scene_with_camera(path, camera)?;
+    let beside = || {
+        path.extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("obj"))
+            .then(|| tracer::spec::spec_beside(path))
+            .flatten()
+    };
+    let spec = match spec {
+        Some(spec) => Some(spec.to_path_buf()),
+        None => beside().inspect(|s| eprintln!("note: applying {} (the SPEC file beside the OBJ)", s.display())),
+    };
+    if let Some(spec) = spec {
+        for note in tracer::spec::load_spec(&spec)?.apply(&mut scene)? {
+            eprintln!("warning: {}: {note}", spec.display());
+        }
+    }
+    Ok(scene)
 }
 
 /// Whether `path` names a glTF file (by its extension).
@@ -633,12 +676,12 @@ fn prepare(
     mode: SpectralMode,
     default_sampler: fn(&Capabilities) -> SamplerKind,
 ) -> Result<(Box<dyn PreparedScene>, RenderSettings)> {
-    let mut scene = load_scene_with_camera(&args.scene, args.camera.as_deref())?;
+    let mut scene = load_scene_with(&args.scene, args.camera.as_deref(), args.spec.as_deref())?;
     if scene.triangles.is_empty() && scene.shapes.is_empty() {
         bail!("{}: the scene has no geometry", args.scene.display());
     }
     scene.punctual_lights.extend(args.lights.iter().cloned());
-    apply_sky(&mut scene, args.sky);
+    apply_sky(&mut scene, &args.sky)?;
     let backend = make_backend(args)?;
     let sampler = args.sampler.unwrap_or_else(|| default_sampler(&backend.capabilities()));
     let settings = settings(args, spp, mode, sampler, &scene)?;

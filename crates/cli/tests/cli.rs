@@ -698,3 +698,39 @@ fn the_example_scene_files_load() {
     }
     assert!(n >= 5, "{n} example scene files");
 }
+
+#[test]
+fn spec_files_colour_materials_and_light_the_sky() {
+    let example = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/thesis/metal.obj");
+    let dir = temp_dir("spec");
+    let out = dir.join("metal.exr");
+    let render = |extra: &[&str]| {
+        let mut a = vec!["render", example.to_str().unwrap(), "--width", "12", "--height", "12", "--spp", "4"];
+        a.extend_from_slice(extra);
+        a.extend(["-o", out.to_str().unwrap()]);
+        let o = spt(&a);
+        assert!(o.status.success(), "{}", stderr(&o));
+        (stderr(&o), exr_means(&out))
+    };
+    // The SPEC file beside the OBJ is applied: its D65 sky lights the scene (no default
+    // sky warning) and the golden sphere is warmer than it is grey.
+    let (log, golden) = render(&["--eye", "0,0.5,1.2", "--center", "0,0.5,0"]);
+    assert!(log.contains("applying") && log.contains("metal.spec") && !log.contains("no light"), "{log}");
+    assert!(golden[0] > 1.2 * golden[2], "{golden:?}");
+    // Another SPEC file replaces it; --sky FILE.spec takes only its sky.
+    let grey = dir.join("grey.spec");
+    std::fs::write(
+        &grey,
+        r#"{ "materials": { "Metal": { "diff": "grey", "spec": "grey" } }, "spectra": { "grey": { "380": 0.5, "775": 0.5 } } }"#,
+    )
+    .unwrap();
+    let (_, greyed) =
+        render(&["--eye", "0,0.5,1.2", "--center", "0,0.5,0", "--spec", grey.to_str().unwrap(), "--sky", "white"]);
+    assert!((greyed[0] / greyed[2] - 1.0).abs() < 0.05, "{greyed:?}");
+    let o = spt(&["render", example.to_str().unwrap(), "--sky", grey.to_str().unwrap(), "-o", out.to_str().unwrap()]);
+    assert!(!o.status.success() && stderr(&o).contains("the SPEC file names no sky"), "{}", stderr(&o));
+    std::fs::write(&grey, r#"{ "materials": { "Gold": { "diff": "g" } }, "spectra": { "g": { "400": 0.5 } } }"#)
+        .unwrap();
+    let o = spt(&["render", example.to_str().unwrap(), "--spec", grey.to_str().unwrap(), "-o", out.to_str().unwrap()]);
+    assert!(!o.status.success() && stderr(&o).contains("materials.Gold: no such material"), "{}", stderr(&o));
+}

@@ -1,7 +1,7 @@
 //! A dependency-free mutation fuzzer for the glTF reader
-//! ([`tracer::gltf_scene::load_gltf_bytes`], the `gltf` crate underneath) and the TOML
+//! ([`tracer::gltf_scene::load_gltf_bytes`], the `gltf` crate underneath), the TOML
 //! scene-file reader ([`tracer::scene_file::parse_scene_file`], the `toml` crate
-//! underneath): glTF files — JSON with data URIs, JSON with an external `.bin`, binary
+//! underneath) and the SPEC reader ([`tracer::spec::parse_spec`], `serde_json`): glTF files — JSON with data URIs, JSON with an external `.bin`, binary
 //! `.glb` — and scene files are mutated at random and loaded from memory; every input must
 //! load or fail with an error, never panic (the glTF loader turns a panic of the `gltf`
 //! crate into an error that says so, which this counts; the scene-file reader runs under
@@ -28,6 +28,7 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::{Duration, Instant};
 use tracer::gltf_scene::{GltfOptions, load_gltf_bytes};
 use tracer::scene_file::parse_scene_file;
+use tracer::spec::parse_spec;
 
 /// The system allocator, counting live bytes and their high-water mark.
 struct Counting;
@@ -137,6 +138,17 @@ fn handwritten() -> Seed {
     Seed { name: "handwritten.gltf", main: text.into_bytes(), files: Vec::new() }
 }
 
+/// A SPEC file in the thesis's format (its listing 8.7, completed).
+const SPEC_FILE: &str = r#"{
+    "materials": { "Metal": { "diff": "golden", "spec": "golden" }, "Floor": { "diff": "grey" } },
+    "sky": "CIE_D65",
+    "spectra": {
+        "CIE_D65": { "380": 0.444027773062, "385": 0.463859369164, "770": 0.552525209656, "775": 0.537999524666 },
+        "golden": { "380": 0.36, "500": 0.45, "550": 0.78, "775": 0.98 },
+        "grey": { "380.0": 0.5, "775.0": 0.5 }
+    }
+}"#;
+
 /// A scene file with every kind of entry but meshes (which would read files).
 const SCENE_FILE: &str = r#"
 [camera]
@@ -202,15 +214,18 @@ radiance = [0.1, 0.2, 0.3]
 "#;
 
 fn seeds(shared: &Path) -> Vec<Seed> {
-    let mut out =
-        vec![handwritten(), Seed { name: "scene.toml", main: SCENE_FILE.as_bytes().to_vec(), files: Vec::new() }];
+    let mut out = vec![
+        handwritten(),
+        Seed { name: "scene.toml", main: SCENE_FILE.as_bytes().to_vec(), files: Vec::new() },
+        Seed { name: "metal.spec", main: SPEC_FILE.as_bytes().to_vec(), files: Vec::new() },
+    ];
     let dir = shared.join("scenes/gltf-box");
     let read = |f: &str| std::fs::read(dir.join(f)).ok();
     if let (Some(gltf), Some(bin), Some(glb)) = (read("Box.gltf"), read("Box0.bin"), read("Box.glb")) {
         out.push(Seed { name: "Box.gltf", main: gltf, files: vec![("Box0.bin".into(), bin)] });
         out.push(Seed { name: "Box.glb", main: glb, files: Vec::new() });
     } else {
-        eprintln!("note: {} is absent; fuzzing the hand-written seed only", dir.display());
+        eprintln!("note: {} is absent; fuzzing the hand-written seeds only", dir.display());
     }
     out
 }
@@ -327,7 +342,24 @@ fn check(s: &Seed, camera: bool) -> Result<bool, String> {
     PEAK.store(LIVE.load(Ordering::Relaxed), Ordering::Relaxed);
     let before = LIVE.load(Ordering::Relaxed);
     let start = Instant::now();
-    let result = if s.name.ends_with(".toml") {
+    let result = if s.name.ends_with(".spec") {
+        // Parsed, then applied to a scene with the materials it names.
+        let text = String::from_utf8_lossy(&s.main);
+        let run = || -> tracer::Result<()> {
+            let spec = parse_spec(&text, &path)?;
+            let mut scene = tracer::Scene::default();
+            for name in ["Metal", "Floor"] {
+                scene
+                    .materials
+                    .push(tracer::material::Material::diffuse(name, spectral::spectrum::Colour::constant(0.5))?);
+            }
+            spec.apply(&mut scene).map(|_| ())
+        };
+        match std::panic::catch_unwind(run) {
+            Ok(r) => r,
+            Err(_) => return Err("panic in the SPEC reader".into()),
+        }
+    } else if s.name.ends_with(".toml") {
         // The scene-file reader has no panic guard of its own (it needs none): a panic
         // here is counted as one.
         let text = String::from_utf8_lossy(&s.main);

@@ -30,6 +30,7 @@ pub mod scene;
 pub mod scene_file;
 pub mod scenes;
 pub mod shading;
+pub mod spec;
 
 pub use accumulation::{Accumulation, FilmAccumulation};
 pub use camera::Camera;
