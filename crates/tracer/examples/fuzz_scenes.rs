@@ -164,8 +164,8 @@ alpha = 0.2
 
 [materials.lamp]
 model = "lambert"
-reflectance = 0
-emission = [4, 3, 2]
+reflectance = { table = { "400" = 0.2, "700" = 0.6 }, scale = 0.5 }
+emission = { blackbody = 3000, scale = 4 }
 
 [materials.glass]
 model = "dielectric"
@@ -210,7 +210,7 @@ direction = [-1, -2, -1]
 irradiance = 3
 
 [sky]
-radiance = [0.1, 0.2, 0.3]
+radiance = { spectrum = "D65", scale = 0.3 }
 "#;
 
 fn seeds(shared: &Path) -> Vec<Seed> {

@@ -40,9 +40,13 @@
 //! radiance = [0.2, 0.3, 0.5] # a uniform sky (linear sRGB radiance)
 //! ```
 //!
-//! Colours are one number (a grey) or three (linear sRGB). Every error names the file and
-//! the line and column of the offending value (`scene.toml:12:9: …`); unknown keys are
-//! errors, not silently ignored.
+//! Colours (material colours, emission, light intensities, the sky) are one number (a
+//! grey), three (linear sRGB), or a spectrum: `{ spectrum = "D65" }` (also `"A"`, `"E"`),
+//! `{ blackbody = 3200 }` (peak 1), `{ table = { "400" = 0.2, "700" = 0.6 } }` (nm →
+//! value, linear in between) or `{ spd = "golden", file = "metal.spec" }` (an SPD of a
+//! SPEC file), each with an optional `scale`. Every error names the file and the line and
+//! column of the offending value (`scene.toml:12:9: …`); unknown keys are errors, not
+//! silently ignored.
 
 use crate::camera::Camera;
 use crate::geometry::ShapeKind;
@@ -60,7 +64,7 @@ use shapes::implicit::Implicit;
 use shapes::polygon::{InsideTest, Polygon};
 use shapes::roots::RootSolver;
 use shapes::sphere::{Sphere, SphereMethod};
-use spectral::spectrum::Colour;
+use spectral::spectrum::{Colour, ColourRole, Spectrum, TabulatedSpectrum};
 use std::collections::BTreeMap;
 use std::ops::Range;
 use std::path::Path;
@@ -104,20 +108,95 @@ fn default_fov() -> f32 {
     crate::camera::DEFAULT_FOV_Y_DEG
 }
 
-/// A grey (one number) or linear-sRGB colour.
-#[derive(Clone, Copy, Deserialize)]
+/// A colour: a grey (one number), linear sRGB (three), or a spectrum ([`SpectrumDef`]).
+#[derive(Clone, Deserialize)]
 #[serde(untagged)]
 enum ColourDef {
     Grey(f32),
     Rgb([f32; 3]),
+    Spectrum(SpectrumDef),
+}
+
+/// A spectrum by name (`spectrum = "D65" | "A" | "E"`), a black body (`blackbody = K`,
+/// peak 1), a table (`table = { "400" = 0.1, … }`, nm → value) or an SPD of a SPEC file
+/// (`spd = NAME, file = "x.spec"`), times `scale` (default 1).
+#[derive(Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SpectrumDef {
+    spectrum: Option<String>,
+    blackbody: Option<f32>,
+    table: Option<BTreeMap<String, f32>>,
+    spd: Option<String>,
+    file: Option<String>,
+    scale: Option<f32>,
 }
 
 impl ColourDef {
-    fn rgb(self) -> [f32; 3] {
+    /// The colour in `role`; spectra from SPEC files are resolved against `dir`.
+    fn colour(&self, role: ColourRole, dir: &Path) -> std::result::Result<Colour, String> {
         match self {
-            Self::Grey(v) => [v; 3],
-            Self::Rgb(c) => c,
+            Self::Grey(v) => rgb_colour([*v; 3], role),
+            Self::Rgb(c) => rgb_colour(*c, role),
+            Self::Spectrum(s) => Ok(Colour::from_spectrum(s.spectrum(dir)?, role)),
         }
+    }
+}
+
+fn rgb_colour(rgb: [f32; 3], role: ColourRole) -> std::result::Result<Colour, String> {
+    match role {
+        ColourRole::Reflectance => Colour::reflectance_rgb(rgb),
+        ColourRole::Illuminant => Colour::illuminant_rgb(rgb),
+    }
+    .map_err(|e| e.to_string())
+}
+
+impl SpectrumDef {
+    fn spectrum(&self, dir: &Path) -> std::result::Result<Spectrum, String> {
+        let scale = self.scale.unwrap_or(1.0);
+        if !(scale.is_finite() && scale >= 0.0) {
+            return Err(format!("scale {scale} must be a non-negative number"));
+        }
+        let given = [self.spectrum.is_some(), self.blackbody.is_some(), self.table.is_some(), self.spd.is_some()];
+        if given.iter().filter(|&&g| g).count() != 1 {
+            return Err("a spectrum needs exactly one of spectrum, blackbody, table or spd".into());
+        }
+        if self.file.is_some() != self.spd.is_some() {
+            return Err("spd and file go together: spd = NAME, file = \"x.spec\"".into());
+        }
+        let table = |lambda: Vec<f32>, value: Vec<f32>| {
+            TabulatedSpectrum::new(lambda, value.into_iter().map(|v| v * scale).collect()).map_err(|e| e.to_string())
+        };
+        if let Some(name) = &self.spectrum {
+            return match name.to_ascii_uppercase().as_str() {
+                "D65" => Ok(Spectrum::D65(scale)),
+                "A" => Ok(Spectrum::IlluminantA(scale / 100.0)),
+                "E" => Ok(Spectrum::Constant(scale)),
+                _ => Err(format!("unknown spectrum '{name}' (known: D65, A, E; or blackbody, table, spd)")),
+            };
+        }
+        if let Some(kelvin) = self.blackbody {
+            if !(kelvin.is_finite() && (100.0..=1.0e6).contains(&kelvin)) {
+                return Err(format!("blackbody {kelvin} K is outside [100, 10⁶]"));
+            }
+            return Ok(Spectrum::Blackbody { kelvin, scale });
+        }
+        if let Some(t) = &self.table {
+            let mut points = Vec::with_capacity(t.len());
+            for (l, &v) in t {
+                let lambda: f32 = l.trim().parse().map_err(|_| format!("table: '{l}' is not a wavelength in nm"))?;
+                points.push((lambda, v));
+            }
+            points.sort_by(|a, b| a.0.total_cmp(&b.0));
+            let (lambda, value) = points.into_iter().unzip();
+            return Ok(Spectrum::Tabulated(table(lambda, value)?));
+        }
+        let (name, file) = (self.spd.as_deref().unwrap_or_default(), self.file.as_deref().unwrap_or_default());
+        let spec = crate::spec::load_spec_spectra(&dir.join(file)).map_err(|e| e.to_string())?;
+        let t = spec.get(name).ok_or_else(|| {
+            format!("{file}: no spectrum '{name}' (defined: {})", spec.keys().cloned().collect::<Vec<_>>().join(", "))
+        })?;
+        let (lambda, value): (Vec<f32>, Vec<f32>) = (360..=830).map(|l| (l as f32, t.eval(l as f32))).unzip();
+        Ok(Spectrum::Tabulated(table(lambda, value)?))
     }
 }
 
@@ -202,7 +281,7 @@ pub fn parse_scene_file(text: &str, path: &Path) -> Result<Scene> {
     // Materials by name, in the file's (sorted) order.
     let mut materials: BTreeMap<&str, u32> = BTreeMap::new();
     for (name, table) in &file.materials {
-        let material = material(name, table).map_err(|(span, m)| at(span, m))?;
+        let material = material(name, table, dir).map_err(|(span, m)| at(span, m))?;
         materials.insert(name, scene.materials.len() as u32);
         scene.materials.push(material);
     }
@@ -275,7 +354,7 @@ pub fn parse_scene_file(text: &str, path: &Path) -> Result<Scene> {
 
     for def in &file.light {
         let span = def.span();
-        let colour = |c: &ColourDef| Colour::illuminant_rgb(c.rgb()).map_err(|e| at(span.clone(), e.to_string()));
+        let colour = |c: &ColourDef| c.colour(ColourRole::Illuminant, dir).map_err(|e| at(span.clone(), e));
         let light = match def.get_ref() {
             LightDef::Point { position, intensity } => PunctualLight::point((*position).into(), colour(intensity)?),
             LightDef::Spot { position, direction, inner, outer, intensity } => PunctualLight::spot(
@@ -294,8 +373,7 @@ pub fn parse_scene_file(text: &str, path: &Path) -> Result<Scene> {
     }
 
     if let Some(sky) = &file.sky {
-        let radiance =
-            Colour::illuminant_rgb(sky.get_ref().radiance.rgb()).map_err(|e| at(sky.span(), e.to_string()))?;
+        let radiance = sky.get_ref().radiance.colour(ColourRole::Illuminant, dir).map_err(|e| at(sky.span(), e))?;
         scene.environment = Some(Environment { radiance });
     }
 
@@ -314,7 +392,11 @@ pub fn parse_scene_file(text: &str, path: &Path) -> Result<Scene> {
 
 /// A material table: `model`, an optional `emission`, and the model's parameters; an
 /// error comes with the span of the value at fault (the table's for a missing model).
-fn material(name: &str, table: &Spanned<MaterialDef>) -> std::result::Result<Material, (Range<usize>, String)> {
+fn material(
+    name: &str,
+    table: &Spanned<MaterialDef>,
+    dir: &Path,
+) -> std::result::Result<Material, (Range<usize>, String)> {
     let what = |span: Range<usize>, m: String| (span, format!("material '{name}': {m}"));
     let model = match table.get_ref().get("model") {
         Some(v) => match v.get_ref() {
@@ -339,21 +421,27 @@ fn material(name: &str, table: &Spanned<MaterialDef>) -> std::result::Result<Mat
             toml::Value::Array(a) if a.len() == 3 && a.iter().all(|v| number(v).is_some()) => {
                 ParamValue::Rgb([0, 1, 2].map(|i| number(&a[i]).unwrap_or(0.0)))
             }
+            toml::Value::Table(t) => {
+                let fail = |e: String| what(spanned.span(), format!("{key}: {e}"));
+                let def: SpectrumDef = toml::Value::Table(t.clone()).try_into().map_err(|e| fail(format!("{e}")))?;
+                let role = if key == "emission" { ColourRole::Illuminant } else { ColourRole::Reflectance };
+                ParamValue::Colour(ColourDef::Spectrum(def).colour(role, dir).map_err(fail)?)
+            }
             _ => {
-                let m = format!("{key}: expected a number, three numbers, a name or true/false");
+                let m = format!("{key}: expected a number, three numbers, a spectrum table, a name or true/false");
                 return Err(what(spanned.span(), m));
             }
         };
         match key.as_str() {
             "model" => {}
             "emission" => {
-                let rgb = match value {
-                    ParamValue::Scalar(v) => [v; 3],
-                    ParamValue::Rgb(c) => c,
-                    _ => return Err(what(spanned.span(), "emission: expected a number or three numbers".into())),
+                let colour = match value {
+                    ParamValue::Scalar(v) => Colour::illuminant_rgb([v; 3]),
+                    ParamValue::Rgb(c) => Colour::illuminant_rgb(c),
+                    ParamValue::Colour(c) => Ok(c),
+                    _ => return Err(what(spanned.span(), "emission: expected a colour or a spectrum".into())),
                 };
-                let colour = Colour::illuminant_rgb(rgb).map_err(|e| what(spanned.span(), format!("emission: {e}")))?;
-                emission = Some(colour);
+                emission = Some(colour.map_err(|e| what(spanned.span(), format!("emission: {e}")))?);
             }
             _ => params.push((key.as_str(), value)),
         }

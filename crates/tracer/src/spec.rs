@@ -78,8 +78,45 @@ pub fn load_spec(path: &Path) -> Result<SpecFile> {
     parse_spec(&text, path)
 }
 
+/// The SPDs of a SPEC file by name (its `materials` and `sky` are not checked), for scene
+/// files that take one of its spectra.
+pub fn load_spec_spectra(path: &Path) -> Result<BTreeMap<String, TabulatedSpectrum>> {
+    let text = std::fs::read_to_string(path).map_err(|source| Error::Io { path: path.to_path_buf(), source })?;
+    Ok(parse_spectra(&text, path)?.0)
+}
+
 /// Parses a SPEC file's text; `path` names it in messages.
 pub fn parse_spec(text: &str, path: &Path) -> Result<SpecFile> {
+    let fail = |message: String| Error::Parse { path: path.to_path_buf(), line: None, message };
+    let (spectra, above_one, def) = parse_spectra(text, path)?;
+    let lookup = |what: String, name: &str| {
+        spectra.get(name).cloned().map(|t| (name.to_string(), t)).ok_or_else(|| {
+            let known: Vec<&str> = spectra.keys().map(String::as_str).collect();
+            let known = if known.is_empty() { "none".to_string() } else { known.join(", ") };
+            fail(format!("{what}: no spectrum '{name}' in spectra (defined: {known})"))
+        })
+    };
+    let reflectance = |what: String, name: &str| {
+        let (name, t) = lookup(what.clone(), name)?;
+        match above_one.get(&name) {
+            Some((l, v)) => Err(fail(format!("{what}: '{name}' is a reflectance but is {v} > 1 at {l} nm"))),
+            None => Ok((name, t)),
+        }
+    };
+    let mut materials = BTreeMap::new();
+    for (material, roles) in &def.materials {
+        let diff = roles.diff.as_deref().map(|n| reflectance(format!("materials.{material}.diff"), n)).transpose()?;
+        let spec = roles.spec.as_deref().map(|n| reflectance(format!("materials.{material}.spec"), n)).transpose()?;
+        materials.insert(material.clone(), (diff, spec));
+    }
+    let sky = def.sky.as_deref().map(|n| lookup("sky".into(), n)).transpose()?;
+    Ok(SpecFile { path: path.to_path_buf(), materials, sky })
+}
+
+/// A SPEC text's SPDs by name, each SPD's first value above 1, and the file as read.
+type Spectra = (BTreeMap<String, TabulatedSpectrum>, BTreeMap<String, (f32, f32)>, SpecDef);
+
+fn parse_spectra(text: &str, path: &Path) -> Result<Spectra> {
     let fail = |message: String| Error::Parse { path: path.to_path_buf(), line: None, message };
     let def: SpecDef = serde_json::from_str(text).map_err(|e| match e.line() {
         0 => fail(e.to_string()),
@@ -113,28 +150,7 @@ pub fn parse_spec(text: &str, path: &Path) -> Result<SpecFile> {
         let table = TabulatedSpectrum::new(lambda, value).map_err(|e| fail(format!("spectra.{name}: {e}")))?;
         spectra.insert(name.clone(), table);
     }
-    let lookup = |what: String, name: &str| {
-        spectra.get(name).cloned().map(|t| (name.to_string(), t)).ok_or_else(|| {
-            let known: Vec<&str> = spectra.keys().map(String::as_str).collect();
-            let known = if known.is_empty() { "none".to_string() } else { known.join(", ") };
-            fail(format!("{what}: no spectrum '{name}' in spectra (defined: {known})"))
-        })
-    };
-    let reflectance = |what: String, name: &str| {
-        let (name, t) = lookup(what.clone(), name)?;
-        match above_one.get(&name) {
-            Some((l, v)) => Err(fail(format!("{what}: '{name}' is a reflectance but is {v} > 1 at {l} nm"))),
-            None => Ok((name, t)),
-        }
-    };
-    let mut materials = BTreeMap::new();
-    for (material, roles) in &def.materials {
-        let diff = roles.diff.as_deref().map(|n| reflectance(format!("materials.{material}.diff"), n)).transpose()?;
-        let spec = roles.spec.as_deref().map(|n| reflectance(format!("materials.{material}.spec"), n)).transpose()?;
-        materials.insert(material.clone(), (diff, spec));
-    }
-    let sky = def.sky.as_deref().map(|n| lookup("sky".into(), n)).transpose()?;
-    Ok(SpecFile { path: path.to_path_buf(), materials, sky })
+    Ok((spectra, above_one, def))
 }
 
 impl SpecFile {

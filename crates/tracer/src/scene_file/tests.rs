@@ -174,3 +174,63 @@ fn errors_name_the_line_and_column_of_what_is_wrong() {
     let e = load_scene_file(&write("missing", "[[mesh]]\nfile = \"gone.obj\"\n")).unwrap_err().to_string();
     assert!(e.contains("gone.obj") && e.to_lowercase().contains("no such file"), "{e}");
 }
+
+#[test]
+fn colours_can_be_spectra_by_name_black_body_table_or_spec_file() {
+    let path = write("spectra", "");
+    let dir = path.parent().unwrap();
+    std::fs::write(dir.join("m.spec"), r#"{ "spectra": { "golden": { "400": 0.3, "700": 0.9 } } }"#).unwrap();
+    let text = r#"
+[materials.tabled]
+model = "lambert"
+reflectance = { table = { "400" = 0.2, "700" = 0.6 } }
+
+[materials.golden]
+model = "lambert"
+reflectance = { spd = "golden", file = "m.spec", scale = 0.5 }
+
+[materials.warm]
+model = "lambert"
+reflectance = 0
+emission = { blackbody = 3000, scale = 5 }
+
+[[light]]
+type = "point"
+position = [0, 2, 0]
+intensity = { spectrum = "A", scale = 2 }
+
+[sky]
+radiance = { spectrum = "D65", scale = 0.5 }
+"#;
+    std::fs::write(&path, text).unwrap();
+    let s = load_scene_file(&path).unwrap();
+    let reflectance = |i: usize| match s.materials[i].params() {
+        Some(ModelParams::Lambert(p)) => p.reflectance.spectrum.clone(),
+        other => panic!("{other:?}"),
+    };
+    // Sorted by name: golden, tabled, warm.
+    assert!((reflectance(0).eval(550.0) - 0.5 * 0.6).abs() < 1e-6, "{}", reflectance(0).eval(550.0));
+    assert!((reflectance(1).eval(550.0) - 0.4).abs() < 1e-6);
+    let warm = s.materials[2].emission.as_ref().unwrap();
+    assert_eq!(warm.spectrum, Spectrum::Blackbody { kelvin: 3000.0, scale: 5.0 });
+    // A 3000 K black body is reddish: its sRGB value has more red than blue.
+    assert!(warm.rgb[0] > 2.0 * warm.rgb[2], "{:?}", warm.rgb);
+    assert!(matches!(&s.punctual_lights[0], PunctualLight::Point { intensity, .. }
+        if (intensity.spectrum.eval(560.0) - 2.0).abs() < 1e-4));
+    assert_eq!(s.environment.as_ref().unwrap().radiance.spectrum, Spectrum::D65(0.5));
+    for (bad, needle) in [
+        ("[sky]\nradiance = { spectrum = \"D50\" }\n", "unknown spectrum 'D50'"),
+        ("[sky]\nradiance = { spectrum = \"D65\", blackbody = 5000 }\n", "exactly one of"),
+        ("[sky]\nradiance = { spd = \"golden\" }\n", "spd and file go together"),
+        ("[sky]\nradiance = { spd = \"silver\", file = \"m.spec\" }\n", "no spectrum 'silver' (defined: golden)"),
+        (
+            "[materials.a]\nmodel = \"lambert\"\nreflectance = { table = { \"blue\" = 0.5 } }\n",
+            "'blue' is not a wavelength",
+        ),
+        ("[materials.a]\nmodel = \"lambert\"\nreflectance = { colour = 1 }\n", "unknown field `colour`"),
+    ] {
+        std::fs::write(&path, bad).unwrap();
+        let e = load_scene_file(&path).unwrap_err().to_string();
+        assert!(e.contains(needle), "{bad}\n→ {e}");
+    }
+}
