@@ -144,3 +144,66 @@ fn an_occluder_casts_a_hard_shadow() {
     assert_eq!(radiance_at(&prepared, &PathTracer, 0.9, 0.0), [0.0; 3]);
     assert!(radiance_at(&prepared, &PathTracer, 1.1, 0.0)[0] > 0.0);
 }
+
+/// The mean and standard error of `n` estimates of the red radiance looking straight down
+/// at floor point `p` (RGB mode), one path each.
+fn mean_radiance(prepared: &CpuScene, integrator: &impl Integrator, p: Vec3, n: usize, seed: u64) -> (f64, f64) {
+    let view = prepared.view();
+    let mut sampler = rng::Pcg32::seed_from_u64(seed);
+    let (mut sum, mut sum_sq) = (0.0f64, 0.0f64);
+    for _ in 0..n {
+        let mut wl = SampledWavelengths::<3>::rgb();
+        let ray = bvh::Ray::new(p + Vec3::new(0.0, 0.5, 0.0), -Vec3::Y);
+        let settings = PathSettings::default();
+        let l = integrator.radiance(&view, ray, &mut wl, &settings, &mut sampler, &mut PathCounters::default());
+        sum += l.0[0] as f64;
+        sum_sq += (l.0[0] as f64).powi(2);
+    }
+    let mean = sum / n as f64;
+    (mean, ((sum_sq / n as f64 - mean * mean) / n as f64).sqrt())
+}
+
+#[test]
+fn a_sun_disk_gives_the_same_irradiance_as_a_delta_sun_and_shows_its_radiance() {
+    // A disk of angular radius r centred at zenith angle θ, entirely above the horizon,
+    // delivers E cos θ to a horizontal surface (its projected solid angle is π sin²r cos θ
+    // and its radiance E/(π sin²r)): the floor's radiance is ρ/π · E cos θ, as under a
+    // delta sun. The path tracer finds it by light sampling and by BSDF-sampled rays
+    // escaping into the disk (MIS); the direct and Whitted integrators by light sampling
+    // alone (Whitted draws one direction in the disk per hit, as it takes every light). A disk
+    // 40° across makes the BSDF-sampled share large enough to matter.
+    let theta = 30f32.to_radians();
+    let travel = Vec3::new(theta.sin(), -theta.cos(), 0.0);
+    let e = 2.0f32;
+    let diameter = 40f32.to_radians();
+    let prepared = floor_with(vec![PunctualLight::sun(travel, Colour::constant(e), diameter)], false);
+    let expect = (ALBEDO * FRAC_1_PI * e * theta.cos()) as f64;
+    for (name, (mean, se)) in [
+        ("path", mean_radiance(&prepared, &PathTracer, Vec3::new(0.3, 0.0, 0.2), 40_000, 5)),
+        ("direct", mean_radiance(&prepared, &DirectLighting, Vec3::new(-1.0, 0.0, 0.4), 40_000, 6)),
+        ("whitted", mean_radiance(&prepared, &tracer::Whitted, Vec3::new(0.8, 0.0, -0.5), 40_000, 8)),
+    ] {
+        let z = (mean - expect) / se;
+        assert!(z.abs() < 4.5 && se < 0.02 * expect, "{name}: {mean} ± {se}, expected {expect} (z = {z:.2})");
+    }
+    // Looking into the disk: its radiance E/(π sin²r), exactly.
+    let view = prepared.view();
+    let mut wl = SampledWavelengths::<3>::rgb();
+    let ray = bvh::Ray::new(Vec3::new(0.0, 1.0, 0.0), -travel);
+    let l = DirectLighting.radiance(
+        &view,
+        ray,
+        &mut wl,
+        &PathSettings::default(),
+        &mut rng::Pcg32::seed_from_u64(1),
+        &mut PathCounters::default(),
+    );
+    let radiance = e / (std::f32::consts::PI * (0.5 * diameter).sin().powi(2));
+    assert!((l.0[0] - radiance).abs() < 1e-4 * radiance, "{} vs {radiance}", l.0[0]);
+    // An occluder casts a penumbra: a point whose view of the disk is partly blocked gets
+    // part of the light (a delta sun gives all or nothing).
+    let card = floor_with(vec![PunctualLight::sun(travel, Colour::constant(e), diameter)], true);
+    // The card (half-size 0.5 at height 1) shades the floor around x = tan θ.
+    let (edge, _) = mean_radiance(&card, &DirectLighting, Vec3::new(theta.tan() + 0.45, 0.0, 0.0), 4_000, 7);
+    assert!(edge > 0.1 * expect && edge < 0.9 * expect, "penumbra: {edge} of {expect}");
+}

@@ -4,9 +4,10 @@ use spectral::spectrum::Colour;
 use tracer::PunctualLight;
 
 /// The syntax, for `--help` and error messages.
-pub(crate) const LIGHT_SYNTAX: &str = "point:X,Y,Z:I | spot:X,Y,Z:DX,DY,DZ:INNER,OUTER:I | sun:DX,DY,DZ:E \
+pub(crate) const LIGHT_SYNTAX: &str = "point:X,Y,Z:I | spot:X,Y,Z:DX,DY,DZ:INNER,OUTER:I | sun:DX,DY,DZ:E[:DIAMETER] \
      (I, E: one value for white or R,G,B in linear sRGB; INNER, OUTER: cone half-angles in degrees; \
-     D: the direction the light shines in)";
+     D: the direction the light shines in; DIAMETER: the sun disk's angular diameter in degrees, \
+     0 (a delta direction) by default, 0.53 for the real sun)";
 
 /// Parses one `--light` value.
 pub(crate) fn parse_light(s: &str) -> Result<PunctualLight, String> {
@@ -34,6 +35,13 @@ pub(crate) fn parse_light(s: &str) -> Result<PunctualLight, String> {
             PunctualLight::spot(vec3(p, "position")?, direction(d)?, colour(i)?, inner.to_radians(), outer.to_radians())
         }
         ["sun" | "directional", d, e] => PunctualLight::directional(direction(d)?, colour(e)?),
+        ["sun" | "directional", d, e, diameter] => {
+            let deg: f32 = diameter.trim().parse().map_err(|_| bad(format!("'{diameter}' is not an angle")))?;
+            if !(0.0..90.0).contains(&deg) {
+                return Err(bad(format!("sun diameter {deg}°: need 0 ≤ DIAMETER < 90")));
+            }
+            PunctualLight::sun(direction(d)?, colour(e)?, deg.to_radians())
+        }
         [kind, ..] if !matches!(*kind, "point" | "spot" | "sun" | "directional") => {
             return Err(bad(format!("unknown light kind '{kind}'")));
         }
@@ -79,7 +87,14 @@ mod tests {
         let sun = parse_light("sun:1,-1,0:2").unwrap();
         let PunctualLight::Directional { direction, .. } = sun else { panic!("{sun:?}") };
         assert!((direction - Vec3::new(1.0, -1.0, 0.0).normalize()).length() < 1e-6);
+        assert!(sun.disk().is_none());
+        let disk = parse_light("sun:0,-1,0:2:0.53").unwrap();
+        let (axis, cos_radius, _) = disk.disk().expect("a sun disk");
+        assert_eq!((axis, disk.kind()), (Vec3::Y, "sun disk"));
+        assert!((cos_radius - 0.265f32.to_radians().cos()).abs() < 1e-7);
         for (bad, says) in [
+            ("sun:0,-1,0:2:95", "need 0 ≤ DIAMETER < 90"),
+            ("sun:0,-1,0:2:wide", "'wide' is not an angle"),
             ("lamp:0,0,0:1", "unknown light kind 'lamp'"),
             ("point:0,0:1", "position"),
             ("point:0,0,0:-1", "non-negative"),

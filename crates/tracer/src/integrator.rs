@@ -176,6 +176,35 @@ impl<'a> SceneView<'a> {
         self.scene.environment.as_ref().map_or(SampledSpectrum::zero(), |e| e.radiance.sample(wl))
     }
 
+    /// The radiance of the sun disks a ray escaping along `dir` sees; with the pdf of the
+    /// BSDF sample that sent it, each is weighted by the power heuristic against the
+    /// disk's light-sampling pdf (without, weight 1: a camera ray, or a specular bounce).
+    #[cold]
+    pub fn suns_seen<const N: usize>(
+        &self,
+        dir: Vec3,
+        wl: &SampledWavelengths<N>,
+        bsdf_pdf: Option<f32>,
+    ) -> SampledSpectrum<N> {
+        let mut l = SampledSpectrum::zero();
+        for sun in self.lights.suns() {
+            if dir.dot(sun.axis) >= sun.cos_radius {
+                let le = self.scene.punctual_lights[sun.index as usize].colour().sample(wl) * sun.radiance_scale;
+                l += le * bsdf_pdf.map_or(1.0, |p| power_heuristic(p, sun.pdf));
+            }
+        }
+        l
+    }
+
+    /// What a ray that escapes along `dir` sees, unweighted: the environment and any sun
+    /// disk (for integrators that do not sample lights by BSDF, at camera rays and
+    /// specular bounces).
+    #[inline]
+    pub fn escaped_radiance<const N: usize>(&self, dir: Vec3, wl: &SampledWavelengths<N>) -> SampledSpectrum<N> {
+        let env = self.environment_radiance(wl);
+        if self.lights.suns().is_empty() { env } else { env + self.suns_seen(dir, wl, None) }
+    }
+
     /// The closest hit along `ray`.
     #[inline]
     pub fn intersect(&self, ray: &Ray) -> Option<SceneHit> {
@@ -333,8 +362,9 @@ fn light_contribution<const N: usize, B: Bsdf<N>>(
         // A delta light: I·falloff/d² (or E) stands for the radiance and the pdf is the
         // probability of choosing it, so f·Le·|cos θ|/pdf is the usual estimate.
         LightSource::Punctual(k) => {
-            let (wi, dist, le) = punctual_incidence(&scene.punctual_lights[k as usize], ls.point, it.p, wl)?;
-            (wi, dist, ls.pdf, le, true)
+            let light = &scene.punctual_lights[k as usize];
+            let (wi, dist, le) = punctual_incidence(light, ls.point, it.p, wl)?;
+            (wi, dist, ls.pdf, le, light.disk().is_none())
         }
     };
     let wi = at.frame.to_local(wi_world);
@@ -380,8 +410,10 @@ fn punctual_incidence<const N: usize>(
     wl: &SampledWavelengths<N>,
 ) -> Option<(Vec3, f32, SampledSpectrum<N>)> {
     let (intensity, falloff_of) = match light {
-        PunctualLight::Directional { irradiance, .. } => {
-            return Some((point, f32::INFINITY, irradiance.sample(wl)));
+        // A sun disk's radiance, or a delta direction's irradiance.
+        PunctualLight::Directional { irradiance, cos_radius, .. } => {
+            let scale = if *cos_radius < 1.0 { light.disk_radiance_scale() } else { 1.0 };
+            return Some((point, f32::INFINITY, irradiance.sample(wl) * scale));
         }
         PunctualLight::Point { intensity, .. } => (intensity, None),
         PunctualLight::Spot { intensity, direction, cos_inner, cos_outer, .. } => {
@@ -460,6 +492,9 @@ fn path_radiance<const N: usize, S: Sampler>(
                 let le = env.radiance.sample(wl);
                 let w = if prev_specular { 1.0 } else { power_heuristic(prev_pdf, lights.environment_pdf()) };
                 l += beta * le * w;
+            }
+            if !lights.suns().is_empty() {
+                l += beta * view.suns_seen(ray.dir, wl, (!prev_specular).then_some(prev_pdf));
             }
             break;
         };

@@ -60,6 +60,25 @@ pub struct Lights {
     /// the primitives' in `cdf`).
     punctual_pmf: Vec<f32>,
     environment_pmf: f32,
+    /// The sun disks among the punctual lights, which escaping rays can see.
+    suns: Vec<SunDisk>,
+}
+
+/// A sun disk as escaping rays need it: which light, where and how large, and the
+/// solid-angle pdf with which [`Lights::sample`] draws a direction in it.
+#[derive(Clone, Copy, Debug)]
+pub struct SunDisk {
+    /// Its index in [`Scene::punctual_lights`].
+    pub index: u32,
+    /// Unit direction towards its centre.
+    pub axis: Vec3,
+    /// Cosine of its angular radius.
+    pub cos_radius: f32,
+    /// Radiance / irradiance: 1/(π sin² r).
+    pub radiance_scale: f32,
+    /// Solid-angle pdf of [`Lights::sample`] drawing a direction inside it (choice of the
+    /// light included).
+    pub pdf: f32,
 }
 
 impl Lights {
@@ -123,7 +142,7 @@ impl Lights {
                 (acc / total) as f32
             })
             .collect();
-        let punctual_pmf = punctual_power.iter().map(|p| (p / total) as f32).collect();
+        let punctual_pmf: Vec<f32> = punctual_power.iter().map(|p| (p / total) as f32).collect();
         for (&t, p) in prims.iter().zip(&power) {
             prim_pmf[t as usize] = (p / total) as f32;
         }
@@ -136,7 +155,43 @@ impl Lights {
                 LightTriangle { vertices, normal: cross.normalize(), area: 0.5 * cross.length() }
             })
             .collect();
-        Self { prims, triangles, cdf, prim_pmf, punctual_pmf, environment_pmf: (env_power / total) as f32 }
+        let suns = scene
+            .punctual_lights
+            .iter()
+            .enumerate()
+            .filter_map(|(k, l)| {
+                let (axis, cos_radius, solid_angle) = l.disk()?;
+                let pdf = punctual_pmf[k] / solid_angle;
+                Some(SunDisk { index: k as u32, axis, cos_radius, radiance_scale: l.disk_radiance_scale(), pdf })
+            })
+            .collect();
+        Self { prims, triangles, cdf, prim_pmf, punctual_pmf, environment_pmf: (env_power / total) as f32, suns }
+    }
+
+    /// The sun disks (directional lights with an angular size), which escaping rays see.
+    #[inline]
+    pub fn suns(&self) -> &[SunDisk] {
+        &self.suns
+    }
+
+    /// A light sample on punctual light `index` given that it was chosen: its position or
+    /// direction with pdf 1 for a delta light; for a sun disk a direction drawn uniformly
+    /// within it from `u`, with the solid-angle pdf 1/(2π(1 − cos r)).
+    #[inline]
+    pub fn sample_punctual(scene: &Scene, index: usize, u: Vec2) -> LightSample {
+        let light = &scene.punctual_lights[index];
+        let source = LightSource::Punctual(index as u32);
+        match light.disk() {
+            None => LightSample { point: light.towards(), normal: Vec3::ZERO, pdf: 1.0, source },
+            Some((axis, cos_radius, solid_angle)) => {
+                let cos_theta = 1.0 - u.x * (1.0 - cos_radius);
+                let sin_theta = (1.0 - cos_theta * cos_theta).max(0.0).sqrt();
+                let (s, c) = (std::f32::consts::TAU * u.y).sin_cos();
+                let (t, b) = axis.any_orthonormal_pair();
+                let dir = (cos_theta * axis + sin_theta * (c * t + s * b)).normalize();
+                LightSample { point: dir, normal: Vec3::ZERO, pdf: 1.0 / solid_angle, source }
+            }
+        }
     }
 
     /// True if there is nothing to sample.
@@ -212,17 +267,13 @@ impl Lights {
             });
         }
         let k = self.cdf.partition_point(|&c| c <= u.x).min(self.cdf.len() - 1);
-        if k >= self.prims.len() {
-            let index = k - self.prims.len();
-            return Some(LightSample {
-                point: scene.punctual_lights[index].towards(),
-                normal: Vec3::ZERO,
-                pdf: self.punctual_pmf[index],
-                source: LightSource::Punctual(index as u32),
-            });
-        }
         let below = if k == 0 { self.environment_pmf } else { self.cdf[k - 1] };
         let u = Vec2::new(rescale(u.x, below, self.cdf[k]), u.y);
+        if k >= self.prims.len() {
+            let index = k - self.prims.len();
+            let ls = Self::sample_punctual(scene, index, u);
+            return Some(LightSample { pdf: ls.pdf * self.punctual_pmf[index], ..ls });
+        }
         let prim = self.prims[k];
         let pmf = self.prim_pmf[prim as usize];
         let source = LightSource::Primitive(prim);

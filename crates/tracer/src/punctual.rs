@@ -1,9 +1,13 @@
 //! Lights without area: points, spots and directional (sun-like) lights, as glTF's
 //! `KHR_lights_punctual` and pbrt-v4's `point`, `spot` and `distant` lights define them.
 //!
-//! They are delta lights: no ray can hit them, so they reach an image only through
-//! next-event estimation (a shadow ray towards them), never through a BSDF-sampled ray,
-//! and their light samples need no multiple importance sampling (weight 1).
+//! Points, spots and the default directional light are delta lights: no ray can hit
+//! them, so they reach an image only through next-event estimation (a shadow ray towards
+//! them), never through a BSDF-sampled ray, and their light samples need no multiple
+//! importance sampling (weight 1). A directional light given an angular diameter (a sun
+//! disk, [`PunctualLight::sun`]) is not: it is a disk of uniform radiance at infinity,
+//! sampled uniformly within its cone and found by escaping rays too, weighted by MIS; its
+//! shadows have penumbrae and it lights caustics a path tracer can find.
 
 use glam::Vec3;
 use spectral::spectrum::Colour;
@@ -34,12 +38,15 @@ pub enum PunctualLight {
         /// Cosine of the angle beyond which it is zero (≤ `cos_inner`).
         cos_outer: f32,
     },
-    /// Parallel light from infinitely far away (the sun, as a delta direction).
+    /// Light from infinitely far away: parallel (a delta direction) or, with an angular
+    /// size, a disk of uniform radiance (the sun as it is).
     Directional {
         /// The unit direction the light travels in (`0,-1,0`: straight down).
         direction: Vec3,
         /// Irradiance E on a surface facing the light.
         irradiance: Colour,
+        /// Cosine of the disk's angular radius: 1 for a delta direction.
+        cos_radius: f32,
     },
 }
 
@@ -62,9 +69,38 @@ impl PunctualLight {
         }
     }
 
-    /// A directional light travelling along `direction` (normalised here).
+    /// A directional light travelling along `direction` (normalised here): a delta.
     pub fn directional(direction: Vec3, irradiance: Colour) -> Self {
-        Self::Directional { direction: direction.normalize_or_zero(), irradiance }
+        Self::Directional { direction: direction.normalize_or_zero(), irradiance, cos_radius: 1.0 }
+    }
+
+    /// A sun disk of angular diameter `diameter` (radians; the real sun's is 0.0093, 0.53°)
+    /// delivering irradiance E to a surface facing it; 0 is [`Self::directional`].
+    pub fn sun(direction: Vec3, irradiance: Colour, diameter: f32) -> Self {
+        Self::Directional { direction: direction.normalize_or_zero(), irradiance, cos_radius: (0.5 * diameter).cos() }
+    }
+
+    /// For a sun disk: the unit direction towards its centre, the cosine of its angular
+    /// radius and its solid angle 2π(1 − cos r); `None` for delta lights.
+    #[inline]
+    pub fn disk(&self) -> Option<(Vec3, f32, f32)> {
+        match *self {
+            Self::Directional { direction, cos_radius, .. } if cos_radius < 1.0 => {
+                Some((-direction, cos_radius, TAU * (1.0 - cos_radius)))
+            }
+            _ => None,
+        }
+    }
+
+    /// The factor from a sun disk's irradiance to its radiance, 1/(π sin² r) (the projected
+    /// solid angle of a cap of angular radius r is π sin² r, so that a surface facing the
+    /// disk receives E); 0 for delta lights.
+    #[inline]
+    pub fn disk_radiance_scale(&self) -> f32 {
+        match self.disk() {
+            Some((_, c, _)) => 1.0 / (PI * (1.0 - c * c)),
+            None => 0.0,
+        }
     }
 
     /// The light moved by `t` (positions as points, directions as vectors, renormalised);
@@ -80,7 +116,9 @@ impl PunctualLight {
                 cos_inner,
                 cos_outer,
             },
-            Self::Directional { direction, irradiance } => Self::Directional { direction: dir(direction), irradiance },
+            Self::Directional { direction, irradiance, cos_radius } => {
+                Self::Directional { direction: dir(direction), irradiance, cos_radius }
+            }
         }
     }
 
@@ -98,6 +136,7 @@ impl PunctualLight {
         match self {
             Self::Point { .. } => "point",
             Self::Spot { .. } => "spot",
+            Self::Directional { cos_radius, .. } if *cos_radius < 1.0 => "sun disk",
             Self::Directional { .. } => "directional",
         }
     }
@@ -164,7 +203,17 @@ impl PunctualLight {
                     ));
                 }
             }
-            Self::Directional { direction, .. } => unit(direction)?,
+            Self::Directional { direction, cos_radius, .. } => {
+                unit(direction)?;
+                // Up to 90° across (a wider cap would reach past the horizon of every
+                // surface facing it; nothing in a sky is that large).
+                if !(cos_radius.is_finite() && cos_radius > std::f32::consts::FRAC_1_SQRT_2 && cos_radius <= 1.0) {
+                    return Err(format!(
+                        "sun: the angular diameter {:.3}° must lie in [0°, 90°)",
+                        2.0 * cos_radius.clamp(-1.0, 1.0).acos().to_degrees()
+                    ));
+                }
+            }
         }
         if self.colour().rgb.iter().any(|c| !(c.is_finite() && *c >= 0.0)) {
             return Err(format!(

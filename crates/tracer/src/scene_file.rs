@@ -33,8 +33,9 @@
 //!
 //! [[light]]
 //! type = "sun"               # point {position, intensity}, spot {position, direction,
-//! direction = [-1, -2, -1]   # inner, outer (degrees), intensity}, sun {direction, irradiance}
-//! irradiance = 3
+//! direction = [-1, -2, -1]   # inner, outer (degrees), intensity}, sun {direction,
+//! irradiance = 3             # irradiance, diameter (degrees; 0: a delta direction)}
+//! diameter = 0.53
 //!
 //! [sky]
 //! radiance = [0.2, 0.3, 0.5] # a uniform sky (linear sRGB radiance)
@@ -239,9 +240,24 @@ enum ShapeDef {
 #[derive(Deserialize)]
 #[serde(tag = "type", rename_all = "lowercase", deny_unknown_fields)]
 enum LightDef {
-    Point { position: [f32; 3], intensity: ColourDef },
-    Spot { position: [f32; 3], direction: [f32; 3], inner: f32, outer: f32, intensity: ColourDef },
-    Sun { direction: [f32; 3], irradiance: ColourDef },
+    Point {
+        position: [f32; 3],
+        intensity: ColourDef,
+    },
+    Spot {
+        position: [f32; 3],
+        direction: [f32; 3],
+        inner: f32,
+        outer: f32,
+        intensity: ColourDef,
+    },
+    Sun {
+        direction: [f32; 3],
+        irradiance: ColourDef,
+        /// Angular diameter in degrees (0: a delta direction; the real sun: 0.53).
+        #[serde(default)]
+        diameter: f32,
+    },
 }
 
 #[derive(Deserialize)]
@@ -364,8 +380,8 @@ pub fn parse_scene_file(text: &str, path: &Path) -> Result<Scene> {
                 inner.to_radians(),
                 outer.to_radians(),
             ),
-            LightDef::Sun { direction, irradiance } => {
-                PunctualLight::directional((*direction).into(), colour(irradiance)?)
+            LightDef::Sun { direction, irradiance, diameter } => {
+                PunctualLight::sun((*direction).into(), colour(irradiance)?, diameter.to_radians())
             }
         };
         light.validate().map_err(|e| at(span.clone(), e))?;

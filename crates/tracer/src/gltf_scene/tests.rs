@@ -202,7 +202,7 @@ fn cameras_and_punctual_lights_are_placed_by_their_nodes() {
         }
         other => panic!("{other:?}"),
     }
-    assert!(matches!(&lights[1], PunctualLight::Directional { direction, irradiance }
+    assert!(matches!(&lights[1], PunctualLight::Directional { direction, irradiance, cos_radius: 1.0 }
         if *direction == Vec3::NEG_Z && irradiance.rgb == [3.0; 3]));
     assert!(matches!(&lights[2], PunctualLight::Point { position, intensity }
         if *position == Vec3::ONE && intensity.rgb == [2.0, 0.0, 0.0]));

@@ -38,7 +38,7 @@ impl Integrator for DirectLighting {
     ) -> SampledSpectrum<N> {
         counters.rays += 1;
         let Some(hit) = view.intersect(&ray) else {
-            return view.environment_radiance(wl);
+            return view.escaped_radiance(ray.dir, wl);
         };
         let it = view.interaction(&hit, settings.shading_normals);
         let material = view.material(hit.prim);

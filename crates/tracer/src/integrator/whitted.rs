@@ -5,11 +5,11 @@ use super::{
     Integrator, Mis, PathCounters, PathSettings, SceneView, Shading, interior_transmittance, light_contribution,
     lobe_leaks,
 };
-use crate::lights::{LightSample, LightSource, ONE_MINUS_EPSILON};
+use crate::lights::{LightSource, Lights, ONE_MINUS_EPSILON};
 use crate::sampler::Sampler;
 use brdf::{Bsdf, Frame};
 use bvh::Ray;
-use glam::{Vec2, Vec3};
+use glam::Vec2;
 use spectral::{SampledSpectrum, SampledWavelengths};
 
 /// The recursion depth when the settings leave it unbounded (`max_depth` 0): a ray may
@@ -73,7 +73,7 @@ fn trace<const N: usize, S: Sampler>(
     counters.rays += 1;
     let scene = view.scene;
     let Some(hit) = view.intersect(&ray) else {
-        return view.environment_radiance(wl);
+        return view.escaped_radiance(ray.dir, wl);
     };
     let it = view.interaction(&hit, settings.shading_normals);
     let material = view.material(hit.prim);
@@ -98,9 +98,10 @@ fn trace<const N: usize, S: Sampler>(
     if flags.is_non_specular() {
         let at = Shading { it: &it, material, ng, wo_world, frame: &frame, wo };
         // Every punctual light deterministically (probability 1 each)…
+        // (A sun disk by one direction drawn within it.)
         for (k, light) in scene.punctual_lights.iter().enumerate() {
-            let source = LightSource::Punctual(k as u32);
-            let ls = LightSample { point: light.towards(), normal: Vec3::ZERO, pdf: 1.0, source };
+            let u = if light.disk().is_some() { sampler.next_2d() } else { Vec2::ZERO };
+            let ls = Lights::sample_punctual(scene, k, u);
             if let Some((f, le, w)) = light_contribution(view, &at, &bsdf, wl, Mis::None, &ls, counters) {
                 l += f * le * w;
             }
