@@ -476,5 +476,8 @@ impl RgbIlluminantSpectrum {
     }
 }
 
+pub mod table;
+pub use table::{TABLE_RES, UpliftTable, uplift_table};
+
 #[cfg(test)]
 mod tests;
