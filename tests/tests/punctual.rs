@@ -110,27 +110,13 @@ fn two_lights_add_up_whichever_is_chosen() {
     let (a, b) = (Vec3::new(0.0, 2.0, 0.0), Vec3::new(1.0, 1.0, 0.0));
     let lights = vec![PunctualLight::point(a, Colour::constant(1.0)), PunctualLight::point(b, Colour::constant(3.0))];
     let prepared = floor_with(lights, false);
-    let view = prepared.view();
     let p = Vec3::new(0.5, 0.0, 0.0);
     let law = |light: Vec3, i: f32| {
         let d = light - p;
         ALBEDO * FRAC_1_PI * i * (d.y / d.length()) / d.length_squared()
     };
     let expect = law(a, 1.0) + law(b, 3.0);
-    let mut sampler = rng::Pcg32::seed_from_u64(11);
-    let n = 20_000;
-    let mut sum = 0.0f64;
-    let mut sum_sq = 0.0f64;
-    for _ in 0..n {
-        let mut wl = SampledWavelengths::<3>::rgb();
-        let ray = bvh::Ray::new(p + Vec3::new(0.0, 0.5, 0.0), -Vec3::Y);
-        let settings = PathSettings::default();
-        let l = PathTracer.radiance(&view, ray, &mut wl, &settings, &mut sampler, &mut PathCounters::default());
-        sum += l.0[0] as f64;
-        sum_sq += (l.0[0] as f64).powi(2);
-    }
-    let mean = sum / n as f64;
-    let se = ((sum_sq / n as f64 - mean * mean) / n as f64).sqrt();
+    let (mean, se) = mean_radiance(&prepared, &PathTracer, p, 20_000, 11);
     let z = (mean - expect as f64) / se;
     assert!(z.abs() < 4.5, "mean {mean} ± {se}, expected {expect} (z = {z:.2})");
 }

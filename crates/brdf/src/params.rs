@@ -205,6 +205,20 @@ pub enum ParamError {
     },
 }
 
+impl ParamError {
+    /// The declared parameter whose value is at fault (`None` for an unknown name), for
+    /// loaders that point at where that value was written.
+    pub fn param(&self) -> Option<&'static str> {
+        match self {
+            Self::OutOfRange { param, .. }
+            | Self::WrongKind { param, .. }
+            | Self::NotAnOption { param, .. }
+            | Self::Spectrum { param, .. } => Some(param),
+            Self::Unknown { .. } => None,
+        }
+    }
+}
+
 impl ModelDef {
     /// The declaration of parameter `name`.
     pub fn param(&self, name: &str) -> Option<(usize, &ParamDef)> {

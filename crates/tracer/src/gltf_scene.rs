@@ -105,14 +105,7 @@ pub fn load_gltf_bytes(
     // the panic becomes an error naming the file.
     match catch_unwind(AssertUnwindSafe(|| convert(bytes, path, options, read))) {
         Ok(result) => result,
-        Err(panic) => {
-            let what = panic
-                .downcast_ref::<&str>()
-                .map(|s| s.to_string())
-                .or_else(|| panic.downcast_ref::<String>().cloned())
-                .unwrap_or_default();
-            Err(fail(format!("the glTF reader panicked: {what}")))
-        }
+        Err(panic) => Err(fail(format!("the glTF reader panicked: {}", crate::panic_message(panic.as_ref())))),
     }
 }
 

@@ -32,7 +32,7 @@ use crate::mesh::Mesh;
 use crate::mtl::{self, MtlMaterial, Numbers, Statement, quote, shorten};
 use crate::scene::Scene;
 use crate::{Error, Result};
-use brdf::params::{ParamError, ParamValue};
+use brdf::params::ParamValue;
 use glam::Vec3;
 use spectral::spectrum::Colour;
 use std::cell::RefCell;
@@ -132,11 +132,7 @@ pub fn load_obj_text(text: &str, path: &Path, read_mtl: &dyn Fn(&Path) -> std::i
         Ok(Ok((models, _))) => models,
         Ok(Err(e)) => return Err(obj_error(None, e.to_string())),
         Err(panic) => {
-            let what = panic
-                .downcast_ref::<&str>()
-                .map(|s| s.to_string())
-                .or_else(|| panic.downcast_ref::<String>().cloned())
-                .unwrap_or_default();
+            let what = crate::panic_message(panic.as_ref());
             return Err(obj_error(None, format!("the OBJ reader (tobj) panicked: {}", quote(&what))));
         }
     };
@@ -244,14 +240,7 @@ fn to_material(lib: &Path, m: &MtlMaterial) -> Result<Material> {
     }
     let mut material = Material::builtin(&m.name, model, &params).map_err(|e| {
         // The message names the material already; add where the value came from.
-        let param = match &e {
-            ParamError::OutOfRange { param, .. }
-            | ParamError::WrongKind { param, .. }
-            | ParamError::NotAnOption { param, .. }
-            | ParamError::Spectrum { param, .. } => Some(*param),
-            _ => None,
-        };
-        let line = lines.iter().find(|(name, _)| Some(*name) == param).map_or(m.line, |&(_, line)| line);
+        let line = lines.iter().find(|(name, _)| Some(*name) == e.param()).map_or(m.line, |&(_, line)| line);
         Error::Parse { path: lib.to_path_buf(), line: Some(line), message: e.to_string() }
     })?;
     material.emission = emission;

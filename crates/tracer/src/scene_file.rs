@@ -57,7 +57,7 @@ use crate::obj::load_obj;
 use crate::punctual::PunctualLight;
 use crate::scene::{Environment, Scene};
 use crate::{Error, Result};
-use brdf::params::{ParamError, ParamValue};
+use brdf::params::ParamValue;
 use glam::{Mat3, Mat4, Quat, Vec3};
 use serde::Deserialize;
 use shapes::boxes::Cuboid;
@@ -464,14 +464,7 @@ fn material(
     }
     let mut m = Material::builtin(name, model, &params).map_err(|e| {
         // The message names the material already; point at the parameter's value.
-        let param = match &e {
-            ParamError::OutOfRange { param, .. }
-            | ParamError::WrongKind { param, .. }
-            | ParamError::NotAnOption { param, .. }
-            | ParamError::Spectrum { param, .. } => Some(*param),
-            _ => None,
-        };
-        let span = param.and_then(|p| table.get_ref().get(p)).map_or(table.span(), |v| v.span());
+        let span = e.param().and_then(|p| table.get_ref().get(p)).map_or(table.span(), |v| v.span());
         (span, e.to_string())
     })?;
     m.emission = emission.filter(|e| !e.is_black());
