@@ -164,6 +164,8 @@ fn run_info(args: InfoArgs) -> Result<()> {
 }
 
 #[derive(Args)]
+// A scene file's [render] settings come first on the command line; the user's win.
+#[command(args_override_self = true)]
 struct ViewArgs {
     #[command(flatten)]
     scene: SceneArgs,
@@ -484,6 +486,8 @@ fn parse_shading_normals(s: &str) -> Result<ShadingNormals, String> {
 }
 
 #[derive(Args)]
+// A scene file's [render] settings come first on the command line; the user's win.
+#[command(args_override_self = true)]
 struct RenderArgs {
     #[command(flatten)]
     scene: SceneArgs,
@@ -511,6 +515,8 @@ struct RenderArgs {
 }
 
 #[derive(Args)]
+// A scene file's [render] settings come first on the command line; the user's win.
+#[command(args_override_self = true)]
 struct BenchArgs {
     #[command(flatten)]
     scene: SceneArgs,
@@ -986,8 +992,70 @@ fn bench_frames(prepared: Arc<dyn PreparedScene>, all: &[RenderSettings], spp: u
     Ok(())
 }
 
+/// The options a scene file's `[render]` table stands for, for `command` (render, bench
+/// or view: each takes those it has), or an error in the file.
+fn scene_file_options(command: &Command) -> Result<Vec<String>> {
+    let (scene, spp, spectral) = match command {
+        Command::Render(a) => (&a.scene.scene, true, true),
+        Command::Bench(a) => (&a.scene.scene, true, false),
+        Command::View(a) => (&a.scene.scene, false, true),
+        _ => return Ok(Vec::new()),
+    };
+    if !scene.extension().is_some_and(|e| e.eq_ignore_ascii_case("toml")) {
+        return Ok(Vec::new());
+    }
+    let d = tracer::scene_file::render_defaults(scene)?;
+    let mut out = Vec::new();
+    let mut push = |flag: &str, value: Option<String>| {
+        if let Some(v) = value {
+            out.extend([flag.to_string(), v]);
+        }
+    };
+    push("--width", d.width.map(|v| v.to_string()));
+    push("--height", d.height.map(|v| v.to_string()));
+    push("--seed", d.seed.map(|v| v.to_string()));
+    push("--max-depth", d.max_depth.map(|v| v.to_string()));
+    push("--rr-depth", d.rr_depth.map(|v| v.to_string()));
+    push("--sampler", d.sampler);
+    push("--integrator", d.integrator);
+    if spp {
+        push("--spp", d.spp.map(|v| v.to_string()));
+    }
+    if spectral {
+        push("--spectral", d.spectral);
+    }
+    Ok(out)
+}
+
+/// The command line, with a scene file's `[render]` settings put in front of the user's
+/// own options (right after the subcommand), so that those given win: clap keeps the last
+/// value of an option given twice.
+fn parse_command_line() -> Result<Cli> {
+    let argv: Vec<std::ffi::OsString> = std::env::args_os().collect();
+    let cli = Cli::parse_from(&argv);
+    let extra = scene_file_options(&cli.command)?;
+    if extra.is_empty() {
+        return Ok(cli);
+    }
+    // argv[1] is the subcommand (the CLI has no global options).
+    let mut with_defaults = argv[..2].to_vec();
+    with_defaults.extend(extra.into_iter().map(Into::into));
+    with_defaults.extend(argv[2..].iter().cloned());
+    Cli::try_parse_from(&with_defaults).map_err(|e| {
+        let message = e.to_string();
+        let first = message.lines().next().unwrap_or_default().trim_start_matches("error: ").to_string();
+        anyhow::anyhow!("the scene file's [render] table: {first}")
+    })
+}
+
 fn main() -> ExitCode {
-    let cli = Cli::parse();
+    let cli = match parse_command_line() {
+        Ok(cli) => cli,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            return ExitCode::FAILURE;
+        }
+    };
     let result = match cli.command {
         Command::Render(a) => run_render(a).context("render failed"),
         Command::Bench(a) => run_bench(a).context("bench failed"),

@@ -734,3 +734,26 @@ fn spec_files_colour_materials_and_light_the_sky() {
     let o = spt(&["render", example.to_str().unwrap(), "--spec", grey.to_str().unwrap(), "-o", out.to_str().unwrap()]);
     assert!(!o.status.success() && stderr(&o).contains("materials.Gold: no such material"), "{}", stderr(&o));
 }
+
+#[test]
+fn a_scene_files_render_table_sets_defaults_that_options_override() {
+    let dir = temp_dir("render-table");
+    let scene = dir.join("s.toml");
+    let text = "[camera]\neye = [0, 1, 4]\ncenter = [0, 0.5, 0]\n[materials.w]\nmodel = \"lambert\"\n\
+                [[shape]]\ntype = \"sphere\"\ncenter = [0, 0.5, 0]\nradius = 0.5\nmaterial = \"w\"\n\
+                [render]\nwidth = 20\nheight = 10\nspp = 3\nspectral = \"rgb\"\n";
+    std::fs::write(&scene, text).unwrap();
+    let out = dir.join("s.png");
+    let o = spt(&["render", scene.to_str().unwrap(), "-o", out.to_str().unwrap()]);
+    assert!(o.status.success() && stderr(&o).contains("20×10 at 3 spp, rgb mode"), "{}", stderr(&o));
+    let o =
+        spt(&["render", scene.to_str().unwrap(), "--height", "6", "--spectral", "hero", "-o", out.to_str().unwrap()]);
+    assert!(o.status.success() && stderr(&o).contains("20×6 at 3 spp, hero mode"), "{}", stderr(&o));
+    assert_eq!(image::open(&out).unwrap().height(), 6);
+    std::fs::write(&scene, text.replace("\"rgb\"", "\"cmyk\"")).unwrap();
+    let o = spt(&["render", scene.to_str().unwrap(), "-o", out.to_str().unwrap()]);
+    assert!(!o.status.success() && stderr(&o).contains("[render] table: invalid value 'cmyk'"), "{}", stderr(&o));
+    std::fs::write(&scene, text.replace("spp = 3", "samples = 3")).unwrap();
+    let o = spt(&["render", scene.to_str().unwrap(), "-o", out.to_str().unwrap()]);
+    assert!(!o.status.success() && stderr(&o).contains("unknown field `samples`"), "{}", stderr(&o));
+}

@@ -169,6 +169,11 @@ irradiance = 3
 
 [sky]
 radiance = { spectrum = "D65", scale = 0.3 }
+
+[render]
+width = 64
+spp = 4
+spectral = "bins40"
 "#;
 
 fn seeds(shared: &Path) -> Vec<Seed> {

@@ -39,6 +39,10 @@
 //!
 //! [sky]
 //! radiance = [0.2, 0.3, 0.5] # a uniform sky (linear sRGB radiance)
+//!
+//! [render]                   # defaults for `spt render/bench/view`; their options win
+//! width = 640                # also height, spp, seed, max_depth, rr_depth,
+//! spectral = "bins40"        # sampler, integrator
 //! ```
 //!
 //! Colours (material colours, emission, light intensities, the sky) are one number (a
@@ -85,6 +89,45 @@ struct FileDef {
     #[serde(default)]
     light: Vec<Spanned<LightDef>>,
     sky: Option<Spanned<SkyDef>>,
+    /// Read by [`render_defaults`], not by the scene.
+    #[allow(dead_code)]
+    render: Option<RenderDefaults>,
+}
+
+/// A scene file's `[render]` table: settings the CLI uses where its command line does
+/// not give them (its options override them).
+#[derive(Clone, Debug, Default, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct RenderDefaults {
+    /// Image width in pixels.
+    pub width: Option<u32>,
+    /// Image height in pixels.
+    pub height: Option<u32>,
+    /// Samples per pixel.
+    pub spp: Option<u32>,
+    /// Random seed.
+    pub seed: Option<u64>,
+    /// Maximum bounces (0: unbounded).
+    pub max_depth: Option<u32>,
+    /// Bounces before Russian roulette.
+    pub rr_depth: Option<u32>,
+    /// Spectral mode: hero, bins40 or rgb.
+    pub spectral: Option<String>,
+    /// Sampler: zsobol, sobol or independent.
+    pub sampler: Option<String>,
+    /// Integrator: path, direct, ao or whitted.
+    pub integrator: Option<String>,
+}
+
+/// The `[render]` table of a scene file (all `None` without one). Errors as
+/// [`load_scene_file`]'s.
+pub fn render_defaults(path: &Path) -> Result<RenderDefaults> {
+    let text = std::fs::read_to_string(path).map_err(|source| Error::Io { path: path.to_path_buf(), source })?;
+    let file: FileDef = toml::from_str(&text).map_err(|e| {
+        let (line, column) = line_column(&text, e.span().unwrap_or(0..0).start);
+        Error::ParseAt { path: path.to_path_buf(), line, column, message: e.message().to_string() }
+    })?;
+    Ok(file.render.unwrap_or_default())
 }
 
 /// A material table: each value with where it is, for messages.
