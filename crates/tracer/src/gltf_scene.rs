@@ -207,7 +207,7 @@ fn convert(
 }
 
 fn revisited(node: usize) -> String {
-    format!("node {node} is reached twice: the node hierarchy must be trees (one parent per node, no cycles)")
+    format!("nodes[{node}] is reached twice: the node hierarchy must be trees (one parent per node, no cycles)")
 }
 
 impl GltfScene {
@@ -334,7 +334,7 @@ impl Converter<'_> {
     /// Converts what `node` holds, placed by `world`.
     fn node(&mut self, node: &gltf::Node, world: Mat4) -> Result<()> {
         if !world.is_finite() {
-            return Err(self.fail(format!("node {}: its transform is not finite", node.index())));
+            return Err(self.fail(format!("nodes[{}]: its transform is not finite", node.index())));
         }
         if let Some(mesh) = node.mesh() {
             for p in mesh.primitives() {
@@ -348,7 +348,7 @@ impl Converter<'_> {
                     let forward = world.transform_vector3(-Vec3::Z).normalize_or_zero();
                     let up = world.transform_vector3(Vec3::Y).normalize_or_zero();
                     let c = Camera { eye, center: eye + forward, up, fov_y_deg: p.yfov().to_degrees() };
-                    c.validate().map_err(|e| self.fail(format!("camera {}: {e}", camera.index())))?;
+                    c.validate().map_err(|e| self.fail(format!("cameras[{}]: {e}", camera.index())))?;
                     Some(c)
                 }
                 gltf::camera::Projection::Orthographic(_) => {
@@ -363,7 +363,10 @@ impl Converter<'_> {
             });
         }
         if let Some(light) = node.light() {
-            let at = |what: &str| format!("light {} ({}): {what}", light.index(), light.name().unwrap_or("unnamed"));
+            let at = |what: &str| {
+                let name = light.name().map(|n| format!(" ({n})")).unwrap_or_default();
+                format!("KHR_lights_punctual.lights[{}]{name}: {what}", light.index())
+            };
             let position = world.transform_point3(Vec3::ZERO);
             let direction = world.transform_vector3(-Vec3::Z);
             let rgb = light.color().map(|c| c * light.intensity());
@@ -387,7 +390,8 @@ impl Converter<'_> {
     /// Converts one primitive of `mesh` into world-space triangles.
     fn primitive(&mut self, mesh: &gltf::Mesh, p: &gltf::Primitive, world: Mat4) -> Result<()> {
         let at = |what: String| {
-            format!("mesh {} ({}) primitive {}: {what}", mesh.index(), mesh.name().unwrap_or("unnamed"), p.index())
+            let name = mesh.name().map(|n| format!(" ({n})")).unwrap_or_default();
+            format!("meshes[{}].primitives[{}]{name}: {what}", mesh.index(), p.index())
         };
         let mode = p.mode();
         if !matches!(
