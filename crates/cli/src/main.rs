@@ -391,6 +391,10 @@ struct SceneArgs {
     /// beside it, if any.
     #[arg(long, value_name = "FILE.spec")]
     spec: Option<PathBuf>,
+    /// Changes a value of a .toml scene file before it is read (repeatable): a dotted key
+    /// and a TOML value, e.g. materials.gold.alpha=0.3, shape.0.radius=0.4, camera.fov=30.
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    sets: Vec<String>,
     /// Adds a light (repeatable): point:X,Y,Z:I, spot:X,Y,Z:DX,DY,DZ:INNER,OUTER:I or
     /// sun:DX,DY,DZ:E, with I (radiant intensity) or E (irradiance) one value for white or
     /// R,G,B in linear sRGB, cone half-angles in degrees, D the direction it shines in.
@@ -553,12 +557,27 @@ pub(crate) fn parse_vec3(s: &str) -> Result<Vec3, String> {
 }
 
 pub(crate) fn load_scene(path: &Path) -> Result<Scene> {
-    load_scene_with(path, None, None)
+    load_scene_with(path, None, None, &[])
 }
 
 /// Loads a scene and applies a SPEC file: `spec`, else (for an OBJ) the one beside it.
-pub(crate) fn load_scene_with(path: &Path, camera: Option<&str>, spec: Option<&Path>) -> Result<Scene> {
-    let mut scene = load_scene_with_camera(path, camera)?;
+pub(crate) fn load_scene_with(
+    path: &Path,
+    camera: Option<&str>,
+    spec: Option<&Path>,
+    sets: &[String],
+) -> Result<Scene> {
+    let is_toml = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("toml"));
+    let mut scene = if is_toml {
+        if camera.is_some() {
+            bail!("--camera: {} is a scene file (its [camera] or a glTF mesh's camera applies)", path.display());
+        }
+        tracer::scene_file::load_scene_file_with(path, sets)?
+    } else if !sets.is_empty() {
+        bail!("--set applies to .toml scene files; {} is not one", path.display());
+    } else {
+        load_scene_with_camera(path, camera)?
+    };
     let beside = || {
         path.extension()
             .is_some_and(|e| e.eq_ignore_ascii_case("obj"))
@@ -682,7 +701,7 @@ fn prepare(
     mode: SpectralMode,
     default_sampler: fn(&Capabilities) -> SamplerKind,
 ) -> Result<(Box<dyn PreparedScene>, RenderSettings)> {
-    let mut scene = load_scene_with(&args.scene, args.camera.as_deref(), args.spec.as_deref())?;
+    let mut scene = load_scene_with(&args.scene, args.camera.as_deref(), args.spec.as_deref(), &args.sets)?;
     if scene.triangles.is_empty() && scene.shapes.is_empty() {
         bail!("{}: the scene has no geometry", args.scene.display());
     }

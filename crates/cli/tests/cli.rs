@@ -672,6 +672,27 @@ fn scene_files_render_and_their_errors_name_line_and_column() {
     let o = spt(&["info", scene.to_str().unwrap()]);
     let info = String::from_utf8_lossy(&o.stdout);
     assert!(info.contains("1 analytic shapes") && info.contains("lambert: white"), "{info}");
+    // --set changes the file's values before it is read: a darker sphere.
+    let bright = exr_means(&out);
+    let o = spt(&[
+        "render",
+        scene.to_str().unwrap(),
+        "--width",
+        "16",
+        "--height",
+        "16",
+        "--spp",
+        "4",
+        "--set",
+        "materials.white.reflectance=0.07",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let dark = exr_means(&out);
+    assert!((dark[0] / bright[0] - 0.1).abs() < 0.02, "{dark:?} vs {bright:?}");
+    let o = spt(&["render", "builtin:glass-torus", "--set", "camera.fov=30", "-o", out.to_str().unwrap()]);
+    assert!(!o.status.success() && stderr(&o).contains("--set applies to .toml scene files"), "{}", stderr(&o));
     let bad = dir.join("bad.toml");
     std::fs::write(&bad, "[materials.white]\nmodel = \"lambert\"\nreflectance = 1.7\n").unwrap();
     let o = spt(&["render", bad.to_str().unwrap(), "-o", out.to_str().unwrap()]);

@@ -315,6 +315,74 @@ pub fn load_scene_file(path: &Path) -> Result<Scene> {
     parse_scene_file(&text, path)
 }
 
+/// Loads a scene file with `--set KEY=VALUE` overrides applied first ([`apply_overrides`]).
+pub fn load_scene_file_with(path: &Path, overrides: &[String]) -> Result<Scene> {
+    if overrides.is_empty() {
+        return load_scene_file(path);
+    }
+    let text = std::fs::read_to_string(path).map_err(|source| Error::Io { path: path.to_path_buf(), source })?;
+    let edited = apply_overrides(&text, overrides).map_err(|message| Error::Parse {
+        path: path.to_path_buf(),
+        line: None,
+        message,
+    })?;
+    // Positions now refer to the edited text: say so.
+    parse_scene_file(&edited, path).map_err(|e| match e {
+        Error::ParseAt { path, line, column, message } => {
+            Error::ParseAt { path, line, column, message: format!("{message} (in the file as --set changed it)") }
+        }
+        other => other,
+    })
+}
+
+/// A scene file's text with `KEY=VALUE` overrides applied: KEY is a dotted path through
+/// tables and arrays (`materials.gold.alpha`, `shape.0.radius`, `camera.fov`; missing
+/// tables are created), VALUE a TOML value (`0.3`, `[1, 2, 3]`, `"gold"`, or a bare word,
+/// taken as a string).
+pub fn apply_overrides(text: &str, overrides: &[String]) -> std::result::Result<String, String> {
+    let mut doc = toml::Value::Table(toml::from_str(text).map_err(|e| e.message().to_string())?);
+    for o in overrides {
+        let Some((key, value)) = o.split_once('=') else {
+            return Err(format!("--set {o}: expected KEY=VALUE"));
+        };
+        let value = match toml::from_str::<toml::Table>(&format!("v = {value}")) {
+            Ok(mut t) => t.remove("v").unwrap_or(toml::Value::String(value.to_string())),
+            Err(_) => toml::Value::String(value.trim().to_string()),
+        };
+        let parts: Vec<&str> = key.trim().split('.').collect();
+        if parts.iter().any(|p| p.is_empty()) {
+            return Err(format!("--set {o}: '{key}' is not a dotted key"));
+        }
+        set_value(&mut doc, &parts, value).map_err(|e| format!("--set {o}: {e}"))?;
+    }
+    toml::to_string(&doc).map_err(|e| e.to_string())
+}
+
+/// Sets `value` at the dotted path `parts` under `here`: table keys (a missing table is
+/// created) and array indices.
+fn set_value(here: &mut toml::Value, parts: &[&str], value: toml::Value) -> std::result::Result<(), String> {
+    let Some((first, rest)) = parts.split_first() else { return Ok(()) };
+    let child = match here {
+        toml::Value::Table(t) if rest.is_empty() => {
+            t.insert(first.to_string(), value);
+            return Ok(());
+        }
+        toml::Value::Table(t) => t.entry(first.to_string()).or_insert_with(|| toml::Value::Table(toml::Table::new())),
+        toml::Value::Array(a) => {
+            let i: usize = first.parse().map_err(|_| format!("'{first}' indexes an array: it must be a number"))?;
+            let len = a.len();
+            a.get_mut(i).ok_or_else(|| format!("index {i} is past the array's {len} entries"))?
+        }
+        _ => return Err(format!("'{first}' is inside a value that is neither a table nor an array")),
+    };
+    if rest.is_empty() {
+        *child = value;
+        Ok(())
+    } else {
+        set_value(child, rest, value)
+    }
+}
+
 /// The 1-based line and column of byte `offset` in `text`.
 fn line_column(text: &str, offset: usize) -> (usize, usize) {
     let before = &text[..offset.min(text.len())];

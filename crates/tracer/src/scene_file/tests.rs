@@ -234,3 +234,40 @@ radiance = { spectrum = "D65", scale = 0.5 }
         assert!(e.contains(needle), "{bad}\n→ {e}");
     }
 }
+
+#[test]
+fn set_overrides_change_values_by_dotted_path() {
+    let text = FULL;
+    let edited = apply_overrides(
+        text,
+        &[
+            "materials.gold.alpha=0.35".into(),
+            "shape.0.radius=0.4".into(),
+            "camera.fov = 30".into(),
+            "materials.gold.metal=silver".into(),
+            "sky.radiance=[0.5, 0.5, 0.5]".into(),
+            "materials.new.model=\"lambert\"".into(),
+        ],
+    )
+    .unwrap();
+    // The meshes resolve against the scene file's directory: load it from there.
+    let s = load_scene_file(&write("overrides", &edited)).unwrap();
+    let gold = s.materials.iter().find(|m| m.name == "gold").unwrap();
+    let Some(ModelParams::RoughConductor(p)) = gold.params() else { unreachable!() };
+    assert_eq!((p.alpha, p.metal.name()), (0.35, "silver"));
+    assert!(s.materials.iter().any(|m| m.name == "new"));
+    assert_eq!(s.camera.unwrap().fov_y_deg, 30.0);
+    assert_eq!(s.environment.unwrap().radiance.rgb, [0.5; 3]);
+    let ShapeKind::Sphere(sphere) = &s.shapes[0].shape else { unreachable!() };
+    assert_eq!(sphere.radius, 0.4);
+    for (bad, needle) in [
+        ("shape.9.radius=1", "index 9 is past the array's 4 entries"),
+        ("shape.x.radius=1", "'x' indexes an array"),
+        ("camera.fov.deg=1", "neither a table nor an array"),
+        ("camera", "expected KEY=VALUE"),
+        ("camera..fov=1", "not a dotted key"),
+    ] {
+        let e = apply_overrides(text, &[bad.into()]).unwrap_err();
+        assert!(e.contains(needle), "{bad}: {e}");
+    }
+}
