@@ -83,11 +83,13 @@ fn run_info(args: InfoArgs) -> Result<()> {
     };
     println!("{}", args.scene.display());
     println!(
-        "  geometry: {} triangles, {} vertices ({} with shading normals, {} with tangents), {} analytic shapes",
+        "  geometry: {} triangles, {} vertices ({} with shading normals, {} with tangents, {} with texture \
+         coordinates), {} analytic shapes",
         scene.triangles.len(),
         scene.positions.len(),
         scene.normals.len(),
         scene.tangents.len(),
+        scene.uvs.len(),
         scene.shapes.len()
     );
     let mut shape_kinds: std::collections::BTreeMap<&str, usize> = Default::default();
@@ -147,6 +149,7 @@ fn run_info(args: InfoArgs) -> Result<()> {
     let bytes = std::mem::size_of_val(scene.positions.as_slice())
         + std::mem::size_of_val(scene.normals.as_slice())
         + std::mem::size_of_val(scene.tangents.as_slice())
+        + std::mem::size_of_val(scene.uvs.as_slice())
         + std::mem::size_of_val(scene.triangles.as_slice())
         + std::mem::size_of_val(scene.material_ids.as_slice())
         + std::mem::size_of_val(scene.shapes.as_slice());

@@ -4,7 +4,8 @@
 //! What is converted:
 //! * the default scene's node hierarchy, each node's mesh placed by its world transform
 //!   (a mirroring transform reverses the winding, so fronts stay fronts); primitives in
-//!   triangle, strip and fan modes, indexed or not, with their normals;
+//!   triangle, strip and fan modes, indexed or not, with their normals and texture
+//!   coordinates (`TEXCOORD_0`, kept for the textures to come);
 //! * materials: `pbrMetallicRoughness` factors with `KHR_materials_ior` → the
 //!   metallic–roughness BSDF ([`brdf::models::MetallicRoughness`], the specification's
 //!   Appendix B); `KHR_materials_transmission` × (1 − metallic) ≥ ½ → a dielectric of
@@ -406,10 +407,15 @@ impl Converter<'_> {
         use gltf::accessor::{DataType, Dimensions};
         let vec3_f32 = |a: &gltf::Accessor| a.data_type() == DataType::F32 && a.dimensions() == Dimensions::Vec3;
         for (semantic, accessor) in p.attributes() {
+            let (t, d) = (accessor.data_type(), accessor.dimensions());
             let needs_vec3 = matches!(semantic, gltf::Semantic::Positions | gltf::Semantic::Normals);
             if needs_vec3 && !vec3_f32(&accessor) {
-                let (t, d) = (accessor.data_type(), accessor.dimensions());
                 return Err(self.fail(at(format!("{semantic:?} must be VEC3 of 32-bit floats, not {d:?} of {t:?}"))));
+            }
+            let texture_type = matches!(t, DataType::F32 | DataType::U8 | DataType::U16) && d == Dimensions::Vec2;
+            if semantic == gltf::Semantic::TexCoords(0) && !texture_type {
+                let m = format!("TEXCOORD_0 must be VEC2 of floats or normalised bytes or shorts, not {d:?} of {t:?}");
+                return Err(self.fail(at(m)));
             }
         }
         if let Some(a) = p.indices() {
@@ -419,8 +425,13 @@ impl Converter<'_> {
                 return Err(self.fail(at(format!("indices must be unsigned integer scalars, not {d:?} of {t:?}"))));
             }
         }
-        for a in [p.get(&gltf::Semantic::Positions), p.get(&gltf::Semantic::Normals), p.indices()].into_iter().flatten()
-        {
+        let used = [
+            p.get(&gltf::Semantic::Positions),
+            p.get(&gltf::Semantic::Normals),
+            p.get(&gltf::Semantic::TexCoords(0)),
+            p.indices(),
+        ];
+        for a in used.into_iter().flatten() {
             self.accessor_in_bounds(&a).map_err(|e| self.fail(at(format!("accessor {}: {e}", a.index()))))?;
         }
         let buffers = self.buffers;
@@ -459,8 +470,13 @@ impl Converter<'_> {
         } else {
             Vec::new()
         };
+        let uvs: Vec<glam::Vec2> = match reader.read_tex_coords(0) {
+            Some(t) => t.into_f32().map(glam::Vec2::from).collect(),
+            None => Vec::new(),
+        };
+        let uvs = if uvs.len() == n && uvs.iter().all(|uv| uv.is_finite()) { uvs } else { Vec::new() };
         let material = self.material(p.material())?;
-        let m = Mesh { positions, normals, tangents: Vec::new(), triangles };
+        let m = Mesh { positions, normals, tangents: Vec::new(), uvs, triangles };
         if !m.triangles.is_empty() {
             self.out.scene.add_with_material(&m, material);
         }

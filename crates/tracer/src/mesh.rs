@@ -12,6 +12,8 @@ pub struct Mesh {
     pub normals: Vec<Vec3>,
     /// Unit per-vertex tangents (orienting anisotropic BSDFs), or empty.
     pub tangents: Vec<Vec3>,
+    /// Per-vertex texture coordinates ((0, 0): the image's top-left corner), or empty.
+    pub uvs: Vec<glam::Vec2>,
     /// Triangles, counter-clockwise seen from the front.
     pub triangles: Vec<[u32; 3]>,
 }
@@ -65,6 +67,8 @@ pub fn quad(centre: Vec3, normal: Vec3, half: f32) -> Mesh {
         positions: vec![centre - u - v, centre + u - v, centre + u + v, centre - u + v],
         normals: vec![n; 4],
         tangents: vec![u.normalize(); 4],
+        // The image upright on the front face: (0, 0) at the −u+v corner.
+        uvs: vec![glam::Vec2::new(0.0, 1.0), glam::Vec2::new(1.0, 1.0), glam::Vec2::new(1.0, 0.0), glam::Vec2::ZERO],
         triangles: vec![[0, 1, 2], [0, 2, 3]],
     }
 }

@@ -153,10 +153,17 @@ pub fn load_obj_text(text: &str, path: &Path, read_mtl: &dyn Fn(&Path) -> std::i
         let mesh = &model.mesh;
         let vec3s = |v: &[f32]| -> Vec<Vec3> { v.chunks_exact(3).map(|p| Vec3::new(p[0], p[1], p[2])).collect() };
         let normals = if mesh.normals.len() == mesh.positions.len() { vec3s(&mesh.normals) } else { Vec::new() };
+        // OBJ's v grows upwards; the scene's (glTF's) downwards.
+        let uvs = if 3 * mesh.texcoords.len() == 2 * mesh.positions.len() {
+            mesh.texcoords.chunks_exact(2).map(|t| glam::Vec2::new(t[0], 1.0 - t[1])).collect()
+        } else {
+            Vec::new()
+        };
         let m = Mesh {
             positions: vec3s(&mesh.positions),
             normals,
             tangents: Vec::new(),
+            uvs,
             triangles: mesh.indices.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect(),
         };
         if m.triangles.is_empty() {
@@ -462,6 +469,13 @@ mod obj_tests {
     fn vertices_with_w_and_colours_keep_their_positions() {
         let s = load("v 2 4 6 2\nv 1 0 0 0.1 0.2 0.3\nv 0 1 0\nf 1 2 3\n").unwrap();
         assert_eq!(s.positions, [[1.0, 2.0, 3.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]);
+    }
+
+    #[test]
+    fn texture_coordinates_are_kept_with_v_flipped() {
+        let s = load("v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0.25\nvt 0 1\nf 1/1 2/2 3/3\n").unwrap();
+        assert_eq!(s.uvs, [[0.0, 1.0], [1.0, 0.75], [0.0, 0.0]]);
+        assert!(load(&format!("{TRIANGLE}f 1 2 3\n")).unwrap().uvs.is_empty());
     }
 
     #[test]

@@ -30,6 +30,9 @@ pub struct Scene {
     /// Per-vertex tangents that orient anisotropic BSDFs (same length as `positions`), or
     /// empty; a zero tangent means "any tangent" for that vertex.
     pub tangents: Vec<[f32; 3]>,
+    /// Per-vertex texture coordinates (same length as `positions`), or empty; (0, 0) is
+    /// the image's top-left corner (glTF's convention; OBJ's v is flipped on loading).
+    pub uvs: Vec<[f32; 2]>,
     /// Triangles as vertex indices; counter-clockwise seen from the front.
     pub triangles: Vec<[u32; 3]>,
     /// Material index of each triangle.
@@ -89,6 +92,7 @@ impl Scene {
         self.positions.extend(mesh.positions.iter().map(|p| p.to_array()));
         extend_attribute(&mut self.normals, base, &mesh.normals, count);
         extend_attribute(&mut self.tangents, base, &mesh.tangents, count);
+        extend_uvs(&mut self.uvs, base, &mesh.uvs, count);
         self.triangles.extend(mesh.triangles.iter().map(|t| t.map(|i| i + base as u32)));
         self.material_ids.extend(std::iter::repeat_n(material, mesh.triangles.len()));
     }
@@ -118,6 +122,7 @@ impl Scene {
             other.tangents.iter().map(|t| (linear * Vec3::from_array(*t)).normalize_or(Vec3::X)).collect();
         extend_attribute(&mut self.normals, base as usize, &normals, count);
         extend_attribute(&mut self.tangents, base as usize, &tangents, count);
+        extend_uvs(&mut self.uvs, base as usize, &other.uvs, count);
         self.triangles.extend(other.triangles.iter().map(|t| {
             let t = t.map(|i| i + base);
             if mirrored { [t[0], t[2], t[1]] } else { t }
@@ -186,6 +191,12 @@ impl Scene {
         if !self.normals.is_empty() && self.normals.len() != self.positions.len() {
             return bad(format!("{} normals for {} vertices", self.normals.len(), self.positions.len()));
         }
+        if !self.uvs.is_empty() && self.uvs.len() != self.positions.len() {
+            return bad(format!("{} texture coordinates for {} vertices", self.uvs.len(), self.positions.len()));
+        }
+        if self.uvs.iter().any(|uv| !uv.iter().all(|c| c.is_finite())) {
+            return bad("a texture coordinate is not finite".into());
+        }
         if !self.tangents.is_empty() && self.tangents.len() != self.positions.len() {
             return bad(format!("{} tangents for {} vertices", self.tangents.len(), self.positions.len()));
         }
@@ -219,6 +230,16 @@ impl Scene {
 /// Appends a per-vertex attribute for `count` new vertices starting at `base`, keeping
 /// the array either empty (no mesh has the attribute) or as long as the positions, with
 /// zeros where a mesh lacks it.
+/// As [`extend_attribute`], for texture coordinates (missing ones are (0, 0)).
+fn extend_uvs<T: Copy + Into<[f32; 2]>>(attr: &mut Vec<[f32; 2]>, base: usize, values: &[T], count: usize) {
+    if !values.is_empty() {
+        attr.resize(base, [0.0; 2]);
+        attr.extend(values.iter().map(|&v| v.into()));
+    } else if !attr.is_empty() {
+        attr.resize(base + count, [0.0; 2]);
+    }
+}
+
 fn extend_attribute(attr: &mut Vec<[f32; 3]>, base: usize, values: &[Vec3], count: usize) {
     if !values.is_empty() {
         attr.resize(base, [0.0; 3]);

@@ -115,7 +115,7 @@ pub fn glass_bunny(obj: &Path) -> Result<Scene> {
     let offset = Vec3::new(-b.centre().x, -b.min.y, -b.centre().z);
     let positions: Vec<Vec3> = mesh_scene.positions.iter().map(|p| (Vec3::from_array(*p) + offset) * scale).collect();
     let normals = smooth_normals(&positions, &mesh_scene.triangles);
-    let mesh = crate::mesh::Mesh { positions, normals, tangents: vec![], triangles: mesh_scene.triangles };
+    let mesh = crate::mesh::Mesh { positions, normals, tangents: vec![], uvs: vec![], triangles: mesh_scene.triangles };
     let mut scene = Scene::default();
     scene.add(&mesh, glass(1.5)?);
     add_floor(&mut scene, 0.0, 4.0)?;

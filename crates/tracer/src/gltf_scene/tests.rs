@@ -85,6 +85,7 @@ fn the_box_loads_the_same_from_gltf_and_glb() {
     let Some(ModelParams::MetallicRoughness(p)) = a.scene.materials[0].params() else { unreachable!() };
     assert_eq!(p.metallic, 0.0);
     assert!(a.scene.camera.is_none() && a.scene.punctual_lights.is_empty());
+    assert!(a.scene.uvs.is_empty(), "the box has no texture coordinates");
 }
 
 #[test]
@@ -97,6 +98,8 @@ fn every_shared_model_converts_with_its_triangle_count() {
         let Some(path) = shared(rel) else { continue };
         let s = load_gltf(&path, &GltfOptions::default()).unwrap();
         assert_eq!(s.scene.triangles.len(), triangles, "{rel}");
+        // Each has TEXCOORD_0: one coordinate per vertex, finite.
+        assert_eq!(s.scene.uvs.len(), s.scene.positions.len(), "{rel}");
         assert!(s.notes.iter().any(|n| n.contains("textures not applied")), "{rel}: {:?}", s.notes);
         if rel.contains("Transmission") {
             assert!(
