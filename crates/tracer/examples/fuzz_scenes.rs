@@ -57,8 +57,9 @@ fn base64(bytes: &[u8]) -> String {
     out
 }
 
-/// A hand-written file using what the converter reads: a strip with normals, a node tree
-/// with every transform form, cameras, the three light kinds and the material extensions.
+/// A hand-written file using what the converter reads: a strip with normals and texture
+/// coordinates, a node tree with every transform form, cameras, the three light kinds and
+/// the material extensions.
 fn handwritten() -> Seed {
     let mut bin = Vec::new();
     for v in [0.0f32, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 1.0, 1.0, 0.0] {
@@ -72,12 +73,15 @@ fn handwritten() -> Seed {
     for i in [0u16, 1, 2, 3] {
         bin.extend_from_slice(&i.to_le_bytes());
     }
+    for v in [0.0f32, 0.0, 1.0, 0.0, 0.0, 1.0, 1.0, 1.0] {
+        bin.extend_from_slice(&v.to_le_bytes());
+    }
     let text = format!(
         r#"{{"asset":{{"version":"2.0"}},"scene":0,"scenes":[{{"nodes":[0,3]}}],
 "nodes":[{{"mesh":0,"children":[1,2],"scale":[1,2,-1]}},{{"camera":0,"translation":[0,0,3]}},
 {{"matrix":[1,0,0,0,0,1,0,0,0,0,1,0,0,1,0,1],"extensions":{{"KHR_lights_punctual":{{"light":0}}}}}},
 {{"rotation":[0,0.7071068,0,0.7071068],"mesh":1,"extensions":{{"KHR_lights_punctual":{{"light":1}}}}}}],
-"meshes":[{{"primitives":[{{"attributes":{{"POSITION":0,"NORMAL":1}},"indices":2,"mode":5,"material":0}}]}},
+"meshes":[{{"primitives":[{{"attributes":{{"POSITION":0,"NORMAL":1,"TEXCOORD_0":3}},"indices":2,"mode":5,"material":0}}]}},
 {{"primitives":[{{"attributes":{{"POSITION":0}},"mode":6,"material":1}},{{"attributes":{{"POSITION":0}}}}]}}],
 "materials":[{{"pbrMetallicRoughness":{{"baseColorFactor":[1,0.5,0.2,1],"metallicFactor":0,"roughnessFactor":0}},
 "extensions":{{"KHR_materials_transmission":{{"transmissionFactor":1}},"KHR_materials_ior":{{"ior":1.4}},
@@ -85,9 +89,11 @@ fn handwritten() -> Seed {
 {{"emissiveFactor":[1,1,0.5],"extensions":{{"KHR_materials_emissive_strength":{{"emissiveStrength":3}}}}}}],
 "cameras":[{{"type":"perspective","perspective":{{"yfov":0.7,"znear":0.1}}}}],
 "accessors":[{{"bufferView":0,"componentType":5126,"count":4,"type":"VEC3","min":[0,0,0],"max":[1,1,0]}},
-{{"bufferView":1,"componentType":5126,"count":4,"type":"VEC3"}},{{"bufferView":2,"componentType":5123,"count":4,"type":"SCALAR"}}],
-"bufferViews":[{{"buffer":0,"byteLength":48}},{{"buffer":0,"byteOffset":48,"byteLength":48}},{{"buffer":0,"byteOffset":96,"byteLength":8}}],
-"buffers":[{{"byteLength":104,"uri":"data:application/octet-stream;base64,{}"}}],
+{{"bufferView":1,"componentType":5126,"count":4,"type":"VEC3"}},{{"bufferView":2,"componentType":5123,"count":4,"type":"SCALAR"}},
+{{"bufferView":3,"componentType":5126,"count":4,"type":"VEC2"}}],
+"bufferViews":[{{"buffer":0,"byteLength":48}},{{"buffer":0,"byteOffset":48,"byteLength":48}},{{"buffer":0,"byteOffset":96,"byteLength":8}},
+{{"buffer":0,"byteOffset":104,"byteLength":32}}],
+"buffers":[{{"byteLength":136,"uri":"data:application/octet-stream;base64,{}"}}],
 "extensionsUsed":["KHR_lights_punctual","KHR_materials_transmission","KHR_materials_ior","KHR_materials_volume","KHR_materials_emissive_strength"],
 "extensions":{{"KHR_lights_punctual":{{"lights":[{{"type":"spot","intensity":5,"spot":{{"innerConeAngle":0.1,"outerConeAngle":0.5}}}},
 {{"type":"directional","color":[1,0.9,0.8],"intensity":2}}]}}}}}}"#,
