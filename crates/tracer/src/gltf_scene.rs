@@ -101,7 +101,7 @@ pub fn load_gltf_bytes(
     options: &GltfOptions,
     read: &dyn Fn(&Path) -> std::io::Result<Vec<u8>>,
 ) -> Result<GltfScene> {
-    let fail = |message: String| Error::Parse { path: path.to_path_buf(), line: None, message };
+    let fail = |message: String| Error::parse(path, message);
     // The last line of defence, as for tobj: should the gltf crate panic on some input,
     // the panic becomes an error naming the file.
     match catch_unwind(AssertUnwindSafe(|| convert(bytes, path, options, read))) {
@@ -116,7 +116,7 @@ fn convert(
     options: &GltfOptions,
     read: &dyn Fn(&Path) -> std::io::Result<Vec<u8>>,
 ) -> Result<GltfScene> {
-    let fail = |message: String| Error::Parse { path: path.to_path_buf(), line: None, message };
+    let fail = |message: String| Error::parse(path, message);
     let invalid = |e: String| fail(format!("not a valid glTF file: {e}"));
     // gltf 1.4.1 subtracts the 12-byte header from a GLB's declared length unchecked (an
     // overflow panic in builds with overflow checks, found by `examples/fuzz_scenes.rs`).
@@ -230,7 +230,7 @@ fn load_buffers(
     path: &Path,
     read: &dyn Fn(&Path) -> std::io::Result<Vec<u8>>,
 ) -> Result<Vec<gltf::buffer::Data>> {
-    let fail = |message: String| Error::Parse { path: path.to_path_buf(), line: None, message };
+    let fail = |message: String| Error::parse(path, message);
     let dir = path.parent().unwrap_or(Path::new(""));
     let mut buffers = Vec::new();
     for buffer in document.buffers() {
@@ -329,7 +329,7 @@ struct Converter<'a> {
 
 impl Converter<'_> {
     fn fail(&self, message: String) -> Error {
-        Error::Parse { path: self.path.to_path_buf(), line: None, message }
+        Error::parse(self.path, message)
     }
 
     /// Converts what `node` holds, placed by `world`.

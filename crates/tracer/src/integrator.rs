@@ -411,9 +411,8 @@ fn punctual_incidence<const N: usize>(
 ) -> Option<(Vec3, f32, SampledSpectrum<N>)> {
     let (intensity, falloff_of) = match light {
         // A sun disk's radiance, or a delta direction's irradiance.
-        PunctualLight::Directional { irradiance, cos_radius, .. } => {
-            let scale = if *cos_radius < 1.0 { light.disk_radiance_scale() } else { 1.0 };
-            return Some((point, f32::INFINITY, irradiance.sample(wl) * scale));
+        PunctualLight::Directional { irradiance, .. } => {
+            return Some((point, f32::INFINITY, irradiance.sample(wl) * light.disk_radiance_scale()));
         }
         PunctualLight::Point { intensity, .. } => (intensity, None),
         PunctualLight::Spot { intensity, direction, cos_inner, cos_outer, .. } => {

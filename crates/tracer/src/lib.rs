@@ -123,6 +123,14 @@ pub enum Error {
 /// Result with this crate's [`Error`].
 pub type Result<T, E = Error> = std::result::Result<T, E>;
 
+impl Error {
+    /// A malformed file, where no line can be named (a binary or re-serialised file, or a
+    /// problem of the whole file).
+    pub(crate) fn parse(path: &std::path::Path, message: String) -> Self {
+        Self::Parse { path: path.to_path_buf(), line: None, message }
+    }
+}
+
 /// A caught panic's message (its `&str` or `String` payload; empty otherwise), for the
 /// loaders that turn a dependency's panic into an error naming the file.
 pub(crate) fn panic_message(payload: &(dyn std::any::Any + Send)) -> String {

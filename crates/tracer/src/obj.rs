@@ -45,8 +45,13 @@ pub const DEFAULT_ALBEDO: f32 = 0.5;
 
 /// Loads an OBJ file and the MTL libraries it names.
 pub fn load_obj(path: &Path) -> Result<Scene> {
-    let text = read_text(path).map_err(|source| Error::Io { path: path.to_path_buf(), source })?;
-    load_obj_text(&text, path, &read_text)
+    load_obj_text(&read_text_file(path)?, path, &read_text)
+}
+
+/// [`read_text`] with the error naming the file: how every text scene format (OBJ, MTL,
+/// scene files, SPEC files) is read.
+pub(crate) fn read_text_file(path: &Path) -> Result<String> {
+    read_text(path).map_err(|source| Error::Io { path: path.to_path_buf(), source })
 }
 
 /// A scene file's text (invalid UTF-8 replaced). Only regular files: a mutated `mtllib`

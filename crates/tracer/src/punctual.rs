@@ -92,14 +92,15 @@ impl PunctualLight {
         }
     }
 
-    /// The factor from a sun disk's irradiance to its radiance, 1/(π sin² r) (the projected
-    /// solid angle of a cap of angular radius r is π sin² r, so that a surface facing the
-    /// disk receives E); 0 for delta lights.
+    /// What next-event estimation multiplies a directional light's irradiance by: for a
+    /// sun disk 1/(π sin² r), its radiance (the projected solid angle of a cap of angular
+    /// radius r is π sin² r, so that a surface facing the disk receives E); 1 for a delta
+    /// direction, whose estimate uses the irradiance itself.
     #[inline]
     pub fn disk_radiance_scale(&self) -> f32 {
         match self.disk() {
             Some((_, c, _)) => 1.0 / (PI * (1.0 - c * c)),
-            None => 0.0,
+            None => 1.0,
         }
     }
 

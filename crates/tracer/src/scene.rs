@@ -92,7 +92,7 @@ impl Scene {
         self.positions.extend(mesh.positions.iter().map(|p| p.to_array()));
         extend_attribute(&mut self.normals, base, &mesh.normals, count);
         extend_attribute(&mut self.tangents, base, &mesh.tangents, count);
-        extend_uvs(&mut self.uvs, base, &mesh.uvs, count);
+        extend_attribute(&mut self.uvs, base, &mesh.uvs, count);
         self.triangles.extend(mesh.triangles.iter().map(|t| t.map(|i| i + base as u32)));
         self.material_ids.extend(std::iter::repeat_n(material, mesh.triangles.len()));
     }
@@ -122,7 +122,7 @@ impl Scene {
             other.tangents.iter().map(|t| (linear * Vec3::from_array(*t)).normalize_or(Vec3::X)).collect();
         extend_attribute(&mut self.normals, base as usize, &normals, count);
         extend_attribute(&mut self.tangents, base as usize, &tangents, count);
-        extend_uvs(&mut self.uvs, base as usize, &other.uvs, count);
+        extend_attribute(&mut self.uvs, base as usize, &other.uvs, count);
         self.triangles.extend(other.triangles.iter().map(|t| {
             let t = t.map(|i| i + base);
             if mirrored { [t[0], t[2], t[1]] } else { t }
@@ -230,22 +230,17 @@ impl Scene {
 /// Appends a per-vertex attribute for `count` new vertices starting at `base`, keeping
 /// the array either empty (no mesh has the attribute) or as long as the positions, with
 /// zeros where a mesh lacks it.
-/// As [`extend_attribute`], for texture coordinates (missing ones are (0, 0)).
-fn extend_uvs<T: Copy + Into<[f32; 2]>>(attr: &mut Vec<[f32; 2]>, base: usize, values: &[T], count: usize) {
+fn extend_attribute<const K: usize, T: Copy + Into<[f32; K]>>(
+    attr: &mut Vec<[f32; K]>,
+    base: usize,
+    values: &[T],
+    count: usize,
+) {
     if !values.is_empty() {
-        attr.resize(base, [0.0; 2]);
+        attr.resize(base, [0.0; K]);
         attr.extend(values.iter().map(|&v| v.into()));
     } else if !attr.is_empty() {
-        attr.resize(base + count, [0.0; 2]);
-    }
-}
-
-fn extend_attribute(attr: &mut Vec<[f32; 3]>, base: usize, values: &[Vec3], count: usize) {
-    if !values.is_empty() {
-        attr.resize(base, [0.0; 3]);
-        attr.extend(values.iter().map(|v| v.to_array()));
-    } else if !attr.is_empty() {
-        attr.resize(base + count, [0.0; 3]);
+        attr.resize(base + count, [0.0; K]);
     }
 }
 

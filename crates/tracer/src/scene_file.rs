@@ -122,7 +122,7 @@ pub struct RenderDefaults {
 /// The `[render]` table of a scene file (all `None` without one). Errors as
 /// [`load_scene_file`]'s.
 pub fn render_defaults(path: &Path) -> Result<RenderDefaults> {
-    let text = std::fs::read_to_string(path).map_err(|source| Error::Io { path: path.to_path_buf(), source })?;
+    let text = crate::obj::read_text_file(path)?;
     let file: FileDef = toml::from_str(&text).map_err(|e| {
         let (line, column) = line_column(&text, e.span().unwrap_or(0..0).start);
         Error::ParseAt { path: path.to_path_buf(), line, column, message: e.message().to_string() }
@@ -311,7 +311,7 @@ struct SkyDef {
 
 /// Loads a scene file and the meshes it names.
 pub fn load_scene_file(path: &Path) -> Result<Scene> {
-    let text = std::fs::read_to_string(path).map_err(|source| Error::Io { path: path.to_path_buf(), source })?;
+    let text = crate::obj::read_text_file(path)?;
     parse_scene_file(&text, path)
 }
 
@@ -320,12 +320,8 @@ pub fn load_scene_file_with(path: &Path, overrides: &[String]) -> Result<Scene> 
     if overrides.is_empty() {
         return load_scene_file(path);
     }
-    let text = std::fs::read_to_string(path).map_err(|source| Error::Io { path: path.to_path_buf(), source })?;
-    let edited = apply_overrides(&text, overrides).map_err(|message| Error::Parse {
-        path: path.to_path_buf(),
-        line: None,
-        message,
-    })?;
+    let text = crate::obj::read_text_file(path)?;
+    let edited = apply_overrides(&text, overrides).map_err(|message| Error::parse(path, message))?;
     // Positions now refer to the edited text: say so.
     parse_scene_file(&edited, path).map_err(|e| match e {
         Error::ParseAt { path, line, column, message } => {
@@ -513,7 +509,7 @@ pub fn parse_scene_file(text: &str, path: &Path) -> Result<Scene> {
         }
         None => mesh_camera,
     };
-    scene.validate().map_err(|e| Error::Parse { path: path.to_path_buf(), line: None, message: e.to_string() })?;
+    scene.validate().map_err(|e| Error::parse(path, e.to_string()))?;
     Ok(scene)
 }
 

@@ -20,7 +20,7 @@
 //! values must lie in [0, 1]. A role the material's model lacks (a mirror has no diffuse
 //! colour) is reported, not an error; a material or SPD name that does not exist is.
 
-use crate::material::Material;
+use crate::material::{Material, Surface};
 use crate::scene::{Environment, Scene};
 use crate::{Error, Result};
 use brdf::params::Resolved;
@@ -74,20 +74,20 @@ pub fn spec_beside(obj: &Path) -> Option<PathBuf> {
 
 /// Reads a SPEC file.
 pub fn load_spec(path: &Path) -> Result<SpecFile> {
-    let text = std::fs::read_to_string(path).map_err(|source| Error::Io { path: path.to_path_buf(), source })?;
+    let text = crate::obj::read_text_file(path)?;
     parse_spec(&text, path)
 }
 
 /// The SPDs of a SPEC file by name (its `materials` and `sky` are not checked), for scene
 /// files that take one of its spectra.
 pub fn load_spec_spectra(path: &Path) -> Result<BTreeMap<String, TabulatedSpectrum>> {
-    let text = std::fs::read_to_string(path).map_err(|source| Error::Io { path: path.to_path_buf(), source })?;
+    let text = crate::obj::read_text_file(path)?;
     Ok(parse_spectra(&text, path)?.0)
 }
 
 /// Parses a SPEC file's text; `path` names it in messages.
 pub fn parse_spec(text: &str, path: &Path) -> Result<SpecFile> {
-    let fail = |message: String| Error::Parse { path: path.to_path_buf(), line: None, message };
+    let fail = |message: String| Error::parse(path, message);
     let (spectra, above_one, def) = parse_spectra(text, path)?;
     let lookup = |what: String, name: &str| {
         spectra.get(name).cloned().map(|t| (name.to_string(), t)).ok_or_else(|| {
@@ -117,7 +117,7 @@ pub fn parse_spec(text: &str, path: &Path) -> Result<SpecFile> {
 type Spectra = (BTreeMap<String, TabulatedSpectrum>, BTreeMap<String, (f32, f32)>, SpecDef);
 
 fn parse_spectra(text: &str, path: &Path) -> Result<Spectra> {
-    let fail = |message: String| Error::Parse { path: path.to_path_buf(), line: None, message };
+    let fail = |message: String| Error::parse(path, message);
     let def: SpecDef = serde_json::from_str(text).map_err(|e| match e.line() {
         0 => fail(e.to_string()),
         line => Error::ParseAt { path: path.to_path_buf(), line, column: e.column(), message: e.to_string() },
@@ -157,7 +157,7 @@ impl SpecFile {
     /// Gives the scene's materials their SPDs and the scene the sky; returns notes on roles
     /// a material's model has no colour for. Every material the file names must exist.
     pub fn apply(&self, scene: &mut Scene) -> Result<Vec<String>> {
-        let fail = |message: String| Error::Parse { path: self.path.clone(), line: None, message };
+        let fail = |message: String| Error::parse(&self.path, message);
         let mut notes = Vec::new();
         for (name, (diff, spec)) in &self.materials {
             if !scene.materials.iter().any(|m| &m.name == name) {
@@ -168,23 +168,30 @@ impl SpecFile {
                 )));
             }
             for m in scene.materials.iter_mut().filter(|m| &m.name == name) {
-                for (role, keys, spd) in [("diff", &DIFFUSE_KEYS[..], diff), ("spec", &SPECULAR_KEYS[..], spec)] {
+                let roles =
+                    [("diff", "diffuse", &DIFFUSE_KEYS[..], diff), ("spec", "specular", &SPECULAR_KEYS[..], spec)];
+                for (role, colour, keys, spd) in roles {
                     let Some((spd_name, table)) = spd else { continue };
                     if !set_colours(m, keys, role == "spec", table) {
                         let model = m.model().map_or("custom", |id| id.name());
                         notes.push(format!(
-                            "material '{name}' ({model}) has no {} colour: its {role} spectrum '{spd_name}' is unused",
-                            if role == "diff" { "diffuse" } else { "specular" }
+                            "material '{name}' ({model}) has no {colour} colour: its {role} spectrum '{spd_name}' is unused"
                         ));
                     }
                 }
             }
         }
-        if let Some((_, table)) = &self.sky {
-            let radiance = Colour::from_spectrum(Spectrum::Tabulated(table.clone()), ColourRole::Illuminant);
+        if let Some(radiance) = self.sky_radiance() {
             scene.environment = Some(Environment { radiance });
         }
         Ok(notes)
+    }
+
+    /// The sky's radiance, if the file names a sky SPD.
+    pub fn sky_radiance(&self) -> Option<Colour> {
+        self.sky
+            .as_ref()
+            .map(|(_, table)| Colour::from_spectrum(Spectrum::Tabulated(table.clone()), ColourRole::Illuminant))
     }
 }
 
@@ -194,21 +201,20 @@ fn set_colours(m: &mut Material, keys: &[&str], specular: bool, table: &Tabulate
     let Some(params) = m.params() else { return false };
     let model = params.model();
     let mut values = params.to_resolved().values().to_vec();
+    let colour = Colour::from_spectrum(Spectrum::Tabulated(table.clone()), ColourRole::Reflectance);
     let mut any = false;
-    for (i, def) in model.def().params.iter().enumerate() {
+    for (value, def) in values.iter_mut().zip(model.def().params) {
         let matches = match def.mtl_key {
             Some(key) => keys.contains(&key),
             None => specular && def.name == "tint",
         };
-        if matches && matches!(values[i], Resolved::Colour(_)) {
-            values[i] =
-                Resolved::Colour(Colour::from_spectrum(Spectrum::Tabulated(table.clone()), ColourRole::Reflectance));
+        if matches && matches!(value, Resolved::Colour(_)) {
+            *value = Resolved::Colour(colour.clone());
             any = true;
         }
     }
     if any {
-        let params = model.from_resolved(&brdf::params::ResolvedParams::from_values(values));
-        *m = Material { surface: Material::from_params(&m.name, params).surface, ..m.clone() };
+        m.surface = Surface::Builtin(model.from_resolved(&brdf::params::ResolvedParams::from_values(values)));
     }
     any
 }

@@ -16,7 +16,8 @@
 //! microfacet rather than by what the coating lets through, so the dielectric part is not
 //! energy-conserving: a smooth white dielectric reflects 1.03× what it receives at
 //! cos θo = 0.5 and 1.72× at cos θo = 0.05 (measured and pinned by the tests; the metal
-//! never exceeds 1). That is the specification's model, kept as written so that glTF
+//! never exceeds 1; `cargo test -p brdf --lib metallic_roughness_albedo_table -- --ignored
+//! --nocapture` prints all of these albedos). That is the specification's model, kept as written so that glTF
 //! files render as their authors' viewers show them.
 //!
 //! Sampling is a one-sample mixture of visible-normal GGX sampling (Heitz 2018) and

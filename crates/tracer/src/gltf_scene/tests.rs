@@ -231,10 +231,13 @@ fn bad_files_are_errors_that_say_what_is_wrong() {
         (ok.replace("data:application/octet-stream;base64,", "missing.bin#"), "buffer 0: cannot read t/missing.bin#"),
         (ok.replace(r#""byteLength":44"#, r#""byteLength":4400"#), "declares 4400"),
         (ok.replace(r#""scene":0,"scenes":[{"nodes":[0]}]"#, r#""scenes":[]"#), "no scene"),
-        (ok.replace(r#""nodes":[{"mesh":0}]"#, r#""nodes":[{"children":[1]},{"children":[0],"mesh":0}]"#), ""),
+        (
+            ok.replace(r#""nodes":[{"mesh":0}]"#, r#""nodes":[{"children":[1]},{"children":[0],"mesh":0}]"#),
+            "nodes[0] is reached twice",
+        ),
         (
             ok.replace(r#""nodes":[{"mesh":0}]"#, r#""nodes":[{"children":[1,2]},{"children":[2]},{"mesh":0}]"#),
-            "",
+            "nodes[2] is reached twice",
         ),
         (ok.replace(r#""nodes":[{"mesh":0}]"#, r#""nodes":[{"mesh":0,"scale":[1e38,1e38,1e38],"children":[1]},{"mesh":0,"scale":[1e38,1,1]}]"#), "not finite"),
         (ok.replace(r#""nodes":[{"mesh":0}]"#, r#""nodes":[{"camera":0,"mesh":0}],"cameras":[{"type":"orthographic","orthographic":{"xmag":1,"ymag":1,"znear":0,"zfar":1}}]"#), ""),

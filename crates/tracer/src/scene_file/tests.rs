@@ -159,10 +159,14 @@ fn errors_name_the_line_and_column_of_what_is_wrong() {
         ),
         ("[[mesh]]\nfile = \"tri.obj\"\nscale = 0\n", "scene.toml:1:1: ", "scale"),
         ("[[mesh]]\nfile = \"tri.png\"\n", "scene.toml:1:1: ", "meshes are .obj, .gltf or .glb files"),
-        ("[[light]]\ntype = \"point\"\nposition = [0, 0, 0]\nintensity = -1\n", "scene.toml:1:1: ", ""),
-        ("[camera]\neye = [0, 0, 0]\ncenter = [0, 0, 0]\n", "scene.toml:1:1: ", ""),
-        ("[sky]\nradiance = \"blue\"\n", "scene.toml:2:12: ", ""),
-        ("sky = 3 3\n", "scene.toml:1:", ""),
+        (
+            "[[light]]\ntype = \"point\"\nposition = [0, 0, 0]\nintensity = -1\n",
+            "scene.toml:1:1: ",
+            "non-negative, got -1",
+        ),
+        ("[camera]\neye = [0, 0, 0]\ncenter = [0, 0, 0]\n", "scene.toml:1:1: ", "eye and center coincide"),
+        ("[sky]\nradiance = \"blue\"\n", "scene.toml:2:12: ", "did not match any variant"),
+        ("sky = 3 3\n", "scene.toml:1:7: ", "expected"),
     ] {
         let path = write("errors", text);
         let e = load_scene_file(&path).unwrap_err().to_string();

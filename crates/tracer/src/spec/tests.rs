@@ -112,3 +112,14 @@ fn bad_spec_files_say_what_is_wrong() {
     let e = spec.apply(&mut scene()).unwrap_err().to_string();
     assert!(e.contains("materials.Nope: no such material in the scene (it has: Metal, Wall, Other)"), "{e}");
 }
+
+#[test]
+fn only_regular_files_are_read() {
+    // /dev/zero never ends: reading it whole would never return.
+    for e in [
+        load_spec(Path::new("/dev/zero")).unwrap_err(),
+        crate::scene_file::load_scene_file(Path::new("/dev/zero")).unwrap_err(),
+    ] {
+        assert!(e.to_string().starts_with("/dev/zero: not a regular file"), "{e}");
+    }
+}
