@@ -452,12 +452,9 @@ fn apply_sky(scene: &mut Scene, sky: &Sky) -> Result<()> {
         Sky::None => scene.environment = None,
         Sky::White(l) => scene.environment = Some(tracer::Environment::white_sky(*l)),
         Sky::Spec(path) => {
-            let spec = tracer::spec::load_spec(path)?;
-            let Some((_, table)) = spec.sky else { bail!("--sky {}: the SPEC file names no sky", path.display()) };
-            let radiance = spectral::spectrum::Colour::from_spectrum(
-                spectral::spectrum::Spectrum::Tabulated(table),
-                spectral::spectrum::ColourRole::Illuminant,
-            );
+            let Some(radiance) = tracer::spec::load_spec(path)?.sky_radiance() else {
+                bail!("--sky {}: the SPEC file names no sky", path.display())
+            };
             scene.environment = Some(tracer::Environment { radiance });
         }
     }
@@ -563,45 +560,17 @@ pub(crate) fn load_scene(path: &Path) -> Result<Scene> {
     load_scene_with(path, None, None, &[])
 }
 
-/// Loads a scene and applies a SPEC file: `spec`, else (for an OBJ) the one beside it.
-pub(crate) fn load_scene_with(
-    path: &Path,
-    camera: Option<&str>,
-    spec: Option<&Path>,
-    sets: &[String],
-) -> Result<Scene> {
-    let is_toml = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("toml"));
-    let mut scene = if is_toml {
-        if camera.is_some() {
-            bail!("--camera: {} is a scene file (its [camera] or a glTF mesh's camera applies)", path.display());
-        }
-        tracer::scene_file::load_scene_file_with(path, sets)?
-    } else if !sets.is_empty() {
-        bail!("--set applies to .toml scene files; {} is not one", path.display());
-    } else {
-        load_scene_with_camera(path, camera)?
-    };
-    let beside = || {
-        path.extension()
-            .is_some_and(|e| e.eq_ignore_ascii_case("obj"))
-            .then(|| tracer::spec::spec_beside(path))
-            .flatten()
-    };
-    let spec = match spec {
-        Some(spec) => Some(spec.to_path_buf()),
-        None => beside().inspect(|s| eprintln!("note: applying {} (the SPEC file beside the OBJ)", s.display())),
-    };
-    if let Some(spec) = spec {
-        for note in tracer::spec::load_spec(&spec)?.apply(&mut scene)? {
-            eprintln!("warning: {}: {note}", spec.display());
-        }
+/// A scene path's format, by its extension (lower case), or `builtin` for `builtin:NAME`.
+fn scene_format(path: &Path) -> Option<String> {
+    if path.to_str().is_some_and(|p| p.starts_with("builtin:")) {
+        return Some("builtin".into());
     }
-    Ok(scene)
+    path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase)
 }
 
-/// Whether `path` names a glTF file (by its extension).
+/// Whether `path` names a glTF file.
 fn is_gltf(path: &Path) -> bool {
-    matches!(path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref(), Some("gltf" | "glb"))
+    matches!(scene_format(path).as_deref(), Some("gltf" | "glb"))
 }
 
 /// A glTF file converted, its notes (what the conversion ignored) printed as warnings.
@@ -614,26 +583,54 @@ fn load_gltf(path: &Path, camera: Option<&str>) -> Result<tracer::gltf_scene::Gl
     Ok(loaded)
 }
 
-/// Loads a scene; `camera` picks a glTF file's camera by index or name.
-pub(crate) fn load_scene_with_camera(path: &Path, camera: Option<&str>) -> Result<Scene> {
-    if is_gltf(path) {
-        return Ok(load_gltf(path, camera)?.scene);
+/// Loads a scene by its format: `camera` picks a glTF file's camera (index or name), `sets`
+/// changes a scene file's values, and a SPEC file is applied — `spec`, else for an OBJ the
+/// one beside it.
+pub(crate) fn load_scene_with(
+    path: &Path,
+    camera: Option<&str>,
+    spec: Option<&Path>,
+    sets: &[String],
+) -> Result<Scene> {
+    let format = scene_format(path);
+    let format = format.as_deref();
+    if let Some(camera) = camera
+        && !matches!(format, Some("gltf" | "glb"))
+    {
+        match format {
+            Some("toml") => bail!(
+                "--camera {camera}: {} is a scene file (its [camera] or a glTF mesh's camera applies)",
+                path.display()
+            ),
+            _ => bail!("--camera {camera}: {} has no cameras (only glTF scenes do)", path.display()),
+        }
     }
-    if let Some(camera) = camera {
-        bail!("--camera {camera}: {} has no cameras (only glTF scenes do)", path.display());
+    if !sets.is_empty() && format != Some("toml") {
+        bail!("--set applies to .toml scene files; {} is not one", path.display());
     }
-    if let Some(name) = path.to_str().and_then(|p| p.strip_prefix("builtin:")) {
-        return Ok(tracer::scenes::builtin(name)?);
-    }
-    match path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref() {
-        Some("obj") => Ok(tracer::obj::load_obj(path)?),
-        Some("toml") => Ok(tracer::scene_file::load_scene_file(path)?),
+    let mut scene = match format {
+        Some("builtin") => tracer::scenes::builtin(&path.to_string_lossy()["builtin:".len()..])?,
+        Some("gltf" | "glb") => load_gltf(path, camera)?.scene,
+        Some("toml") => tracer::scene_file::load_scene_file_with(path, sets)?,
+        Some("obj") => tracer::obj::load_obj(path)?,
         _ => bail!(
             "{}: unsupported scene format (supported: .obj, .gltf, .glb, .toml, or builtin:NAME with NAME one of {})",
             path.display(),
             tracer::scenes::BUILTIN_SCENES.join(", ")
         ),
+    };
+    let spec = match spec {
+        Some(spec) => Some(spec.to_path_buf()),
+        None if format == Some("obj") => tracer::spec::spec_beside(path)
+            .inspect(|s| eprintln!("note: applying {} (the SPEC file beside the OBJ)", s.display())),
+        None => None,
+    };
+    if let Some(spec) = spec {
+        for note in tracer::spec::load_spec(&spec)?.apply(&mut scene)? {
+            eprintln!("warning: {}: {note}", spec.display());
+        }
     }
+    Ok(scene)
 }
 
 fn settings(
@@ -1023,7 +1020,7 @@ fn scene_file_options(command: &Command) -> Result<Vec<String>> {
         Command::View(a) => (&a.scene.scene, false, true),
         _ => return Ok(Vec::new()),
     };
-    if !scene.extension().is_some_and(|e| e.eq_ignore_ascii_case("toml")) {
+    if scene_format(scene).as_deref() != Some("toml") {
         return Ok(Vec::new());
     }
     let d = tracer::scene_file::render_defaults(scene)?;
