@@ -21,7 +21,7 @@ pub mod wgsl;
 
 pub use frame::Frame;
 pub use models::{Dielectric, Lambert, Mirror, ModelBsdf, ModelId, ModelParams};
-pub use registry::Model;
+pub use registry::{Model, Texels, TextureSlots};
 
 // For the exported macros, so that their users need not depend on glam and spectral.
 #[doc(hidden)]

@@ -12,8 +12,61 @@
 use crate::Bsdf;
 use crate::params::ParamSet;
 use crate::wgsl::ModelWgsl;
-use spectral::SampledWavelengths;
 use spectral::spectrum::Colour;
+use spectral::{SampledSpectrum, SampledWavelengths};
+
+/// Which of a model's parameters textures may drive (see [`Model::TEXTURE_SLOTS`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct TextureSlots {
+    /// The diffuse or base colour (MTL `map_Kd`, glTF `baseColorTexture`).
+    pub base_colour: bool,
+    /// The specular colour (MTL `map_Ks`).
+    pub specular: bool,
+    /// Roughness and metalness (glTF `metallicRoughnessTexture`).
+    pub metallic_roughness: bool,
+}
+
+impl TextureSlots {
+    /// No parameter is texturable.
+    pub const NONE: Self = Self { base_colour: false, specular: false, metallic_roughness: false };
+    /// Only the base colour.
+    pub const BASE_COLOUR: Self = Self { base_colour: true, ..Self::NONE };
+}
+
+/// A material's texture values at one hit, each multiplying the parameter it drives
+/// (glTF 2.0 § 3.9.2: "the texture value is multiplied by the factor"); `None` and 1 leave
+/// the parameter as it is.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Texels<const N: usize> {
+    /// Multiplies the diffuse or base colour.
+    pub base_colour: Option<SampledSpectrum<N>>,
+    /// Multiplies the specular colour.
+    pub specular: Option<SampledSpectrum<N>>,
+    /// Multiplies the perceptual roughness (a texture's green channel in glTF).
+    pub roughness: f32,
+    /// Multiplies the metalness (a texture's blue channel in glTF).
+    pub metallic: f32,
+}
+
+impl<const N: usize> Default for Texels<N> {
+    fn default() -> Self {
+        Self { base_colour: None, specular: None, roughness: 1.0, metallic: 1.0 }
+    }
+}
+
+impl<const N: usize> Texels<N> {
+    /// `value` (a parameter sampled at the path's wavelengths) times the base-colour texel.
+    #[inline]
+    pub fn base(&self, value: SampledSpectrum<N>) -> SampledSpectrum<N> {
+        self.base_colour.map_or(value, |t| t * value)
+    }
+
+    /// `value` times the specular texel.
+    #[inline]
+    pub fn spec(&self, value: SampledSpectrum<N>) -> SampledSpectrum<N> {
+        self.specular.map_or(value, |t| t * value)
+    }
+}
 
 /// A BSDF model, implemented by its typed parameter struct.
 pub trait Model: ParamSet + Clone + std::fmt::Debug + PartialEq + Send + Sync + 'static {
@@ -25,6 +78,16 @@ pub trait Model: ParamSet + Clone + std::fmt::Debug + PartialEq + Send + Sync + 
 
     /// The BSDF at the path's wavelengths (or RGB channels).
     fn bsdf<const N: usize>(&self, wl: &SampledWavelengths<N>) -> Self::Bsdf<N>;
+
+    /// The parameters textures may drive; a loader refuses a texture for any other.
+    const TEXTURE_SLOTS: TextureSlots = TextureSlots::NONE;
+
+    /// The BSDF with its [`TEXTURE_SLOTS`](Model::TEXTURE_SLOTS) parameters multiplied by
+    /// a hit's texels; a model without slots ignores them.
+    fn bsdf_textured<const N: usize>(&self, wl: &SampledWavelengths<N>, texels: &Texels<N>) -> Self::Bsdf<N> {
+        let _ = texels;
+        self.bsdf(wl)
+    }
 
     /// True if light can pass through the surface: the BSDF then sees both sides as they
     /// are (no two-sided flipping), and the geometric normal marks the outside.
@@ -173,6 +236,26 @@ macro_rules! registry {
             pub fn bsdf<const N: usize>(&self, wl: &$crate::spectral::SampledWavelengths<N>) -> ModelBsdf<N> {
                 match self {
                     $(Self::$Variant(p) => ModelBsdf::$Variant($crate::Model::bsdf(p, wl)),)+
+                }
+            }
+
+            /// The BSDF with a hit's texture values (see [`Model::bsdf_textured`]($crate::Model::bsdf_textured)).
+            #[inline]
+            pub fn bsdf_textured<const N: usize>(
+                &self,
+                wl: &$crate::spectral::SampledWavelengths<N>,
+                texels: &$crate::registry::Texels<N>,
+            ) -> ModelBsdf<N> {
+                match self {
+                    $(Self::$Variant(p) => ModelBsdf::$Variant($crate::Model::bsdf_textured(p, wl, texels)),)+
+                }
+            }
+
+            /// See [`Model::TEXTURE_SLOTS`]($crate::Model::TEXTURE_SLOTS).
+            #[inline]
+            pub fn texture_slots(&self) -> $crate::registry::TextureSlots {
+                match self {
+                    $(Self::$Variant(_) => <$Params as $crate::Model>::TEXTURE_SLOTS,)+
                 }
             }
 

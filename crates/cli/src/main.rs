@@ -115,8 +115,33 @@ fn run_info(args: InfoArgs) -> Result<()> {
             names.iter().map(|&(n, k)| if k > 1 { format!("{n} ×{k}") } else { n.to_string() }).collect();
         println!("    {model}: {}", listed.join(", "));
     }
-    let emissive: Vec<&str> =
-        scene.materials.iter().filter(|m| m.emission.is_some()).map(|m| m.name.as_str()).collect();
+    let textured: Vec<&tracer::texture::MaterialTextures> =
+        scene.materials.iter().filter_map(|m| m.textures.as_deref()).collect();
+    if !textured.is_empty() {
+        let (images, bytes) = scene.texture_images();
+        let count = |has: fn(&tracer::texture::MaterialTextures) -> bool| textured.iter().filter(|t| has(t)).count();
+        println!(
+            "  textures: {images} images, {:.1} MB of texels; {} textured materials ({} base colour, {} specular, \
+             {} metallic-roughness, {} normal, {} bump, {} emissive, {} alpha)",
+            bytes as f64 / 1e6,
+            textured.len(),
+            count(|t| t.base_colour.is_some()),
+            count(|t| t.specular.is_some()),
+            count(|t| t.metallic_roughness.is_some()),
+            count(|t| t.normal.is_some()),
+            count(|t| t.bump.is_some()),
+            count(|t| t.emissive.is_some()),
+            count(|t| t.alpha.is_some()),
+        );
+    }
+    let emissive: Vec<String> = scene
+        .materials
+        .iter()
+        .filter(|m| m.emission.is_some())
+        .map(|m| {
+            if m.has_textured_emission() { format!("{} (textured: seen, not sampled)", m.name) } else { m.name.clone() }
+        })
+        .collect();
     let emits = |id: u32| scene.materials.get(id as usize).is_some_and(|m| m.emission.is_some());
     let emitting_triangles = scene.material_ids.iter().filter(|&&id| emits(id)).count();
     let emitting_shapes = scene.shapes.iter().filter(|s| emits(s.material)).count();
@@ -404,6 +429,11 @@ struct SceneArgs {
     /// CPU backend only. A scene so lit gets no default sky.
     #[arg(long = "light", value_name = "LIGHT", value_parser = light_arg::parse_light, allow_hyphen_values = true)]
     lights: Vec<tracer::PunctualLight>,
+    /// Renders the materials without their textures (colour, normal, bump, alpha and
+    /// emission maps): their factors alone, as a backend without textures would need.
+    /// The files are still read.
+    #[arg(long)]
+    no_textures: bool,
 }
 
 /// `--sky`: what lights a scene from infinitely far away.
@@ -706,6 +736,9 @@ fn prepare(
         bail!("{}: the scene has no geometry", args.scene.display());
     }
     scene.punctual_lights.extend(args.lights.iter().cloned());
+    if args.no_textures {
+        scene.strip_textures();
+    }
     apply_sky(&mut scene, &args.sky)?;
     let backend = make_backend(args)?;
     let sampler = args.sampler.unwrap_or_else(|| default_sampler(&backend.capabilities()));

@@ -620,7 +620,11 @@ fn gltf_scenes_render_through_their_cameras_and_report_what_they_ignore() {
     assert!(out.contains("geometry: 128775 triangles"), "{out}");
     assert!(out.contains("camera 0 (render_camera): eye [-0.077, 0.339, 1.803]"), "{out}");
     assert!(out.contains("roughdielectric: ") && out.contains("metallicroughness: "), "{out}");
-    assert!(stderr(&o).contains("9 textures not applied"), "{}", stderr(&o));
+    // Its textures are read (base colours tint the glass, roughness maps roughen it,
+    // masks cut out); the label's emissive texture glows but is not a light.
+    assert!(out.contains("textures: 8 images") && out.contains("7 base colour") && out.contains("6 alpha"), "{out}");
+    assert!(out.contains("LabelMaterial (textured: seen, not sampled)"), "{out}");
+    assert!(stderr(&o).contains("transmission texture is not applied"), "{}", stderr(&o));
 
     let dir = temp_dir("gltf");
     let png = dir.join("glass.png");
@@ -777,4 +781,37 @@ fn a_scene_files_render_table_sets_defaults_that_options_override() {
     std::fs::write(&scene, text.replace("spp = 3", "samples = 3")).unwrap();
     let o = spt(&["render", scene.to_str().unwrap(), "-o", out.to_str().unwrap()]);
     assert!(!o.status.success() && stderr(&o).contains("unknown field `samples`"), "{}", stderr(&o));
+}
+
+#[test]
+fn textured_obj_scenes_render_and_a_missing_texture_is_a_clear_error() {
+    let dir = temp_dir("textures");
+    // The floor with texture coordinates.
+    let with_uvs =
+        OBJ.replace("usemtl white\nf 4 3 2 1", "vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nusemtl white\nf 4/4 3/3 2/2 1/1");
+    assert_ne!(with_uvs, OBJ);
+    let obj = write_scene(&dir, &with_uvs);
+    // The floor gets a red checkerboard; the lamp stays as it is.
+    let checker = image::RgbImage::from_fn(8, 8, |x, y| {
+        image::Rgb(if (x + y).is_multiple_of(2) { [255, 0, 0] } else { [40; 3] })
+    });
+    checker.save(dir.join("checker.png")).unwrap();
+    std::fs::write(dir.join("scene.mtl"), MTL.replace("Kd 0.8 0.8 0.8", "Kd 1 1 1\nmap_Kd checker.png")).unwrap();
+    let out = dir.join("textured.exr");
+    let o = render_small(&obj, (16, 16, 8), &out, &[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let info = spt(&["info", obj.to_str().unwrap()]);
+    let text = String::from_utf8_lossy(&info.stdout);
+    assert!(text.contains("textures: 1 images") && text.contains("1 base colour"), "{text}");
+    // --no-textures: the factor alone (white), beside which the textured floor is red.
+    let plain = dir.join("plain.exr");
+    let o = render_small(&obj, (16, 16, 8), &plain, &["--no-textures"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let ([r, g, _], [pr, pg, _]) = (exr_means(&out), exr_means(&plain));
+    assert!(g < 0.9 * pg && r / g > 1.2 * pr / pg, "textured {r} {g}, plain {pr} {pg}");
+    // A missing image: exit status 1, the material and the file named.
+    std::fs::write(dir.join("scene.mtl"), MTL.replace("Kd 0.8 0.8 0.8", "map_Kd textures/gone.png")).unwrap();
+    let o = render_small(&obj, (16, 16, 8), &out, &[]);
+    let e = stderr(&o);
+    assert!(!o.status.success() && e.contains("material 'white'") && e.contains("gone.png"), "{e}");
 }

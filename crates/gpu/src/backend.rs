@@ -140,6 +140,7 @@ pub fn capabilities_for(integrator: GpuIntegrator) -> Capabilities {
         analytic_shapes: false,
         custom_bsdfs: false,
         punctual_lights: false,
+        textures: false,
         triangle_tests: vec![TriangleTest::Watertight, TriangleTest::MollerTrumbore],
         // Auto is the binary tree: on an H100 the 4-wide one (`crate::wide`) renders 1.2–1.8×
         // slower in this megakernel; it stays selectable for comparisons.

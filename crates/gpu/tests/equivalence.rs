@@ -396,6 +396,17 @@ fn unsupported_scenes_and_modes_are_clear_errors() {
     let err = caps.check_scene(&room, &wide).unwrap_err().to_string();
     assert!(err.contains("8-wide triangle BVH") && err.contains("--bvh-width auto"), "{err}");
     caps.check_scene(&room, &SceneOptions::default()).unwrap();
+    // Textures are refused, naming the first textured material, with the ways out.
+    let mut textured = room.clone();
+    let image = std::sync::Arc::new(tracer::texture::TextureImage::from_rgba8(1, 1, vec![[9, 9, 9, 255]]).unwrap());
+    let map = tracer::texture::TextureMap::new(image, tracer::texture::Encoding::Srgb);
+    let textures = tracer::texture::MaterialTextures { base_colour: Some(map), ..Default::default() };
+    textured.materials[0] = textured.materials[0].clone().with_textures(textures);
+    let err = caps.check_scene(&textured, &SceneOptions::default()).unwrap_err().to_string();
+    let name = &textured.materials[0].name;
+    assert!(err.contains("textures") && err.contains(name.as_str()) && err.contains("--no-textures"), "{err}");
+    textured.strip_textures();
+    caps.check_scene(&textured, &SceneOptions::default()).unwrap();
     let s = settings(8, 8, 1);
     for mode in [SpectralMode::Rgb, SpectralMode::Bins40] {
         let err = caps.check_settings(&RenderSettings { mode, ..s.clone() }).unwrap_err().to_string();

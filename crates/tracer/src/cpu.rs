@@ -91,6 +91,7 @@ fn cpu_capabilities(integrator: &'static str) -> Capabilities {
         analytic_shapes: true,
         custom_bsdfs: true,
         punctual_lights: true,
+        textures: true,
         triangle_tests: vec![TriangleTest::Watertight, TriangleTest::MollerTrumbore],
         bvh_widths: BvhWidth::CPU.to_vec(),
         integrator,

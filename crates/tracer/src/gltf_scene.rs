@@ -34,13 +34,16 @@ use crate::material::{Material, ModelId};
 use crate::mesh::Mesh;
 use crate::punctual::PunctualLight;
 use crate::scene::Scene;
+use crate::texture::{Alpha, AlphaMode, Encoding, MaterialTextures, NormalMap, TextureImage, TextureMap, Wrap};
 use crate::{Error, Result};
+use brdf::TextureSlots;
 use brdf::params::ParamValue;
 use glam::{Mat3, Mat4, Vec3};
 use spectral::spectrum::Colour;
 use std::collections::HashMap;
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 /// How a glTF file is turned into a scene.
 #[derive(Clone, Debug, Default)]
@@ -78,17 +81,8 @@ pub const MAX_TRIANGLES: u64 = 1 << 26;
 
 /// Loads a `.gltf` or `.glb` file and the buffers it names.
 pub fn load_gltf(path: &Path, options: &GltfOptions) -> Result<GltfScene> {
-    let bytes = read_file(path).map_err(|source| Error::Io { path: path.to_path_buf(), source })?;
-    load_gltf_bytes(&bytes, path, options, &read_file)
-}
-
-/// A regular file's bytes: a buffer URI can name anything, and a FIFO would block and
-/// `/dev/zero` never end.
-fn read_file(path: &Path) -> std::io::Result<Vec<u8>> {
-    if !std::fs::metadata(path)?.is_file() {
-        return Err(std::io::Error::new(std::io::ErrorKind::InvalidInput, "not a regular file"));
-    }
-    std::fs::read(path)
+    let bytes = crate::obj::read_file_bytes(path).map_err(|source| Error::Io { path: path.to_path_buf(), source })?;
+    load_gltf_bytes(&bytes, path, options, &crate::obj::read_file_bytes)
 }
 
 /// Converts a glTF file's bytes (JSON or binary): `path` names it in messages and is what
@@ -144,7 +138,14 @@ fn convert(
         return Err(fail("the file has no scene".into()));
     };
 
-    let mut converter = Converter { path, buffers: &buffers, out: GltfScene::empty(), materials: HashMap::new() };
+    let mut converter = Converter {
+        path,
+        buffers: &buffers,
+        out: GltfScene::empty(),
+        materials: HashMap::new(),
+        read,
+        images: HashMap::new(),
+    };
     // Count the triangles the scene expands to before converting any.
     let mut triangles = 0u64;
     walk(&gltf_scene, &mut |node, _| {
@@ -195,10 +196,6 @@ fn convert(
     if out.cameras.len() < camera_count {
         out.notes
             .push(format!("{} of {camera_count} cameras are not placed by any node", camera_count - out.cameras.len()));
-    }
-    let textures = document.textures().count();
-    if textures > 0 {
-        out.notes.push(format!("{textures} textures not applied (materials use their factors)"));
     }
     if out.scene.triangles.is_empty() {
         return Err(fail("the scene has no triangles".into()));
@@ -325,6 +322,10 @@ struct Converter<'a> {
     out: GltfScene,
     /// The scene's material index for each glTF material (None: glTF's default material).
     materials: HashMap<Option<usize>, u32>,
+    /// Reads files the glTF names (buffers, images).
+    read: &'a dyn Fn(&Path) -> std::io::Result<Vec<u8>>,
+    /// Decoded images by index (each decoded once, however many textures use it).
+    images: HashMap<usize, Arc<TextureImage>>,
 }
 
 impl Converter<'_> {
@@ -537,7 +538,8 @@ impl Converter<'_> {
             (Some(i), None) => format!("material {i}"),
             (None, None) => "(default)".to_string(),
         };
-        let fail = |what: String| self.fail(format!("material '{name}': {what}"));
+        let path = self.path;
+        let fail = |what: String| Error::parse(path, format!("material '{name}': {what}"));
         let pbr = m.pbr_metallic_roughness();
         let [r, g, b, alpha] = pbr.base_color_factor();
         let base = [r, g, b];
@@ -575,15 +577,54 @@ impl Converter<'_> {
             (ModelId::MetallicRoughness, params)
         };
         let mut material = Material::builtin(&name, model, &params).map_err(|e| fail(e.to_string()))?;
+        let slots = material.params().map_or(TextureSlots::NONE, |p| p.texture_slots());
+        let mut textures = MaterialTextures::default();
+        if let Some(info) = pbr.base_color_texture() {
+            if slots.base_colour {
+                textures.base_colour = self.texture_info(&name, &info, Encoding::Srgb)?;
+            } else {
+                self.out.note(format!("material '{name}': base colour texture not applied to a {}", model.name()));
+            }
+        }
+        if let Some(info) = pbr.metallic_roughness_texture() {
+            if slots.metallic_roughness {
+                textures.metallic_roughness = self.texture_info(&name, &info, Encoding::Linear)?;
+            } else {
+                self.out
+                    .note(format!("material '{name}': metallic-roughness texture not applied to a {}", model.name()));
+            }
+        }
+        if let Some(normal) = m.normal_texture() {
+            let map = self.texture(&name, &normal.texture(), normal.tex_coord(), None, Encoding::Linear)?;
+            textures.normal = map.map(|map| NormalMap { map, scale: normal.scale() });
+        }
+        if m.transmission().is_some_and(|t| t.transmission_texture().is_some()) {
+            self.out.note(format!(
+                "material '{name}': its transmission texture is not applied (the transmission factor decides)"
+            ));
+        }
+        if m.occlusion_texture().is_some() {
+            self.out.note("occlusion textures are not applied (paths find occlusion themselves)".into());
+        }
         let strength = m.emissive_strength().unwrap_or(1.0);
         let emissive = m.emissive_factor().map(|c| c * strength);
-        if m.emissive_texture().is_some() {
-            // The factor scales a texture that is mostly black: alone, it would make the
-            // whole surface glow.
-            self.out.note(format!("material '{name}': emissive texture not applied, so it does not emit"));
-        } else if emissive.iter().any(|&c| c != 0.0) {
+        if let Some(info) = m.emissive_texture() {
+            textures.emissive = self.texture_info(&name, &info, Encoding::Srgb)?;
+        }
+        let emissive_texture_missing = m.emissive_texture().is_some() && textures.emissive.is_none();
+        if emissive.iter().any(|&c| c != 0.0) && !emissive_texture_missing {
             material.emission = Some(Colour::illuminant_rgb(emissive).map_err(|e| fail(format!("emission: {e}")))?);
         }
+        let mode = match m.alpha_mode() {
+            gltf::material::AlphaMode::Opaque => AlphaMode::Opaque,
+            gltf::material::AlphaMode::Mask => AlphaMode::Mask { cutoff: m.alpha_cutoff().unwrap_or(0.5) },
+            gltf::material::AlphaMode::Blend => AlphaMode::Blend,
+        };
+        if mode != AlphaMode::Opaque {
+            let map = textures.base_colour.clone().filter(|m| m.image.has_alpha());
+            textures.alpha = Some(Alpha { mode, factor: alpha, map });
+        }
+        material = material.with_textures(textures);
         let mixed = transmission * (1.0 - metallic);
         if mixed > 0.0 && mixed < 1.0 {
             let as_what = if transmissive { "fully transmissive" } else { "opaque" };
@@ -591,10 +632,97 @@ impl Converter<'_> {
                 "material '{name}': transmission {transmission} at metallic {metallic} rendered {as_what} (no partial mix yet)"
             ));
         }
-        if m.alpha_mode() != gltf::material::AlphaMode::Opaque || alpha < 1.0 {
-            self.out.note("alpha modes (MASK, BLEND) are ignored: surfaces render opaque".into());
-        }
         Ok(material)
+    }
+
+    /// The texture a material's texture reference names, with its transform.
+    fn texture_info(
+        &mut self,
+        material: &str,
+        info: &gltf::texture::Info,
+        encoding: Encoding,
+    ) -> Result<Option<TextureMap>> {
+        let transform = info.texture_transform();
+        let tex_coord = transform.as_ref().and_then(|t| t.tex_coord()).unwrap_or(info.tex_coord());
+        self.texture(material, &info.texture(), tex_coord, transform, encoding)
+    }
+
+    /// A glTF texture as a map: its image decoded (once), its sampler's wrap modes and
+    /// `KHR_texture_transform` (glTF's uv' = T · R · S · uv, rotation counter-clockwise
+    /// in uv space); `None`, with a note, for texture coordinates other than
+    /// `TEXCOORD_0`.
+    fn texture(
+        &mut self,
+        material: &str,
+        texture: &gltf::Texture,
+        tex_coord: u32,
+        transform: Option<gltf::texture::TextureTransform>,
+        encoding: Encoding,
+    ) -> Result<Option<TextureMap>> {
+        if tex_coord != 0 {
+            self.out.note(format!(
+                "material '{material}': a texture on TEXCOORD_{tex_coord} is not applied (only TEXCOORD_0 is read)"
+            ));
+            return Ok(None);
+        }
+        let image = self.image(material, &texture.source())?;
+        let wrap = |w: gltf::texture::WrappingMode| match w {
+            gltf::texture::WrappingMode::ClampToEdge => Wrap::Clamp,
+            gltf::texture::WrappingMode::MirroredRepeat => Wrap::Mirror,
+            gltf::texture::WrappingMode::Repeat => Wrap::Repeat,
+        };
+        let sampler = texture.sampler();
+        let mut map = TextureMap::new(image, encoding);
+        map.wrap = [wrap(sampler.wrap_s()), wrap(sampler.wrap_t())];
+        if let Some(t) = transform {
+            let (sin, cos) = t.rotation().sin_cos();
+            let [ox, oy] = t.offset();
+            let [sx, sy] = t.scale();
+            // Columns of T·R·S with R = [[cos, sin], [−sin, cos]] (the extension's matrix).
+            map.transform = Mat3::from_cols(
+                Vec3::new(cos * sx, -sin * sx, 0.0),
+                Vec3::new(sin * sy, cos * sy, 0.0),
+                Vec3::new(ox, oy, 1.0),
+            );
+            if !map.transform.is_finite() {
+                return Err(self.fail(format!("material '{material}': KHR_texture_transform is not finite")));
+            }
+        }
+        Ok(Some(map))
+    }
+
+    /// `images[i]` decoded: from a buffer view, a data URI or a file next to the glTF.
+    fn image(&mut self, material: &str, image: &gltf::Image) -> Result<Arc<TextureImage>> {
+        let i = image.index();
+        if let Some(decoded) = self.images.get(&i) {
+            return Ok(decoded.clone());
+        }
+        let fail = |message: String| Error::Texture {
+            material: material.into(),
+            texture: format!("{}: images[{i}]", self.path.display()),
+            message,
+        };
+        let bytes = match image.source() {
+            gltf::image::Source::View { view, .. } => {
+                let data = self.buffers.get(view.buffer().index()).map_or(&[][..], |d| &d.0[..]);
+                let range = view.offset()..view.offset().saturating_add(view.length());
+                data.get(range)
+                    .ok_or_else(|| fail(format!("bufferViews[{}] lies outside its buffer", view.index())))?
+                    .to_vec()
+            }
+            gltf::image::Source::Uri { uri, .. } if uri.starts_with("data:") => {
+                gltf::buffer::Data::from_source_and_blob(gltf::buffer::Source::Uri(uri), None, &mut None)
+                    .map_err(|e| fail(format!("data URI: {e}")))?
+                    .0
+            }
+            gltf::image::Source::Uri { uri, .. } => {
+                let file = self.path.parent().unwrap_or(Path::new("")).join(percent_decode(uri));
+                (self.read)(&file).map_err(|e| fail(format!("cannot read {}: {e}", file.display())))?
+            }
+        };
+        let decoded = Arc::new(TextureImage::decode(&bytes).map_err(fail)?);
+        self.images.insert(i, decoded.clone());
+        Ok(decoded)
     }
 }
 

@@ -132,6 +132,9 @@ pub struct SceneView<'a> {
     pub lights: &'a Lights,
     /// Whether any material disperses (looked up once here, not per sample).
     dispersive: bool,
+    /// Whether any material has cut-outs or transparency: rays then pass through
+    /// surfaces where its alpha says so (looked up once; scenes without pay nothing).
+    cutouts: bool,
 }
 
 /// Surface data at a hit.
@@ -146,6 +149,8 @@ struct Interaction {
     tangent: Vec3,
     /// Triangle area (for light pdfs).
     area: f32,
+    /// Interpolated texture coordinates (zero where the mesh has none).
+    uv: Vec2,
 }
 
 impl Interaction {
@@ -161,7 +166,8 @@ impl<'a> SceneView<'a> {
     /// The view of a scene with its accelerators and emitters.
     pub fn new(scene: &'a Scene, geometry: &'a Geometry, lights: &'a Lights) -> Self {
         let dispersive = scene.materials.iter().any(|m| m.is_dispersive());
-        Self { scene, geometry, lights, dispersive }
+        let cutouts = scene.materials.iter().any(|m| m.alpha().is_some());
+        Self { scene, geometry, lights, dispersive, cutouts }
     }
 
     /// Whether any of the scene's materials disperses light.
@@ -205,24 +211,94 @@ impl<'a> SceneView<'a> {
         if self.lights.suns().is_empty() { env } else { env + self.suns_seen(dir, wl, None) }
     }
 
-    /// The closest hit along `ray`.
+    /// The closest hit along `ray` (passing through cut-outs).
     #[inline]
     pub fn intersect(&self, ray: &Ray) -> Option<SceneHit> {
-        self.geometry.intersect(&self.scene.shapes, ray)
+        let hit = self.geometry.intersect(&self.scene.shapes, ray);
+        if self.cutouts { self.through_cutouts(ray, hit) } else { hit }
     }
 
-    /// True if anything blocks `ray`.
+    /// True if anything blocks `ray` (cut-outs and transparency let it pass).
     #[inline]
     pub fn occluded(&self, ray: &Ray) -> bool {
-        self.geometry.occluded(&self.scene.shapes, ray)
+        if self.cutouts {
+            let hit = self.geometry.intersect(&self.scene.shapes, ray);
+            self.through_cutouts(ray, hit).is_some()
+        } else {
+            self.geometry.occluded(&self.scene.shapes, ray)
+        }
     }
 
-    fn interaction(&self, hit: &SceneHit, shading: ShadingNormals) -> Interaction {
+    /// The first hit from `hit` on along `ray` that alpha does not let through: each hit
+    /// on a material with alpha is tested at its texture coordinates, and the ray goes on
+    /// past it where the surface is absent (a closest-hit query per layer: only scenes
+    /// with cut-outs pay for it).
+    #[cold]
+    fn through_cutouts(&self, ray: &Ray, mut hit: Option<SceneHit>) -> Option<SceneHit> {
+        // A bound on the layers: a ray grazing a stack of cut-out cards ends as blocked.
+        for _ in 0..256 {
+            let h = hit?;
+            let Some(alpha) = self.material(h.prim).alpha() else { return Some(h) };
+            let uv = self.uv_at(&h);
+            if !alpha.passes(uv, crate::texture::alpha_hash(ray.origin, ray.dir, h.prim)) {
+                return Some(h);
+            }
+            hit = self.geometry.intersect(&self.scene.shapes, &Ray { t_min: h.t, ..*ray });
+        }
+        hit
+    }
+
+    /// Texture coordinates at a hit (zero without any).
+    #[inline]
+    fn uv_at(&self, hit: &SceneHit) -> Vec2 {
+        let scene = self.scene;
+        match hit.surface {
+            HitSurface::Triangle { u, v } if !scene.uvs.is_empty() => {
+                let [t0, t1, t2] = scene.triangles[hit.prim as usize].map(|i| Vec2::from_array(scene.uvs[i as usize]));
+                (1.0 - u - v) * t0 + u * t1 + v * t2
+            }
+            _ => Vec2::ZERO,
+        }
+    }
+
+    /// Surface data at `hit` on `material`, its shading normal bent by the material's
+    /// normal or bump map.
+    fn interaction(&self, hit: &SceneHit, material: &Material, shading: ShadingNormals) -> Interaction {
+        let mut it = self.surface_at(hit, shading);
+        if let Some(t) = &material.textures
+            && (t.normal.is_some() || t.bump.is_some())
+            && shading != ShadingNormals::Geometric
+            && let HitSurface::Triangle { .. } = hit.surface
+            && !self.scene.uvs.is_empty()
+        {
+            let scene = self.scene;
+            let tri = scene.triangles[hit.prim as usize];
+            let p = tri.map(|i| Vec3::from_array(scene.positions[i as usize]));
+            let uv = tri.map(|i| Vec2::from_array(scene.uvs[i as usize]));
+            let (dpdu, dpdv) = crate::texture::triangle_uv_derivatives(p, uv);
+            let n = t.bent_normal(it.uv, it.ns, dpdu, dpdv);
+            // Kept on the geometric normal's side, as every shading normal is.
+            it.ns = if n.dot(it.ng) < 0.0 { (n - 2.0 * n.dot(it.ng) * it.ng).normalize_or(it.ng) } else { n };
+            if it.tangent != Vec3::ZERO || dpdu != Vec3::ZERO {
+                it.tangent = dpdu;
+            }
+        }
+        it
+    }
+
+    fn surface_at(&self, hit: &SceneHit, shading: ShadingNormals) -> Interaction {
         let (u, v) = match hit.surface {
             HitSurface::Triangle { u, v } => (u, v),
             HitSurface::Shape(h) => {
                 let shape = self.scene.shapes[(hit.prim - self.geometry.triangle_count()) as usize].shape.shape();
-                return Interaction { p: h.p, ng: h.n, ns: h.n, tangent: Vec3::ZERO, area: shape.area() };
+                return Interaction {
+                    p: h.p,
+                    ng: h.n,
+                    ns: h.n,
+                    tangent: Vec3::ZERO,
+                    area: shape.area(),
+                    uv: Vec2::ZERO,
+                };
             }
         };
         let scene = self.scene;
@@ -248,7 +324,13 @@ impl<'a> SceneView<'a> {
             let [t0, t1, t2] = tri.map(|i| Vec3::from_array(scene.tangents[i as usize]));
             b0 * t0 + u * t1 + v * t2
         };
-        Interaction { p, ng, ns, tangent, area }
+        let uv = if scene.uvs.is_empty() {
+            Vec2::ZERO
+        } else {
+            let [t0, t1, t2] = tri.map(|i| Vec2::from_array(scene.uvs[i as usize]));
+            b0 * t0 + u * t1 + v * t2
+        };
+        Interaction { p, ng, ns, tangent, area, uv }
     }
 
     #[inline]
@@ -497,8 +579,8 @@ fn path_radiance<const N: usize, S: Sampler>(
             }
             break;
         };
-        let it = view.interaction(&hit, settings.shading_normals);
         let material = view.material(hit.prim);
+        let it = view.interaction(&hit, material, settings.shading_normals);
         let wo_world = -ray.dir;
         let front = wo_world.dot(it.ng) > 0.0;
 
@@ -507,10 +589,7 @@ fn path_radiance<const N: usize, S: Sampler>(
         }
 
         // Emission seen by this path (one-sided: front face only).
-        if let Some(e) = &material.emission
-            && front
-        {
-            let le = e.sample(wl);
+        if front && let Some(le) = material.emission_at(it.uv, wl) {
             let w = if prev_specular {
                 1.0
             } else {
@@ -525,7 +604,7 @@ fn path_radiance<const N: usize, S: Sampler>(
         if settings.max_depth > 0 && bounce >= settings.max_depth {
             // Past the limit, continue only through purely specular surfaces, while the
             // extension lasts.
-            let flags = material.bsdf(wl).flags();
+            let flags = material.bsdf_at(it.uv, wl).flags();
             if extension_left == 0 || !flags.is_specular() || flags.is_non_specular() {
                 break;
             }
@@ -547,7 +626,7 @@ fn path_radiance<const N: usize, S: Sampler>(
         let (ng, ns) = shading_normals(settings.shading_normals, it.ng, it.ns, wo_world, material.is_two_sided());
         let frame = Frame::from_normal_tangent(ns, it.tangent);
         let wo = frame.to_local(wo_world);
-        let bsdf = material.bsdf(wl);
+        let bsdf = material.bsdf_at(it.uv, wl);
         let flags = bsdf.flags();
 
         // Next-event estimation: one shadow ray to a point on a light.

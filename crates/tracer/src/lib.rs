@@ -31,6 +31,7 @@ pub mod scene_file;
 pub mod scenes;
 pub mod shading;
 pub mod spec;
+pub mod texture;
 
 pub use accumulation::{Accumulation, FilmAccumulation};
 pub use camera::Camera;
@@ -76,6 +77,16 @@ pub enum Error {
         line: usize,
         /// The 1-based column (in characters).
         column: usize,
+        /// What is wrong.
+        message: String,
+    },
+    /// A texture cannot be read or used.
+    #[error("material '{material}': texture '{texture}': {message}")]
+    Texture {
+        /// The material naming it.
+        material: String,
+        /// The file (or, inside a glTF file, `images[i]`).
+        texture: String,
         /// What is wrong.
         message: String,
     },

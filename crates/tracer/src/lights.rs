@@ -94,7 +94,10 @@ impl Lights {
         let mut power = Vec::new();
         let mut prim_pmf = vec![0.0; triangles + scene.shapes.len()];
         let mut push = |prim: usize, area: f32, material: u32| {
-            if let Some(e) = &scene.materials[material as usize].emission {
+            let m = &scene.materials[material as usize];
+            // An emissive texture varies the power over the surface: such emitters are
+            // left to the paths that hit them (weight 1), not sampled.
+            if let Some(e) = m.emission.as_ref().filter(|_| !m.has_textured_emission()) {
                 let p = PI * area * e.luminance().max(0.0);
                 if p > 0.0 && p.is_finite() {
                     prims.push(prim as u32);

@@ -12,6 +12,8 @@ use spectral::spectrum::Colour;
 use spectral::{SampledSpectrum, SampledWavelengths};
 use std::sync::Arc;
 
+use crate::texture::{Alpha, AlphaMode, MaterialTextures};
+
 pub use brdf::{ModelId, ModelParams};
 
 /// How a surface scatters light.
@@ -46,6 +48,8 @@ pub struct Material {
     pub surface: Surface,
     /// Emitted radiance, on the front face only (counter-clockwise winding), or `None`.
     pub emission: Option<Colour>,
+    /// Textures that modulate its parameters, normal, emission and alpha, or `None`.
+    pub textures: Option<Arc<MaterialTextures>>,
 }
 
 impl Material {
@@ -57,7 +61,7 @@ impl Material {
 
     /// A registered model with parameters already typed (e.g. `LambertParams { .. }.into()`).
     pub fn from_params(name: &str, params: ModelParams) -> Self {
-        Self { name: name.into(), surface: Surface::Builtin(params), emission: None }
+        Self { name: name.into(), surface: Surface::Builtin(params), emission: None, textures: None }
     }
 
     /// A Lambertian material; the albedo must lie in [0, 1].
@@ -85,13 +89,51 @@ impl Material {
 
     /// A material whose BSDF comes from outside the workspace.
     pub fn custom(name: &str, builder: Arc<dyn DynBsdfBuilder>, transmissive: bool) -> Self {
-        Self { name: name.into(), surface: Surface::Custom { builder, transmissive }, emission: None }
+        Self { name: name.into(), surface: Surface::Custom { builder, transmissive }, emission: None, textures: None }
     }
 
     /// This material, emitting `radiance` from its front faces.
     pub fn with_emission(mut self, radiance: Colour) -> Self {
         self.emission = Some(radiance);
         self
+    }
+
+    /// This material with `textures` (none if they are empty).
+    pub fn with_textures(mut self, textures: MaterialTextures) -> Self {
+        self.textures = (!textures.is_empty()).then(|| Arc::new(textures));
+        self
+    }
+
+    /// Whether an emissive texture modulates the emission: such an emitter is found only
+    /// by paths that hit it, never sampled as a light (its power varies over the surface).
+    #[inline]
+    pub fn has_textured_emission(&self) -> bool {
+        self.textures.as_ref().is_some_and(|t| t.emissive.is_some())
+    }
+
+    /// The material's alpha, if it can be (partly) transparent.
+    #[inline]
+    pub fn alpha(&self) -> Option<&Alpha> {
+        self.textures.as_ref()?.alpha.as_ref().filter(|a| a.mode != AlphaMode::Opaque)
+    }
+
+    /// The BSDF at a hit with texture coordinates `uv` (textures applied, if any).
+    #[inline]
+    pub fn bsdf_at<const N: usize>(&self, uv: Vec2, wl: &SampledWavelengths<N>) -> MaterialBsdf<'_, N> {
+        match (&self.surface, &self.textures) {
+            (Surface::Builtin(p), Some(t)) => MaterialBsdf::Builtin(p.bsdf_textured(wl, &t.texels(uv, wl))),
+            _ => self.bsdf(wl),
+        }
+    }
+
+    /// The emitted radiance at a hit with texture coordinates `uv`, if any.
+    #[inline]
+    pub fn emission_at<const N: usize>(&self, uv: Vec2, wl: &SampledWavelengths<N>) -> Option<SampledSpectrum<N>> {
+        let e = self.emission.as_ref()?.sample(wl);
+        Some(match &self.textures {
+            Some(t) if t.emissive.is_some() => e * t.emission_scale(uv, wl),
+            _ => e,
+        })
     }
 
     /// True if the BSDF acts on both faces the same way (everything that does not

@@ -26,6 +26,28 @@ pub struct Statement {
     pub line: usize,
 }
 
+/// The texture statements of the format (checked for syntax; the renderer applies
+/// `map_Kd`, `map_Ks`, `map_d`, `norm`/`map_Kn` and `bump`/`map_bump`).
+pub const TEXTURE_KEYS: &[&str] = &[
+    "map_Ka", "map_Kd", "map_Ks", "map_Ke", "map_Ns", "map_d", "map_bump", "bump", "norm", "map_Kn", "disp", "decal",
+    "refl",
+];
+
+/// A texture statement's file and options (see [`Statement::texture`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct TextureStatement {
+    /// The image file, relative to the MTL file.
+    pub file: String,
+    /// `-o u v w`: added to the texture coordinates (OBJ's, v upwards).
+    pub offset: [f32; 3],
+    /// `-s u v w`: multiplies the texture coordinates.
+    pub scale: [f32; 3],
+    /// `-clamp on`: clamp instead of tiling.
+    pub clamp: bool,
+    /// `-bm`: the bump multiplier.
+    pub bump: f32,
+}
+
 /// A malformed statement: where and why (the caller knows the file).
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct MtlError {
@@ -95,6 +117,69 @@ impl Statement {
         }
     }
 
+    /// A texture statement (`map_Kd [-options] file`): its file and the options we use
+    /// (`-o`, `-s`, `-clamp`, `-bm`); the other options of the format are skipped with
+    /// their arguments. The file is the rest of the line (it may contain spaces); the last
+    /// word is always part of it, even if it starts with a minus sign.
+    pub fn texture(&self) -> Result<TextureStatement, MtlError> {
+        let mut t =
+            TextureStatement { file: String::new(), offset: [0.0; 3], scale: [1.0; 3], clamp: false, bump: 1.0 };
+        let toks: Vec<&str> = self.values.split_whitespace().collect();
+        let mut i = 0;
+        let number = |tok: Option<&&str>| tok.and_then(|t| t.parse::<f32>().ok()).filter(|v| v.is_finite());
+        while i + 1 < toks.len() && toks[i].starts_with('-') && toks[i].len() > 1 && number(Some(&toks[i])).is_none() {
+            let option = toks[i];
+            i += 1;
+            let mut values = Vec::new();
+            let (least, most) = match option {
+                "-o" | "-s" | "-t" => (1, 3),
+                "-mm" => (2, 2),
+                "-bm" | "-boost" | "-texres" => (1, 1),
+                "-blendu" | "-blendv" | "-cc" | "-clamp" | "-imfchan" | "-type" => {
+                    let Some(word) = toks.get(i) else {
+                        return Err(self.error(format!("{}: {option} needs a value", self.key)));
+                    };
+                    if option == "-clamp" {
+                        t.clamp = match *word {
+                            "on" => true,
+                            "off" => false,
+                            other => {
+                                return Err(self.error(format!(
+                                    "{}: -clamp '{}' is not on or off",
+                                    self.key,
+                                    quote(other)
+                                )));
+                            }
+                        };
+                    }
+                    i += 1;
+                    continue;
+                }
+                other => return Err(self.error(format!("{}: unknown option '{}'", self.key, quote(other)))),
+            };
+            while values.len() < most
+                && let Some(v) = number(toks.get(i))
+            {
+                values.push(v);
+                i += 1;
+            }
+            if values.len() < least {
+                return Err(self.error(format!("{}: {option} needs {least} number(s)", self.key)));
+            }
+            match option {
+                "-o" => t.offset[..values.len()].copy_from_slice(&values),
+                "-s" => t.scale[..values.len()].copy_from_slice(&values),
+                "-bm" => t.bump = values[0],
+                _ => {}
+            }
+        }
+        t.file = toks[i.min(toks.len())..].join(" ");
+        if t.file.is_empty() {
+            return Err(self.error(format!("{} names no file", self.key)));
+        }
+        Ok(t)
+    }
+
     /// An `illum` statement: the illumination model, 0–10.
     pub fn illum(&self) -> Result<u8, MtlError> {
         let mut toks = self.values.split_whitespace();
@@ -110,6 +195,7 @@ impl Statement {
             "Ka" | "Kd" | "Ks" | "Ke" | "Tf" => self.colour().map(drop),
             "Ns" | "Ni" | "d" | "Tr" => self.scalar().map(drop),
             "illum" => self.illum().map(drop),
+            key if TEXTURE_KEYS.contains(&key) => self.texture().map(drop),
             _ => Ok(()),
         }
     }
@@ -218,6 +304,31 @@ mod tests {
         assert_eq!(m[0].get("map_Kd").unwrap().values, "my#tex.png");
         assert_eq!(m[1].get("Ks").unwrap().colour(), Ok([0.1, 0.2, 0.3]));
         assert!(m[1].get("Kd").is_none());
+    }
+
+    #[test]
+    fn texture_statements_give_their_file_and_options() {
+        let st = |values: &str| Statement { key: "map_Kd".into(), values: values.into(), line: 7 };
+        let t = st("-s 2 3 -o 0.5 -clamp on -bm 0.25 -blendu off -mm 0 1 -imfchan r my tex.png").texture().unwrap();
+        assert_eq!(t.file, "my tex.png");
+        assert_eq!((t.scale, t.offset, t.clamp, t.bump), ([2.0, 3.0, 1.0], [0.5, 0.0, 0.0], true, 0.25));
+        let plain = st("brick.jpg").texture().unwrap();
+        assert_eq!((plain.file.as_str(), plain.scale, plain.clamp, plain.bump), ("brick.jpg", [1.0; 3], false, 1.0));
+        // A file name that starts with a minus sign and a number is still a file.
+        assert_eq!(st("-o 1 -2.png").texture().unwrap().file, "-2.png");
+        for (bad, needle) in [
+            ("", "names no file"),
+            ("-s 2", "names no file"),
+            ("-clamp maybe x.png", "-clamp 'maybe'"),
+            ("-bm x.png", "-bm needs 1"),
+            ("-frobnicate 3 x.png", "unknown option '-frobnicate'"),
+        ] {
+            let e = st(bad).texture().unwrap_err();
+            assert!(e.message.contains(needle) && e.line == 7, "{bad}: {e:?}");
+        }
+        // Texture statements are checked when the library is read.
+        let e = parse_mtl("newmtl a\nmap_Kd -bm x y\n").unwrap_err();
+        assert_eq!(e.line, 2, "{e:?}");
     }
 
     #[test]

@@ -31,6 +31,9 @@ use crate::material::{Material, ModelId};
 use crate::mesh::Mesh;
 use crate::mtl::{self, MtlMaterial, Numbers, Statement, quote, shorten};
 use crate::scene::Scene;
+use crate::texture::{
+    Alpha, AlphaMode, BumpMap, Encoding, MaterialTextures, NormalMap, TextureCache, TextureMap, Wrap,
+};
 use crate::{Error, Result};
 use brdf::params::ParamValue;
 use glam::Vec3;
@@ -57,14 +60,20 @@ pub(crate) fn read_text_file(path: &Path) -> Result<String> {
 /// A scene file's text (invalid UTF-8 replaced). Only regular files: a mutated `mtllib`
 /// can name anything, and a FIFO would block and `/dev/zero` never end.
 fn read_text(path: &Path) -> std::io::Result<String> {
-    if !std::fs::metadata(path)?.is_file() {
-        return Err(std::io::Error::new(std::io::ErrorKind::InvalidInput, "not a regular file"));
-    }
-    let bytes = std::fs::read(path)?;
+    let bytes = read_file_bytes(path)?;
     Ok(match String::from_utf8(bytes) {
         Ok(text) => text,
         Err(e) => String::from_utf8_lossy(e.as_bytes()).into_owned(),
     })
+}
+
+/// A regular file's bytes: a name from a scene file can name anything, and a FIFO would
+/// block and `/dev/zero` never end.
+pub(crate) fn read_file_bytes(path: &Path) -> std::io::Result<Vec<u8>> {
+    if !std::fs::metadata(path)?.is_file() {
+        return Err(std::io::Error::new(std::io::ErrorKind::InvalidInput, "not a regular file"));
+    }
+    std::fs::read(path)
 }
 
 /// Loads an OBJ scene from its text, without touching the disk: `path` names the OBJ in
@@ -142,9 +151,10 @@ pub fn load_obj_text(text: &str, path: &Path, read_mtl: &dyn Fn(&Path) -> std::i
         }
     };
     let mut converted = Vec::new();
+    let mut textures = TextureCache::default();
     for library in libraries.into_inner() {
         for m in &library.materials {
-            converted.push(to_material(&library.path, m)?);
+            converted.push(to_material(&library.path, m, &mut textures)?);
         }
     }
     let default = MtlMaterial {
@@ -152,7 +162,7 @@ pub fn load_obj_text(text: &str, path: &Path, read_mtl: &dyn Fn(&Path) -> std::i
         line: 0,
         statements: vec![Statement { key: "Kd".into(), values: DEFAULT_ALBEDO.to_string(), line: 0 }],
     };
-    let default = to_material(path, &default)?;
+    let default = to_material(path, &default, &mut textures)?;
     let mut scene = Scene::default();
     for model in &models {
         let mesh = &model.mesh;
@@ -193,7 +203,7 @@ struct Library {
 /// uses the material API (`Material::builtin`, `ModelId`, the parameter
 /// declarations), so that changes there touch one function. Errors name `lib`, the
 /// line and the material.
-fn to_material(lib: &Path, m: &MtlMaterial) -> Result<Material> {
+fn to_material(lib: &Path, m: &MtlMaterial, cache: &mut TextureCache) -> Result<Material> {
     let at = |line: usize, message: String| Error::Parse {
         path: lib.to_path_buf(),
         line: Some(line),
@@ -227,7 +237,8 @@ fn to_material(lib: &Path, m: &MtlMaterial) -> Result<Material> {
     } else {
         let illum = m.get("illum").map(Statement::illum).transpose().map_err(syntax)?.unwrap_or(2);
         let opacity = m.dissolve().map_err(syntax)?.unwrap_or(1.0);
-        if matches!(illum, 4 | 6 | 7) || opacity < 1.0 {
+        // With `map_d`, `d` scales a cut-out's alpha rather than making glass.
+        if matches!(illum, 4 | 6 | 7) || (opacity < 1.0 && !m.has("map_d")) {
             ModelId::Dielectric
         } else if matches!(illum, 3 | 5) {
             ModelId::Mirror
@@ -256,7 +267,64 @@ fn to_material(lib: &Path, m: &MtlMaterial) -> Result<Material> {
         Error::Parse { path: lib.to_path_buf(), line: Some(line), message: e.to_string() }
     })?;
     material.emission = emission;
-    Ok(material)
+    let textures = material_textures(lib, m, &material, cache)?;
+    Ok(material.with_textures(textures))
+}
+
+/// The texture maps an MTL material names, read relative to its library: `map_Kd` and
+/// `map_Ks` where the model has a base or specular colour to multiply (ignored
+/// otherwise), `map_d` as stochastic transparency times `d`, `norm`/`map_Kn` as a
+/// tangent-space normal map (`-bm` scales its slopes) and `bump`/`map_bump` as a height
+/// map (`-bm` world units per unit of height). A missing or unreadable image is an error
+/// naming the material and the file.
+fn material_textures(
+    lib: &Path,
+    m: &MtlMaterial,
+    material: &Material,
+    cache: &mut TextureCache,
+) -> Result<MaterialTextures> {
+    let dir = lib.parent().unwrap_or(Path::new(""));
+    let slots = material.params().map_or(brdf::TextureSlots::NONE, |p| p.texture_slots());
+    let mut map = |key: &str, encoding: Encoding| -> Result<Option<(TextureMap, f32)>> {
+        let Some(statement) = m.get(key) else { return Ok(None) };
+        let t = statement.texture().map_err(|e| Error::Parse {
+            path: lib.to_path_buf(),
+            line: Some(e.line),
+            message: format!("material '{}': {}", m.name, e.message),
+        })?;
+        let image = cache.load(&dir.join(t.file.replace('\\', "/")), &m.name)?;
+        let mut map = TextureMap::new(image, encoding);
+        if t.clamp {
+            map.wrap = [Wrap::Clamp; 2];
+        }
+        if t.offset[..2] != [0.0; 2] || t.scale[..2] != [1.0; 2] {
+            // uv' = uv·s + o in OBJ's coordinates (v upwards); ours have v' = 1 − v.
+            let [su, sv, _] = t.scale;
+            let [ou, ov, _] = t.offset;
+            map.transform = glam::Mat3::from_cols(
+                Vec3::new(su, 0.0, 0.0),
+                Vec3::new(0.0, sv, 0.0),
+                Vec3::new(ou, 1.0 - sv - ov, 1.0),
+            );
+        }
+        Ok(Some((map, t.bump)))
+    };
+    let mut textures = MaterialTextures::default();
+    if slots.base_colour {
+        textures.base_colour = map("map_Kd", Encoding::Srgb)?.map(|(m, _)| m);
+    }
+    if slots.specular {
+        textures.specular = map("map_Ks", Encoding::Srgb)?.map(|(m, _)| m);
+    }
+    if let Some((map, _)) = map("map_d", Encoding::Linear)? {
+        let factor = m.dissolve().ok().flatten().unwrap_or(1.0);
+        textures.alpha = Some(Alpha { mode: AlphaMode::Blend, factor, map: Some(map) });
+    }
+    let normal = if m.has("norm") { "norm" } else { "map_Kn" };
+    textures.normal = map(normal, Encoding::Linear)?.map(|(map, scale)| NormalMap { map, scale });
+    let bump = if m.has("map_bump") { "map_bump" } else { "bump" };
+    textures.bump = map(bump, Encoding::Linear)?.map(|(map, scale)| BumpMap { map, scale });
+    Ok(textures)
 }
 
 /// Checks an OBJ text line by line and returns the text `tobj` is given, or the first
@@ -431,6 +499,53 @@ mod tests {
 #[cfg(test)]
 mod obj_tests {
     use super::*;
+
+    /// A textured quad's OBJ and MTL in a fresh directory, with a 2×1 PNG `tex.png`.
+    fn textured_dir(name: &str, mtl: &str) -> PathBuf {
+        let dir = std::env::temp_dir().join(format!("spt-obj-textures-{name}-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let obj = "mtllib q.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nvt 0 0\nvt 1 0\nvt 1 1\nusemtl q\nf 1/1 2/2 3/3\n";
+        std::fs::write(dir.join("q.obj"), obj).unwrap();
+        std::fs::write(dir.join("q.mtl"), mtl).unwrap();
+        image::RgbaImage::from_fn(2, 1, |x, _| image::Rgba([if x == 0 { 255 } else { 0 }, 0, 0, 128]))
+            .save(dir.join("tex.png"))
+            .unwrap();
+        dir
+    }
+
+    #[test]
+    fn mtl_texture_maps_become_material_textures() {
+        let dir = textured_dir(
+            "maps",
+            "newmtl q\nKd 0.5 0.5 0.5\nd 0.8\nmap_Kd -s 2 1 tex.png\nmap_d tex.png\nnorm tex.png\nmap_bump -bm 0.1 tex.png\nmap_Ka tex.png\n",
+        );
+        let scene = load_obj(&dir.join("q.obj")).unwrap();
+        let t = scene.materials[0].textures.as_deref().expect("textures");
+        let base = t.base_colour.as_ref().unwrap();
+        assert_eq!((base.encoding, base.image.width()), (Encoding::Srgb, 2));
+        // -s 2 1: u doubled, so u = 0.125 reads the texel centre at 0.25 (red).
+        assert_eq!(base.sample(glam::Vec2::new(0.125, 0.5))[0], 1.0);
+        let alpha = t.alpha.as_ref().unwrap();
+        assert_eq!((alpha.mode, alpha.factor), (AlphaMode::Blend, 0.8));
+        assert!((alpha.value(glam::Vec2::new(0.25, 0.5)) - 0.8 * 128.0 / 255.0).abs() < 1e-6);
+        assert_eq!(t.normal.as_ref().map(|n| n.scale), Some(1.0));
+        assert_eq!(t.bump.as_ref().map(|b| b.scale), Some(0.1));
+        // Every map shares the one decoded image.
+        assert_eq!(scene.texture_images().0, 1);
+        std::fs::remove_dir_all(&dir).ok();
+    }
+
+    #[test]
+    fn a_missing_texture_is_an_error_naming_the_material_and_the_file() {
+        let dir = textured_dir("missing", "newmtl q\nmap_Kd nowhere/brick.jpg\n");
+        let e = load_obj(&dir.join("q.obj")).unwrap_err().to_string();
+        assert!(e.contains("material 'q'") && e.contains("brick.jpg"), "{e}");
+        let dir2 = textured_dir("broken", "newmtl q\nmap_Kd q.obj\n");
+        let e = load_obj(&dir2.join("q.obj")).unwrap_err().to_string();
+        assert!(e.contains("material 'q'") && e.contains("q.obj") && e.contains("not a PNG"), "{e}");
+        std::fs::remove_dir_all(&dir).ok();
+        std::fs::remove_dir_all(&dir2).ok();
+    }
 
     fn load(obj: &str) -> Result<Scene> {
         load_obj_text(obj, Path::new("s.obj"), &|_| Err(std::io::ErrorKind::NotFound.into()))

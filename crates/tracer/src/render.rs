@@ -172,6 +172,8 @@ pub struct Capabilities {
     pub custom_bsdfs: bool,
     /// Whether it samples point, spot and directional lights ([`crate::PunctualLight`]).
     pub punctual_lights: bool,
+    /// Whether it reads material textures (colour, normal, alpha, emission maps).
+    pub textures: bool,
     /// Ray–triangle tests it implements.
     pub triangle_tests: Vec<TriangleTest>,
     /// Triangle-BVH node widths it can be asked for ([`BvhWidth::Auto`] = its own choice).
@@ -223,6 +225,15 @@ impl Capabilities {
             return Err(unsupported(
                 format!("custom BSDFs (material '{}')", m.name),
                 "register the model in brdf's registry with its WGSL twin, or use --backend cpu",
+            ));
+        }
+        if !self.textures
+            && let Some(m) = scene.materials.iter().find(|m| m.textures.is_some())
+        {
+            let count = scene.materials.iter().filter(|m| m.textures.is_some()).count();
+            return Err(unsupported(
+                format!("textures ({count} textured materials in this scene, the first '{}')", m.name),
+                "use --backend cpu (or --no-textures to render the materials' factors alone)",
             ));
         }
         if !self.triangle_tests.contains(&options.triangle_test) {

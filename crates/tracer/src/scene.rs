@@ -63,16 +63,44 @@ impl Environment {
 }
 
 impl Scene {
-    /// Whether anything emits: a non-black environment or punctual light, or a triangle
-    /// or shape whose material has a non-black emission. A scene without lights renders
-    /// black.
+    /// Whether anything lights the scene: a non-black environment or punctual light, or a
+    /// triangle or shape whose material has a non-black emission. A scene without lights
+    /// renders black. Emission through an emissive texture (screens, decals, glTF's
+    /// DamagedHelmet) does not count: it is seen, but it is not sampled as a light, and a
+    /// model that has only such glow still needs a light to be seen.
     pub fn has_lights(&self) -> bool {
-        let emits =
-            |m: u32| self.materials.get(m as usize).and_then(|m| m.emission.as_ref()).is_some_and(|e| !e.is_black());
+        let emits = |m: u32| {
+            self.materials
+                .get(m as usize)
+                .filter(|m| !m.has_textured_emission())
+                .and_then(|m| m.emission.as_ref())
+                .is_some_and(|e| !e.is_black())
+        };
         self.environment.as_ref().is_some_and(|e| !e.radiance.is_black())
             || self.material_ids.iter().any(|&m| emits(m))
             || self.shapes.iter().any(|s| emits(s.material))
             || self.punctual_lights.iter().any(|l| !l.colour().is_black())
+    }
+
+    /// The distinct texture images the materials read (each once, however many maps share
+    /// it) and the bytes their texels take.
+    pub fn texture_images(&self) -> (usize, usize) {
+        let mut seen = std::collections::HashSet::new();
+        let mut bytes = 0;
+        for t in self.materials.iter().filter_map(|m| m.textures.as_deref()) {
+            for map in t.maps() {
+                if seen.insert(std::sync::Arc::as_ptr(&map.image)) {
+                    bytes += map.image.size_bytes();
+                }
+            }
+        }
+        (seen.len(), bytes)
+    }
+
+    /// Drops every material's textures (they render with their factors alone); returns
+    /// how many materials had any.
+    pub fn strip_textures(&mut self) -> usize {
+        self.materials.iter_mut().filter_map(|m| m.textures.take()).count()
     }
 
     /// Appends a mesh with one material (flat-shaded if its normals are empty; tangents

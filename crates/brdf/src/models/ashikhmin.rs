@@ -23,7 +23,7 @@
 use crate::frame::{flip_z, upper_pair};
 use crate::sampling::{cosine_hemisphere, cosine_hemisphere_pdf};
 use crate::wgsl::{ModelWgsl, WgslConstant, WgslPiece, WgslValue};
-use crate::{Bsdf, BsdfSample, Model, ScatterFlags};
+use crate::{Bsdf, BsdfSample, Model, ScatterFlags, Texels, TextureSlots};
 use glam::{Vec2, Vec3};
 use spectral::{SampledSpectrum, SampledWavelengths};
 use std::f32::consts::{FRAC_1_PI, FRAC_PI_2};
@@ -62,9 +62,16 @@ impl Model for AshikhminParams {
         ],
     };
 
+    const TEXTURE_SLOTS: TextureSlots = TextureSlots { base_colour: true, specular: true, metallic_roughness: false };
+
     #[inline]
     fn bsdf<const N: usize>(&self, wl: &SampledWavelengths<N>) -> Ashikhmin<N> {
-        Ashikhmin::new(self.nu, self.nv, self.rs.sample(wl), self.rd.sample(wl))
+        self.bsdf_textured(wl, &Texels::default())
+    }
+
+    #[inline]
+    fn bsdf_textured<const N: usize>(&self, wl: &SampledWavelengths<N>, texels: &Texels<N>) -> Ashikhmin<N> {
+        Ashikhmin::new(self.nu, self.nv, texels.spec(self.rs.sample(wl)), texels.base(self.rd.sample(wl)))
     }
 }
 

@@ -5,7 +5,7 @@ use crate::fresnel::{fresnel_dielectric, fresnel_schlick, refract_local};
 use crate::models::dispersion::{Dispersion, DispersionPreset};
 use crate::params::Colour;
 use crate::wgsl::{ModelWgsl, WgslPiece};
-use crate::{Bsdf, BsdfSample, Model, ScatterFlags};
+use crate::{Bsdf, BsdfSample, Model, ScatterFlags, Texels, TextureSlots};
 use glam::{Vec2, Vec3};
 use spectral::{SampledSpectrum, SampledWavelengths};
 
@@ -52,8 +52,16 @@ impl Model for DielectricParams {
         constants: &[],
     };
 
+    /// glTF's base colour tints transmission (`KHR_materials_transmission`).
+    const TEXTURE_SLOTS: TextureSlots = TextureSlots::BASE_COLOUR;
+
     #[inline]
     fn bsdf<const N: usize>(&self, wl: &SampledWavelengths<N>) -> Dielectric<N> {
+        self.bsdf_textured(wl, &Texels::default())
+    }
+
+    #[inline]
+    fn bsdf_textured<const N: usize>(&self, wl: &SampledWavelengths<N>, texels: &Texels<N>) -> Dielectric<N> {
         let fresnel = if self.schlick { FresnelModel::Schlick } else { FresnelModel::Exact };
         // RGB mode has no wavelengths: it uses the base index (n_d) without dispersion.
         let (eta, dispersive) = if wl.is_rgb() || self.dispersion == DispersionPreset::None {
@@ -61,7 +69,7 @@ impl Model for DielectricParams {
         } else {
             (Dispersion::from_preset(self.dispersion, self.cauchy_b).ior(self.ior, wl.lambda[0]), N > 1)
         };
-        Dielectric { eta, dispersive, fresnel, tint: self.tint.sample(wl) }
+        Dielectric { eta, dispersive, fresnel, tint: texels.base(self.tint.sample(wl)) }
     }
 
     fn is_transmissive(&self) -> bool {

@@ -2,7 +2,7 @@
 
 use crate::sampling::{cosine_hemisphere_two_sided, cosine_hemisphere_two_sided_pdf};
 use crate::wgsl::{ModelWgsl, WgslPiece};
-use crate::{Bsdf, BsdfSample, Model, ScatterFlags};
+use crate::{Bsdf, BsdfSample, Model, ScatterFlags, Texels, TextureSlots};
 use glam::{Vec2, Vec3};
 use spectral::{SampledSpectrum, SampledWavelengths};
 use std::f32::consts::FRAC_1_PI;
@@ -20,9 +20,16 @@ impl Model for LambertParams {
     const WGSL: ModelWgsl =
         ModelWgsl { source: include_str!("lambert.wgsl"), needs: &[WgslPiece::Sampling], constants: &[] };
 
+    const TEXTURE_SLOTS: TextureSlots = TextureSlots::BASE_COLOUR;
+
     #[inline]
     fn bsdf<const N: usize>(&self, wl: &SampledWavelengths<N>) -> Lambert<N> {
-        Lambert { reflectance: self.reflectance.sample(wl) }
+        self.bsdf_textured(wl, &Texels::default())
+    }
+
+    #[inline]
+    fn bsdf_textured<const N: usize>(&self, wl: &SampledWavelengths<N>, texels: &Texels<N>) -> Lambert<N> {
+        Lambert { reflectance: texels.base(self.reflectance.sample(wl)) }
     }
 }
 

@@ -29,7 +29,7 @@ use crate::frame::{flip_z, reflect, upper_pair};
 use crate::models::microfacet::Ggx;
 use crate::sampling::{cosine_hemisphere, cosine_hemisphere_pdf};
 use crate::wgsl::{ModelWgsl, WgslConstant, WgslPiece, WgslValue};
-use crate::{Bsdf, BsdfSample, Model, ScatterFlags};
+use crate::{Bsdf, BsdfSample, Model, ScatterFlags, Texels, TextureSlots};
 use glam::{Vec2, Vec3};
 use spectral::{SampledSpectrum, SampledWavelengths};
 use std::f32::consts::FRAC_1_PI;
@@ -81,9 +81,17 @@ impl Model for MetallicRoughnessParams {
         }],
     };
 
+    const TEXTURE_SLOTS: TextureSlots = TextureSlots { base_colour: true, specular: false, metallic_roughness: true };
+
     #[inline]
     fn bsdf<const N: usize>(&self, wl: &SampledWavelengths<N>) -> MetallicRoughness<N> {
-        MetallicRoughness::new(self.base_color.sample(wl), self.metallic, self.roughness, self.ior)
+        self.bsdf_textured(wl, &Texels::default())
+    }
+
+    #[inline]
+    fn bsdf_textured<const N: usize>(&self, wl: &SampledWavelengths<N>, t: &Texels<N>) -> MetallicRoughness<N> {
+        let base = t.base(self.base_color.sample(wl));
+        MetallicRoughness::new(base, self.metallic * t.metallic, self.roughness * t.roughness, self.ior)
     }
 }
 

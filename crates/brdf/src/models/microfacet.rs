@@ -27,7 +27,7 @@ use crate::frame::{flip_z, reflect};
 use crate::fresnel::fresnel_dielectric;
 use crate::models::metal::{MetalPreset, fresnel_spectrum};
 use crate::wgsl::{ModelWgsl, WgslPiece};
-use crate::{Bsdf, BsdfSample, Model, ScatterFlags};
+use crate::{Bsdf, BsdfSample, Model, ScatterFlags, Texels, TextureSlots};
 use glam::{Vec2, Vec3};
 use spectral::{SampledSpectrum, SampledWavelengths};
 use std::f32::consts::{PI, TAU};
@@ -106,12 +106,27 @@ impl Model for RoughDielectricParams {
         constants: &[],
     };
 
+    /// glTF's base colour tints transmission; its roughness texture multiplies the
+    /// perceptual roughness r = √α (so α by its square), kept above 10⁻³.
+    const TEXTURE_SLOTS: TextureSlots = TextureSlots { base_colour: true, specular: false, metallic_roughness: true };
+
     #[inline]
     fn bsdf<const N: usize>(&self, wl: &SampledWavelengths<N>) -> RoughDielectric<N> {
+        self.bsdf_textured(wl, &Texels::default())
+    }
+
+    #[inline]
+    fn bsdf_textured<const N: usize>(&self, wl: &SampledWavelengths<N>, texels: &Texels<N>) -> RoughDielectric<N> {
+        let (ax, ay) = if texels.roughness == 1.0 {
+            (self.alpha, self.alpha_y)
+        } else {
+            let k = texels.roughness * texels.roughness;
+            ((self.alpha * k).max(1e-3), if self.alpha_y > 0.0 { (self.alpha_y * k).max(1e-3) } else { 0.0 })
+        };
         RoughDielectric {
-            distribution: Ggx::from_alphas(self.alpha, self.alpha_y),
+            distribution: Ggx::from_alphas(ax, ay),
             eta: self.ior,
-            tint: self.tint.sample(wl),
+            tint: texels.base(self.tint.sample(wl)),
         }
     }
 

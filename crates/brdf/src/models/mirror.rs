@@ -2,7 +2,7 @@
 
 use crate::frame::reflect_local;
 use crate::wgsl::ModelWgsl;
-use crate::{Bsdf, BsdfSample, Model, ScatterFlags};
+use crate::{Bsdf, BsdfSample, Model, ScatterFlags, Texels, TextureSlots};
 use glam::{Vec2, Vec3};
 use spectral::{SampledSpectrum, SampledWavelengths};
 
@@ -18,9 +18,16 @@ impl Model for MirrorParams {
     type Bsdf<const N: usize> = Mirror<N>;
     const WGSL: ModelWgsl = ModelWgsl { source: include_str!("mirror.wgsl"), needs: &[], constants: &[] };
 
+    const TEXTURE_SLOTS: TextureSlots = TextureSlots { specular: true, ..TextureSlots::NONE };
+
     #[inline]
     fn bsdf<const N: usize>(&self, wl: &SampledWavelengths<N>) -> Mirror<N> {
-        Mirror { reflectance: self.reflectance.sample(wl) }
+        self.bsdf_textured(wl, &Texels::default())
+    }
+
+    #[inline]
+    fn bsdf_textured<const N: usize>(&self, wl: &SampledWavelengths<N>, texels: &Texels<N>) -> Mirror<N> {
+        Mirror { reflectance: texels.spec(self.reflectance.sample(wl)) }
     }
 }
 

@@ -3,7 +3,7 @@
 use crate::models::lambert::same_hemisphere;
 use crate::sampling::{cosine_hemisphere_two_sided, cosine_hemisphere_two_sided_pdf};
 use crate::wgsl::{ModelWgsl, WgslPiece};
-use crate::{Bsdf, BsdfSample, Model, ScatterFlags};
+use crate::{Bsdf, BsdfSample, Model, ScatterFlags, Texels, TextureSlots};
 use glam::{Vec2, Vec3};
 use spectral::{SampledSpectrum, SampledWavelengths};
 use std::f32::consts::{FRAC_1_PI, FRAC_PI_2};
@@ -28,9 +28,16 @@ impl Model for OrenNayarParams {
     const WGSL: ModelWgsl =
         ModelWgsl { source: include_str!("oren_nayar.wgsl"), needs: &[WgslPiece::Sampling], constants: &[] };
 
+    const TEXTURE_SLOTS: TextureSlots = TextureSlots::BASE_COLOUR;
+
     #[inline]
     fn bsdf<const N: usize>(&self, wl: &SampledWavelengths<N>) -> OrenNayar<N> {
-        OrenNayar::new(self.reflectance.sample(wl), self.sigma)
+        self.bsdf_textured(wl, &Texels::default())
+    }
+
+    #[inline]
+    fn bsdf_textured<const N: usize>(&self, wl: &SampledWavelengths<N>, texels: &Texels<N>) -> OrenNayar<N> {
+        OrenNayar::new(texels.base(self.reflectance.sample(wl)), self.sigma)
     }
 }
 

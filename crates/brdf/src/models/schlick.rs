@@ -42,7 +42,7 @@
 use crate::frame::{flip_z, upper_pair};
 use crate::sampling::{cosine_hemisphere, cosine_hemisphere_pdf};
 use crate::wgsl::{ModelWgsl, WgslConstant, WgslPiece, WgslValue};
-use crate::{Bsdf, BsdfSample, Model, ScatterFlags};
+use crate::{Bsdf, BsdfSample, Model, ScatterFlags, Texels, TextureSlots};
 use glam::{Vec2, Vec3};
 use spectral::{SampledSpectrum, SampledWavelengths};
 use std::f32::consts::{FRAC_1_PI, FRAC_PI_2, TAU};
@@ -98,11 +98,18 @@ impl Model for SchlickParams {
         ],
     };
 
+    const TEXTURE_SLOTS: TextureSlots = TextureSlots::BASE_COLOUR;
+
     #[inline]
     fn bsdf<const N: usize>(&self, wl: &SampledWavelengths<N>) -> Schlick<N> {
+        self.bsdf_textured(wl, &Texels::default())
+    }
+
+    #[inline]
+    fn bsdf_textured<const N: usize>(&self, wl: &SampledWavelengths<N>, texels: &Texels<N>) -> Schlick<N> {
         let w = [self.a, self.b, self.c];
         let weights = if w.iter().any(|&x| x < 0.0) { None } else { Some(w) };
-        Schlick::new(self.reflectance.sample(wl), self.roughness, self.isotropy, weights, self.geometric)
+        Schlick::new(texels.base(self.reflectance.sample(wl)), self.roughness, self.isotropy, weights, self.geometric)
     }
 }
 

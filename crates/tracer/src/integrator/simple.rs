@@ -40,19 +40,19 @@ impl Integrator for DirectLighting {
         let Some(hit) = view.intersect(&ray) else {
             return view.escaped_radiance(ray.dir, wl);
         };
-        let it = view.interaction(&hit, settings.shading_normals);
         let material = view.material(hit.prim);
+        let it = view.interaction(&hit, material, settings.shading_normals);
         let wo_world = -ray.dir;
         let mut l = SampledSpectrum::zero();
-        if let Some(e) = &material.emission
-            && wo_world.dot(it.ng) > 0.0
+        if wo_world.dot(it.ng) > 0.0
+            && let Some(le) = material.emission_at(it.uv, wl)
         {
-            l += e.sample(wl);
+            l += le;
         }
         let (ng, ns) =
             super::shading_normals(settings.shading_normals, it.ng, it.ns, wo_world, material.is_two_sided());
         let frame = Frame::from_normal_tangent(ns, it.tangent);
-        let bsdf = material.bsdf(wl);
+        let bsdf = material.bsdf_at(it.uv, wl);
         if bsdf.flags().is_non_specular() {
             let at = Shading { it: &it, material, ng, wo_world, frame: &frame, wo: frame.to_local(wo_world) };
             if let Some((f, le, k)) = next_event(view, &at, &bsdf, wl, Mis::None, sampler.next_2d(), counters) {
@@ -112,7 +112,7 @@ impl Integrator for AmbientOcclusion {
     ) -> SampledSpectrum<N> {
         counters.rays += 1;
         let Some(hit) = view.intersect(&ray) else { return SampledSpectrum::zero() };
-        let it = view.interaction(&hit, settings.shading_normals);
+        let it = view.interaction(&hit, view.material(hit.prim), settings.shading_normals);
         // The hemisphere on the viewer's side.
         let side = if ray.dir.dot(it.ng) < 0.0 { 1.0 } else { -1.0 };
         let (ng, mut ns) = (it.ng * side, it.ns * side);

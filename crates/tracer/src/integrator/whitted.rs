@@ -75,17 +75,15 @@ fn trace<const N: usize, S: Sampler>(
     let Some(hit) = view.intersect(&ray) else {
         return view.escaped_radiance(ray.dir, wl);
     };
-    let it = view.interaction(&hit, settings.shading_normals);
     let material = view.material(hit.prim);
+    let it = view.interaction(&hit, material, settings.shading_normals);
     let wo_world = -ray.dir;
     let front = wo_world.dot(it.ng) > 0.0;
     let mut l = SampledSpectrum::<N>::zero();
     // Beer–Lambert inside absorbing glass, as in the path tracer.
     let attenuation = interior_transmittance(material, front, hit.t, wl).unwrap_or(SampledSpectrum::one());
-    if let Some(e) = &material.emission
-        && front
-    {
-        l += e.sample(wl);
+    if front && let Some(le) = material.emission_at(it.uv, wl) {
+        l += le;
     }
     if depth >= max_depth {
         return l * attenuation;
@@ -93,7 +91,7 @@ fn trace<const N: usize, S: Sampler>(
     let (ng, ns) = super::shading_normals(settings.shading_normals, it.ng, it.ns, wo_world, material.is_two_sided());
     let frame = Frame::from_normal_tangent(ns, it.tangent);
     let wo = frame.to_local(wo_world);
-    let bsdf = material.bsdf(wl);
+    let bsdf = material.bsdf_at(it.uv, wl);
     let flags = bsdf.flags();
     if flags.is_non_specular() {
         let at = Shading { it: &it, material, ng, wo_world, frame: &frame, wo };
