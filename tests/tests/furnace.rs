@@ -28,7 +28,7 @@ fn furnace(albedo: f32) -> CpuScene {
     ] {
         scene.add(&quad(c, n, 1.0), white());
     }
-    scene.environment = Some(Environment { radiance: Colour::constant(1.0) });
+    scene.environment = Some(Environment::uniform(Colour::constant(1.0)));
     scene.camera =
         Some(Camera { eye: Vec3::new(0.0, 1.0, 3.5), center: Vec3::new(0.0, 1.0, 0.0), up: Vec3::Y, fov_y_deg: 40.0 });
     CpuBackend::new(2).unwrap().prepare_cpu(scene, &SceneOptions::default()).unwrap()

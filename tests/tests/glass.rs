@@ -29,7 +29,7 @@ fn beer_lambert_matches_exp_minus_alpha_s() {
         &uv_sphere(Vec3::ZERO, 0.5, 32, 64, false),
         glass(&[("ior", ParamValue::Scalar(1.0)), ("absorption", ParamValue::Rgb(alpha))]),
     );
-    scene.environment = Some(Environment { radiance: Colour::constant(1.0) });
+    scene.environment = Some(Environment::uniform(Colour::constant(1.0)));
     let eye = Vec3::new(0.0, 0.0, 3.0);
     scene.camera = Some(Camera { eye, center: Vec3::ZERO, up: Vec3::Y, fov_y_deg: 0.05 });
     let prepared = CpuBackend::new(2).unwrap().prepare_cpu(scene, &SceneOptions::default()).unwrap();
@@ -60,7 +60,7 @@ fn furnace_with(object: Material) -> CpuScene {
     for (c, n) in [(Vec3::new(0.0, 0.0, 0.0), Vec3::Y), (Vec3::new(0.0, 1.0, -1.0), Vec3::Z)] {
         scene.add(&quad(c, n, 1.0), white());
     }
-    scene.environment = Some(Environment { radiance: Colour::constant(1.0) });
+    scene.environment = Some(Environment::uniform(Colour::constant(1.0)));
     scene.camera =
         Some(Camera { eye: Vec3::new(0.0, 0.8, 3.0), center: Vec3::new(0.0, 0.6, 0.0), up: Vec3::Y, fov_y_deg: 30.0 });
     CpuBackend::new(2).unwrap().prepare_cpu(scene, &SceneOptions::default()).unwrap()

@@ -108,7 +108,7 @@ fn whitted_equals_path_tracing_on_mirrors_and_glass() {
     scene.add(&tracer::mesh::uv_sphere(Vec3::new(0.3, 0.1, 0.0), 0.5, 24, 48, false), glass.clone());
     scene.add(&quad(Vec3::new(-0.6, 0.0, 0.3), Vec3::new(1.0, 0.0, 1.0), 0.3), glass);
     scene.add(&quad(Vec3::new(0.0, 1.2, 0.0), -Vec3::Y, 0.4), lamp);
-    scene.environment = Some(tracer::Environment { radiance: Colour::reflectance_rgb([0.2, 0.3, 0.5]).unwrap() });
+    scene.environment = Some(tracer::Environment::uniform(Colour::reflectance_rgb([0.2, 0.3, 0.5]).unwrap()));
     scene.camera =
         Some(Camera { eye: Vec3::new(0.2, 0.4, 3.0), center: Vec3::new(0.0, 0.1, 0.0), up: Vec3::Y, fov_y_deg: 45.0 });
     let path_settings = PathSettings { max_depth: 6, rr_depth: 100, ..Default::default() };

@@ -20,7 +20,7 @@ fn no_model_is_brighter_than_the_furnace_or_produces_nan() {
         let mut scene = Scene::default();
         let material = Material::builtin(model.def().name, model, &[]).unwrap();
         scene.add(&uv_sphere(Vec3::ZERO, 1.0, 24, 48, false), material);
-        scene.environment = Some(Environment { radiance: Colour::constant(1.0) });
+        scene.environment = Some(Environment::uniform(Colour::constant(1.0)));
         // Close enough that the sphere fills the frame.
         scene.camera = Some(Camera { eye: Vec3::new(0.0, 0.0, 2.0), center: Vec3::ZERO, up: Vec3::Y, fov_y_deg: 30.0 });
         let prepared = CpuBackend::new(2).unwrap().prepare_cpu(scene, &SceneOptions::default()).unwrap();

@@ -56,7 +56,7 @@ fn convex_in_furnace(shape: ShapeKind, albedo: f32) {
     let name = shape.name();
     let mut scene = Scene::default();
     scene.add_shape(shape, Material::diffuse("white", Colour::constant(albedo)).unwrap());
-    scene.environment = Some(Environment { radiance: Colour::constant(1.0) });
+    scene.environment = Some(Environment::uniform(Colour::constant(1.0)));
     let bounds = scene.bounds();
     scene.camera = Some(Camera {
         eye: bounds.centre() + Vec3::new(0.7, 0.9, 2.2) * bounds.extent().length(),
@@ -144,7 +144,7 @@ fn smooth_sphere_in_furnace(material: Material, shading: ShadingNormals) -> (f64
     let mut scene = Scene::default();
     // Coarse on purpose: 8 × 16 facets make shading and geometric normals disagree a lot.
     scene.add(&uv_sphere(Vec3::ZERO, 1.0, 8, 16, false), material);
-    scene.environment = Some(Environment { radiance: Colour::constant(1.0) });
+    scene.environment = Some(Environment::uniform(Colour::constant(1.0)));
     scene.camera = Some(Camera { eye: Vec3::new(0.0, 0.3, 3.2), center: Vec3::ZERO, up: Vec3::Y, fov_y_deg: 40.0 });
     let size = 32;
     let path = PathSettings { shading_normals: shading, rr_depth: 8, ..Default::default() };

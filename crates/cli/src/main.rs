@@ -410,8 +410,10 @@ struct SceneArgs {
     shading_normals: ShadingNormals,
     /// Light from everywhere that hits nothing: auto (the scene's own; a uniform white sky
     /// — CIE D65, luminance 1 — if the scene has no light at all), none (no sky, even the
-    /// scene's), white or white:LUMINANCE (a uniform white sky replacing the scene's), or
-    /// FILE.spec (the `sky` SPD of a SPEC file in the thesis's format).
+    /// scene's), white or white:LUMINANCE (a uniform white sky replacing the scene's),
+    /// FILE.spec (the `sky` SPD of a SPEC file in the thesis's format), or an environment
+    /// map FILE.exr|.hdr|.png|.jpg[:SCALE] (latitude-longitude, y up, its centre towards
+    /// −z; importance-sampled by luminance; CPU backend).
     #[arg(long, default_value = "auto", value_parser = parse_sky)]
     sky: Sky,
     /// A SPEC file (the thesis's JSON of SPDs) giving the scene's materials diffuse and
@@ -447,13 +449,30 @@ enum Sky {
     White(f32),
     /// The `sky` SPD of a SPEC file.
     Spec(PathBuf),
+    /// A latitude–longitude environment map times a scale.
+    Map(PathBuf, f32),
 }
 
 fn parse_sky(s: &str) -> Result<Sky, String> {
-    let bad =
-        || format!("unknown sky '{s}' (known: auto, none, white, white:LUMINANCE with LUMINANCE > 0, or FILE.spec)");
-    if s.to_ascii_lowercase().ends_with(".spec") {
+    let bad = || {
+        format!(
+            "unknown sky '{s}' (known: auto, none, white, white:LUMINANCE with LUMINANCE > 0, FILE.spec, or an environment map FILE.exr|.hdr|.png|.jpg[:SCALE])"
+        )
+    };
+    let lower = s.to_ascii_lowercase();
+    if lower.ends_with(".spec") {
         return Ok(Sky::Spec(PathBuf::from(s)));
+    }
+    // FILE.exr (and .hdr, .png, .jpg), optionally :SCALE.
+    let (file, scale) = match s.rsplit_once(':') {
+        Some((file, scale)) if scale.trim().parse::<f32>().is_ok() => (file, scale.trim().parse::<f32>().unwrap()),
+        _ => (s, 1.0),
+    };
+    if [".exr", ".hdr", ".png", ".jpg", ".jpeg"].iter().any(|e| file.to_ascii_lowercase().ends_with(e)) {
+        if !(scale.is_finite() && scale > 0.0) {
+            return Err(format!("environment map scale {scale} must be positive and finite"));
+        }
+        return Ok(Sky::Map(PathBuf::from(file), scale));
     }
     match s {
         "auto" => Ok(Sky::Auto),
@@ -485,7 +504,11 @@ fn apply_sky(scene: &mut Scene, sky: &Sky) -> Result<()> {
             let Some(radiance) = tracer::spec::load_spec(path)?.sky_radiance() else {
                 bail!("--sky {}: the SPEC file names no sky", path.display())
             };
-            scene.environment = Some(tracer::Environment { radiance });
+            scene.environment = Some(tracer::Environment::uniform(radiance));
+        }
+        Sky::Map(path, scale) => {
+            let map = tracer::envmap::EnvironmentMap::load(path, 0.0)?;
+            scene.environment = Some(tracer::Environment::from_map(map, *scale));
         }
     }
     Ok(())

@@ -815,3 +815,26 @@ fn textured_obj_scenes_render_and_a_missing_texture_is_a_clear_error() {
     let e = stderr(&o);
     assert!(!o.status.success() && e.contains("material 'white'") && e.contains("gone.png"), "{e}");
 }
+
+#[test]
+fn an_environment_map_lights_a_scene_from_the_command_line() {
+    let dir = temp_dir("envmap");
+    let obj = write_scene(&dir, OBJ);
+    let sky = dir.join("sky.exr");
+    image::Rgb32FImage::from_fn(16, 8, |_, y| image::Rgb(if y < 4 { [0.2, 0.4, 1.0] } else { [0.0; 3] }))
+        .save(&sky)
+        .unwrap();
+    let (dim, bright) = (dir.join("dim.exr"), dir.join("bright.exr"));
+    let map = sky.to_str().unwrap().to_string();
+    let o = render_small(&obj, (16, 16, 16), &dim, &["--sky", &map]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let o = render_small(&obj, (16, 16, 16), &bright, &["--sky", &format!("{map}:4")]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    // A blue sky: the scaled one adds light, bluer than red.
+    let (d, b) = (exr_means(&dim), exr_means(&bright));
+    assert!(b[2] > d[2] + 0.05 && (b[2] - d[2]) > 2.0 * (b[0] - d[0]), "{d:?} {b:?}");
+    let o = render_small(&obj, (16, 16, 16), &dim, &["--sky", &format!("{map}:0")]);
+    assert!(!o.status.success() && stderr(&o).contains("scale 0 must be positive"), "{}", stderr(&o));
+    let o = render_small(&obj, (16, 16, 16), &dim, &["--sky", "nowhere/sky.hdr"]);
+    assert!(!o.status.success() && stderr(&o).contains("nowhere/sky.hdr"), "{}", stderr(&o));
+}

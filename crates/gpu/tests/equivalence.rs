@@ -237,7 +237,7 @@ fn model_scene(material: Material) -> Scene {
     let mut light = quad(Vec3::new(-1.5, 4.0, 1.5), -Vec3::Y, 1.0);
     light.normals.clear();
     scene.add(&light, lamp);
-    scene.environment = Some(Environment { radiance: Colour::constant(0.3) });
+    scene.environment = Some(Environment::uniform(Colour::constant(0.3)));
     scene.camera =
         Some(Camera { eye: Vec3::new(0.0, 2.0, 3.6), center: Vec3::new(0.0, 0.9, 0.0), up: Vec3::Y, fov_y_deg: 40.0 });
     scene

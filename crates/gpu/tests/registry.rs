@@ -62,7 +62,7 @@ fn cpu_loaders_and_gpu_know_the_same_models() {
         assert!(module.functions.iter().any(|(_, f)| f.name.as_deref() == Some(&format!("{name}_sample"))));
         compiled.insert(name);
         // The CPU: a render that reaches the model (lit by a sky, seen head on).
-        scene.environment = Some(tracer::Environment { radiance: spectral::spectrum::Colour::constant(1.0) });
+        scene.environment = Some(tracer::Environment::uniform(spectral::spectrum::Colour::constant(1.0)));
         let prepared = CpuBackend::new(1).unwrap().prepare(scene, &SceneOptions::default()).unwrap();
         let settings = RenderSettings { width: 8, height: 8, spp: 2, ..Default::default() };
         let (film, stats) = tracer::render(prepared.as_ref(), &settings, &|_| {}).unwrap();

@@ -64,6 +64,16 @@ impl<I: Integrator> CpuBackend<I> {
         let geometry = Geometry::build(&scene, options.triangle_test, options.bvh_width)?;
         let build = start.elapsed();
         let lights = Lights::new(&scene);
+        // Colour textures uplift through a table built on first use (~0.8 s): build it
+        // here, in preparation, rather than inside the first render's samples.
+        let colour_textures = scene
+            .materials
+            .iter()
+            .filter_map(|m| m.textures.as_deref())
+            .any(|t| t.base_colour.is_some() || t.specular.is_some() || t.emissive.is_some());
+        if colour_textures {
+            spectral::uplift::uplift_table();
+        }
         let stats = PrepareStats {
             build,
             compile: None,

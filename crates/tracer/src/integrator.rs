@@ -176,10 +176,11 @@ impl<'a> SceneView<'a> {
         self.dispersive
     }
 
-    /// The environment's radiance at the sampled wavelengths (zero without one).
+    /// The environment's radiance from direction `dir` at the sampled wavelengths (zero
+    /// without one).
     #[inline]
-    pub fn environment_radiance<const N: usize>(&self, wl: &SampledWavelengths<N>) -> SampledSpectrum<N> {
-        self.scene.environment.as_ref().map_or(SampledSpectrum::zero(), |e| e.radiance.sample(wl))
+    pub fn environment_radiance<const N: usize>(&self, dir: Vec3, wl: &SampledWavelengths<N>) -> SampledSpectrum<N> {
+        self.scene.environment.as_ref().map_or(SampledSpectrum::zero(), |e| e.radiance_from(dir, wl))
     }
 
     /// The radiance of the sun disks a ray escaping along `dir` sees; with the pdf of the
@@ -207,7 +208,7 @@ impl<'a> SceneView<'a> {
     /// specular bounces).
     #[inline]
     pub fn escaped_radiance<const N: usize>(&self, dir: Vec3, wl: &SampledWavelengths<N>) -> SampledSpectrum<N> {
-        let env = self.environment_radiance(wl);
+        let env = self.environment_radiance(dir, wl);
         if self.lights.suns().is_empty() { env } else { env + self.suns_seen(dir, wl, None) }
     }
 
@@ -440,7 +441,7 @@ fn light_contribution<const N: usize, B: Bsdf<N>>(
                 _ => (wi, dist, 0.0, SampledSpectrum::zero(), false),
             }
         }
-        LightSource::Environment => (ls.point, f32::INFINITY, ls.pdf, view.environment_radiance(wl), false),
+        LightSource::Environment => (ls.point, f32::INFINITY, ls.pdf, view.environment_radiance(ls.point, wl), false),
         // A delta light: I·falloff/d² (or E) stands for the radiance and the pdf is the
         // probability of choosing it, so f·Le·|cos θ|/pdf is the usual estimate.
         LightSource::Punctual(k) => {
@@ -570,8 +571,8 @@ fn path_radiance<const N: usize, S: Sampler>(
         counters.rays += 1;
         let Some(hit) = view.intersect(&ray) else {
             if let Some(env) = &scene.environment {
-                let le = env.radiance.sample(wl);
-                let w = if prev_specular { 1.0 } else { power_heuristic(prev_pdf, lights.environment_pdf()) };
+                let le = env.radiance_from(ray.dir, wl);
+                let w = if prev_specular { 1.0 } else { power_heuristic(prev_pdf, lights.environment_pdf(ray.dir)) };
                 l += beta * le * w;
             }
             if !lights.suns().is_empty() {

@@ -13,6 +13,7 @@
 pub mod accumulation;
 pub mod camera;
 pub mod cpu;
+pub mod envmap;
 pub mod film;
 pub mod geometry;
 pub mod gltf_scene;

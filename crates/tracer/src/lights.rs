@@ -1,7 +1,8 @@
 //! Light sources for next-event estimation: emissive triangles and analytic shapes,
 //! point, spot and directional lights, chosen in proportion to their power, plus the
-//! uniform environment.
+//! environment (uniform, or importance-sampled by its map's luminance).
 
+use crate::envmap::EnvironmentMap;
 use crate::punctual::PunctualLight;
 use crate::scene::Scene;
 use brdf::sampling::{UNIFORM_SPHERE_PDF, uniform_sphere, uniform_triangle};
@@ -60,6 +61,8 @@ pub struct Lights {
     /// the primitives' in `cdf`).
     punctual_pmf: Vec<f32>,
     environment_pmf: f32,
+    /// The environment's map, sampled by luminance (uniform directions without one).
+    environment_map: Option<std::sync::Arc<EnvironmentMap>>,
     /// The sun disks among the punctual lights, which escaping rays can see.
     suns: Vec<SunDisk>,
 }
@@ -121,7 +124,7 @@ impl Lights {
         let env_power = scene
             .environment
             .as_ref()
-            .map_or(0.0, |env| (4.0 * PI * PI * r * r * env.radiance.luminance().max(0.0)) as f64);
+            .map_or(0.0, |env| (4.0 * PI * PI * r * r * env.mean_luminance().max(0.0)) as f64);
         let punctual_power: Vec<f64> = scene
             .punctual_lights
             .iter()
@@ -168,7 +171,9 @@ impl Lights {
                 Some(SunDisk { index: k as u32, axis, cos_radius, radiance_scale: l.disk_radiance_scale(), pdf })
             })
             .collect();
-        Self { prims, triangles, cdf, prim_pmf, punctual_pmf, environment_pmf: (env_power / total) as f32, suns }
+        let environment_map = scene.environment.as_ref().and_then(|e| e.map.clone());
+        let environment_pmf = (env_power / total) as f32;
+        Self { prims, triangles, cdf, prim_pmf, punctual_pmf, environment_pmf, environment_map, suns }
     }
 
     /// The sun disks (directional lights with an angular size), which escaping rays see.
@@ -244,10 +249,11 @@ impl Lights {
         self.environment_pmf
     }
 
-    /// Solid-angle pdf of sampling environment direction (any direction: uniform).
+    /// Solid-angle pdf with which [`Lights::sample`] draws environment direction `dir`
+    /// (choice of the environment included): uniform, or by the map's luminance.
     #[inline]
-    pub fn environment_pdf(&self) -> f32 {
-        self.environment_pmf * UNIFORM_SPHERE_PDF
+    pub fn environment_pdf(&self, dir: Vec3) -> f32 {
+        self.environment_pmf * self.environment_map.as_ref().map_or(UNIFORM_SPHERE_PDF, |m| m.pdf(dir))
     }
 
     /// Picks a light with `u.x`, then a point on it with `u`, `u.x` rescaled to [0, 1)
@@ -262,10 +268,15 @@ impl Lights {
         }
         if u.x < self.environment_pmf || self.cdf.is_empty() {
             // Without other lights the environment's share is the whole interval (pmf 1).
+            let u = Vec2::new(rescale(u.x, 0.0, self.environment_pmf), u.y);
+            let (point, pdf) = match &self.environment_map {
+                None => (uniform_sphere(u), UNIFORM_SPHERE_PDF),
+                Some(map) => map.sample(u)?,
+            };
             return Some(LightSample {
-                point: uniform_sphere(Vec2::new(rescale(u.x, 0.0, self.environment_pmf), u.y)),
+                point,
                 normal: Vec3::ZERO,
-                pdf: self.environment_pdf(),
+                pdf: self.environment_pmf * pdf,
                 source: LightSource::Environment,
             });
         }
@@ -318,7 +329,7 @@ mod tests {
         };
         s.add(&quad(Vec3::new(0.0, 2.0, 0.0), -Vec3::Y, 0.5), lamp("big", 4.0));
         s.add(&quad(Vec3::new(3.0, 2.0, 0.0), -Vec3::Y, 0.25), lamp("small", 2.0));
-        s.environment = Some(Environment { radiance: Colour::constant(0.01) });
+        s.environment = Some(Environment::uniform(Colour::constant(0.01)));
         s
     }
 
@@ -375,7 +386,7 @@ mod tests {
 
     #[test]
     fn an_environment_alone_takes_the_sample_unchanged() {
-        let scene = Scene { environment: Some(Environment { radiance: Colour::constant(1.0) }), ..Scene::default() };
+        let scene = Scene { environment: Some(Environment::uniform(Colour::constant(1.0))), ..Scene::default() };
         let lights = Lights::new(&scene);
         assert_eq!(lights.environment_pmf(), 1.0);
         for u in [Vec2::new(0.0, 0.3), Vec2::new(0.37, 0.9), Vec2::new(ONE_MINUS_EPSILON, 0.5)] {

@@ -172,7 +172,8 @@ pub struct Capabilities {
     pub custom_bsdfs: bool,
     /// Whether it samples point, spot and directional lights ([`crate::PunctualLight`]).
     pub punctual_lights: bool,
-    /// Whether it reads material textures (colour, normal, alpha, emission maps).
+    /// Whether it reads textures: material maps (colour, normal, alpha, emission) and
+    /// environment maps.
     pub textures: bool,
     /// Ray–triangle tests it implements.
     pub triangle_tests: Vec<TriangleTest>,
@@ -234,6 +235,12 @@ impl Capabilities {
             return Err(unsupported(
                 format!("textures ({count} textured materials in this scene, the first '{}')", m.name),
                 "use --backend cpu (or --no-textures to render the materials' factors alone)",
+            ));
+        }
+        if !self.textures && scene.environment.as_ref().is_some_and(|e| e.map.is_some()) {
+            return Err(unsupported(
+                "environment maps".into(),
+                "use --backend cpu, or a uniform sky (--sky white[:LUMINANCE])",
             ));
         }
         if !self.triangle_tests.contains(&options.triangle_test) {

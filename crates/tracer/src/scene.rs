@@ -13,8 +13,11 @@ use spectral::spectrum::{Colour, ColourRole, Spectrum};
 /// Light arriving from infinitely far away in every direction that hits nothing.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Environment {
-    /// Radiance, the same from every direction (the thesis's "sky" SPD).
+    /// Radiance, the same from every direction (the thesis's "sky" SPD); with a map, the
+    /// factor that multiplies the map's radiance.
     pub radiance: Colour,
+    /// A latitude–longitude map of the radiance by direction, or `None` for a uniform sky.
+    pub map: Option<std::sync::Arc<crate::envmap::EnvironmentMap>>,
 }
 
 /// A renderable scene. Geometry is a triangle soup over shared vertices, kept as flat,
@@ -58,7 +61,42 @@ impl Environment {
     /// A uniform white sky: CIE D65 scaled to luminance Y = `luminance`, sRGB's own white,
     /// so its linear-sRGB radiance is (`luminance`, `luminance`, `luminance`).
     pub fn white_sky(luminance: f32) -> Self {
-        Self { radiance: Colour::from_spectrum(Spectrum::D65(luminance), ColourRole::Illuminant) }
+        Self::uniform(Colour::from_spectrum(Spectrum::D65(luminance), ColourRole::Illuminant))
+    }
+
+    /// The same radiance from every direction.
+    pub fn uniform(radiance: Colour) -> Self {
+        Self { radiance, map: None }
+    }
+
+    /// An environment map times a grey `scale`.
+    pub fn from_map(map: crate::envmap::EnvironmentMap, scale: f32) -> Self {
+        Self { radiance: Colour::constant(scale), map: Some(std::sync::Arc::new(map)) }
+    }
+
+    /// Luminance-like power per unit solid angle, averaged over directions (for light
+    /// selection).
+    pub fn mean_luminance(&self) -> f32 {
+        self.radiance.luminance() * self.map.as_ref().map_or(1.0, |m| m.mean_luminance())
+    }
+
+    /// Whether it sends no light at all.
+    pub fn is_black(&self) -> bool {
+        self.radiance.is_black() || self.map.as_ref().is_some_and(|m| m.mean_luminance() == 0.0)
+    }
+
+    /// The radiance arriving from direction `dir` at the path's wavelengths.
+    #[inline]
+    pub fn radiance_from<const N: usize>(
+        &self,
+        dir: glam::Vec3,
+        wl: &spectral::SampledWavelengths<N>,
+    ) -> spectral::SampledSpectrum<N> {
+        let base = self.radiance.sample(wl);
+        match &self.map {
+            None => base,
+            Some(m) => base * m.radiance(dir, wl),
+        }
     }
 }
 
@@ -76,7 +114,7 @@ impl Scene {
                 .and_then(|m| m.emission.as_ref())
                 .is_some_and(|e| !e.is_black())
         };
-        self.environment.as_ref().is_some_and(|e| !e.radiance.is_black())
+        self.environment.as_ref().is_some_and(|e| !e.is_black())
             || self.material_ids.iter().any(|&m| emits(m))
             || self.shapes.iter().any(|s| emits(s.material))
             || self.punctual_lights.iter().any(|l| !l.colour().is_black())
@@ -287,7 +325,7 @@ mod tests {
         scene.materials.push(grey.clone().with_emission(Colour::constant(3.0)));
         scene.add(&quad(Vec3::Y, -Vec3::Y, 0.2), grey.clone().with_emission(Colour::constant(0.0)));
         assert!(!scene.has_lights());
-        scene.environment = Some(Environment { radiance: Colour::constant(0.0) });
+        scene.environment = Some(Environment::uniform(Colour::constant(0.0)));
         assert!(!scene.has_lights());
         let mut lamp = scene.clone();
         lamp.add(&quad(Vec3::Y, -Vec3::Y, 0.2), grey.clone().with_emission(Colour::constant(3.0)));

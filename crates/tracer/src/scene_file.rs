@@ -38,7 +38,9 @@
 //! diameter = 0.53
 //!
 //! [sky]
-//! radiance = [0.2, 0.3, 0.5] # a uniform sky (linear sRGB radiance)
+//! radiance = [0.2, 0.3, 0.5] # a uniform sky (linear sRGB radiance); or
+//! # map = "sky.exr"          # a latitude-longitude environment map (EXR, HDR, PNG, JPEG),
+//! # rotation = 90            # turned about +y (degrees), times radiance (default 1)
 //!
 //! [render]                   # defaults for `spt render/bench/view`; their options win
 //! width = 640                # also height, spp, seed, max_depth, rr_depth,
@@ -54,6 +56,7 @@
 //! silently ignored.
 
 use crate::camera::Camera;
+use crate::envmap::EnvironmentMap;
 use crate::geometry::ShapeKind;
 use crate::gltf_scene::{GltfOptions, load_gltf};
 use crate::material::{Material, ModelId};
@@ -306,7 +309,13 @@ enum LightDef {
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct SkyDef {
-    radiance: ColourDef,
+    /// The uniform radiance, or with a map the colour that multiplies it.
+    radiance: Option<ColourDef>,
+    /// A latitude–longitude environment map (EXR/HDR, or PNG/JPEG as sRGB).
+    map: Option<String>,
+    /// Degrees the map turns about the vertical axis (counter-clockwise from above).
+    #[serde(default)]
+    rotation: f32,
 }
 
 /// Loads a scene file and the meshes it names.
@@ -496,8 +505,24 @@ pub fn parse_scene_file(text: &str, path: &Path) -> Result<Scene> {
     }
 
     if let Some(sky) = &file.sky {
-        let radiance = sky.get_ref().radiance.colour(ColourRole::Illuminant, dir).map_err(|e| at(sky.span(), e))?;
-        scene.environment = Some(Environment { radiance });
+        let def = sky.get_ref();
+        let radiance = match &def.radiance {
+            Some(c) => Some(c.colour(ColourRole::Illuminant, dir).map_err(|e| at(sky.span(), e))?),
+            None => None,
+        };
+        scene.environment = Some(match &def.map {
+            Some(file) => {
+                let map =
+                    EnvironmentMap::load(&dir.join(file), def.rotation).map_err(|e| at(sky.span(), e.to_string()))?;
+                Environment { radiance: radiance.unwrap_or(Colour::constant(1.0)), map: Some(std::sync::Arc::new(map)) }
+            }
+            None => {
+                let Some(radiance) = radiance else {
+                    return Err(at(sky.span(), "[sky] needs a radiance, a map, or both".into()));
+                };
+                Environment::uniform(radiance)
+            }
+        });
     }
 
     scene.camera = match &file.camera {

@@ -33,7 +33,7 @@ pub fn material_sphere(material: Material) -> Scene {
     let mut light = quad(Vec3::new(-2.0, 4.5, 2.0), -Vec3::Y, 0.8);
     light.normals.clear();
     scene.add(&light, lamp);
-    scene.environment = Some(Environment { radiance: Colour::constant(0.15) });
+    scene.environment = Some(Environment::uniform(Colour::constant(0.15)));
     scene.camera =
         Some(Camera { eye: Vec3::new(0.0, 2.2, 4.8), center: Vec3::new(0.0, 0.9, 0.0), up: Vec3::Y, fov_y_deg: 32.0 });
     scene
@@ -74,7 +74,7 @@ pub fn sphere_flake(level: u32) -> Result<Scene> {
     }
     add_floor(&mut scene, 0.0, 4.0)?;
     add_lamp(&mut scene, Vec3::new(-2.5, 3.5, 2.5), 0.5)?;
-    scene.environment = Some(Environment { radiance: Colour::constant(0.1) });
+    scene.environment = Some(Environment::uniform(Colour::constant(0.1)));
     scene.camera =
         Some(Camera { eye: Vec3::new(2.1, 1.6, 2.6), center: Vec3::new(0.0, 0.55, 0.0), up: Vec3::Y, fov_y_deg: 35.0 });
     Ok(scene)
@@ -91,7 +91,7 @@ pub fn glass_torus(solver: RootSolver) -> Result<Scene> {
     scene.add_shape(ShapeKind::Implicit(torus), glass(1.5)?);
     add_floor_z(&mut scene, -1.1, 4.0)?;
     add_lamp(&mut scene, Vec3::new(-2.0, -2.0, 2.5), 0.4)?;
-    scene.environment = Some(Environment { radiance: Colour::constant(0.2) });
+    scene.environment = Some(Environment::uniform(Colour::constant(0.2)));
     scene.camera = Some(Camera {
         eye: Vec3::new(0.0, -3.6, 1.6),
         center: Vec3::new(0.0, 0.0, -0.2),
@@ -120,7 +120,7 @@ pub fn glass_bunny(obj: &Path) -> Result<Scene> {
     scene.add(&mesh, glass(1.5)?);
     add_floor(&mut scene, 0.0, 4.0)?;
     add_lamp(&mut scene, Vec3::new(-1.5, 2.5, 1.5), 0.35)?;
-    scene.environment = Some(Environment { radiance: Colour::constant(0.2) });
+    scene.environment = Some(Environment::uniform(Colour::constant(0.2)));
     scene.camera =
         Some(Camera { eye: Vec3::new(0.0, 0.7, 2.6), center: Vec3::new(0.0, 0.45, 0.0), up: Vec3::Y, fov_y_deg: 35.0 });
     Ok(scene)

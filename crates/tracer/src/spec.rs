@@ -182,7 +182,7 @@ impl SpecFile {
             }
         }
         if let Some(radiance) = self.sky_radiance() {
-            scene.environment = Some(Environment { radiance });
+            scene.environment = Some(Environment::uniform(radiance));
         }
         Ok(notes)
     }

@@ -275,3 +275,25 @@ fn set_overrides_change_values_by_dotted_path() {
         assert!(e.contains(needle), "{bad}: {e}");
     }
 }
+
+#[test]
+fn the_sky_can_be_an_environment_map_turned_and_scaled() {
+    let path =
+        write("sky-map", "[[mesh]]\nfile = \"tri.obj\"\n\n[sky]\nmap = \"sky.exr\"\nrotation = 90\nradiance = 2\n");
+    let sky = image::Rgb32FImage::from_fn(4, 2, |x, y| image::Rgb([x as f32, y as f32, 1.0]));
+    sky.save(path.with_file_name("sky.exr")).unwrap();
+    let s = load_scene_file(&path).unwrap();
+    let env = s.environment.as_ref().unwrap();
+    let map = env.map.as_ref().expect("a map");
+    assert_eq!((map.width(), map.height(), env.radiance.rgb), (4, 2, [2.0; 3]));
+    // Turned 90°: the map's centre (u = ½) now lies towards −x.
+    let centre = map.uv(Vec3::NEG_X);
+    assert!((centre.x - 0.5).abs() < 1e-5, "{centre}");
+    // A sky with neither radiance nor map, and a map that is not there, are errors.
+    let empty = write("sky-empty", "[[mesh]]\nfile = \"tri.obj\"\n\n[sky]\nrotation = 3\n");
+    let e = load_scene_file(&empty).unwrap_err().to_string();
+    assert!(e.contains("needs a radiance, a map, or both") && e.contains(":4:"), "{e}");
+    let missing = write("sky-missing", "[[mesh]]\nfile = \"tri.obj\"\n\n[sky]\nmap = \"gone.hdr\"\n");
+    let e = load_scene_file(&missing).unwrap_err().to_string();
+    assert!(e.contains("gone.hdr"), "{e}");
+}
