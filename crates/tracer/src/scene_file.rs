@@ -48,7 +48,8 @@
 //! ```
 //!
 //! Colours (material colours, emission, light intensities, the sky) are one number (a
-//! grey), three (linear sRGB), or a spectrum: `{ spectrum = "D65" }` (also `"A"`, `"E"`),
+//! grey), three (linear sRGB), or a spectrum: `{ spectrum = "D65" }` (also `"D50"`, `"D55"`,
+//! `"D75"`, `"A"`, `"E"`), `{ daylight = 5000 }` (any CIE D illuminant),
 //! `{ blackbody = 3200 }` (peak 1), `{ table = { "400" = 0.2, "700" = 0.6 } }` (nm →
 //! value, linear in between) or `{ spd = "golden", file = "metal.spec" }` (an SPD of a
 //! SPEC file), each with an optional `scale`. Every error names the file and the line and
@@ -164,13 +165,16 @@ enum ColourDef {
     Spectrum(SpectrumDef),
 }
 
-/// A spectrum by name (`spectrum = "D65" | "A" | "E"`), a black body (`blackbody = K`,
+/// A spectrum by name (`spectrum = "D65" | "D50" | "D55" | "D75" | "A" | "E"`; D65 scaled to
+/// luminance 1, A and the other D illuminants to 1 at 560 nm), a CIE daylight of any
+/// temperature (`daylight = K`, 4000–25000, 1 at 560 nm), a black body (`blackbody = K`,
 /// peak 1), a table (`table = { "400" = 0.1, … }`, nm → value) or an SPD of a SPEC file
 /// (`spd = NAME, file = "x.spec"`), times `scale` (default 1).
 #[derive(Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 struct SpectrumDef {
     spectrum: Option<String>,
+    daylight: Option<f32>,
     blackbody: Option<f32>,
     table: Option<BTreeMap<String, f32>>,
     spd: Option<String>,
@@ -203,9 +207,15 @@ impl SpectrumDef {
         if !(scale.is_finite() && scale >= 0.0) {
             return Err(format!("scale {scale} must be a non-negative number"));
         }
-        let given = [self.spectrum.is_some(), self.blackbody.is_some(), self.table.is_some(), self.spd.is_some()];
+        let given = [
+            self.spectrum.is_some(),
+            self.daylight.is_some(),
+            self.blackbody.is_some(),
+            self.table.is_some(),
+            self.spd.is_some(),
+        ];
         if given.iter().filter(|&&g| g).count() != 1 {
-            return Err("a spectrum needs exactly one of spectrum, blackbody, table or spd".into());
+            return Err("a spectrum needs exactly one of spectrum, daylight, blackbody, table or spd".into());
         }
         if self.file.is_some() != self.spd.is_some() {
             return Err("spd and file go together: spd = NAME, file = \"x.spec\"".into());
@@ -218,8 +228,20 @@ impl SpectrumDef {
                 "D65" => Ok(Spectrum::D65(scale)),
                 "A" => Ok(Spectrum::IlluminantA(scale / 100.0)),
                 "E" => Ok(Spectrum::Constant(scale)),
-                _ => Err(format!("unknown spectrum '{name}' (known: D65, A, E; or blackbody, table, spd)")),
+                // CIE 15:2018's temperatures for the named D illuminants.
+                "D50" => Ok(Spectrum::Daylight { kelvin: 5003.0, scale: scale / 100.0 }),
+                "D55" => Ok(Spectrum::Daylight { kelvin: 5503.0, scale: scale / 100.0 }),
+                "D75" => Ok(Spectrum::Daylight { kelvin: 7504.0, scale: scale / 100.0 }),
+                _ => Err(format!(
+                    "unknown spectrum '{name}' (known: D65, D50, D55, D75, A, E; or daylight, blackbody, table, spd)"
+                )),
             };
+        }
+        if let Some(kelvin) = self.daylight {
+            if !(kelvin.is_finite() && (4000.0..=25_000.0).contains(&kelvin)) {
+                return Err(format!("daylight {kelvin} K is outside the CIE D series' [4000, 25000]"));
+            }
+            return Ok(Spectrum::Daylight { kelvin, scale: scale / 100.0 });
         }
         if let Some(kelvin) = self.blackbody {
             if !(kelvin.is_finite() && (100.0..=1.0e6).contains(&kelvin)) {

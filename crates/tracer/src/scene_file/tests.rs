@@ -223,7 +223,7 @@ radiance = { spectrum = "D65", scale = 0.5 }
         if (intensity.spectrum.eval(560.0) - 2.0).abs() < 1e-4));
     assert_eq!(s.environment.as_ref().unwrap().radiance.spectrum, Spectrum::D65(0.5));
     for (bad, needle) in [
-        ("[sky]\nradiance = { spectrum = \"D50\" }\n", "unknown spectrum 'D50'"),
+        ("[sky]\nradiance = { spectrum = \"F11\" }\n", "unknown spectrum 'F11'"),
         ("[sky]\nradiance = { spectrum = \"D65\", blackbody = 5000 }\n", "exactly one of"),
         ("[sky]\nradiance = { spd = \"golden\" }\n", "spd and file go together"),
         ("[sky]\nradiance = { spd = \"silver\", file = \"m.spec\" }\n", "no spectrum 'silver' (defined: golden)"),
@@ -296,4 +296,26 @@ fn the_sky_can_be_an_environment_map_turned_and_scaled() {
     let missing = write("sky-missing", "[[mesh]]\nfile = \"tri.obj\"\n\n[sky]\nmap = \"gone.hdr\"\n");
     let e = load_scene_file(&missing).unwrap_err().to_string();
     assert!(e.contains("gone.hdr"), "{e}");
+}
+
+#[test]
+fn daylight_spectra_by_name_and_by_temperature() {
+    let path = write(
+        "daylight",
+        "[[mesh]]\nfile = \"tri.obj\"\n\n[[light]]\ntype = \"point\"\nposition = [0, 2, 0]\n\
+         intensity = { spectrum = \"D50\", scale = 2 }\n\n[[light]]\ntype = \"point\"\nposition = [0, 3, 0]\n\
+         intensity = { daylight = 5003 }\n",
+    );
+    let s = load_scene_file(&path).unwrap();
+    let d50 = s.punctual_lights[0].colour();
+    assert_eq!(d50.spectrum, Spectrum::Daylight { kelvin: 5003.0, scale: 0.02 });
+    // D50 is warmer than sRGB's D65 white: more red than blue.
+    assert!(d50.rgb[0] > d50.rgb[2], "{:?}", d50.rgb);
+    assert_eq!(s.punctual_lights[1].colour().spectrum, Spectrum::Daylight { kelvin: 5003.0, scale: 0.01 });
+    let bad = write(
+        "daylight-bad",
+        "[[mesh]]\nfile = \"tri.obj\"\n\n[[light]]\ntype = \"point\"\nposition = [0, 2, 0]\nintensity = { daylight = 2000 }\n",
+    );
+    let e = load_scene_file(&bad).unwrap_err().to_string();
+    assert!(e.contains("daylight 2000 K is outside"), "{e}");
 }
