@@ -1,7 +1,9 @@
 //! A dependency-free mutation fuzzer for the glTF reader
 //! ([`tracer::gltf_scene::load_gltf_bytes`], the `gltf` crate underneath), the TOML
 //! scene-file reader ([`tracer::scene_file::parse_scene_file`], the `toml` crate
-//! underneath) and the SPEC reader ([`tracer::spec::parse_spec`], `serde_json`): glTF files — JSON with data URIs, JSON with an external `.bin`, binary
+//! underneath), the SPEC reader ([`tracer::spec::parse_spec`], `serde_json`) and the
+//! image decoding of textures and environment maps ([`tracer::texture::TextureImage::decode`],
+//! [`tracer::envmap::EnvironmentMap::decode`], the `image` crate): glTF files — JSON with data URIs, JSON with an external `.bin`, binary
 //! `.glb` — and scene files are mutated at random and loaded from memory; every input must
 //! load or fail with an error, never panic (the glTF loader turns a panic of the `gltf`
 //! crate into an error that says so, which this counts; the scene-file reader runs under
@@ -76,6 +78,11 @@ fn handwritten() -> Seed {
     for v in [0.0f32, 0.0, 1.0, 0.0, 0.0, 1.0, 1.0, 1.0] {
         bin.extend_from_slice(&v.to_le_bytes());
     }
+    // A 2×2 RGBA PNG for the textures.
+    let mut png = Vec::new();
+    image::RgbaImage::from_fn(2, 2, |x, y| image::Rgba([x as u8 * 255, y as u8 * 255, 128, 100 + x as u8 * 100]))
+        .write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
+        .expect("a PNG in memory");
     let text = format!(
         r#"{{"asset":{{"version":"2.0"}},"scene":0,"scenes":[{{"nodes":[0,3]}}],
 "nodes":[{{"mesh":0,"children":[1,2],"scale":[1,2,-1]}},{{"camera":0,"translation":[0,0,3]}},
@@ -86,7 +93,12 @@ fn handwritten() -> Seed {
 "materials":[{{"pbrMetallicRoughness":{{"baseColorFactor":[1,0.5,0.2,1],"metallicFactor":0,"roughnessFactor":0}},
 "extensions":{{"KHR_materials_transmission":{{"transmissionFactor":1}},"KHR_materials_ior":{{"ior":1.4}},
 "KHR_materials_volume":{{"attenuationDistance":1,"attenuationColor":[0.5,0.5,1]}}}}}},
-{{"emissiveFactor":[1,1,0.5],"extensions":{{"KHR_materials_emissive_strength":{{"emissiveStrength":3}}}}}}],
+{{"emissiveFactor":[1,1,0.5],"extensions":{{"KHR_materials_emissive_strength":{{"emissiveStrength":3}}}},
+"pbrMetallicRoughness":{{"baseColorTexture":{{"index":0,"extensions":{{"KHR_texture_transform":{{"offset":[0.1,0],"rotation":0.3,"scale":[2,2]}}}}}},
+"metallicRoughnessTexture":{{"index":0}}}},"normalTexture":{{"index":0,"scale":0.5}},"emissiveTexture":{{"index":0}},
+"alphaMode":"MASK","alphaCutoff":0.3}}],
+"textures":[{{"source":0,"sampler":0}}],"samplers":[{{"wrapS":33648,"wrapT":33071}}],
+"images":[{{"uri":"data:image/png;base64,{}"}}],
 "cameras":[{{"type":"perspective","perspective":{{"yfov":0.7,"znear":0.1}}}}],
 "accessors":[{{"bufferView":0,"componentType":5126,"count":4,"type":"VEC3","min":[0,0,0],"max":[1,1,0]}},
 {{"bufferView":1,"componentType":5126,"count":4,"type":"VEC3"}},{{"bufferView":2,"componentType":5123,"count":4,"type":"SCALAR"}},
@@ -94,9 +106,10 @@ fn handwritten() -> Seed {
 "bufferViews":[{{"buffer":0,"byteLength":48}},{{"buffer":0,"byteOffset":48,"byteLength":48}},{{"buffer":0,"byteOffset":96,"byteLength":8}},
 {{"buffer":0,"byteOffset":104,"byteLength":32}}],
 "buffers":[{{"byteLength":136,"uri":"data:application/octet-stream;base64,{}"}}],
-"extensionsUsed":["KHR_lights_punctual","KHR_materials_transmission","KHR_materials_ior","KHR_materials_volume","KHR_materials_emissive_strength"],
+"extensionsUsed":["KHR_lights_punctual","KHR_materials_transmission","KHR_materials_ior","KHR_materials_volume","KHR_materials_emissive_strength","KHR_texture_transform"],
 "extensions":{{"KHR_lights_punctual":{{"lights":[{{"type":"spot","intensity":5,"spot":{{"innerConeAngle":0.1,"outerConeAngle":0.5}}}},
 {{"type":"directional","color":[1,0.9,0.8],"intensity":2}}]}}}}}}"#,
+        base64(&png),
         base64(&bin)
     );
     Seed { name: "handwritten.gltf", main: text.into_bytes(), files: Vec::new() }
@@ -188,6 +201,25 @@ fn seeds(shared: &Path) -> Vec<Seed> {
         Seed { name: "scene.toml", main: SCENE_FILE.as_bytes().to_vec(), files: Vec::new() },
         Seed { name: "metal.spec", main: SPEC_FILE.as_bytes().to_vec(), files: Vec::new() },
     ];
+    // Images, as textures and environment maps: small PNG, JPEG and EXR files written here,
+    // and the smallest of Sponza's JPEGs.
+    let encode = |format: image::ImageFormat, image: image::DynamicImage| {
+        let mut bytes = Vec::new();
+        image.write_to(&mut std::io::Cursor::new(&mut bytes), format).map(|_| bytes).ok()
+    };
+    let gradient = image::RgbaImage::from_fn(7, 5, |x, y| image::Rgba([x as u8 * 30, y as u8 * 40, 128, 200]));
+    let rgb = image::DynamicImage::ImageRgba8(gradient.clone()).to_rgb8();
+    let hdr = image::Rgb32FImage::from_fn(8, 4, |x, y| image::Rgb([x as f32, y as f32 * 10.0, 0.5]));
+    for (name, bytes) in [
+        ("t.png", encode(image::ImageFormat::Png, image::DynamicImage::ImageRgba8(gradient))),
+        ("t.jpg", encode(image::ImageFormat::Jpeg, image::DynamicImage::ImageRgb8(rgb))),
+        ("t.exr", encode(image::ImageFormat::OpenExr, image::DynamicImage::ImageRgb32F(hdr))),
+        ("s.jpg", std::fs::read(shared.join("scenes/sponza/01_s_ba.jpg")).ok()),
+    ] {
+        if let Some(main) = bytes {
+            out.push(Seed { name, main, files: Vec::new() });
+        }
+    }
     let dir = shared.join("scenes/gltf-box");
     let read = |f: &str| std::fs::read(dir.join(f)).ok();
     if let (Some(gltf), Some(bin), Some(glb)) = (read("Box.gltf"), read("Box0.bin"), read("Box.glb")) {
@@ -328,6 +360,17 @@ fn check(s: &Seed, camera: bool) -> Result<bool, String> {
             Ok(r) => r,
             Err(_) => return Err("panic in the SPEC reader".into()),
         }
+    } else if [".png", ".jpg", ".exr"].iter().any(|e| s.name.ends_with(e)) {
+        // Texture and environment-map decoding (`image` underneath, bounded by the file's
+        // size): errors are fine, panics are caught and reported as such.
+        let texture = tracer::texture::TextureImage::decode(&s.main);
+        let map = tracer::envmap::EnvironmentMap::decode(&s.main, 10.0);
+        for e in [texture.as_ref().err(), map.as_ref().err()].into_iter().flatten() {
+            if e.contains("decoder failed") {
+                return Err(format!("panic: {e}"));
+            }
+        }
+        texture.map(drop).map_err(tracer::Error::Setting)
     } else if s.name.ends_with(".toml") {
         // The scene-file reader has no panic guard of its own (it needs none): a panic
         // here is counted as one.
@@ -352,7 +395,11 @@ fn check(s: &Seed, camera: bool) -> Result<bool, String> {
     }
     // Everything the converter keeps is proportional to the input (scene arrays are at
     // most a few hundred bytes per input byte for these small seeds).
-    if peak > (1 << 20) + 1000 * size {
+    // An image may decode to up to 16 M + 256 pixels per byte of file (see
+    // `texture::decode_image`), as RGBA8 and as f32 RGB.
+    let image = [".png", ".jpg", ".exr"].iter().any(|e| s.name.ends_with(e));
+    let allowed = if image { 3 * 16 * ((16 << 20) + 256 * size) } else { (1 << 20) + 1000 * size };
+    if peak > allowed {
         return Err(format!("allocated {peak} bytes for a {size}-byte input"));
     }
     Ok(result.is_ok())

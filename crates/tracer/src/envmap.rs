@@ -143,26 +143,20 @@ impl EnvironmentMap {
     pub fn load(path: &Path, rotation_deg: f32) -> Result<Self> {
         let fail = |message: String| Error::Setting(format!("environment map '{}': {message}", path.display()));
         let bytes = crate::obj::read_file_bytes(path).map_err(|e| fail(e.to_string()))?;
-        let mut reader = image::ImageReader::new(std::io::Cursor::new(&bytes))
-            .with_guessed_format()
-            .map_err(|e| fail(e.to_string()))?;
-        let mut limits = image::Limits::default();
-        limits.max_image_width = Some(MAX_ENVIRONMENT_SIZE);
-        limits.max_image_height = Some(MAX_ENVIRONMENT_SIZE);
-        limits.max_alloc = Some(4 << 30);
-        reader.limits(limits);
-        let format = reader.format().ok_or_else(|| fail("not an EXR, HDR, PNG or JPEG image".into()))?;
-        let decoded = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| reader.decode()))
-            .map_err(|p| fail(format!("the decoder failed: {}", crate::panic_message(&p))))?
-            .map_err(|e| fail(e.to_string()))?;
+        Self::decode(&bytes, rotation_deg).map_err(fail)
+    }
+
+    /// [`EnvironmentMap::load`] from bytes in memory; the error says why not.
+    pub fn decode(bytes: &[u8], rotation_deg: f32) -> std::result::Result<Self, String> {
+        let decoded = crate::texture::decode_image(bytes, MAX_ENVIRONMENT_SIZE)?;
+        let linear = matches!(decoded, image::DynamicImage::ImageRgb32F(_) | image::DynamicImage::ImageRgba32F(_));
         let (width, height) = (decoded.width(), decoded.height());
-        let linear = matches!(format, image::ImageFormat::OpenExr | image::ImageFormat::Hdr);
         let texels = decoded
             .into_rgb32f()
             .pixels()
             .map(|p| if linear { p.0 } else { p.0.map(spectral::colour::srgb_decode) })
             .collect();
-        Self::new(width, height, texels, rotation_deg).map_err(fail)
+        Self::new(width, height, texels, rotation_deg)
     }
 
     /// Width in texels.

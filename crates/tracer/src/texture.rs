@@ -66,21 +66,7 @@ impl TextureImage {
     /// Decodes a PNG, JPEG, EXR or HDR file held in memory; the error says why not.
     /// Sizes beyond [`MAX_TEXTURE_SIZE`] and decoder allocations beyond 1 GiB are refused.
     pub fn decode(bytes: &[u8]) -> std::result::Result<Self, String> {
-        let fail = |e: String| e;
-        let mut reader = image::ImageReader::new(std::io::Cursor::new(bytes))
-            .with_guessed_format()
-            .map_err(|e| fail(e.to_string()))?;
-        let mut limits = image::Limits::default();
-        limits.max_image_width = Some(MAX_TEXTURE_SIZE);
-        limits.max_image_height = Some(MAX_TEXTURE_SIZE);
-        limits.max_alloc = Some(1 << 30);
-        reader.limits(limits);
-        if reader.format().is_none() {
-            return Err(fail("not a PNG, JPEG, EXR or HDR image".into()));
-        }
-        let decoded = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| reader.decode()))
-            .map_err(|p| fail(format!("the decoder failed: {}", crate::panic_message(&p))))?
-            .map_err(|e| fail(e.to_string()))?;
+        let decoded = decode_image(bytes, MAX_TEXTURE_SIZE)?;
         let colour = decoded.color();
         let (width, height) = (decoded.width(), decoded.height());
         let texels: Vec<[u8; 4]> = decoded.into_rgba8().pixels().map(|p| p.0).collect();
@@ -126,6 +112,42 @@ impl TextureImage {
     pub fn texel(&self, x: u32, y: u32) -> [u8; 4] {
         self.texels[y as usize * self.width as usize + x as usize]
     }
+}
+
+/// Decodes an image held in memory with the `image` crate, within bounds: each side at
+/// most `max_side`, and no more pixels than the file could plausibly hold — 16 M plus
+/// 256 per byte of file (deflate's best ratio is about 1032 : 1 per channel byte; a
+/// 2048² texture needs a 64 KB file) — so that a forged header of a small file cannot make
+/// the decoder allocate gigabytes. A decoder panic becomes an error.
+pub(crate) fn decode_image(bytes: &[u8], max_side: u32) -> std::result::Result<image::DynamicImage, String> {
+    let reader = || image::ImageReader::new(std::io::Cursor::new(bytes)).with_guessed_format();
+    let probe = reader().map_err(|e| e.to_string())?;
+    if probe.format().is_none() {
+        return Err("not a PNG, JPEG, EXR or HDR image".into());
+    }
+    let guarded = |f: &mut dyn FnMut() -> std::result::Result<image::DynamicImage, String>| {
+        std::panic::catch_unwind(std::panic::AssertUnwindSafe(f))
+            .map_err(|p| format!("the decoder failed: {}", crate::panic_message(&p)))?
+    };
+    let (width, height) = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| probe.into_dimensions()))
+        .map_err(|p| format!("the decoder failed: {}", crate::panic_message(&p)))?
+        .map_err(|e| e.to_string())?;
+    if width == 0 || height == 0 || width > max_side || height > max_side {
+        return Err(format!("{width}×{height} pixels (each side must be 1 to {max_side})"));
+    }
+    let pixels = width as u64 * height as u64;
+    if pixels > (16 << 20) + 256 * bytes.len() as u64 {
+        return Err(format!("{width}×{height} pixels is more than a {}-byte file can hold", bytes.len()));
+    }
+    guarded(&mut || {
+        let mut r = reader().map_err(|e| e.to_string())?;
+        let mut limits = image::Limits::default();
+        limits.max_image_width = Some(max_side);
+        limits.max_image_height = Some(max_side);
+        limits.max_alloc = Some(4 << 30);
+        r.limits(limits);
+        r.decode().map_err(|e| e.to_string())
+    })
 }
 
 /// How coordinates outside [0, 1] map into the image (glTF's sampler wrap modes).
