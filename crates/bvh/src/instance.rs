@@ -81,16 +81,36 @@ impl<A: Accelerator> TwoLevel<A> {
         }
         let mut best: Option<Hit> = None;
         let mut t_max = ray.t_max;
-        let mut stack = vec![0usize];
-        while let Some(i) = stack.pop() {
+        // A fixed stack for the usual depths, spilling to the heap beyond (no allocation
+        // per ray in practice).
+        let mut fixed = [0usize; 64];
+        let mut depth = 1;
+        let mut spill: Vec<usize> = Vec::new();
+        let push = |fixed: &mut [usize; 64], depth: &mut usize, spill: &mut Vec<usize>, i: usize| {
+            if *depth < fixed.len() {
+                fixed[*depth] = i;
+                *depth += 1;
+            } else {
+                spill.push(i);
+            }
+        };
+        loop {
+            let i = if let Some(i) = spill.pop() {
+                i
+            } else if depth > 0 {
+                depth -= 1;
+                fixed[depth]
+            } else {
+                break;
+            };
             let n = &self.nodes[i];
             let aabb = Aabb { min: Vec3::from_array(n.min), max: Vec3::from_array(n.max) };
             if aabb.hit(ray, t_max).is_none() {
                 continue;
             }
             if n.count == 0 {
-                stack.push(n.index as usize);
-                stack.push(i + 1);
+                push(&mut fixed, &mut depth, &mut spill, n.index as usize);
+                push(&mut fixed, &mut depth, &mut spill, i + 1);
                 continue;
             }
             for inst in &self.instances[n.index as usize..(n.index + n.count) as usize] {

@@ -92,6 +92,16 @@ fn run_info(args: InfoArgs) -> Result<()> {
         scene.uvs.len(),
         scene.shapes.len()
     );
+    if !scene.instances.is_empty() {
+        let object_triangles: usize = scene.objects.iter().map(|o| o.triangles.len()).sum();
+        println!(
+            "    {} instances of {} objects ({} triangles kept once, {} placed; a two-level BVH)",
+            scene.instances.len(),
+            scene.objects.len(),
+            object_triangles,
+            scene.instanced_triangle_count()
+        );
+    }
     let mut shape_kinds: std::collections::BTreeMap<&str, usize> = Default::default();
     for s in &scene.shapes {
         *shape_kinds.entry(s.shape.name()).or_default() += 1;
@@ -261,7 +271,9 @@ struct BvhArgs {
 }
 
 fn run_bvh(args: BvhArgs) -> Result<()> {
-    let scene = load_scene(&args.scene)?;
+    let mut scene = load_scene(&args.scene)?;
+    // The builders compared here take one triangle soup: instances are copied into it.
+    scene.flatten_instances();
     if scene.triangles.is_empty() {
         bail!("{}: the scene has no triangles", args.scene.display());
     }
@@ -755,7 +767,7 @@ fn prepare(
     default_sampler: fn(&Capabilities) -> SamplerKind,
 ) -> Result<(Box<dyn PreparedScene>, RenderSettings)> {
     let mut scene = load_scene_with(&args.scene, args.camera.as_deref(), args.spec.as_deref(), &args.sets)?;
-    if scene.triangles.is_empty() && scene.shapes.is_empty() {
+    if scene.triangles.is_empty() && scene.shapes.is_empty() && scene.instances.is_empty() {
         bail!("{}: the scene has no geometry", args.scene.display());
     }
     scene.punctual_lights.extend(args.lights.iter().cloned());
@@ -856,8 +868,18 @@ fn run_render(args: RenderArgs) -> Result<()> {
     let (prepared, settings) = prepare(&args.scene, args.spp, args.spectral, best_sampler)?;
     let s = prepared.scene();
     let stats = prepared.stats();
+    let instanced = if s.instances.is_empty() {
+        String::new()
+    } else {
+        format!(
+            " (+ {} placed by {} instances of {} objects)",
+            s.instanced_triangle_count(),
+            s.instances.len(),
+            s.objects.len()
+        )
+    };
     eprintln!(
-        "{}: {} triangles, {} shapes, {} emissive, {} built in {:.1} ms{}; {}×{} at {} spp, {} mode, {} backend",
+        "{}: {} triangles{instanced}, {} shapes, {} emissive, {} built in {:.1} ms{}; {}×{} at {} spp, {} mode, {} backend",
         args.scene.scene.display(),
         s.triangles.len(),
         s.shapes.len(),

@@ -114,7 +114,9 @@ pub fn run(command: RaysCommand) -> Result<()> {
 }
 
 fn export(args: ExportArgs) -> Result<()> {
-    let scene = crate::load_scene(&args.scene)?;
+    let mut scene = crate::load_scene(&args.scene)?;
+    // Exported as one triangle soup: instances are copied into it.
+    scene.flatten_instances();
     let mut triangles = scene.triangle_soup();
     if triangles.is_empty() {
         bail!("{}: the scene has no triangles", args.scene.display());

@@ -194,6 +194,9 @@ impl SceneData {
         if !scene.shapes.is_empty() {
             return Err(GpuError::Unsupported("analytic shapes (spheres, boxes, …)".into()));
         }
+        if !scene.instances.is_empty() {
+            return Err(GpuError::Unsupported("instances (flatten them first: Scene::flatten_instances)".into()));
+        }
         let kernel = crate::materials::generate(&scene.materials, true)?;
         let start = Instant::now();
         let config = BuildConfig {
@@ -466,9 +469,12 @@ impl GpuBackend {
     }
 
     /// Checks `scene` against the capabilities, uploads it and compiles its kernel.
-    pub fn prepare_gpu(&self, scene: Scene, options: &SceneOptions) -> Result<GpuScene, tracer::Error> {
+    pub fn prepare_gpu(&self, mut scene: Scene, options: &SceneOptions) -> Result<GpuScene, tracer::Error> {
         capabilities_for(self.integrator).check_scene(&scene, options)?;
         scene.validate()?;
+        // The kernel traverses one BVH: instances are copied into it (same surfaces; the
+        // memory a two-level structure saves is not saved here).
+        scene.flatten_instances();
         Ok(self.upload(scene, options)?)
     }
 

@@ -3,7 +3,7 @@
 
 use crate::scene::Scene;
 use crate::{Error, Result};
-use bvh::{Accelerator, BoxBvh, BuildConfig, BvhWidth, Ray, TriangleTest, WideBvh};
+use bvh::{Accelerator, BoxBvh, BuildConfig, BvhWidth, Instance, Ray, TriangleTest, TwoLevel, WideBvh};
 use shapes::boxes::Cuboid;
 use shapes::implicit::Implicit;
 use shapes::polygon::Polygon;
@@ -87,7 +87,48 @@ pub struct Geometry {
     pub triangles: WideBvh,
     /// Analytic shapes, by their boxes.
     pub shapes: BoxBvh,
+    /// Instanced objects: a two-level BVH (a wide BVH per object, a binary one over the
+    /// instances), or `None` for a scene without instances.
+    pub instances: Option<Instanced>,
     triangle_count: u32,
+}
+
+/// The two-level structure over a scene's instances, and what shading needs to turn an
+/// instanced hit back into world space.
+pub struct Instanced {
+    /// Bottom level per object, top level over the placements.
+    pub bvh: TwoLevel<WideBvh>,
+    /// The first primitive id of each instance (ascending; after the triangles and
+    /// shapes).
+    pub first_prim: Vec<u32>,
+    /// Per instance: object-to-world, its normal matrix (inverse transpose) and whether it
+    /// mirrors.
+    pub transforms: Vec<InstanceTransform>,
+}
+
+/// An instance's transforms as shading uses them.
+#[derive(Clone, Copy, Debug)]
+pub struct InstanceTransform {
+    /// Object index.
+    pub object: u32,
+    /// The material replacing the object's, if any.
+    pub material: Option<u32>,
+    /// Object to world.
+    pub to_world: glam::Affine3A,
+    /// Inverse transpose of the linear part, for normals.
+    pub normal: glam::Mat3A,
+    /// −1 where the transform mirrors (the winding's front flips), else 1.
+    pub orientation: f32,
+}
+
+impl Instanced {
+    /// The instance and the object's triangle that primitive `prim` (an instanced one)
+    /// names.
+    #[inline]
+    pub fn locate(&self, prim: u32) -> (usize, u32) {
+        let k = self.first_prim.partition_point(|&f| f <= prim) - 1;
+        (k, prim - self.first_prim[k])
+    }
 }
 
 impl Geometry {
@@ -98,11 +139,44 @@ impl Geometry {
             WideBvh::build(&scene.triangle_soup(), Self::triangle_build_config(), width)?.with_triangle_test(test);
         let boxes: Vec<_> = scene.shapes.iter().map(|s| s.shape.shape().bounds()).collect();
         let shapes = BoxBvh::build(&boxes, BuildConfig { max_leaf_size: 2, ..BuildConfig::default() })?;
-        let count = scene.triangles.len() + scene.shapes.len();
-        if count >= u32::MAX as usize {
+        let count = scene.triangles.len() as u64 + scene.shapes.len() as u64 + scene.instanced_triangle_count();
+        if count >= u32::MAX as u64 {
             return Err(Error::Setting(format!("{count} primitives exceed the 2^32 − 1 a scene can index")));
         }
-        Ok(Self { triangles, shapes, triangle_count: scene.triangles.len() as u32 })
+        let instances =
+            if scene.instances.is_empty() { None } else { Some(Self::build_instances(scene, test, width)?) };
+        Ok(Self { triangles, shapes, instances, triangle_count: scene.triangles.len() as u32 })
+    }
+
+    fn build_instances(scene: &Scene, test: TriangleTest, width: BvhWidth) -> Result<Instanced> {
+        let objects = scene
+            .objects
+            .iter()
+            .map(|o| {
+                let soup: Vec<_> = (0..o.triangles.len()).map(|i| o.triangle_vertices(i)).collect();
+                Ok(WideBvh::build(&soup, Self::triangle_build_config(), width)?.with_triangle_test(test))
+            })
+            .collect::<Result<Vec<_>>>()?;
+        let mut first = (scene.triangles.len() + scene.shapes.len()) as u32;
+        let mut placements = Vec::with_capacity(scene.instances.len());
+        let mut first_prim = Vec::with_capacity(scene.instances.len());
+        let mut transforms = Vec::with_capacity(scene.instances.len());
+        for inst in &scene.instances {
+            let to_world = glam::Affine3A::from_mat4(inst.transform);
+            let linear = glam::Mat3::from_mat4(inst.transform);
+            placements.push(Instance { object: inst.object, transform: to_world, prim_offset: first });
+            first_prim.push(first);
+            transforms.push(InstanceTransform {
+                object: inst.object,
+                material: inst.material,
+                to_world,
+                normal: glam::Mat3A::from(linear.inverse().transpose()),
+                orientation: if linear.determinant() < 0.0 { -1.0 } else { 1.0 },
+            });
+            first += scene.objects[inst.object as usize].triangles.len() as u32;
+        }
+        let bvh = TwoLevel::new(objects, &placements, BuildConfig::default())?;
+        Ok(Instanced { bvh, first_prim, transforms })
     }
 
     /// How the triangles' binary BVH is built before it is collapsed: binned SAH, leaves of
@@ -119,7 +193,13 @@ impl Geometry {
     /// The closest hit in (`ray.t_min`, `ray.t_max`). `shapes` must be the scene's.
     #[inline]
     pub fn intersect(&self, shapes: &[SceneShape], ray: &Ray) -> Option<SceneHit> {
-        let triangle = self.triangles.intersect(ray);
+        let mut triangle = self.triangles.intersect(ray);
+        if let Some(instanced) = &self.instances {
+            let t_max = triangle.map_or(ray.t_max, |h| h.t);
+            if let Some(h) = instanced.bvh.intersect(&Ray { t_max, ..*ray }) {
+                triangle = Some(h);
+            }
+        }
         let t_max = triangle.map_or(ray.t_max, |h| h.t);
         let mut best =
             triangle.map(|h| SceneHit { prim: h.prim, t: h.t, surface: HitSurface::Triangle { u: h.u, v: h.v } });
@@ -135,6 +215,7 @@ impl Geometry {
     #[inline]
     pub fn occluded(&self, shapes: &[SceneShape], ray: &Ray) -> bool {
         self.triangles.occluded(ray)
+            || self.instances.as_ref().is_some_and(|i| i.bvh.occluded(ray))
             || self
                 .shapes
                 .traverse(ray, ray.t_max, true, |k, t_max| {

@@ -5,14 +5,14 @@
 //! * the default scene's node hierarchy, each node's mesh placed by its world transform
 //!   (a mirroring transform reverses the winding, so fronts stay fronts); primitives in
 //!   triangle, strip and fan modes, indexed or not, with their normals and texture
-//!   coordinates (`TEXCOORD_0`, kept for the textures to come);
+//!   coordinates (`TEXCOORD_0`);
 //! * materials: `pbrMetallicRoughness` factors with `KHR_materials_ior` → the
 //!   metallic–roughness BSDF ([`brdf::models::MetallicRoughness`], the specification's
 //!   Appendix B); `KHR_materials_transmission` × (1 − metallic) ≥ ½ → a dielectric of
 //!   that index (smooth at roughness 0, else GGX with α = roughness²), tinted by the base
 //!   colour, absorbing by `KHR_materials_volume`'s attenuation when smooth;
-//!   `emissiveFactor` × `KHR_materials_emissive_strength` → an area light (not where an
-//!   emissive texture would modulate it);
+//!   `emissiveFactor` × `KHR_materials_emissive_strength` → an area light (with an
+//!   emissive texture: a glow seen by paths, not sampled as a light);
 //! * perspective cameras, chosen by index or name ([`GltfOptions::camera`]; the first in
 //!   the scene otherwise); the film's width and height set the aspect ratio;
 //! * `KHR_lights_punctual` point, spot and directional lights as delta lights.
@@ -20,9 +20,15 @@
 //! Units: the renderer's radiance is read as luminance in cd/m² (nits), so glTF's candela
 //! (point, spot), lux (directional) and emissive nits carry over unchanged.
 //!
-//! Not yet converted, and reported in [`GltfScene::notes`]: textures (every material uses
-//! its factors), alpha modes, orthographic cameras, points and lines, light `range`. Repeated
-//! meshes are copied per instance (not instanced in the two-level BVH).
+//! * textures: base colour, metallic–roughness, normal and emissive maps with their
+//!   samplers' wrap modes and `KHR_texture_transform` (see [`crate::texture`]), alpha
+//!   modes (MASK cut-outs, BLEND as stochastic transparency);
+//! * a mesh that several nodes place becomes one object instanced in the two-level BVH
+//!   ([`Scene::objects`], [`Scene::instances`]) rather than a copy per node.
+//!
+//! Not converted, and reported in [`GltfScene::notes`]: occlusion and transmission
+//! textures, texture coordinates other than `TEXCOORD_0`, orthographic cameras, points and
+//! lines, light `range`.
 //!
 //! Bad input is an error naming the file and what is wrong, never a panic: the buffers
 //! are read only from regular files next to the glTF or from the file itself, indices are
@@ -132,6 +138,15 @@ fn convert(
             }
         }
     }
+    // gltf 1.4.1's `Image::source` unwraps a missing `uri` and a buffer view's missing
+    // `mimeType` (panics found by `examples/fuzz_scenes.rs`): check both first.
+    for (i, image) in json.images.iter().enumerate() {
+        match (&image.uri, &image.buffer_view, &image.mime_type) {
+            (Some(_), None, _) | (None, Some(_), Some(_)) => {}
+            (None, Some(_), None) => return Err(invalid(format!("images[{i}]: a buffer view needs a mimeType"))),
+            _ => return Err(invalid(format!("images[{i}]: needs either a uri or a bufferView"))),
+        }
+    }
     let document = gltf::Document::from_json(json).map_err(|e| invalid(e.to_string()))?;
     let buffers = load_buffers(&document, blob, path, read)?;
     let Some(gltf_scene) = document.default_scene().or_else(|| document.scenes().next()) else {
@@ -145,11 +160,14 @@ fn convert(
         materials: HashMap::new(),
         read,
         images: HashMap::new(),
+        instanced_meshes: HashMap::new(),
     };
     // Count the triangles the scene expands to before converting any.
     let mut triangles = 0u64;
+    let mut mesh_uses: HashMap<usize, usize> = HashMap::new();
     walk(&gltf_scene, &mut |node, _| {
         if let Some(mesh) = node.mesh() {
+            *mesh_uses.entry(mesh.index()).or_default() += 1;
             for p in mesh.primitives() {
                 triangles += primitive_triangle_bound(&p);
             }
@@ -163,6 +181,7 @@ fn convert(
         WalkError::Revisited(node) => fail(revisited(node)),
         WalkError::Visit(e) => e,
     })?;
+    converter.instanced_meshes = mesh_uses.into_iter().filter(|&(_, n)| n > 1).map(|(m, _)| (m, None)).collect();
     walk(&gltf_scene, &mut |node, world| converter.node(node, world)).map_err(|e| match e {
         WalkError::Revisited(node) => fail(revisited(node)),
         WalkError::Visit(e) => e,
@@ -197,7 +216,7 @@ fn convert(
         out.notes
             .push(format!("{} of {camera_count} cameras are not placed by any node", camera_count - out.cameras.len()));
     }
-    if out.scene.triangles.is_empty() {
+    if out.scene.triangles.is_empty() && out.scene.instanced_triangle_count() == 0 {
         return Err(fail("the scene has no triangles".into()));
     }
     out.scene.validate().map_err(|e| fail(e.to_string()))?;
@@ -326,6 +345,9 @@ struct Converter<'a> {
     read: &'a dyn Fn(&Path) -> std::io::Result<Vec<u8>>,
     /// Decoded images by index (each decoded once, however many textures use it).
     images: HashMap<usize, Arc<TextureImage>>,
+    /// Meshes that more than one node places, with their object once converted: they are
+    /// instanced (two-level BVH) rather than copied.
+    instanced_meshes: HashMap<usize, Option<u32>>,
 }
 
 impl Converter<'_> {
@@ -339,8 +361,31 @@ impl Converter<'_> {
             return Err(self.fail(format!("nodes[{}]: its transform is not finite", node.index())));
         }
         if let Some(mesh) = node.mesh() {
-            for p in mesh.primitives() {
-                self.primitive(&mesh, &p, world)?;
+            match self.instanced_meshes.get(&mesh.index()).copied() {
+                None => {
+                    for p in mesh.primitives() {
+                        self.primitive(&mesh, &p, world)?;
+                    }
+                }
+                Some(object) => {
+                    let object = match object {
+                        Some(o) => o,
+                        None => {
+                            let o = self.object(&mesh)?;
+                            self.instanced_meshes.insert(mesh.index(), Some(o));
+                            o
+                        }
+                    };
+                    let det = Mat3::from_mat4(world).determinant();
+                    if det == 0.0 || !det.is_finite() {
+                        // A collapsed placement has no surface to show.
+                        return Ok(());
+                    }
+                    self.out
+                        .scene
+                        .place(object, world)
+                        .map_err(|e| self.fail(format!("nodes[{}]: {e}", node.index())))?;
+                }
             }
         }
         if let Some(camera) = node.camera() {
@@ -390,6 +435,34 @@ impl Converter<'_> {
     }
 
     /// Converts one primitive of `mesh` into world-space triangles.
+    /// Converts `mesh` once, in its own space, as an object for instances: its primitives
+    /// are converted as usual, then moved from the scene's arrays into the object.
+    fn object(&mut self, mesh: &gltf::Mesh) -> Result<u32> {
+        let scene = &self.out.scene;
+        let (vertices, triangles) = (scene.positions.len(), scene.triangles.len());
+        for p in mesh.primitives() {
+            self.primitive(mesh, &p, Mat4::IDENTITY)?;
+        }
+        let scene = &mut self.out.scene;
+        let tail = |a: &mut Vec<[f32; 3]>| if a.len() > vertices { a.split_off(vertices) } else { Vec::new() };
+        let object = crate::scene::SceneObject {
+            positions: scene.positions.split_off(vertices),
+            normals: tail(&mut scene.normals),
+            tangents: tail(&mut scene.tangents),
+            uvs: if scene.uvs.len() > vertices { scene.uvs.split_off(vertices) } else { Vec::new() },
+            triangles: scene
+                .triangles
+                .split_off(triangles)
+                .into_iter()
+                .map(|t| t.map(|i| i - vertices as u32))
+                .collect(),
+            material_ids: scene.material_ids.split_off(triangles),
+            punctual_lights: Vec::new(),
+        };
+        scene.objects.push(object);
+        Ok(scene.objects.len() as u32 - 1)
+    }
+
     fn primitive(&mut self, mesh: &gltf::Mesh, p: &gltf::Primitive, world: Mat4) -> Result<()> {
         let at = |what: String| {
             let name = mesh.name().map(|n| format!(" ({n})")).unwrap_or_default();

@@ -5,7 +5,7 @@
 //! ch. 9; the thesis's "explicit" and "implicit" paths, ch. 5), Russian roulette and
 //! spectral transport at N sampled wavelengths.
 
-use crate::geometry::{Geometry, HitSurface, SceneHit};
+use crate::geometry::{Geometry, HitSurface, InstanceTransform, SceneHit};
 use crate::lights::{LightSample, LightSource, Lights};
 use crate::material::Material;
 use crate::punctual::PunctualLight;
@@ -252,14 +252,51 @@ impl<'a> SceneView<'a> {
     /// Texture coordinates at a hit (zero without any).
     #[inline]
     fn uv_at(&self, hit: &SceneHit) -> Vec2 {
-        let scene = self.scene;
         match hit.surface {
-            HitSurface::Triangle { u, v } if !scene.uvs.is_empty() => {
-                let [t0, t1, t2] = scene.triangles[hit.prim as usize].map(|i| Vec2::from_array(scene.uvs[i as usize]));
+            HitSurface::Triangle { u, v } => {
+                let (mesh, tri, _) = self.triangle_source(hit.prim);
+                if mesh.uvs.is_empty() {
+                    return Vec2::ZERO;
+                }
+                let [t0, t1, t2] = mesh.triangles[tri as usize].map(|i| Vec2::from_array(mesh.uvs[i as usize]));
                 (1.0 - u - v) * t0 + u * t1 + v * t2
             }
             _ => Vec2::ZERO,
         }
+    }
+
+    /// The arrays triangle primitive `prim` lives in, its index there, and the transform
+    /// that places it (`None` for the scene's own triangles, already in world space).
+    #[inline(always)]
+    fn triangle_source(&self, prim: u32) -> (MeshArrays<'_>, u32, Option<&InstanceTransform>) {
+        let scene = self.scene;
+        if prim < self.geometry.triangle_count() {
+            let arrays = MeshArrays {
+                positions: &scene.positions,
+                normals: &scene.normals,
+                tangents: &scene.tangents,
+                uvs: &scene.uvs,
+                triangles: &scene.triangles,
+            };
+            return (arrays, prim, None);
+        }
+        self.instanced_source(prim)
+    }
+
+    #[cold]
+    fn instanced_source(&self, prim: u32) -> (MeshArrays<'_>, u32, Option<&InstanceTransform>) {
+        let instanced = self.geometry.instances.as_ref().expect("an instanced primitive without instances");
+        let (k, local) = instanced.locate(prim);
+        let xf = &instanced.transforms[k];
+        let o = &self.scene.objects[xf.object as usize];
+        let arrays = MeshArrays {
+            positions: &o.positions,
+            normals: &o.normals,
+            tangents: &o.tangents,
+            uvs: &o.uvs,
+            triangles: &o.triangles,
+        };
+        (arrays, local, Some(xf))
     }
 
     /// Surface data at `hit` on `material`, its shading normal bent by the material's
@@ -270,12 +307,14 @@ impl<'a> SceneView<'a> {
             && (t.normal.is_some() || t.bump.is_some())
             && shading != ShadingNormals::Geometric
             && let HitSurface::Triangle { .. } = hit.surface
-            && !self.scene.uvs.is_empty()
         {
-            let scene = self.scene;
-            let tri = scene.triangles[hit.prim as usize];
-            let p = tri.map(|i| Vec3::from_array(scene.positions[i as usize]));
-            let uv = tri.map(|i| Vec2::from_array(scene.uvs[i as usize]));
+            let (mesh, tri, xf) = self.triangle_source(hit.prim);
+            let tri = mesh.triangles[tri as usize];
+            let p = tri.map(|i| {
+                let p = Vec3::from_array(mesh.positions[i as usize]);
+                xf.map_or(p, |x| x.to_world.transform_point3(p))
+            });
+            let uv = tri.map(|i| mesh.uvs.get(i as usize).map_or(Vec2::ZERO, |t| Vec2::from_array(*t)));
             let (dpdu, dpdv) = crate::texture::triangle_uv_derivatives(p, uv);
             let n = t.bent_normal(it.uv, it.ns, dpdu, dpdv);
             // Kept on the geometric normal's side, as every shading normal is.
@@ -302,33 +341,41 @@ impl<'a> SceneView<'a> {
                 };
             }
         };
-        let scene = self.scene;
-        let tri = scene.triangles[hit.prim as usize];
-        let [v0, v1, v2] = tri.map(|i| Vec3::from_array(scene.positions[i as usize]));
+        let (mesh, tri, xf) = self.triangle_source(hit.prim);
+        let tri = mesh.triangles[tri as usize];
+        let [mut v0, mut v1, mut v2] = tri.map(|i| Vec3::from_array(mesh.positions[i as usize]));
+        if let Some(x) = xf {
+            [v0, v1, v2] = [v0, v1, v2].map(|p| x.to_world.transform_point3(p));
+        }
         let b0 = 1.0 - u - v;
         let p = b0 * v0 + u * v1 + v * v2;
         let cross = (v1 - v0).cross(v2 - v0);
         let area = 0.5 * cross.length();
-        let ng = cross / (2.0 * area);
+        // A mirroring placement reverses the world winding: the object's front stays front.
+        let ng = cross / (2.0 * area) * xf.map_or(1.0, |x| x.orientation);
         let mut ns = ng;
-        if !scene.normals.is_empty() && shading != ShadingNormals::Geometric {
-            let [n0, n1, n2] = tri.map(|i| Vec3::from_array(scene.normals[i as usize]));
-            let n = b0 * n0 + u * n1 + v * n2;
+        if !mesh.normals.is_empty() && shading != ShadingNormals::Geometric {
+            let [n0, n1, n2] = tri.map(|i| Vec3::from_array(mesh.normals[i as usize]));
+            let mut n = b0 * n0 + u * n1 + v * n2;
+            if let Some(x) = xf {
+                n = Vec3::from(x.normal * glam::Vec3A::from(n));
+            }
             if n.length_squared() > 1e-12 {
                 let n = n.normalize();
                 ns = if n.dot(ng) < 0.0 { -n } else { n };
             }
         }
-        let tangent = if scene.tangents.is_empty() {
+        let tangent = if mesh.tangents.is_empty() {
             Vec3::ZERO
         } else {
-            let [t0, t1, t2] = tri.map(|i| Vec3::from_array(scene.tangents[i as usize]));
-            b0 * t0 + u * t1 + v * t2
+            let [t0, t1, t2] = tri.map(|i| Vec3::from_array(mesh.tangents[i as usize]));
+            let t = b0 * t0 + u * t1 + v * t2;
+            xf.map_or(t, |x| x.to_world.transform_vector3(t))
         };
-        let uv = if scene.uvs.is_empty() {
+        let uv = if mesh.uvs.is_empty() {
             Vec2::ZERO
         } else {
-            let [t0, t1, t2] = tri.map(|i| Vec2::from_array(scene.uvs[i as usize]));
+            let [t0, t1, t2] = tri.map(|i| Vec2::from_array(mesh.uvs[i as usize]));
             b0 * t0 + u * t1 + v * t2
         };
         Interaction { p, ng, ns, tangent, area, uv }
@@ -336,8 +383,33 @@ impl<'a> SceneView<'a> {
 
     #[inline]
     fn material(&self, prim: u32) -> &Material {
-        &self.scene.materials[self.scene.material_id(prim) as usize]
+        let scene = self.scene;
+        let id = match scene.material_ids.get(prim as usize) {
+            Some(&m) => m,
+            None => match scene.shapes.get(prim as usize - scene.triangles.len()) {
+                Some(s) => s.material,
+                None => self.instanced_material(prim),
+            },
+        };
+        &scene.materials[id as usize]
     }
+
+    #[cold]
+    fn instanced_material(&self, prim: u32) -> u32 {
+        let instanced = self.geometry.instances.as_ref().expect("an instanced primitive without instances");
+        let (k, local) = instanced.locate(prim);
+        let xf = &instanced.transforms[k];
+        xf.material.unwrap_or(self.scene.objects[xf.object as usize].material_ids[local as usize])
+    }
+}
+
+/// A mesh's flat arrays: the scene's own, or an instanced object's.
+struct MeshArrays<'a> {
+    positions: &'a [[f32; 3]],
+    normals: &'a [[f32; 3]],
+    tangents: &'a [[f32; 3]],
+    uvs: &'a [[f32; 2]],
+    triangles: &'a [[u32; 3]],
 }
 
 /// The smallest probability with which Russian roulette ends a path (so that paths of

@@ -95,8 +95,12 @@ impl Lights {
         let triangles = scene.triangles.len();
         let mut prims = Vec::new();
         let mut power = Vec::new();
-        let mut prim_pmf = vec![0.0; triangles + scene.shapes.len()];
-        let mut push = |prim: usize, area: f32, material: u32| {
+        // Emissive triangles (the scene's, then instanced ones in world space) come first
+        // in `prims`, aligned with `light_triangles`; shapes follow.
+        let mut light_triangles = Vec::new();
+        let total_prims = triangles + scene.shapes.len() + scene.instanced_triangle_count() as usize;
+        let mut prim_pmf = vec![0.0; total_prims];
+        let mut push = |prim: usize, area: f32, material: u32| -> bool {
             let m = &scene.materials[material as usize];
             // An emissive texture varies the power over the surface: such emitters are
             // left to the paths that hit them (weight 1), not sampled.
@@ -105,12 +109,37 @@ impl Lights {
                 if p > 0.0 && p.is_finite() {
                     prims.push(prim as u32);
                     power.push(p as f64);
+                    return true;
                 }
+            }
+            false
+        };
+        let mut triangle_light = |prim: usize, vertices: [Vec3; 3], orientation: f32, material: u32| {
+            let cross = (vertices[1] - vertices[0]).cross(vertices[2] - vertices[0]);
+            if push(prim, 0.5 * cross.length(), material) {
+                light_triangles.push(LightTriangle {
+                    vertices,
+                    normal: cross.normalize() * orientation,
+                    area: 0.5 * cross.length(),
+                });
             }
         };
         for (i, &m) in scene.material_ids.iter().enumerate() {
-            let v = scene.triangle_vertices(i);
-            push(i, 0.5 * (v[1] - v[0]).cross(v[2] - v[0]).length(), m);
+            triangle_light(i, scene.triangle_vertices(i), 1.0, m);
+        }
+        let mut first = triangles + scene.shapes.len();
+        for inst in &scene.instances {
+            let o = &scene.objects[inst.object as usize];
+            let orientation = if glam::Mat3::from_mat4(inst.transform).determinant() < 0.0 { -1.0 } else { 1.0 };
+            for i in 0..o.triangles.len() {
+                let m = inst.material_of(o, i);
+                let emits = scene.materials[m as usize].emission.is_some();
+                if emits {
+                    let v = o.triangle_vertices(i).map(|p| inst.transform.transform_point3(p));
+                    triangle_light(first + i, v, orientation, m);
+                }
+            }
+            first += o.triangles.len();
         }
         for (k, s) in scene.shapes.iter().enumerate() {
             let shape = s.shape.shape();
@@ -152,15 +181,7 @@ impl Lights {
         for (&t, p) in prims.iter().zip(&power) {
             prim_pmf[t as usize] = (p / total) as f32;
         }
-        let triangles = prims
-            .iter()
-            .take_while(|&&p| (p as usize) < triangles)
-            .map(|&p| {
-                let vertices = scene.triangle_vertices(p as usize);
-                let cross = (vertices[1] - vertices[0]).cross(vertices[2] - vertices[0]);
-                LightTriangle { vertices, normal: cross.normalize(), area: 0.5 * cross.length() }
-            })
-            .collect();
+        let triangles = light_triangles;
         let suns = scene
             .punctual_lights
             .iter()

@@ -51,6 +51,67 @@ pub struct Scene {
     pub environment: Option<Environment>,
     /// Point, spot and directional lights (no geometry: seen only by light sampling).
     pub punctual_lights: Vec<PunctualLight>,
+    /// Meshes placed more than once, each kept once in its own space ([`Scene::add_object`]).
+    pub objects: Vec<SceneObject>,
+    /// Placements of [`Scene::objects`]: the renderer traces them through a two-level BVH
+    /// (one bottom-level tree per object) instead of copying their triangles. Their
+    /// primitive ids follow the shapes', instance by instance.
+    pub instances: Vec<ObjectInstance>,
+}
+
+/// A triangle mesh in its own coordinates, for placing by [`ObjectInstance`]s: the same
+/// flat arrays as [`Scene`]'s, material ids indexing the scene's materials.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct SceneObject {
+    /// Vertex positions.
+    pub positions: Vec<[f32; 3]>,
+    /// Per-vertex shading normals, or empty.
+    pub normals: Vec<[f32; 3]>,
+    /// Per-vertex tangents, or empty.
+    pub tangents: Vec<[f32; 3]>,
+    /// Per-vertex texture coordinates, or empty.
+    pub uvs: Vec<[f32; 2]>,
+    /// Triangles, counter-clockwise seen from the front.
+    pub triangles: Vec<[u32; 3]>,
+    /// Each triangle's material (an index into [`Scene::materials`]).
+    pub material_ids: Vec<u32>,
+    /// Point, spot and directional lights that come with the mesh (object space), placed
+    /// with each instance.
+    pub punctual_lights: Vec<PunctualLight>,
+}
+
+impl SceneObject {
+    /// The three vertices of triangle `i`, in object space.
+    #[inline]
+    pub fn triangle_vertices(&self, i: usize) -> [Vec3; 3] {
+        self.triangles[i].map(|v| Vec3::from_array(self.positions[v as usize]))
+    }
+
+    /// Its bounds in object space.
+    pub fn bounds(&self) -> Aabb {
+        self.positions.iter().fold(Aabb::EMPTY, |b, p| b.grow(Vec3::from_array(*p)))
+    }
+}
+
+/// One placement of a [`SceneObject`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ObjectInstance {
+    /// Index into [`Scene::objects`].
+    pub object: u32,
+    /// Object-to-world transform (invertible; a mirroring one keeps fronts as fronts, as
+    /// [`Scene::append`] does).
+    pub transform: glam::Mat4,
+    /// A material of the scene that replaces every material of the object in this
+    /// placement, or `None` for the object's own.
+    pub material: Option<u32>,
+}
+
+impl ObjectInstance {
+    /// The material of the object's triangle `i` in this placement.
+    #[inline]
+    pub fn material_of(&self, object: &SceneObject, i: usize) -> u32 {
+        self.material.unwrap_or(object.material_ids[i])
+    }
 }
 
 /// The luminance of the default sky ([`Environment::white_sky`]) that lights scenes
@@ -116,6 +177,10 @@ impl Scene {
         };
         self.environment.as_ref().is_some_and(|e| !e.is_black())
             || self.material_ids.iter().any(|&m| emits(m))
+            || self.instances.iter().any(|i| {
+                let o = &self.objects[i.object as usize];
+                (0..o.triangles.len()).any(|t| emits(i.material_of(o, t)))
+            })
             || self.shapes.iter().any(|s| emits(s.material))
             || self.punctual_lights.iter().any(|l| !l.colour().is_black())
     }
@@ -169,16 +234,41 @@ impl Scene {
     /// `material`, every appended triangle uses that material of this scene instead. Its
     /// camera and environment are not taken; analytic shapes only under the identity
     /// (a transformed shape is not a shape of the same kind in general).
-    pub fn append(&mut self, other: Scene, transform: &glam::Mat4, material: Option<u32>) -> Result<()> {
+    pub fn append(&mut self, mut other: Scene, transform: &glam::Mat4, material: Option<u32>) -> Result<()> {
         let identity = *transform == glam::Mat4::IDENTITY;
         if !other.shapes.is_empty() && !identity {
             return Err(Error::Setting("analytic shapes cannot be transformed".into()));
         }
+        other.flatten_instances();
+        let first_material = self.materials.len() as u32;
+        let triangles = other.triangles.len();
+        let material_ids = std::mem::take(&mut other.material_ids);
+        let materials = std::mem::take(&mut other.materials);
+        let shapes = std::mem::take(&mut other.shapes);
+        let lights = std::mem::take(&mut other.punctual_lights);
+        self.append_geometry(other, transform);
+        match material {
+            Some(id) => self.material_ids.extend(std::iter::repeat_n(id, triangles)),
+            None => {
+                self.material_ids.extend(material_ids.iter().map(|m| m + first_material));
+                self.materials.extend(materials);
+            }
+        }
+        for s in shapes {
+            let id = material.unwrap_or(s.material + first_material);
+            self.shapes.push(SceneShape { shape: s.shape, material: id });
+        }
+        self.punctual_lights.extend(lights.into_iter().map(|l| l.transformed(transform)));
+        Ok(())
+    }
+
+    /// Appends `other`'s vertices and triangles placed by `transform` (winding reversed
+    /// by a mirroring one), without material ids.
+    fn append_geometry(&mut self, other: Scene, transform: &glam::Mat4) {
         let linear = glam::Mat3::from_mat4(*transform);
         let normal_matrix = linear.inverse().transpose();
         let mirrored = linear.determinant() < 0.0;
         let base = self.positions.len() as u32;
-        let first_material = self.materials.len() as u32;
         let count = other.positions.len();
         let place = |p: &[f32; 3]| transform.transform_point3(Vec3::from_array(*p)).to_array();
         self.positions.extend(other.positions.iter().map(place));
@@ -193,19 +283,87 @@ impl Scene {
             let t = t.map(|i| i + base);
             if mirrored { [t[0], t[2], t[1]] } else { t }
         }));
-        match material {
-            Some(id) => self.material_ids.extend(std::iter::repeat_n(id, other.triangles.len())),
+    }
+
+    /// Keeps `other`'s triangles once as an object to place with [`Scene::place`]: its
+    /// materials are appended (or, with `material`, every triangle uses that material of
+    /// this scene), its punctual lights travel with each placement, its camera and
+    /// environment are dropped. Analytic shapes cannot be instanced (an error).
+    pub fn add_object(&mut self, other: Scene, material: Option<u32>) -> Result<u32> {
+        if !other.shapes.is_empty() || !other.instances.is_empty() {
+            return Err(Error::Setting("only triangle meshes can be instanced (not shapes or instances)".into()));
+        }
+        let first_material = self.materials.len() as u32;
+        let material_ids = match material {
+            Some(id) => vec![id; other.triangles.len()],
             None => {
-                self.material_ids.extend(other.material_ids.iter().map(|m| m + first_material));
                 self.materials.extend(other.materials);
+                other.material_ids.iter().map(|m| m + first_material).collect()
             }
+        };
+        self.objects.push(SceneObject {
+            positions: other.positions,
+            normals: other.normals,
+            tangents: other.tangents,
+            uvs: other.uvs,
+            triangles: other.triangles,
+            material_ids,
+            punctual_lights: other.punctual_lights,
+        });
+        Ok(self.objects.len() as u32 - 1)
+    }
+
+    /// Places object `object` by `transform` (with its punctual lights, moved).
+    pub fn place(&mut self, object: u32, transform: glam::Mat4) -> Result<()> {
+        self.place_with(object, transform, None)
+    }
+
+    /// [`Scene::place`], every triangle of this placement using `material` (a material
+    /// of this scene) instead of the object's own where given.
+    pub fn place_with(&mut self, object: u32, transform: glam::Mat4, material: Option<u32>) -> Result<()> {
+        if let Some(m) = material
+            && m as usize >= self.materials.len()
+        {
+            return Err(Error::Setting(format!("material {m} of {}", self.materials.len())));
         }
-        for s in other.shapes {
-            let id = material.unwrap_or(s.material + first_material);
-            self.shapes.push(SceneShape { shape: s.shape, material: id });
+        let Some(o) = self.objects.get(object as usize) else {
+            return Err(Error::Setting(format!("object {object} of {}", self.objects.len())));
+        };
+        let det = glam::Mat3::from_mat4(transform).determinant();
+        if !(transform.is_finite() && det.is_finite() && det != 0.0) {
+            return Err(Error::Setting("an instance's transform is singular or not finite".into()));
         }
-        self.punctual_lights.extend(other.punctual_lights.into_iter().map(|l| l.transformed(transform)));
+        let lights: Vec<PunctualLight> = o.punctual_lights.iter().map(|l| l.clone().transformed(&transform)).collect();
+        self.punctual_lights.extend(lights);
+        self.instances.push(ObjectInstance { object, transform, material });
         Ok(())
+    }
+
+    /// Copies every instance's triangles into the flat arrays and drops the objects: the
+    /// same surfaces as one mesh (for backends without two-level traversal, and as the
+    /// reference the instanced scene is tested against).
+    pub fn flatten_instances(&mut self) {
+        let objects = std::mem::take(&mut self.objects);
+        for inst in std::mem::take(&mut self.instances) {
+            let o = &objects[inst.object as usize];
+            let mesh = Scene {
+                positions: o.positions.clone(),
+                normals: o.normals.clone(),
+                tangents: o.tangents.clone(),
+                uvs: o.uvs.clone(),
+                triangles: o.triangles.clone(),
+                material_ids: Vec::new(),
+                ..Scene::default()
+            };
+            // (Its lights were placed with it already.)
+            self.append_geometry(mesh, &inst.transform);
+            self.material_ids.extend((0..o.triangles.len()).map(|i| inst.material_of(o, i)));
+        }
+    }
+
+    /// Triangles the instances place (counting each placement).
+    pub fn instanced_triangle_count(&self) -> u64 {
+        self.instances.iter().map(|i| self.objects[i.object as usize].triangles.len() as u64).sum()
     }
 
     /// Appends an analytic shape with its own material; returns the material's index.
@@ -226,7 +384,22 @@ impl Scene {
     pub fn material_id(&self, prim: u32) -> u32 {
         match self.material_ids.get(prim as usize) {
             Some(&m) => m,
-            None => self.shapes[prim as usize - self.triangles.len()].material,
+            None => match self.shapes.get(prim as usize - self.triangles.len()) {
+                Some(s) => s.material,
+                None => {
+                    // An instanced triangle: find its instance (a linear walk; the
+                    // renderer uses its precomputed table instead).
+                    let mut local = prim as usize - self.triangles.len() - self.shapes.len();
+                    for i in &self.instances {
+                        let o = &self.objects[i.object as usize];
+                        if local < o.triangles.len() {
+                            return i.material_of(o, local);
+                        }
+                        local -= o.triangles.len();
+                    }
+                    panic!("primitive {prim} does not exist")
+                }
+            },
         }
     }
 
@@ -244,7 +417,21 @@ impl Scene {
     /// The bounds of all geometry.
     pub fn bounds(&self) -> Aabb {
         let meshes = self.positions.iter().fold(Aabb::EMPTY, |b, p| b.grow(Vec3::from_array(*p)));
-        self.shapes.iter().fold(meshes, |b, s| b.union(s.shape.shape().bounds()))
+        let shapes = self.shapes.iter().fold(meshes, |b, s| b.union(s.shape.shape().bounds()));
+        self.instances.iter().fold(shapes, |b, i| {
+            let o = self.objects[i.object as usize].bounds();
+            if o.is_empty() {
+                return b;
+            }
+            (0..8).fold(b, |b, k| {
+                let corner = Vec3::new(
+                    if k & 1 == 0 { o.min.x } else { o.max.x },
+                    if k & 2 == 0 { o.min.y } else { o.max.y },
+                    if k & 4 == 0 { o.min.z } else { o.max.z },
+                );
+                b.grow(i.transform.transform_point3(corner))
+            })
+        })
     }
 
     /// Checks internal consistency: indices in range, one material id per triangle,
@@ -282,6 +469,36 @@ impl Scene {
         }
         if let Some((i, s)) = self.shapes.iter().enumerate().find(|(_, s)| s.material >= nm) {
             return bad(format!("{} {i} has material {} of {nm}", s.shape.name(), s.material));
+        }
+        for (k, o) in self.objects.iter().enumerate() {
+            let as_scene = Scene {
+                positions: o.positions.clone(),
+                normals: o.normals.clone(),
+                tangents: o.tangents.clone(),
+                uvs: o.uvs.clone(),
+                triangles: o.triangles.clone(),
+                material_ids: o.material_ids.clone(),
+                materials: self.materials.clone(),
+                ..Scene::default()
+            };
+            as_scene.validate().map_err(|e| Error::Setting(format!("object {k}: {e}")))?;
+        }
+        for (k, i) in self.instances.iter().enumerate() {
+            let det = glam::Mat3::from_mat4(i.transform).determinant();
+            if i.object as usize >= self.objects.len()
+                || !(i.transform.is_finite() && det.is_finite() && det != 0.0)
+                || i.material.is_some_and(|m| m as usize >= self.materials.len())
+            {
+                return bad(format!(
+                    "instance {k}: object {} of {}, a singular transform, or a missing material",
+                    i.object,
+                    self.objects.len()
+                ));
+            }
+        }
+        let prims = self.triangles.len() as u64 + self.shapes.len() as u64 + self.instanced_triangle_count();
+        if prims >= u32::MAX as u64 {
+            return bad(format!("{prims} primitives exceed the 2^32 − 1 a scene can index"));
         }
         if let Some(camera) = &self.camera {
             camera.validate().map_err(Error::Setting)?;

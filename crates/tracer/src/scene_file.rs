@@ -453,9 +453,24 @@ pub fn parse_scene_file(text: &str, path: &Path) -> Result<Scene> {
     };
 
     let mut mesh_camera = None;
+    // A file named by several [[mesh]] tables is loaded once and instanced (two-level BVH)
+    // rather than copied; its object, by file and camera.
+    let mut uses: BTreeMap<(&str, Option<&str>), usize> = BTreeMap::new();
+    for def in &file.mesh {
+        let m = def.get_ref();
+        *uses.entry((m.file.as_str(), m.camera.as_deref())).or_default() += 1;
+    }
+    let mut objects: BTreeMap<(&str, Option<&str>), u32> = BTreeMap::new();
     for def in &file.mesh {
         let span = def.span();
         let m = def.get_ref();
+        let key = (m.file.as_str(), m.camera.as_deref());
+        if let Some(&object) = objects.get(&key) {
+            let transform = mesh_transform(m).map_err(|e| at(span.clone(), e))?;
+            let material = m.material.as_deref().map(|name| material_id(name, span.clone())).transpose()?;
+            scene.place_with(object, transform, material).map_err(|e| at(span.clone(), e.to_string()))?;
+            continue;
+        }
         let mesh_path = dir.join(&m.file);
         let ext = mesh_path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
         let loaded = match ext.as_deref() {
@@ -473,7 +488,13 @@ pub fn parse_scene_file(text: &str, path: &Path) -> Result<Scene> {
         if mesh_camera.is_none() {
             mesh_camera = loaded.camera.map(|c| transform_camera(&c, &transform));
         }
-        scene.append(loaded, &transform, material).map_err(|e| at(span.clone(), e.to_string()))?;
+        if uses[&key] > 1 && loaded.shapes.is_empty() && loaded.instances.is_empty() {
+            let object = scene.add_object(loaded, None).map_err(|e| at(span.clone(), e.to_string()))?;
+            scene.place_with(object, transform, material).map_err(|e| at(span.clone(), e.to_string()))?;
+            objects.insert(key, object);
+        } else {
+            scene.append(loaded, &transform, material).map_err(|e| at(span.clone(), e.to_string()))?;
+        }
     }
 
     for def in &file.shape {

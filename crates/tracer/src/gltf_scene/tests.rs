@@ -291,3 +291,26 @@ fn every_truncation_of_a_binary_gltf_is_an_error() {
         assert!(r.is_err(), "{len} of {} bytes loaded", bytes.len());
     }
 }
+
+#[test]
+fn a_mesh_placed_by_several_nodes_is_instanced_not_copied() {
+    // Node 0 places the mesh and has children placing it twice more (one mirrored); a
+    // fourth node places it with a singular scale, which shows nothing.
+    let nodes = r#"[{"mesh":0,"children":[1,2,3]},{"mesh":0,"translation":[2,0,0]},
+        {"mesh":0,"scale":[-1,1,1]},{"mesh":0,"scale":[0,1,1]}]"#;
+    let s = load_text(&triangle_gltf(nodes, r#"{"name":"m"}"#, ""), &GltfOptions::default()).unwrap().scene;
+    assert!(s.triangles.is_empty(), "no copies in the flat arrays");
+    assert_eq!((s.objects.len(), s.instances.len(), s.objects[0].triangles.len()), (1, 3, 1));
+    assert_eq!(s.materials.len(), 1);
+    s.validate().unwrap();
+    let b = s.bounds();
+    assert_eq!((b.min.x, b.max.x), (-1.0, 3.0));
+    // Flattened, the same three triangles, the mirrored one rewound to face +z still.
+    let mut flat = s.clone();
+    flat.flatten_instances();
+    assert_eq!(flat.triangles.len(), 3);
+    for i in 0..3 {
+        let v = flat.triangle_vertices(i);
+        assert!((v[1] - v[0]).cross(v[2] - v[0]).z > 0.0, "triangle {i} faces away");
+    }
+}

@@ -101,8 +101,12 @@ fn a_scene_file_places_everything_it_names() {
     assert_eq!(s.materials[2].emission.as_ref().map(|e| e.rgb), Some([4.0, 3.0, 2.0]));
     let Some(ModelParams::RoughConductor(gold)) = s.materials[1].params() else { unreachable!() };
     assert_eq!(gold.alpha, 0.2);
-    // The first triangle: scaled by 2, turned 90° about y ((x, y, z) → (z, y, −x)), moved
-    // to z − 1; the second mirrored in x, its winding reversed, in gold.
+    // The OBJ is named twice: one object, two instances; copied out, the first triangle
+    // is scaled by 2, turned 90° about y ((x, y, z) → (z, y, −x)), moved to z − 1; the
+    // second mirrored in x, its winding reversed, in gold.
+    assert_eq!((s.triangles.len(), s.objects.len(), s.instances.len()), (0, 1, 2));
+    let mut s = s;
+    s.flatten_instances();
     assert_eq!(s.triangles.len(), 2);
     let close = |a: Vec3, b: Vec3| (a - b).length() < 1e-5;
     let [a, b, c] = s.triangle_vertices(0);
@@ -318,4 +322,26 @@ fn daylight_spectra_by_name_and_by_temperature() {
     );
     let e = load_scene_file(&bad).unwrap_err().to_string();
     assert!(e.contains("daylight 2000 K is outside"), "{e}");
+}
+
+#[test]
+fn a_mesh_file_named_twice_is_loaded_once_and_instanced() {
+    let path = write(
+        "instanced",
+        "[materials.grey]\nmodel = \"lambert\"\nreflectance = 0.5\n\n\
+         [[mesh]]\nfile = \"tri.obj\"\n\n[[mesh]]\nfile = \"tri.obj\"\ntranslate = [2, 0, 0]\nmaterial = \"grey\"\n\n\
+         [[mesh]]\nfile = \"tri.obj\"\nscale = [-1, 1, 1]\n",
+    );
+    let s = load_scene_file(&path).unwrap();
+    assert!(s.triangles.is_empty());
+    assert_eq!((s.objects.len(), s.instances.len()), (1, 3));
+    // The second placement wears "grey" instead of the file's red.
+    let grey = s.materials.iter().position(|m| m.name == "grey").unwrap() as u32;
+    assert_eq!(s.instances.iter().map(|i| i.material).collect::<Vec<_>>(), [None, Some(grey), None]);
+    let b = s.bounds();
+    assert_eq!((b.min.x, b.max.x), (-1.0, 3.0));
+    // Named once: copied into the flat arrays as before.
+    let once = write("once", "[[mesh]]\nfile = \"tri.obj\"\n");
+    let s = load_scene_file(&once).unwrap();
+    assert_eq!((s.triangles.len(), s.instances.len()), (1, 0));
 }
