@@ -116,6 +116,40 @@ pub fn daylight(lambda: f32, kelvin: f32) -> f32 {
     (v * 100.0 / at(&DAYLIGHT_S[26])) as f32
 }
 
+/// CIE fluorescent illuminant F`number` (1–12: CIE 15:2018 Table 10) at `lambda`, scaled
+/// to luminance Y = 1 (as [`Spectrum::D65`] is), linear between its 5 nm samples and zero
+/// outside 380–780 nm; 0 for a number outside 1–12.
+pub fn fluorescent(number: u8, lambda: f32) -> f32 {
+    use crate::tables::fluorescent::{FLUORESCENT, FLUORESCENT_LAMBDA_MIN, FLUORESCENT_LAMBDA_STEP};
+    use std::sync::OnceLock;
+    static NORMALISERS: OnceLock<[f32; 12]> = OnceLock::new();
+    let Some(table) = FLUORESCENT.get((number as usize).wrapping_sub(1)) else { return 0.0 };
+    let raw = |lambda: f32| {
+        let x = (lambda - FLUORESCENT_LAMBDA_MIN) / FLUORESCENT_LAMBDA_STEP;
+        if !(0.0..=(table.len() - 1) as f32).contains(&x) {
+            return 0.0;
+        }
+        let i = (x as usize).min(table.len() - 2);
+        let f = x - i as f32;
+        table[i] + f * (table[i + 1] - table[i])
+    };
+    let normalisers = NORMALISERS.get_or_init(|| {
+        std::array::from_fn(|k| {
+            let t = &FLUORESCENT[k];
+            let y = spectrum_to_xyz(|l| {
+                let x = (l - FLUORESCENT_LAMBDA_MIN) / FLUORESCENT_LAMBDA_STEP;
+                if !(0.0..=(t.len() - 1) as f32).contains(&x) {
+                    return 0.0;
+                }
+                let i = (x as usize).min(t.len() - 2);
+                t[i] + (x - i as f32) * (t[i + 1] - t[i])
+            })[1];
+            1.0 / y
+        })
+    });
+    raw(lambda) * normalisers[number as usize - 1]
+}
+
 /// A spectrum, by kind; every variant evaluates in O(1) or O(log n).
 #[derive(Clone, Debug, PartialEq)]
 pub enum Spectrum {
@@ -127,6 +161,13 @@ pub enum Spectrum {
     D65(f32),
     /// CIE illuminant A, relative power 100 at 560 nm, times the factor.
     IlluminantA(f32),
+    /// A CIE fluorescent illuminant F1–F12 ([`fluorescent`], luminance 1) times a factor.
+    Fluorescent {
+        /// 1–12.
+        number: u8,
+        /// Factor (the luminance).
+        scale: f32,
+    },
     /// A CIE D illuminant ([`daylight`]: relative power 100 at 560 nm) times a factor.
     Daylight {
         /// Correlated colour temperature, kelvin (5003 for D50).
@@ -164,6 +205,7 @@ impl Spectrum {
             Self::D65(s) => s * d65_normalised(lambda),
             Self::IlluminantA(s) => s * illuminant_a(lambda),
             Self::Daylight { kelvin, scale } => scale * daylight(lambda, *kelvin),
+            Self::Fluorescent { number, scale } => scale * fluorescent(*number, lambda),
             Self::Blackbody { kelvin, scale } => {
                 // Wien's displacement law gives the peak: λ_max = b / T.
                 let peak = 2.897_771_955e6 / kelvin;
@@ -293,6 +335,21 @@ mod tests {
         }
         assert_eq!(daylight(560.0, 5003.0), 100.0);
         assert_eq!(daylight(200.0, 5003.0), 0.0);
+    }
+
+    #[test]
+    fn fluorescent_illuminants_have_their_white_points_and_unit_luminance() {
+        // CIE 15:2018 Table T.8 (x, y), CIE 1931 observer.
+        for (number, x, y) in [(2u8, 0.37208, 0.37529), (7, 0.31292, 0.32933), (11, 0.38052, 0.37713)] {
+            let xyz = spectrum_to_xyz(|l| fluorescent(number, l));
+            let sum = xyz[0] + xyz[1] + xyz[2];
+            let (cx, cy) = (xyz[0] / sum, xyz[1] / sum);
+            assert!((cx - x).abs() < 3e-4 && (cy - y).abs() < 3e-4, "F{number}: ({cx}, {cy}) vs ({x}, {y})");
+            assert!((xyz[1] - 1.0).abs() < 1e-4, "F{number}: Y = {}", xyz[1]);
+        }
+        // F11 is a tri-band lamp: its 545 nm line stands far above its neighbourhood.
+        assert!(fluorescent(11, 545.0) > 5.0 * fluorescent(11, 520.0));
+        assert_eq!((fluorescent(0, 500.0), fluorescent(13, 500.0), fluorescent(2, 300.0)), (0.0, 0.0, 0.0));
     }
 
     #[test]

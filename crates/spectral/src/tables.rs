@@ -297,3 +297,5 @@ pub static DAYLIGHT_S: [[f32; 3]; 54] = [
     [58.9, -9.3, 6.1],
     [61.9, -9.8, 6.5],
 ];
+
+pub mod fluorescent;

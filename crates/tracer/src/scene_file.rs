@@ -49,7 +49,8 @@
 //!
 //! Colours (material colours, emission, light intensities, the sky) are one number (a
 //! grey), three (linear sRGB), or a spectrum: `{ spectrum = "D65" }` (also `"D50"`, `"D55"`,
-//! `"D75"`, `"A"`, `"E"`), `{ daylight = 5000 }` (any CIE D illuminant),
+//! `"D75"`, `"A"`, `"E"`, the fluorescent `"F1"` … `"F12"`), `{ daylight = 5000 }` (any CIE D
+//! illuminant),
 //! `{ blackbody = 3200 }` (peak 1), `{ table = { "400" = 0.2, "700" = 0.6 } }` (nm →
 //! value, linear in between) or `{ spd = "golden", file = "metal.spec" }` (an SPD of a
 //! SPEC file), each with an optional `scale`. Every error names the file and the line and
@@ -165,8 +166,9 @@ enum ColourDef {
     Spectrum(SpectrumDef),
 }
 
-/// A spectrum by name (`spectrum = "D65" | "D50" | "D55" | "D75" | "A" | "E"`; D65 scaled to
-/// luminance 1, A and the other D illuminants to 1 at 560 nm), a CIE daylight of any
+/// A spectrum by name (`spectrum = "D65" | "D50" | "D55" | "D75" | "A" | "E" | "F1" … "F12"`;
+/// D65 and the fluorescent lamps scaled to luminance 1, A and the other D illuminants to 1
+/// at 560 nm), a CIE daylight of any
 /// temperature (`daylight = K`, 4000–25000, 1 at 560 nm), a black body (`blackbody = K`,
 /// peak 1), a table (`table = { "400" = 0.1, … }`, nm → value) or an SPD of a SPEC file
 /// (`spd = NAME, file = "x.spec"`), times `scale` (default 1).
@@ -232,8 +234,11 @@ impl SpectrumDef {
                 "D50" => Ok(Spectrum::Daylight { kelvin: 5003.0, scale: scale / 100.0 }),
                 "D55" => Ok(Spectrum::Daylight { kelvin: 5503.0, scale: scale / 100.0 }),
                 "D75" => Ok(Spectrum::Daylight { kelvin: 7504.0, scale: scale / 100.0 }),
+                f if f.starts_with('F') && f[1..].parse::<u8>().is_ok_and(|n| (1..=12).contains(&n)) => {
+                    Ok(Spectrum::Fluorescent { number: f[1..].parse().unwrap_or(1), scale })
+                }
                 _ => Err(format!(
-                    "unknown spectrum '{name}' (known: D65, D50, D55, D75, A, E; or daylight, blackbody, table, spd)"
+                    "unknown spectrum '{name}' (known: D65, D50, D55, D75, A, E, F1 … F12; or daylight, blackbody, table, spd)"
                 )),
             };
         }

@@ -227,7 +227,7 @@ radiance = { spectrum = "D65", scale = 0.5 }
         if (intensity.spectrum.eval(560.0) - 2.0).abs() < 1e-4));
     assert_eq!(s.environment.as_ref().unwrap().radiance.spectrum, Spectrum::D65(0.5));
     for (bad, needle) in [
-        ("[sky]\nradiance = { spectrum = \"F11\" }\n", "unknown spectrum 'F11'"),
+        ("[sky]\nradiance = { spectrum = \"F13\" }\n", "unknown spectrum 'F13'"),
         ("[sky]\nradiance = { spectrum = \"D65\", blackbody = 5000 }\n", "exactly one of"),
         ("[sky]\nradiance = { spd = \"golden\" }\n", "spd and file go together"),
         ("[sky]\nradiance = { spd = \"silver\", file = \"m.spec\" }\n", "no spectrum 'silver' (defined: golden)"),
@@ -316,6 +316,9 @@ fn daylight_spectra_by_name_and_by_temperature() {
     // D50 is warmer than sRGB's D65 white: more red than blue.
     assert!(d50.rgb[0] > d50.rgb[2], "{:?}", d50.rgb);
     assert_eq!(s.punctual_lights[1].colour().spectrum, Spectrum::Daylight { kelvin: 5003.0, scale: 0.01 });
+    let f11 = write("f11", "[[mesh]]\nfile = \"tri.obj\"\n\n[sky]\nradiance = { spectrum = \"F11\", scale = 0.5 }\n");
+    let sky = load_scene_file(&f11).unwrap().environment.unwrap().radiance;
+    assert_eq!(sky.spectrum, Spectrum::Fluorescent { number: 11, scale: 0.5 });
     let bad = write(
         "daylight-bad",
         "[[mesh]]\nfile = \"tri.obj\"\n\n[[light]]\ntype = \"point\"\nposition = [0, 2, 0]\nintensity = { daylight = 2000 }\n",
