@@ -395,10 +395,10 @@ fn check(s: &Seed, camera: bool) -> Result<bool, String> {
     }
     // Everything the converter keeps is proportional to the input (scene arrays are at
     // most a few hundred bytes per input byte for these small seeds).
-    // An image may decode to up to 16 M + 256 pixels per byte of file (see
-    // `texture::decode_image`), as RGBA8 and as f32 RGB.
+    // An image may decode to up to 1 M + 1024 pixels per byte of file (see
+    // `texture::decode_image`), as f32 RGBA and then RGBA8 and f32 RGB.
     let image = [".png", ".jpg", ".exr"].iter().any(|e| s.name.ends_with(e));
-    let allowed = if image { 3 * 16 * ((16 << 20) + 256 * size) } else { (1 << 20) + 1000 * size };
+    let allowed = if image { 3 * 16 * ((1 << 20) + 1024 * size) } else { (1 << 20) + 1000 * size };
     if peak > allowed {
         return Err(format!("allocated {peak} bytes for a {size}-byte input"));
     }

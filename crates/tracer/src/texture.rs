@@ -115,15 +115,19 @@ impl TextureImage {
 }
 
 /// Decodes an image held in memory with the `image` crate, within bounds: each side at
-/// most `max_side`, and no more pixels than the file could plausibly hold — 16 M plus
-/// 256 per byte of file (deflate's best ratio is about 1032 : 1 per channel byte; a
-/// 2048² texture needs a 64 KB file) — so that a forged header of a small file cannot make
-/// the decoder allocate gigabytes. A decoder panic becomes an error.
+/// most `max_side`, and no more pixels than the file could hold — 1 M plus 1024 per byte
+/// of file (deflate's best ratio is about 1032 : 1, so even a one-channel PNG of a single
+/// colour stays within it; JPEG and EXR compress less) — so that a forged header of a
+/// small file cannot make the decoder allocate gigabytes (`fuzz_scenes` found a 448-byte
+/// EXR that did). A decoder panic becomes an error.
 pub(crate) fn decode_image(bytes: &[u8], max_side: u32) -> std::result::Result<image::DynamicImage, String> {
     let reader = || image::ImageReader::new(std::io::Cursor::new(bytes)).with_guessed_format();
     let probe = reader().map_err(|e| e.to_string())?;
     if probe.format().is_none() {
         return Err("not a PNG, JPEG, EXR or HDR image".into());
+    }
+    if probe.format() == Some(image::ImageFormat::OpenExr) {
+        check_exr_tiles(bytes)?;
     }
     let guarded = |f: &mut dyn FnMut() -> std::result::Result<image::DynamicImage, String>| {
         std::panic::catch_unwind(std::panic::AssertUnwindSafe(f))
@@ -136,7 +140,7 @@ pub(crate) fn decode_image(bytes: &[u8], max_side: u32) -> std::result::Result<i
         return Err(format!("{width}×{height} pixels (each side must be 1 to {max_side})"));
     }
     let pixels = width as u64 * height as u64;
-    if pixels > (16 << 20) + 256 * bytes.len() as u64 {
+    if pixels > (1 << 20) + 1024 * bytes.len() as u64 {
         return Err(format!("{width}×{height} pixels is more than a {}-byte file can hold", bytes.len()));
     }
     guarded(&mut || {
@@ -148,6 +152,68 @@ pub(crate) fn decode_image(bytes: &[u8], max_side: u32) -> std::result::Result<i
         r.limits(limits);
         r.decode().map_err(|e| e.to_string())
     })
+}
+
+/// The most pixels an OpenEXR tile may cover beyond its image's own: tiles larger than
+/// the image are legal (a 64 × 64 tile over an 8 × 4 image), but the `exr` crate
+/// allocates a whole tile's bytes before reading them, so a forged `tiles` attribute
+/// (found by `fuzz_scenes`: a 64 × 2.6 M tile in a 448-byte file, 1.3 GB) must be refused
+/// first.
+const MAX_EXR_TILE_PIXELS: u64 = 1 << 16;
+
+/// Walks the header attributes of every part of an OpenEXR file (name, type, size, value,
+/// until an empty name) and refuses a tile that covers more than its data window and
+/// [`MAX_EXR_TILE_PIXELS`]; a header it cannot walk is left to the decoder.
+fn check_exr_tiles(bytes: &[u8]) -> std::result::Result<(), String> {
+    let multipart = bytes.get(5).is_some_and(|flags| flags & 0x10 != 0);
+    let mut at = 8;
+    loop {
+        let (mut window, mut tile) = (None, None);
+        loop {
+            let Some(name_end) = bytes.get(at..).and_then(|b| b.iter().position(|&c| c == 0)) else { return Ok(()) };
+            if name_end == 0 {
+                at += 1;
+                break;
+            }
+            let name = &bytes[at..at + name_end];
+            at += name_end + 1;
+            let Some(type_end) = bytes.get(at..).and_then(|b| b.iter().position(|&c| c == 0)) else { return Ok(()) };
+            at += type_end + 1;
+            let Some(size) = bytes.get(at..at + 4).map(|b| i32::from_le_bytes([b[0], b[1], b[2], b[3]])) else {
+                return Ok(());
+            };
+            at += 4;
+            let Some(value) = usize::try_from(size).ok().and_then(|n| bytes.get(at..at.checked_add(n)?)) else {
+                return Ok(());
+            };
+            at += value.len();
+            let word = |k: usize| value.get(4 * k..4 * k + 4).map(|b| i32::from_le_bytes([b[0], b[1], b[2], b[3]]));
+            match name {
+                b"dataWindow" => {
+                    if let (Some(x0), Some(y0), Some(x1), Some(y1)) = (word(0), word(1), word(2), word(3)) {
+                        let w = (x1 as i64 - x0 as i64 + 1).max(0) as u64;
+                        let h = (y1 as i64 - y0 as i64 + 1).max(0) as u64;
+                        window = Some(w * h);
+                    }
+                }
+                b"tiles" => {
+                    if let (Some(w), Some(h)) = (word(0), word(1)) {
+                        tile = Some(w as u32 as u64 * h as u32 as u64);
+                    }
+                }
+                _ => {}
+            }
+        }
+        if let Some(tile) = tile
+            && tile > window.unwrap_or(0).max(MAX_EXR_TILE_PIXELS)
+        {
+            return Err(format!("an OpenEXR tile of {tile} pixels is larger than its image"));
+        }
+        // A multi-part file lists its headers one after another, then an empty one.
+        if !multipart || bytes.get(at) == Some(&0) {
+            return Ok(());
+        }
+    }
 }
 
 /// How coordinates outside [0, 1] map into the image (glTF's sampler wrap modes).

@@ -205,3 +205,38 @@ fn the_alpha_hash_is_uniform_and_depends_on_ray_and_primitive() {
     assert!(chi2 < 27.9, "{chi2} {bins:?}");
     assert_ne!(alpha_hash(Vec3::ONE, Vec3::Z, 1), alpha_hash(Vec3::ONE, Vec3::Z, 2));
 }
+
+/// An OpenEXR header with these attributes (name, type, value), no pixels.
+fn exr_header(attributes: &[(&str, &str, Vec<u8>)]) -> Vec<u8> {
+    let mut b = vec![0x76, 0x2f, 0x31, 0x01, 2, 2, 0, 0];
+    for (name, kind, value) in attributes {
+        b.extend_from_slice(name.as_bytes());
+        b.push(0);
+        b.extend_from_slice(kind.as_bytes());
+        b.push(0);
+        b.extend_from_slice(&(value.len() as i32).to_le_bytes());
+        b.extend_from_slice(value);
+    }
+    b.push(0);
+    b
+}
+
+#[test]
+fn an_exr_tile_larger_than_its_image_is_refused_before_decoding() {
+    let window = [0i32, 0, 7, 3].iter().flat_map(|v| v.to_le_bytes()).collect::<Vec<u8>>();
+    let tiles = |w: u32, h: u32| [w.to_le_bytes(), h.to_le_bytes()].concat().into_iter().chain([0u8]).collect();
+    let forged = exr_header(&[("dataWindow", "box2i", window.clone()), ("tiles", "tiledesc", tiles(64, 2_621_504))]);
+    let e = check_exr_tiles(&forged).unwrap_err();
+    assert!(e.contains("larger than its image"), "{e}");
+    // Ordinary tiles, even larger than a small image, pass.
+    assert!(
+        check_exr_tiles(&exr_header(&[("dataWindow", "box2i", window), ("tiles", "tiledesc", tiles(64, 64))])).is_ok()
+    );
+    // And a real scanline file written by the image crate decodes.
+    let mut exr = Vec::new();
+    image::Rgb32FImage::from_pixel(3, 2, image::Rgb([0.5, 1.5, 2.5]))
+        .write_to(&mut std::io::Cursor::new(&mut exr), image::ImageFormat::OpenExr)
+        .unwrap();
+    assert!(check_exr_tiles(&exr).is_ok());
+    assert!(crate::envmap::EnvironmentMap::decode(&exr, 0.0).is_ok());
+}
