@@ -64,15 +64,21 @@ pub fn planck(lambda_nm: f32, kelvin: f32) -> f32 {
     (v * 1e-9) as f32
 }
 
-/// CIE standard illuminant D65, relative power (100 at 560 nm), linear between 5 nm samples.
-pub fn d65(lambda: f32) -> f32 {
-    let x = (lambda - D65_LAMBDA_MIN) / D65_LAMBDA_STEP;
-    if !(0.0..=(D65.len() - 1) as f32).contains(&x) {
+/// A table of samples every `step` nm from `first` nm at `lambda`: linear in between, zero
+/// outside.
+fn sampled_table(table: &[f32], first: f32, step: f32, lambda: f32) -> f32 {
+    let x = (lambda - first) / step;
+    if !(0.0..=(table.len() - 1) as f32).contains(&x) {
         return 0.0;
     }
-    let i = (x as usize).min(D65.len() - 2);
+    let i = (x as usize).min(table.len() - 2);
     let f = x - i as f32;
-    D65[i] + f * (D65[i + 1] - D65[i])
+    table[i] + f * (table[i + 1] - table[i])
+}
+
+/// CIE standard illuminant D65, relative power (100 at 560 nm), linear between 5 nm samples.
+pub fn d65(lambda: f32) -> f32 {
+    sampled_table(&D65, D65_LAMBDA_MIN, D65_LAMBDA_STEP, lambda)
 }
 
 /// CIE standard illuminant A: a Planckian radiator at 2856 K with c₂ = 1.4388e-2 m·K
@@ -123,31 +129,11 @@ pub fn fluorescent(number: u8, lambda: f32) -> f32 {
     use crate::tables::fluorescent::{FLUORESCENT, FLUORESCENT_LAMBDA_MIN, FLUORESCENT_LAMBDA_STEP};
     use std::sync::OnceLock;
     static NORMALISERS: OnceLock<[f32; 12]> = OnceLock::new();
+    let raw = |table: &[f32], lambda| sampled_table(table, FLUORESCENT_LAMBDA_MIN, FLUORESCENT_LAMBDA_STEP, lambda);
     let Some(table) = FLUORESCENT.get((number as usize).wrapping_sub(1)) else { return 0.0 };
-    let raw = |lambda: f32| {
-        let x = (lambda - FLUORESCENT_LAMBDA_MIN) / FLUORESCENT_LAMBDA_STEP;
-        if !(0.0..=(table.len() - 1) as f32).contains(&x) {
-            return 0.0;
-        }
-        let i = (x as usize).min(table.len() - 2);
-        let f = x - i as f32;
-        table[i] + f * (table[i + 1] - table[i])
-    };
-    let normalisers = NORMALISERS.get_or_init(|| {
-        std::array::from_fn(|k| {
-            let t = &FLUORESCENT[k];
-            let y = spectrum_to_xyz(|l| {
-                let x = (l - FLUORESCENT_LAMBDA_MIN) / FLUORESCENT_LAMBDA_STEP;
-                if !(0.0..=(t.len() - 1) as f32).contains(&x) {
-                    return 0.0;
-                }
-                let i = (x as usize).min(t.len() - 2);
-                t[i] + (x - i as f32) * (t[i + 1] - t[i])
-            })[1];
-            1.0 / y
-        })
-    });
-    raw(lambda) * normalisers[number as usize - 1]
+    let normalisers =
+        NORMALISERS.get_or_init(|| std::array::from_fn(|k| 1.0 / spectrum_to_xyz(|l| raw(&FLUORESCENT[k], l))[1]));
+    raw(table, lambda) * normalisers[number as usize - 1]
 }
 
 /// A spectrum, by kind; every variant evaluates in O(1) or O(log n).
