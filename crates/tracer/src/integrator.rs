@@ -301,8 +301,19 @@ impl<'a> SceneView<'a> {
 
     /// Surface data at `hit` on `material`, its shading normal bent by the material's
     /// normal or bump map.
+    #[inline(always)]
     fn interaction(&self, hit: &SceneHit, material: &Material, shading: ShadingNormals) -> Interaction {
         let mut it = self.surface_at(hit, shading);
+        if material.textures.is_some() {
+            self.bend_normal(&mut it, hit, material, shading);
+        }
+        it
+    }
+
+    /// Bends `it`'s shading normal by the material's normal or bump map, if it has one
+    /// (out of line: most hits have none).
+    #[inline(never)]
+    fn bend_normal(&self, it: &mut Interaction, hit: &SceneHit, material: &Material, shading: ShadingNormals) {
         if let Some(t) = &material.textures
             && (t.normal.is_some() || t.bump.is_some())
             && shading != ShadingNormals::Geometric
@@ -323,7 +334,6 @@ impl<'a> SceneView<'a> {
                 it.tangent = dpdu;
             }
         }
-        it
     }
 
     fn surface_at(&self, hit: &SceneHit, shading: ShadingNormals) -> Interaction {
