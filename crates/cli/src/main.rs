@@ -187,8 +187,24 @@ fn run_info(args: InfoArgs) -> Result<()> {
         + std::mem::size_of_val(scene.uvs.as_slice())
         + std::mem::size_of_val(scene.triangles.as_slice())
         + std::mem::size_of_val(scene.material_ids.as_slice())
-        + std::mem::size_of_val(scene.shapes.as_slice());
-    println!("  memory: {:.1} kB of vertex, triangle and shape arrays (before any BVH)", bytes as f64 / 1e3);
+        + std::mem::size_of_val(scene.shapes.as_slice())
+        + scene
+            .objects
+            .iter()
+            .map(|o| {
+                std::mem::size_of_val(o.positions.as_slice())
+                    + std::mem::size_of_val(o.normals.as_slice())
+                    + std::mem::size_of_val(o.tangents.as_slice())
+                    + std::mem::size_of_val(o.uvs.as_slice())
+                    + std::mem::size_of_val(o.triangles.as_slice())
+                    + std::mem::size_of_val(o.material_ids.as_slice())
+            })
+            .sum::<usize>()
+        + std::mem::size_of_val(scene.instances.as_slice());
+    println!(
+        "  memory: {:.1} kB of vertex, triangle, shape and instance arrays (before any BVH; textures above)",
+        bytes as f64 / 1e3
+    );
     let b = scene.bounds();
     if b.is_empty() {
         println!("  bounds: empty");
@@ -1146,6 +1162,14 @@ fn parse_command_line() -> Result<Cli> {
 }
 
 fn main() -> ExitCode {
+    // Rust starts programs with SIGPIPE ignored, so `spt info SCENE | head` panicked in
+    // `println!` once `head` closed the pipe; restore the default action (end quietly), as
+    // command-line tools behave.
+    #[cfg(unix)]
+    // SAFETY: called before any other thread exists; SIG_DFL is a valid disposition.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
     let cli = match parse_command_line() {
         Ok(cli) => cli,
         Err(e) => {

@@ -838,3 +838,18 @@ fn an_environment_map_lights_a_scene_from_the_command_line() {
     let o = render_small(&obj, (16, 16, 16), &dim, &["--sky", "nowhere/sky.hdr"]);
     assert!(!o.status.success() && stderr(&o).contains("nowhere/sky.hdr"), "{}", stderr(&o));
 }
+
+#[test]
+fn a_closed_pipe_ends_spt_quietly() {
+    // `spt info … | true`: the reader is gone before spt has loaded the scene, so its first
+    // line meets a closed pipe; that panicked before SIGPIPE's default action was restored.
+    let dir = temp_dir("pipe");
+    let obj = write_scene(&dir, OBJ);
+    let spt = env!("CARGO_BIN_EXE_spt");
+    let o = std::process::Command::new("sh")
+        .arg("-c")
+        .arg(format!("'{spt}' info '{}' | true", obj.display()))
+        .output()
+        .expect("sh runs");
+    assert!(!stderr(&o).contains("panicked"), "{}", stderr(&o));
+}
