@@ -438,50 +438,32 @@ impl Scene {
     /// finite coordinates, normals matching positions.
     pub fn validate(&self) -> Result<()> {
         let bad = |m: String| Err(Error::Setting(m));
-        if self.material_ids.len() != self.triangles.len() {
-            return bad(format!("{} material ids for {} triangles", self.material_ids.len(), self.triangles.len()));
-        }
-        if !self.normals.is_empty() && self.normals.len() != self.positions.len() {
-            return bad(format!("{} normals for {} vertices", self.normals.len(), self.positions.len()));
-        }
-        if !self.uvs.is_empty() && self.uvs.len() != self.positions.len() {
-            return bad(format!("{} texture coordinates for {} vertices", self.uvs.len(), self.positions.len()));
-        }
-        if self.uvs.iter().any(|uv| !uv.iter().all(|c| c.is_finite())) {
-            return bad("a texture coordinate is not finite".into());
-        }
-        if !self.tangents.is_empty() && self.tangents.len() != self.positions.len() {
-            return bad(format!("{} tangents for {} vertices", self.tangents.len(), self.positions.len()));
-        }
-        if let Some(i) = self.normals.iter().chain(&self.tangents).position(|n| n.iter().any(|c| !c.is_finite())) {
-            return bad(format!("normal or tangent {i} is not finite"));
-        }
-        let nv = self.positions.len() as u32;
-        if let Some((i, t)) = self.triangles.iter().enumerate().find(|(_, t)| t.iter().any(|&v| v >= nv)) {
-            return bad(format!("triangle {i} indexes vertex {t:?}, but there are {nv} vertices"));
-        }
         let nm = self.materials.len() as u32;
-        if let Some(i) = self.material_ids.iter().position(|&m| m >= nm) {
-            return bad(format!("triangle {i} has material {} of {nm}", self.material_ids[i]));
-        }
-        if let Some(i) = self.positions.iter().position(|p| p.iter().any(|c| !c.is_finite())) {
-            return bad(format!("vertex {i} has a non-finite coordinate {:?}", self.positions[i]));
-        }
+        check_mesh(
+            MeshRef {
+                positions: &self.positions,
+                normals: &self.normals,
+                tangents: &self.tangents,
+                uvs: &self.uvs,
+                triangles: &self.triangles,
+                material_ids: &self.material_ids,
+            },
+            nm,
+        )
+        .map_err(Error::Setting)?;
         if let Some((i, s)) = self.shapes.iter().enumerate().find(|(_, s)| s.material >= nm) {
             return bad(format!("{} {i} has material {} of {nm}", s.shape.name(), s.material));
         }
         for (k, o) in self.objects.iter().enumerate() {
-            let as_scene = Scene {
-                positions: o.positions.clone(),
-                normals: o.normals.clone(),
-                tangents: o.tangents.clone(),
-                uvs: o.uvs.clone(),
-                triangles: o.triangles.clone(),
-                material_ids: o.material_ids.clone(),
-                materials: self.materials.clone(),
-                ..Scene::default()
+            let mesh = MeshRef {
+                positions: &o.positions,
+                normals: &o.normals,
+                tangents: &o.tangents,
+                uvs: &o.uvs,
+                triangles: &o.triangles,
+                material_ids: &o.material_ids,
             };
-            as_scene.validate().map_err(|e| Error::Setting(format!("object {k}: {e}")))?;
+            check_mesh(mesh, nm).map_err(|e| Error::Setting(format!("object {k}: {e}")))?;
         }
         for (k, i) in self.instances.iter().enumerate() {
             let det = glam::Mat3::from_mat4(i.transform).determinant();
@@ -508,6 +490,49 @@ impl Scene {
         }
         Ok(())
     }
+}
+
+/// A mesh's flat arrays, borrowed: the scene's own or an object's.
+struct MeshRef<'a> {
+    positions: &'a [[f32; 3]],
+    normals: &'a [[f32; 3]],
+    tangents: &'a [[f32; 3]],
+    uvs: &'a [[f32; 2]],
+    triangles: &'a [[u32; 3]],
+    material_ids: &'a [u32],
+}
+
+/// Checks a mesh's arrays against each other and `materials` materials: one material id
+/// per triangle, attributes as long as the positions (or empty), indices in range, finite
+/// values.
+fn check_mesh(m: MeshRef, materials: u32) -> std::result::Result<(), String> {
+    if m.material_ids.len() != m.triangles.len() {
+        return Err(format!("{} material ids for {} triangles", m.material_ids.len(), m.triangles.len()));
+    }
+    let nv = m.positions.len();
+    for (what, len) in
+        [("normals", m.normals.len()), ("texture coordinates", m.uvs.len()), ("tangents", m.tangents.len())]
+    {
+        if len != 0 && len != nv {
+            return Err(format!("{len} {what} for {nv} vertices"));
+        }
+    }
+    if m.uvs.iter().any(|uv| !uv.iter().all(|c| c.is_finite())) {
+        return Err("a texture coordinate is not finite".into());
+    }
+    if let Some(i) = m.normals.iter().chain(m.tangents).position(|n| n.iter().any(|c| !c.is_finite())) {
+        return Err(format!("normal or tangent {i} is not finite"));
+    }
+    if let Some((i, t)) = m.triangles.iter().enumerate().find(|(_, t)| t.iter().any(|&v| v as usize >= nv)) {
+        return Err(format!("triangle {i} indexes vertex {t:?}, but there are {nv} vertices"));
+    }
+    if let Some(i) = m.material_ids.iter().position(|&id| id >= materials) {
+        return Err(format!("triangle {i} has material {} of {materials}", m.material_ids[i]));
+    }
+    if let Some(i) = m.positions.iter().position(|p| p.iter().any(|c| !c.is_finite())) {
+        return Err(format!("vertex {i} has a non-finite coordinate {:?}", m.positions[i]));
+    }
+    Ok(())
 }
 
 /// Appends a per-vertex attribute for `count` new vertices starting at `base`, keeping
