@@ -688,6 +688,18 @@ fn install_panic_counter() {
     }));
 }
 
+/// A 2×2 RGBA PNG, encoded once.
+fn tiny_png() -> &'static [u8] {
+    static PNG: std::sync::OnceLock<Vec<u8>> = std::sync::OnceLock::new();
+    PNG.get_or_init(|| {
+        let mut bytes = Vec::new();
+        image::RgbaImage::from_fn(2, 2, |x, y| image::Rgba([x as u8 * 200, y as u8 * 200, 90, 255]))
+            .write_to(&mut std::io::Cursor::new(&mut bytes), image::ImageFormat::Png)
+            .expect("a PNG in memory");
+        bytes
+    })
+}
+
 /// Loads one input from memory, as `spt render` would from disk.
 fn run_one(input: &Seed) -> Outcome {
     let obj_path = Path::new("fuzz").join(format!("{}.obj", input.name));
@@ -698,8 +710,20 @@ fn run_one(input: &Seed) -> Outcome {
             Err(std::io::Error::new(std::io::ErrorKind::NotFound, "no such file"))
         }
     };
+    // Every texture the MTL names is a small PNG in memory (the images' own decoding is
+    // fuzzed by `fuzz_scenes`); names ending otherwise are missing files.
+    let read_image = |p: &Path| -> std::io::Result<Vec<u8>> {
+        let name = p.to_string_lossy().to_ascii_lowercase();
+        if [".jpg", ".png", ".tga", ".bmp"].iter().any(|e| name.ends_with(e)) {
+            Ok(tiny_png().to_vec())
+        } else {
+            Err(std::io::Error::new(std::io::ErrorKind::NotFound, "no such file"))
+        }
+    };
     let before = PANICS.load(Ordering::Relaxed);
-    let result = catch_unwind(AssertUnwindSafe(|| tracer::obj::load_obj_text(&input.obj, &obj_path, &read_mtl)));
+    let result = catch_unwind(AssertUnwindSafe(|| {
+        tracer::obj::load_obj_text_with(&input.obj, &obj_path, &read_mtl, &read_image)
+    }));
     match result {
         _ if PANICS.load(Ordering::Relaxed) != before => Outcome::Panicked,
         Ok(Ok(_)) => Outcome::Loaded,

@@ -81,6 +81,17 @@ pub(crate) fn read_file_bytes(path: &Path) -> std::io::Result<Vec<u8>> {
 /// of such a resolved MTL path. [`load_obj`] reads files through it; a fuzzer or a test
 /// drives the whole loader from memory. Never panics: malformed input is an error.
 pub fn load_obj_text(text: &str, path: &Path, read_mtl: &dyn Fn(&Path) -> std::io::Result<String>) -> Result<Scene> {
+    load_obj_text_with(text, path, read_mtl, &read_file_bytes)
+}
+
+/// [`load_obj_text`] with texture images read by `read_image` too (resolved paths in,
+/// bytes out): the whole loader driven from memory.
+pub fn load_obj_text_with(
+    text: &str,
+    path: &Path,
+    read_mtl: &dyn Fn(&Path) -> std::io::Result<String>,
+    read_image: &dyn Fn(&Path) -> std::io::Result<Vec<u8>>,
+) -> Result<Scene> {
     let obj_error = |line: Option<usize>, message: String| Error::Parse { path: path.to_path_buf(), line, message };
     let PreparedObj { text: tobj_text, mtllibs } =
         prepare_obj(text).map_err(|(line, message)| obj_error(Some(line), message))?;
@@ -154,7 +165,7 @@ pub fn load_obj_text(text: &str, path: &Path, read_mtl: &dyn Fn(&Path) -> std::i
     let mut textures = TextureCache::default();
     for library in libraries.into_inner() {
         for m in &library.materials {
-            converted.push(to_material(&library.path, m, &mut textures)?);
+            converted.push(to_material(&library.path, m, &mut textures, read_image)?);
         }
     }
     let default = MtlMaterial {
@@ -162,7 +173,7 @@ pub fn load_obj_text(text: &str, path: &Path, read_mtl: &dyn Fn(&Path) -> std::i
         line: 0,
         statements: vec![Statement { key: "Kd".into(), values: DEFAULT_ALBEDO.to_string(), line: 0 }],
     };
-    let default = to_material(path, &default, &mut textures)?;
+    let default = to_material(path, &default, &mut textures, read_image)?;
     let mut scene = Scene::default();
     for model in &models {
         let mesh = &model.mesh;
@@ -203,7 +214,12 @@ struct Library {
 /// uses the material API (`Material::builtin`, `ModelId`, the parameter
 /// declarations), so that changes there touch one function. Errors name `lib`, the
 /// line and the material.
-fn to_material(lib: &Path, m: &MtlMaterial, cache: &mut TextureCache) -> Result<Material> {
+fn to_material(
+    lib: &Path,
+    m: &MtlMaterial,
+    cache: &mut TextureCache,
+    read_image: &dyn Fn(&Path) -> std::io::Result<Vec<u8>>,
+) -> Result<Material> {
     let at = |line: usize, message: String| Error::Parse {
         path: lib.to_path_buf(),
         line: Some(line),
@@ -267,7 +283,7 @@ fn to_material(lib: &Path, m: &MtlMaterial, cache: &mut TextureCache) -> Result<
         Error::Parse { path: lib.to_path_buf(), line: Some(line), message: e.to_string() }
     })?;
     material.emission = emission;
-    let textures = material_textures(lib, m, &material, cache)?;
+    let textures = material_textures(lib, m, &material, cache, read_image)?;
     Ok(material.with_textures(textures))
 }
 
@@ -282,6 +298,7 @@ fn material_textures(
     m: &MtlMaterial,
     material: &Material,
     cache: &mut TextureCache,
+    read_image: &dyn Fn(&Path) -> std::io::Result<Vec<u8>>,
 ) -> Result<MaterialTextures> {
     let dir = lib.parent().unwrap_or(Path::new(""));
     let slots = material.params().map_or(brdf::TextureSlots::NONE, |p| p.texture_slots());
@@ -292,7 +309,10 @@ fn material_textures(
             line: Some(e.line),
             message: format!("material '{}': {}", m.name, e.message),
         })?;
-        let image = cache.load(&dir.join(t.file.replace('\\', "/")), &m.name)?;
+        // A texture that cannot be read is named with the statement's line.
+        let image = cache.load_with(&dir.join(t.file.replace('\\', "/")), &m.name, read_image).map_err(|e| {
+            Error::Parse { path: lib.to_path_buf(), line: Some(statement.line), message: e.to_string() }
+        })?;
         let mut map = TextureMap::new(image, encoding);
         if t.clamp {
             map.wrap = [Wrap::Clamp; 2];

@@ -569,10 +569,22 @@ pub struct TextureCache {
 impl TextureCache {
     /// The image at `path`, read on first use; errors name `material`.
     pub fn load(&mut self, path: &Path, material: &str) -> Result<Arc<TextureImage>> {
+        self.load_with(path, material, &crate::obj::read_file_bytes)
+    }
+
+    /// [`TextureCache::load`] with the file's bytes from `read` (a fuzzer or a test serves
+    /// them from memory).
+    pub fn load_with(
+        &mut self,
+        path: &Path,
+        material: &str,
+        read: &dyn Fn(&Path) -> std::io::Result<Vec<u8>>,
+    ) -> Result<Arc<TextureImage>> {
         if let Some(image) = self.images.get(path) {
             return Ok(image.clone());
         }
-        let image = TextureImage::load(path).map_err(|message| Error::Texture {
+        let decoded = read(path).map_err(|e| e.to_string()).and_then(|bytes| TextureImage::decode(&bytes));
+        let image = decoded.map_err(|message| Error::Texture {
             material: material.into(),
             texture: path.display().to_string(),
             message,
