@@ -17,6 +17,22 @@ impl Default for Aabb {
 }
 
 impl Aabb {
+    /// The box holding this box's eight corners under `t` (empty stays empty): where an
+    /// object-space box lies in the world.
+    pub fn transformed(&self, t: &glam::Affine3A) -> Aabb {
+        if self.is_empty() {
+            return Aabb::EMPTY;
+        }
+        (0..8).fold(Aabb::EMPTY, |acc, k| {
+            let corner = Vec3::new(
+                if k & 1 == 0 { self.min.x } else { self.max.x },
+                if k & 2 == 0 { self.min.y } else { self.max.y },
+                if k & 4 == 0 { self.min.z } else { self.max.z },
+            );
+            acc.grow(t.transform_point3(corner))
+        })
+    }
+
     /// The empty box: the identity of [`Aabb::union`].
     pub const EMPTY: Self = Self { min: Vec3::INFINITY, max: Vec3::NEG_INFINITY };
 

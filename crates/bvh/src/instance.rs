@@ -49,7 +49,7 @@ impl<A: Accelerator> TwoLevel<A> {
                     reason: "the transform is singular or not finite".into(),
                 });
             }
-            boxes.push(transform_box(&object.bounds(), &inst.transform));
+            boxes.push(object.bounds().transformed(&inst.transform));
             placed.push(Placed {
                 object: inst.object,
                 world_to_object: inst.transform.inverse(),
@@ -139,21 +139,6 @@ impl<A: Accelerator> TwoLevel<A> {
 
 impl Placed {
     const EMPTY: Self = Self { object: 0, world_to_object: Affine3A::IDENTITY, prim_offset: 0 };
-}
-
-/// The world-space box of an object-space box under `t` (its 8 corners transformed).
-fn transform_box(b: &Aabb, t: &Affine3A) -> Aabb {
-    if b.is_empty() {
-        return Aabb::EMPTY;
-    }
-    (0..8).fold(Aabb::EMPTY, |acc, k| {
-        let corner = Vec3::new(
-            if k & 1 == 0 { b.min.x } else { b.max.x },
-            if k & 2 == 0 { b.min.y } else { b.max.y },
-            if k & 4 == 0 { b.min.z } else { b.max.z },
-        );
-        acc.grow(t.transform_point3(corner))
-    })
 }
 
 impl<A: Accelerator> Accelerator for TwoLevel<A> {

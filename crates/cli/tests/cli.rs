@@ -658,18 +658,7 @@ fn scene_files_render_and_their_errors_name_line_and_column() {
     )
     .unwrap();
     let out = dir.join("spheres.exr");
-    let o = spt(&[
-        "render",
-        scene.to_str().unwrap(),
-        "--width",
-        "16",
-        "--height",
-        "16",
-        "--spp",
-        "4",
-        "-o",
-        out.to_str().unwrap(),
-    ]);
+    let o = render_small(&scene, (16, 16, 4), &out, &[]);
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(!stderr(&o).contains("no light"), "{}", stderr(&o));
     assert!(exr_means(&out).iter().all(|&m| m > 0.0 && m.is_finite()), "{:?}", exr_means(&out));
@@ -678,20 +667,7 @@ fn scene_files_render_and_their_errors_name_line_and_column() {
     assert!(info.contains("1 analytic shapes") && info.contains("lambert: white"), "{info}");
     // --set changes the file's values before it is read: a darker sphere.
     let bright = exr_means(&out);
-    let o = spt(&[
-        "render",
-        scene.to_str().unwrap(),
-        "--width",
-        "16",
-        "--height",
-        "16",
-        "--spp",
-        "4",
-        "--set",
-        "materials.white.reflectance=0.07",
-        "-o",
-        out.to_str().unwrap(),
-    ]);
+    let o = render_small(&scene, (16, 16, 4), &out, &["--set", "materials.white.reflectance=0.07"]);
     assert!(o.status.success(), "{}", stderr(&o));
     let dark = exr_means(&out);
     assert!((dark[0] / bright[0] - 0.1).abs() < 0.02, "{dark:?} vs {bright:?}");

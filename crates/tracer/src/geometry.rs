@@ -106,13 +106,10 @@ pub struct Instanced {
     pub transforms: Vec<InstanceTransform>,
 }
 
-/// An instance's transforms as shading uses them.
+/// An instance's transforms as shading uses them (its object and material are in
+/// [`Scene::instances`], by the same index).
 #[derive(Clone, Copy, Debug)]
 pub struct InstanceTransform {
-    /// Object index.
-    pub object: u32,
-    /// The material replacing the object's, if any.
-    pub material: Option<u32>,
     /// Object to world.
     pub to_world: glam::Affine3A,
     /// Inverse transpose of the linear part, for normals.
@@ -167,8 +164,6 @@ impl Geometry {
             placements.push(Instance { object: inst.object, transform: to_world, prim_offset: first });
             first_prim.push(first);
             transforms.push(InstanceTransform {
-                object: inst.object,
-                material: inst.material,
                 to_world,
                 normal: glam::Mat3A::from(linear.inverse().transpose()),
                 orientation: if linear.determinant() < 0.0 { -1.0 } else { 1.0 },

@@ -748,15 +748,7 @@ impl Converter<'_> {
         let mut map = TextureMap::new(image, encoding);
         map.wrap = [wrap(sampler.wrap_s()), wrap(sampler.wrap_t())];
         if let Some(t) = transform {
-            let (sin, cos) = t.rotation().sin_cos();
-            let [ox, oy] = t.offset();
-            let [sx, sy] = t.scale();
-            // Columns of T·R·S with R = [[cos, sin], [−sin, cos]] (the extension's matrix).
-            map.transform = Mat3::from_cols(
-                Vec3::new(cos * sx, -sin * sx, 0.0),
-                Vec3::new(sin * sy, cos * sy, 0.0),
-                Vec3::new(ox, oy, 1.0),
-            );
+            map.transform = crate::texture::khr_texture_transform(t.offset(), t.rotation(), t.scale());
             if !map.transform.is_finite() {
                 return Err(self.fail(format!("material '{material}': KHR_texture_transform is not finite")));
             }

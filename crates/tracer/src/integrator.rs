@@ -10,6 +10,7 @@ use crate::lights::{LightSample, LightSource, Lights};
 use crate::material::Material;
 use crate::punctual::PunctualLight;
 use crate::sampler::Sampler;
+use crate::scene::MeshRef;
 use crate::scene::Scene;
 use brdf::{Bsdf, Frame, ScatterFlags};
 use bvh::Ray;
@@ -241,7 +242,7 @@ impl<'a> SceneView<'a> {
             let h = hit?;
             let Some(alpha) = self.material(h.prim).alpha() else { return Some(h) };
             let uv = self.uv_at(&h);
-            if !alpha.passes(uv, crate::texture::alpha_hash(ray.origin, ray.dir, h.prim)) {
+            if !alpha.passes(uv, || crate::texture::alpha_hash(ray.origin, ray.dir, h.prim)) {
                 return Some(h);
             }
             hit = self.geometry.intersect(&self.scene.shapes, &Ray { t_min: h.t, ..*ray });
@@ -268,35 +269,20 @@ impl<'a> SceneView<'a> {
     /// The arrays triangle primitive `prim` lives in, its index there, and the transform
     /// that places it (`None` for the scene's own triangles, already in world space).
     #[inline(always)]
-    fn triangle_source(&self, prim: u32) -> (MeshArrays<'_>, u32, Option<&InstanceTransform>) {
+    fn triangle_source(&self, prim: u32) -> (MeshRef<'_>, u32, Option<&InstanceTransform>) {
         let scene = self.scene;
         if prim < self.geometry.triangle_count() {
-            let arrays = MeshArrays {
-                positions: &scene.positions,
-                normals: &scene.normals,
-                tangents: &scene.tangents,
-                uvs: &scene.uvs,
-                triangles: &scene.triangles,
-            };
-            return (arrays, prim, None);
+            return (scene.mesh(), prim, None);
         }
         self.instanced_source(prim)
     }
 
     #[cold]
-    fn instanced_source(&self, prim: u32) -> (MeshArrays<'_>, u32, Option<&InstanceTransform>) {
+    fn instanced_source(&self, prim: u32) -> (MeshRef<'_>, u32, Option<&InstanceTransform>) {
         let instanced = self.geometry.instances.as_ref().expect("an instanced primitive without instances");
         let (k, local) = instanced.locate(prim);
         let xf = &instanced.transforms[k];
-        let o = &self.scene.objects[xf.object as usize];
-        let arrays = MeshArrays {
-            positions: &o.positions,
-            normals: &o.normals,
-            tangents: &o.tangents,
-            uvs: &o.uvs,
-            triangles: &o.triangles,
-        };
-        (arrays, local, Some(xf))
+        (self.scene.objects[self.scene.instances[k].object as usize].mesh(), local, Some(xf))
     }
 
     /// Surface data at `hit` on `material`, its shading normal bent by the material's
@@ -408,18 +394,9 @@ impl<'a> SceneView<'a> {
     fn instanced_material(&self, prim: u32) -> u32 {
         let instanced = self.geometry.instances.as_ref().expect("an instanced primitive without instances");
         let (k, local) = instanced.locate(prim);
-        let xf = &instanced.transforms[k];
-        xf.material.unwrap_or(self.scene.objects[xf.object as usize].material_ids[local as usize])
+        let inst = &self.scene.instances[k];
+        inst.material_of(&self.scene.objects[inst.object as usize], local as usize)
     }
-}
-
-/// A mesh's flat arrays: the scene's own, or an instanced object's.
-struct MeshArrays<'a> {
-    positions: &'a [[f32; 3]],
-    normals: &'a [[f32; 3]],
-    tangents: &'a [[f32; 3]],
-    uvs: &'a [[f32; 2]],
-    triangles: &'a [[u32; 3]],
 }
 
 /// The smallest probability with which Russian roulette ends a path (so that paths of

@@ -81,6 +81,18 @@ pub struct SceneObject {
 }
 
 impl SceneObject {
+    /// Its arrays, borrowed.
+    pub fn mesh(&self) -> MeshRef<'_> {
+        MeshRef {
+            positions: &self.positions,
+            normals: &self.normals,
+            tangents: &self.tangents,
+            uvs: &self.uvs,
+            triangles: &self.triangles,
+            material_ids: &self.material_ids,
+        }
+    }
+
     /// The three vertices of triangle `i`, in object space.
     #[inline]
     pub fn triangle_vertices(&self, i: usize) -> [Vec3; 3] {
@@ -246,7 +258,7 @@ impl Scene {
         let materials = std::mem::take(&mut other.materials);
         let shapes = std::mem::take(&mut other.shapes);
         let lights = std::mem::take(&mut other.punctual_lights);
-        self.append_geometry(other, transform);
+        self.append_geometry(other.mesh(), transform);
         match material {
             Some(id) => self.material_ids.extend(std::iter::repeat_n(id, triangles)),
             None => {
@@ -264,7 +276,7 @@ impl Scene {
 
     /// Appends `other`'s vertices and triangles placed by `transform` (winding reversed
     /// by a mirroring one), without material ids.
-    fn append_geometry(&mut self, other: Scene, transform: &glam::Mat4) {
+    fn append_geometry(&mut self, other: MeshRef, transform: &glam::Mat4) {
         let linear = glam::Mat3::from_mat4(*transform);
         let normal_matrix = linear.inverse().transpose();
         let mirrored = linear.determinant() < 0.0;
@@ -278,7 +290,7 @@ impl Scene {
             other.tangents.iter().map(|t| (linear * Vec3::from_array(*t)).normalize_or(Vec3::X)).collect();
         extend_attribute(&mut self.normals, base as usize, &normals, count);
         extend_attribute(&mut self.tangents, base as usize, &tangents, count);
-        extend_attribute(&mut self.uvs, base as usize, &other.uvs, count);
+        extend_attribute(&mut self.uvs, base as usize, other.uvs, count);
         self.triangles.extend(other.triangles.iter().map(|t| {
             let t = t.map(|i| i + base);
             if mirrored { [t[0], t[2], t[1]] } else { t }
@@ -346,17 +358,8 @@ impl Scene {
         let objects = std::mem::take(&mut self.objects);
         for inst in std::mem::take(&mut self.instances) {
             let o = &objects[inst.object as usize];
-            let mesh = Scene {
-                positions: o.positions.clone(),
-                normals: o.normals.clone(),
-                tangents: o.tangents.clone(),
-                uvs: o.uvs.clone(),
-                triangles: o.triangles.clone(),
-                material_ids: Vec::new(),
-                ..Scene::default()
-            };
             // (Its lights were placed with it already.)
-            self.append_geometry(mesh, &inst.transform);
+            self.append_geometry(o.mesh(), &inst.transform);
             self.material_ids.extend((0..o.triangles.len()).map(|i| inst.material_of(o, i)));
         }
     }
@@ -379,27 +382,15 @@ impl Scene {
         self.shapes.push(SceneShape { shape, material });
     }
 
-    /// The material index of primitive `prim` (triangles first, then shapes).
-    #[inline]
-    pub fn material_id(&self, prim: u32) -> u32 {
-        match self.material_ids.get(prim as usize) {
-            Some(&m) => m,
-            None => match self.shapes.get(prim as usize - self.triangles.len()) {
-                Some(s) => s.material,
-                None => {
-                    // An instanced triangle: find its instance (a linear walk; the
-                    // renderer uses its precomputed table instead).
-                    let mut local = prim as usize - self.triangles.len() - self.shapes.len();
-                    for i in &self.instances {
-                        let o = &self.objects[i.object as usize];
-                        if local < o.triangles.len() {
-                            return i.material_of(o, local);
-                        }
-                        local -= o.triangles.len();
-                    }
-                    panic!("primitive {prim} does not exist")
-                }
-            },
+    /// The scene's own mesh arrays (not its instances), borrowed.
+    pub fn mesh(&self) -> MeshRef<'_> {
+        MeshRef {
+            positions: &self.positions,
+            normals: &self.normals,
+            tangents: &self.tangents,
+            uvs: &self.uvs,
+            triangles: &self.triangles,
+            material_ids: &self.material_ids,
         }
     }
 
@@ -419,18 +410,7 @@ impl Scene {
         let meshes = self.positions.iter().fold(Aabb::EMPTY, |b, p| b.grow(Vec3::from_array(*p)));
         let shapes = self.shapes.iter().fold(meshes, |b, s| b.union(s.shape.shape().bounds()));
         self.instances.iter().fold(shapes, |b, i| {
-            let o = self.objects[i.object as usize].bounds();
-            if o.is_empty() {
-                return b;
-            }
-            (0..8).fold(b, |b, k| {
-                let corner = Vec3::new(
-                    if k & 1 == 0 { o.min.x } else { o.max.x },
-                    if k & 2 == 0 { o.min.y } else { o.max.y },
-                    if k & 4 == 0 { o.min.z } else { o.max.z },
-                );
-                b.grow(i.transform.transform_point3(corner))
-            })
+            b.union(self.objects[i.object as usize].bounds().transformed(&glam::Affine3A::from_mat4(i.transform)))
         })
     }
 
@@ -439,31 +419,12 @@ impl Scene {
     pub fn validate(&self) -> Result<()> {
         let bad = |m: String| Err(Error::Setting(m));
         let nm = self.materials.len() as u32;
-        check_mesh(
-            MeshRef {
-                positions: &self.positions,
-                normals: &self.normals,
-                tangents: &self.tangents,
-                uvs: &self.uvs,
-                triangles: &self.triangles,
-                material_ids: &self.material_ids,
-            },
-            nm,
-        )
-        .map_err(Error::Setting)?;
+        check_mesh(self.mesh(), nm).map_err(Error::Setting)?;
         if let Some((i, s)) = self.shapes.iter().enumerate().find(|(_, s)| s.material >= nm) {
             return bad(format!("{} {i} has material {} of {nm}", s.shape.name(), s.material));
         }
         for (k, o) in self.objects.iter().enumerate() {
-            let mesh = MeshRef {
-                positions: &o.positions,
-                normals: &o.normals,
-                tangents: &o.tangents,
-                uvs: &o.uvs,
-                triangles: &o.triangles,
-                material_ids: &o.material_ids,
-            };
-            check_mesh(mesh, nm).map_err(|e| Error::Setting(format!("object {k}: {e}")))?;
+            check_mesh(o.mesh(), nm).map_err(|e| Error::Setting(format!("object {k}: {e}")))?;
         }
         for (k, i) in self.instances.iter().enumerate() {
             let det = glam::Mat3::from_mat4(i.transform).determinant();
@@ -492,14 +453,22 @@ impl Scene {
     }
 }
 
-/// A mesh's flat arrays, borrowed: the scene's own or an object's.
-struct MeshRef<'a> {
-    positions: &'a [[f32; 3]],
-    normals: &'a [[f32; 3]],
-    tangents: &'a [[f32; 3]],
-    uvs: &'a [[f32; 2]],
-    triangles: &'a [[u32; 3]],
-    material_ids: &'a [u32],
+/// A mesh's flat arrays, borrowed: the scene's own ([`Scene::mesh`]) or an instanced
+/// object's ([`SceneObject::mesh`]), for code that treats both alike.
+#[derive(Clone, Copy, Debug)]
+pub struct MeshRef<'a> {
+    /// Vertex positions.
+    pub positions: &'a [[f32; 3]],
+    /// Per-vertex shading normals, or empty.
+    pub normals: &'a [[f32; 3]],
+    /// Per-vertex tangents, or empty.
+    pub tangents: &'a [[f32; 3]],
+    /// Per-vertex texture coordinates, or empty.
+    pub uvs: &'a [[f32; 2]],
+    /// Triangles as vertex indices.
+    pub triangles: &'a [[u32; 3]],
+    /// Each triangle's material.
+    pub material_ids: &'a [u32],
 }
 
 /// Checks a mesh's arrays against each other and `materials` materials: one material id

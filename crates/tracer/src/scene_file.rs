@@ -470,9 +470,9 @@ pub fn parse_scene_file(text: &str, path: &Path) -> Result<Scene> {
         let span = def.span();
         let m = def.get_ref();
         let key = (m.file.as_str(), m.camera.as_deref());
+        let transform = mesh_transform(m).map_err(|e| at(span.clone(), e))?;
+        let material = m.material.as_deref().map(|name| material_id(name, span.clone())).transpose()?;
         if let Some(&object) = objects.get(&key) {
-            let transform = mesh_transform(m).map_err(|e| at(span.clone(), e))?;
-            let material = m.material.as_deref().map(|name| material_id(name, span.clone())).transpose()?;
             scene.place_with(object, transform, material).map_err(|e| at(span.clone(), e.to_string()))?;
             continue;
         }
@@ -488,12 +488,11 @@ pub fn parse_scene_file(text: &str, path: &Path) -> Result<Scene> {
             Some("gltf" | "glb") => load_gltf(&mesh_path, &GltfOptions { camera: m.camera.clone() })?.scene,
             _ => return Err(at(span, format!("{}: meshes are .obj, .gltf or .glb files", m.file))),
         };
-        let transform = mesh_transform(m).map_err(|e| at(span.clone(), e))?;
-        let material = m.material.as_deref().map(|name| material_id(name, span.clone())).transpose()?;
         if mesh_camera.is_none() {
             mesh_camera = loaded.camera.map(|c| transform_camera(&c, &transform));
         }
-        if uses[&key] > 1 && loaded.shapes.is_empty() && loaded.instances.is_empty() {
+        // (A glTF file with instances of its own is copied: objects do not nest.)
+        if uses[&key] > 1 && loaded.instances.is_empty() {
             let object = scene.add_object(loaded, None).map_err(|e| at(span.clone(), e.to_string()))?;
             scene.place_with(object, transform, material).map_err(|e| at(span.clone(), e.to_string()))?;
             objects.insert(key, object);

@@ -35,8 +35,6 @@ pub struct TextureImage {
     texels: Vec<[u8; 4]>,
     /// Whether the file had an alpha channel (else alpha is 255 everywhere).
     has_alpha: bool,
-    /// Whether the file had a single (grey) channel, with or without alpha.
-    grey: bool,
 }
 
 impl std::fmt::Debug for TextureImage {
@@ -45,35 +43,39 @@ impl std::fmt::Debug for TextureImage {
             .field("width", &self.width)
             .field("height", &self.height)
             .field("has_alpha", &self.has_alpha)
-            .finish()
+            .finish_non_exhaustive()
     }
 }
 
 impl TextureImage {
     /// An image from RGBA8 texels (`width` × `height`, rows from the top).
+    /// It has alpha if any texel is not fully opaque.
     pub fn from_rgba8(width: u32, height: u32, texels: Vec<[u8; 4]>) -> std::result::Result<Self, String> {
+        let has_alpha = texels.iter().any(|t| t[3] != 255);
+        Self::with_alpha(width, height, texels, has_alpha)
+    }
+
+    /// The image after checking its size against its texels.
+    fn with_alpha(width: u32, height: u32, texels: Vec<[u8; 4]>, has_alpha: bool) -> std::result::Result<Self, String> {
         if width == 0 || height == 0 || width > MAX_TEXTURE_SIZE || height > MAX_TEXTURE_SIZE {
             return Err(format!("{width}×{height} texels (each side must be 1 to {MAX_TEXTURE_SIZE})"));
         }
         if texels.len() != width as usize * height as usize {
             return Err(format!("{} texels for a {width}×{height} texture", texels.len()));
         }
-        let has_alpha = texels.iter().any(|t| t[3] != 255);
-        let grey = texels.iter().all(|t| t[0] == t[1] && t[1] == t[2]);
-        Ok(Self { width, height, texels, has_alpha, grey })
+        Ok(Self { width, height, texels, has_alpha })
     }
 
     /// Decodes a PNG, JPEG, EXR or HDR file held in memory; the error says why not.
     /// Sizes beyond [`MAX_TEXTURE_SIZE`] and decoder allocations beyond 1 GiB are refused.
     pub fn decode(bytes: &[u8]) -> std::result::Result<Self, String> {
         let decoded = decode_image(bytes, MAX_TEXTURE_SIZE)?;
-        let colour = decoded.color();
+        // Alpha as the file declares it (an RGBA file that happens to be opaque still has
+        // alpha; a grey or RGB one gives its first channel as alpha, MTL's `map_d` use).
+        let has_alpha = decoded.color().has_alpha();
         let (width, height) = (decoded.width(), decoded.height());
         let texels: Vec<[u8; 4]> = decoded.into_rgba8().pixels().map(|p| p.0).collect();
-        let mut image = Self::from_rgba8(width, height, texels)?;
-        image.has_alpha = colour.has_alpha();
-        image.grey = !colour.has_color();
-        Ok(image)
+        Self::with_alpha(width, height, texels, has_alpha)
     }
 
     /// Reads and decodes an image file; the error says why not.
@@ -95,11 +97,6 @@ impl TextureImage {
     /// Whether the file had an alpha channel.
     pub fn has_alpha(&self) -> bool {
         self.has_alpha
-    }
-
-    /// Whether the file had one grey channel.
-    pub fn is_grey(&self) -> bool {
-        self.grey
     }
 
     /// Bytes its texels take.
@@ -129,13 +126,7 @@ pub(crate) fn decode_image(bytes: &[u8], max_side: u32) -> std::result::Result<i
     if probe.format() == Some(image::ImageFormat::OpenExr) {
         check_exr_tiles(bytes)?;
     }
-    let guarded = |f: &mut dyn FnMut() -> std::result::Result<image::DynamicImage, String>| {
-        std::panic::catch_unwind(std::panic::AssertUnwindSafe(f))
-            .map_err(|p| format!("the decoder failed: {}", crate::panic_message(&p)))?
-    };
-    let (width, height) = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| probe.into_dimensions()))
-        .map_err(|p| format!("the decoder failed: {}", crate::panic_message(&p)))?
-        .map_err(|e| e.to_string())?;
+    let (width, height) = guarded(|| probe.into_dimensions().map_err(|e| e.to_string()))?;
     if width == 0 || height == 0 || width > max_side || height > max_side {
         return Err(format!("{width}×{height} pixels (each side must be 1 to {max_side})"));
     }
@@ -143,7 +134,7 @@ pub(crate) fn decode_image(bytes: &[u8], max_side: u32) -> std::result::Result<i
     if pixels > (1 << 20) + 1024 * bytes.len() as u64 {
         return Err(format!("{width}×{height} pixels is more than a {}-byte file can hold", bytes.len()));
     }
-    guarded(&mut || {
+    guarded(|| {
         let mut r = reader().map_err(|e| e.to_string())?;
         let mut limits = image::Limits::default();
         limits.max_image_width = Some(max_side);
@@ -152,6 +143,13 @@ pub(crate) fn decode_image(bytes: &[u8], max_side: u32) -> std::result::Result<i
         r.limits(limits);
         r.decode().map_err(|e| e.to_string())
     })
+}
+
+/// `f()`, a decoder panic turned into an error (the last line of defence, as for tobj and
+/// gltf).
+fn guarded<T>(f: impl FnOnce() -> std::result::Result<T, String>) -> std::result::Result<T, String> {
+    std::panic::catch_unwind(std::panic::AssertUnwindSafe(f))
+        .map_err(|p| format!("the decoder failed: {}", crate::panic_message(&p)))?
 }
 
 /// The most pixels an OpenEXR tile may cover beyond its image's own: tiles larger than
@@ -279,6 +277,14 @@ impl TextureMap {
         Self { image, wrap: [Wrap::Repeat; 2], encoding, transform: Mat3::IDENTITY }
     }
 
+    /// The filtered RGB at `uv` as a reflectance at the path's wavelengths
+    /// ([`reflectance_spectrum`]).
+    #[inline]
+    pub fn reflectance<const N: usize>(&self, uv: Vec2, wl: &SampledWavelengths<N>) -> SampledSpectrum<N> {
+        let t = self.sample(uv);
+        reflectance_spectrum([t[0], t[1], t[2]], wl)
+    }
+
     /// The bilinearly filtered value at `uv`: RGB decoded by the encoding, alpha linear.
     #[inline]
     pub fn sample(&self, uv: Vec2) -> [f32; 4] {
@@ -315,6 +321,15 @@ impl TextureMap {
 fn linear_table() -> &'static [f32; 256] {
     static TABLE: OnceLock<[f32; 256]> = OnceLock::new();
     TABLE.get_or_init(|| std::array::from_fn(|i| i as f32 / 255.0))
+}
+
+/// glTF's `KHR_texture_transform` as a uv matrix: uv' = T · R · S · uv with
+/// R = [[cos, sin], [−sin, cos]] (the extension's matrix, rows), `rotation` in radians.
+pub fn khr_texture_transform(offset: [f32; 2], rotation: f32, scale: [f32; 2]) -> Mat3 {
+    let (sin, cos) = rotation.sin_cos();
+    let ([ox, oy], [sx, sy]) = (offset, scale);
+    // Columns of T·R·S.
+    Mat3::from_cols(Vec3::new(cos * sx, -sin * sx, 0.0), Vec3::new(sin * sy, cos * sy, 0.0), Vec3::new(ox, oy, 1.0))
 }
 
 /// A reflectance given as linear sRGB in [0, 1] at the path's wavelengths: the RGB
@@ -370,13 +385,14 @@ impl Alpha {
         })
     }
 
-    /// Whether a ray with hash value `u` ∈ [0, 1) passes through the surface at `uv`.
+    /// Whether a ray passes through the surface at `uv`; `coin` gives its value in
+    /// [0, 1) for stochastic transparency (asked only in `Blend` mode).
     #[inline]
-    pub fn passes(&self, uv: Vec2, u: f32) -> bool {
+    pub fn passes(&self, uv: Vec2, coin: impl FnOnce() -> f32) -> bool {
         match self.mode {
             AlphaMode::Opaque => false,
             AlphaMode::Mask { cutoff } => self.value(uv) < cutoff,
-            AlphaMode::Blend => u >= self.value(uv),
+            AlphaMode::Blend => coin() >= self.value(uv),
         }
     }
 }
@@ -441,17 +457,13 @@ impl MaterialTextures {
     /// The texels that drive the BSDF's parameters at `uv`.
     #[inline]
     pub fn texels<const N: usize>(&self, uv: Vec2, wl: &SampledWavelengths<N>) -> brdf::Texels<N> {
-        let colour = |m: &TextureMap| {
-            let t = m.sample(uv);
-            reflectance_spectrum([t[0], t[1], t[2]], wl)
-        };
         let (roughness, metallic) = self.metallic_roughness.as_ref().map_or((1.0, 1.0), |m| {
             let t = m.sample(uv);
             (t[1], t[2])
         });
         brdf::Texels {
-            base_colour: self.base_colour.as_ref().map(colour),
-            specular: self.specular.as_ref().map(colour),
+            base_colour: self.base_colour.as_ref().map(|m| m.reflectance(uv, wl)),
+            specular: self.specular.as_ref().map(|m| m.reflectance(uv, wl)),
             roughness,
             metallic,
         }
@@ -461,10 +473,7 @@ impl MaterialTextures {
     /// material's emission (1 without an emissive texture).
     #[inline]
     pub fn emission_scale<const N: usize>(&self, uv: Vec2, wl: &SampledWavelengths<N>) -> SampledSpectrum<N> {
-        self.emissive.as_ref().map_or(SampledSpectrum::one(), |m| {
-            let t = m.sample(uv);
-            reflectance_spectrum([t[0], t[1], t[2]], wl)
-        })
+        self.emissive.as_ref().map_or(SampledSpectrum::one(), |m| m.reflectance(uv, wl))
     }
 
     /// The shading normal bent by the normal or bump map at `uv`, given the interpolated

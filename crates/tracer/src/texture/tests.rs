@@ -64,6 +64,14 @@ fn a_transform_moves_scales_and_rotates_the_lookup() {
     m.transform = Mat3::from_cols(Vec3::X * 2.0, Vec3::Y * 2.0, Vec3::Z);
     assert_eq!(m.sample(Vec2::new(0.125, 0.375)), [0.0; 4]);
     assert_eq!(m.sample(Vec2::new(0.125, 0.125)), [1.0; 4]);
+    // KHR_texture_transform: the extension's rotation matrix [[cos, sin], [−sin, cos]]
+    // takes (1, 0) to (0, −1) at a quarter turn; scale before rotation, offset last.
+    let t = khr_texture_transform([0.5, 0.25], std::f32::consts::FRAC_PI_2, [2.0, 3.0]);
+    let moved = t.transform_point2(Vec2::new(1.0, 0.0));
+    assert!((moved - Vec2::new(0.5, 0.25 - 2.0)).length() < 1e-6, "{moved}");
+    let moved = t.transform_point2(Vec2::new(0.0, 1.0));
+    assert!((moved - Vec2::new(0.5 + 3.0, 0.25)).length() < 1e-6, "{moved}");
+    assert_eq!(khr_texture_transform([0.0; 2], 0.0, [1.0; 2]), Mat3::IDENTITY);
 }
 
 #[test]
@@ -174,20 +182,20 @@ fn alpha_masks_cut_below_the_cutoff_and_blending_passes_one_minus_alpha() {
     map.wrap = [Wrap::Clamp; 2];
     let (left, right) = (Vec2::new(0.1, 0.5), Vec2::new(0.9, 0.5));
     let mask = Alpha { mode: AlphaMode::Mask { cutoff: 0.5 }, factor: 1.0, map: Some(map.clone()) };
-    assert!(mask.passes(left, 0.99) && mask.passes(left, 0.0));
-    assert!(!mask.passes(right, 0.99) && !mask.passes(right, 0.0));
+    assert!(mask.passes(left, || 0.99) && mask.passes(left, || 0.0));
+    assert!(!mask.passes(right, || 0.99) && !mask.passes(right, || 0.0));
     // The factor scales the texture's alpha (200/255 · 0.5 < 0.5: cut).
-    assert!(Alpha { factor: 0.5, ..mask.clone() }.passes(right, 0.0));
+    assert!(Alpha { factor: 0.5, ..mask.clone() }.passes(right, || 0.0));
     let blend = Alpha { mode: AlphaMode::Blend, factor: 1.0, map: Some(map) };
     let n = 100_000;
     let passed = (0..n)
-        .filter(|&i| blend.passes(left, alpha_hash(Vec3::new(i as f32, 0.5, -2.0), Vec3::new(0.0, 0.6, 0.8), 7)))
+        .filter(|&i| blend.passes(left, || alpha_hash(Vec3::new(i as f32, 0.5, -2.0), Vec3::new(0.0, 0.6, 0.8), 7)))
         .count();
     let expected = 1.0 - 100.0 / 255.0;
     let rate = passed as f64 / n as f64;
     // Binomial σ = 0.0015: 5σ.
     assert!((rate - expected).abs() < 0.008, "{rate} vs {expected}");
-    assert!(!Alpha { mode: AlphaMode::Opaque, ..blend }.passes(left, 0.9));
+    assert!(!Alpha { mode: AlphaMode::Opaque, ..blend }.passes(left, || 0.9));
 }
 
 #[test]
