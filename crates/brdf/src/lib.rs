@@ -109,6 +109,15 @@ pub trait Bsdf<const N: usize> {
     fn pdf(&self, wo: Vec3, wi: Vec3) -> f32;
     /// Samples ωi given ωo: `uc` picks a lobe, `u` the direction within it.
     fn sample(&self, wo: Vec3, uc: f32, u: Vec2) -> Option<BsdfSample<N>>;
+    /// The relative index of refraction n_inside / n_outside of a transmissive BSDF (1
+    /// for one that only reflects). `eval` and `sample` give transmitted *radiance*,
+    /// scaled by 1/η'² (η' the index on ωi's side over ωo's); light carried the other
+    /// way, from the lights (bidirectional path tracing's light subpaths: importance
+    /// transport, Veach 1997 §5.2), is not scaled, and this is what undoes it. A custom
+    /// transmissive BSDF must override it.
+    fn eta(&self) -> f32 {
+        1.0
+    }
 }
 
 /// Builds a BSDF at a hit for any number of sampled wavelengths: the one generic method a

@@ -323,6 +323,12 @@ macro_rules! registry {
                     $(Self::$Variant(b) => b.sample(wo, uc, u),)+
                 }
             }
+            #[inline]
+            fn eta(&self) -> f32 {
+                match self {
+                    $(Self::$Variant(b) => b.eta(),)+
+                }
+            }
         }
     };
 }

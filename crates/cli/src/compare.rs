@@ -104,7 +104,7 @@ pub fn preset(name: &str) -> Option<Vec<Config>> {
     Some(match name {
         "spectral" => each(|c| &mut c.spectral, &["hero", "bins40", "rgb"]),
         "samplers" => each(|c| &mut c.sampler, &["zsobol", "sobol", "independent"]),
-        "integrators" => each(|c| &mut c.integrator, &["path", "direct", "whitted"]),
+        "integrators" => each(|c| &mut c.integrator, &["path", "bdpt", "direct", "whitted"]),
         "triangle-tests" => each(|c| &mut c.triangle_test, &["watertight", "moller-trumbore"]),
         "bvh-widths" => each(|c| &mut c.bvh_width, &["4", "8"]),
         _ => return None,
@@ -563,8 +563,8 @@ mod tests {
         let bad = Config { spectral: Some("cmyk".into()), ..Config::named("x") };
         let Err(e) = bad.apply(&base, SpectralMode::Hero) else { panic!("cmyk accepted") };
         assert!(e.to_string().contains("'x': spectral"), "{e}");
-        let bad = Config { integrator: Some("bdpt".into()), ..Config::named("y") };
-        let Err(e) = bad.apply(&base, SpectralMode::Hero) else { panic!("bdpt accepted") };
+        let bad = Config { integrator: Some("mlt".into()), ..Config::named("y") };
+        let Err(e) = bad.apply(&base, SpectralMode::Hero) else { panic!("mlt accepted") };
         assert!(e.to_string().contains("'y': integrator"), "{e}");
         assert!(configs("nope").unwrap_err().to_string().contains("preset"));
         let dir = std::env::temp_dir().join(format!("spt-compare-unit-{}", std::process::id()));

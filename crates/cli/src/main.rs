@@ -425,7 +425,9 @@ struct SceneArgs {
     /// without BSDF-sampled light), ao (ambient occlusion within --ao-distance; not
     /// light), whitted (recursive ray tracing: mirrors and glass split into their Fresnel-
     /// weighted reflections and refractions, direct light only elsewhere; depth
-    /// --max-depth, 8 when unbounded). direct, ao and whitted are biased by design.
+    /// --max-depth, 8 when unbounded), bdpt (bidirectional path tracing: camera and light
+    /// subpaths connected in every way, weighted by MIS, light tracing splatted onto the
+    /// image; for small lights and caustics). direct, ao and whitted are biased by design.
     #[arg(long, default_value = "path", value_parser = INTEGRATORS)]
     integrator: String,
     /// The ao integrator's reach: occluders farther than this from the surface do not
@@ -764,7 +766,7 @@ fn best_sampler(caps: &Capabilities) -> SamplerKind {
 const BACKENDS: [&str; 2] = ["cpu", "gpu"];
 
 /// The integrators `--integrator` accepts.
-const INTEGRATORS: [&str; 4] = ["path", "direct", "ao", "whitted"];
+const INTEGRATORS: [&str; 5] = ["path", "direct", "ao", "whitted", "bdpt"];
 
 fn parse_distance(s: &str) -> Result<f32, String> {
     match s.trim().parse::<f32>() {
@@ -816,7 +818,9 @@ fn make_backend(args: &SceneArgs) -> Result<Box<dyn Backend>> {
                 "path" => gpu::kernel::GpuIntegrator::Path,
                 "direct" => gpu::kernel::GpuIntegrator::Direct,
                 "ao" => gpu::kernel::GpuIntegrator::AmbientOcclusion { max_distance: args.ao_distance },
-                "whitted" => bail!("the gpu backend has no whitted integrator yet: use --backend cpu"),
+                "whitted" | "bdpt" => {
+                    bail!("the gpu backend has no {} integrator yet: use --backend cpu", args.integrator)
+                }
                 other => bail!("unknown integrator '{other}' (known: {})", INTEGRATORS.join(", ")),
             };
             let gpu = gpu::GpuBackend::new()?.with_integrator(integrator);
@@ -828,6 +832,7 @@ fn make_backend(args: &SceneArgs) -> Result<Box<dyn Backend>> {
             "path" => Box::new(CpuBackend::with_integrator(args.threads, PathTracer)?),
             "direct" => Box::new(CpuBackend::with_integrator(args.threads, tracer::DirectLighting)?),
             "whitted" => Box::new(CpuBackend::with_integrator(args.threads, tracer::Whitted)?),
+            "bdpt" => Box::new(CpuBackend::with_integrator(args.threads, tracer::Bdpt)?),
             "ao" => {
                 Box::new(CpuBackend::with_integrator(args.threads, tracer::AmbientOcclusion::new(args.ao_distance))?)
             }
@@ -871,6 +876,12 @@ fn report(output: &Path, stats: &RenderStats, caps: &Capabilities) {
 
 fn run_render(args: RenderArgs) -> Result<()> {
     let outputs = args.pieces.outputs(&args.output)?;
+    if args.scene.integrator == "bdpt" && (outputs.partial.is_some() || args.pieces.write_partial.is_some()) {
+        bail!(
+            "--integrator bdpt splats light paths over the whole image, which partial renders do not carry yet: \
+             render it without --shard, --partial and --write-partial"
+        );
+    }
     if let Some(p) = &args.stderr
         && outputs.image.is_none()
     {

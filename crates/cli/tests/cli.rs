@@ -405,13 +405,16 @@ fn integrators_are_chosen_by_name() {
     let dir = temp_dir("integrators");
     let scene = write_scene(&dir, OBJ);
     let mut means = Vec::new();
-    for name in ["path", "direct", "ao", "whitted"] {
+    for name in ["path", "direct", "ao", "whitted", "bdpt"] {
         let out = dir.join(format!("{name}.exr"));
         let o = render_small(&scene, (16, 16, 32), &out, &["--integrator", name, "--spectral", "rgb"]);
         assert!(o.status.success(), "{name}: {}", stderr(&o));
         means.push(exr_means(&out)[1]);
     }
-    let (path, direct, ao, whitted) = (means[0], means[1], means[2], means[3]);
+    let (path, direct, ao, whitted, bdpt) = (means[0], means[1], means[2], means[3], means[4]);
+    // Bidirectional path tracing estimates what path tracing does (tests/tests/bdpt.rs
+    // tests it pixel by pixel; here the image mean of a tiny render).
+    assert!((bdpt / path - 1.0).abs() < 0.1, "bdpt {bdpt} vs path {path}");
     assert!(0.0 < direct && direct < path, "direct {direct} vs path {path}");
     // Whitted sees direct light only on this scene's diffuse surfaces.
     assert!(0.0 < whitted && whitted < path, "whitted {whitted} vs path {path}");
@@ -428,7 +431,7 @@ fn integrators_are_chosen_by_name() {
     assert!(exr_means(&near)[1] >= ao, "{} vs {ao}", exr_means(&near)[1]);
     let out = dir.join("x.png");
     for (extra, expected) in [
-        (vec!["--integrator", "bdpt"], "invalid value 'bdpt'"),
+        (vec!["--integrator", "mlt"], "invalid value 'mlt'"),
         (vec!["--integrator", "ao", "--ao-distance=-1"], "positive distance"),
         (vec!["--integrator", "ao", "--ao-distance", "0"], "positive distance"),
     ] {
@@ -436,18 +439,25 @@ fn integrators_are_chosen_by_name() {
         let msg = stderr(&o);
         assert!(!o.status.success() && msg.contains(expected), "{extra:?}: {msg}");
     }
+    // Its splats land anywhere on the image: partial renders cannot carry them yet.
+    let partial = dir.join("x.partial");
+    let o = render_small(&scene, (4, 4, 1), &partial, &["--integrator", "bdpt", "--shard", "1/2"]);
+    let msg = stderr(&o);
+    assert!(!o.status.success() && msg.contains("partial renders do not carry"), "{msg}");
     // The GPU runs direct and ao too (its equivalence tests compare them with the CPU's).
     if gpu::require_gpu().is_some() {
         for integrator in ["direct", "ao"] {
             let o = render_small(&scene, (8, 8, 4), &out, &["--integrator", integrator, "--backend", "gpu"]);
             assert!(o.status.success(), "{integrator}: {}", stderr(&o));
         }
-        let o = render_small(&scene, (8, 8, 4), &out, &["--integrator", "whitted", "--backend", "gpu"]);
-        assert!(!o.status.success() && stderr(&o).contains("use --backend cpu"), "{}", stderr(&o));
+        for integrator in ["whitted", "bdpt"] {
+            let o = render_small(&scene, (8, 8, 4), &out, &["--integrator", integrator, "--backend", "gpu"]);
+            assert!(!o.status.success() && stderr(&o).contains("use --backend cpu"), "{}", stderr(&o));
+        }
     }
 }
 
-/// `spt compare` end to end: a rendered reference, three configurations at 1, 2, 4, 8 spp,
+/// `spt compare` end to end: a rendered reference, four configurations at 1, 2, 4, 8 spp,
 /// a CSV row per render with falling error for the unbiased one, and both charts; a
 /// reference of the wrong size and unknown configurations are refused.
 #[test]
@@ -462,11 +472,12 @@ fn compare_charts_error_against_time() {
     assert!(o.status.success(), "{}", stderr(&o));
     let csv = std::fs::read_to_string(out.join("compare.csv")).unwrap();
     let rows: Vec<Vec<&str>> = csv.lines().skip(1).map(|l| l.split(',').collect()).collect();
-    assert_eq!(rows.len(), 12, "{csv}");
+    assert_eq!(rows.len(), 16, "{csv}");
     let error = |config: &str, spp: &str| -> f64 {
         rows.iter().find(|r| r[0] == config && r[1] == spp).unwrap()[4].parse().unwrap()
     };
     assert!(error("path", "8") < error("path", "1"), "{csv}");
+    assert!(error("bdpt", "8") < error("bdpt", "1"), "{csv}");
     for r in &rows {
         let ssim: f64 = r[5].parse().unwrap();
         assert!(ssim > 0.0 && ssim <= 1.0, "{csv}");
@@ -475,7 +486,7 @@ fn compare_charts_error_against_time() {
     assert!(image::open(out.join("compare.png")).is_ok());
     // A convergence strip per configuration (a 16-pixel crop at 1, 2, 4, 8 spp and the
     // reference) and a heat map of its error at the largest budget.
-    for config in ["path", "direct", "whitted"] {
+    for config in ["path", "bdpt", "direct", "whitted"] {
         let strip = image::open(out.join(format!("strip-{config}.png"))).unwrap();
         assert_eq!((strip.width(), strip.height()), (5 * 16, 16), "{config}");
         let heat = image::open(out.join(format!("heat-{config}.png"))).unwrap().into_rgb8();

@@ -71,6 +71,11 @@ impl Partial {
         if self.film.width() != m.job.width || self.film.height() != m.job.height {
             return Err(Error::Mismatch("film size differs from the manifest's".into()));
         }
+        if self.film.has_splats() {
+            return Err(Error::Mismatch(
+                "the film holds light-tracing splats (the bdpt integrator), which partial files do not carry".into(),
+            ));
+        }
         let json = serde_json::to_vec_pretty(m).expect("manifests serialise");
         atomically(path, |tmp| {
             let io = |source| Error::Io { path: tmp.to_path_buf(), source };

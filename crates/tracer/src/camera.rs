@@ -93,6 +93,43 @@ impl RayGenerator {
         (self.eye, self.forward, self.right, self.up)
     }
 
+    /// The eye: where every camera ray starts.
+    #[inline]
+    pub fn eye(&self) -> Vec3 {
+        self.eye
+    }
+
+    /// The film position (pixels from the top-left corner) whose ray passes through `p`,
+    /// or `None` if `p` is not in front of the eye; the inverse of [`RayGenerator::ray`].
+    /// Positions outside the image are returned as they are.
+    #[inline]
+    pub fn film_position(&self, p: Vec3) -> Option<Vec2> {
+        let d = p - self.eye;
+        let z = d.dot(self.forward);
+        if z.is_nan() || z <= 0.0 {
+            return None;
+        }
+        let ndc_x = d.dot(self.right) / (z * self.right.length_squared());
+        let ndc_y = d.dot(self.up) / (z * self.up.length_squared());
+        Some(Vec2::new(0.5 * (ndc_x + 1.0) / self.inv_size.x, 0.5 * (1.0 - ndc_y) / self.inv_size.y))
+    }
+
+    /// Film area per solid angle around the unit direction `dir`, in pixels per steradian:
+    /// the solid-angle density of the ray through a point drawn uniformly in one pixel,
+    /// and the pinhole's importance W(ω) per pixel. The film lies on the plane one unit
+    /// along the view direction, where ω at angle θ from it spans dA = dω / cos³ θ, and a
+    /// unit of that plane holds width·height / (4 tan_x tan_y) pixels; 0 behind the eye.
+    /// (Integrated over the image's solid angle it gives width·height.)
+    #[inline]
+    pub fn pixels_per_steradian(&self, dir: Vec3) -> f32 {
+        let cos = dir.dot(self.forward);
+        if cos.is_nan() || cos <= 0.0 {
+            return 0.0;
+        }
+        let plane = 4.0 * self.right.length() * self.up.length() * self.inv_size.x * self.inv_size.y;
+        1.0 / (plane * cos * cos * cos)
+    }
+
     /// The ray through film position (x, y) in pixels from the top-left corner; a pixel
     /// spans [x, x+1) × [y, y+1), so jittering within it is a box filter.
     #[inline]
@@ -120,6 +157,30 @@ mod tests {
         assert!(top.dir.y > 0.0, "image top is up");
         let right = g.ray(Vec2::new(200.0, 50.0));
         assert!(right.dir.x > 0.0, "image right is view × up");
+    }
+
+    #[test]
+    fn film_positions_invert_rays_and_the_pixel_density_integrates_to_the_pixel_count() {
+        let cam =
+            Camera { eye: Vec3::new(0.3, 1.0, 3.9), center: Vec3::new(0.0, 0.8, 0.0), up: Vec3::Y, fov_y_deg: 50.0 };
+        let (w, h) = (64, 48);
+        let g = cam.rays(w, h);
+        for film in [Vec2::new(0.0, 0.0), Vec2::new(17.25, 30.5), Vec2::new(63.9, 47.9), Vec2::new(-5.0, 60.0)] {
+            let ray = g.ray(film);
+            let back = g.film_position(ray.origin + 2.7 * ray.dir).unwrap();
+            assert!((back - film).length() < 1e-3, "{film} -> {back}");
+        }
+        assert!(g.film_position(g.eye() - Vec3::new(0.0, 0.0, -1.0)).is_none(), "behind the eye");
+        // The density is the Jacobian: a small square of film spans a solid angle of
+        // its area over the density, at the centre as at the corners.
+        let d = 1e-2;
+        for film in [Vec2::new(32.0, 24.0), Vec2::new(50.0, 7.0), Vec2::new(0.5, 47.5)] {
+            let [a, b, c] = [film, film + Vec2::new(d, 0.0), film + Vec2::new(0.0, d)].map(|f| g.ray(f).dir);
+            let solid_angle = (b - a).cross(c - a).length();
+            let ratio = g.pixels_per_steradian(a) * solid_angle / (d * d);
+            assert!((ratio - 1.0).abs() < 2e-3, "{film}: {ratio}");
+        }
+        assert_eq!(g.pixels_per_steradian(-g.ray(Vec2::new(32.0, 24.0)).dir), 0.0);
     }
 
     #[test]

@@ -4,7 +4,7 @@
 use crate::camera::RayGenerator;
 use crate::film::{Film, PixelStats};
 use crate::geometry::Geometry;
-use crate::integrator::{CameraSample, Integrator, PathCounters, PathTracer, SceneView};
+use crate::integrator::{CameraSample, Integrator, PathCounters, PathTracer, SceneView, Splat};
 use crate::lights::Lights;
 use crate::render::{
     Backend, Capabilities, PixelRect, PrepareStats, PreparedScene, RenderSettings, SceneOptions, check_pass,
@@ -235,6 +235,7 @@ struct TileResult {
     y0: u32,
     w: u32,
     pixels: Vec<PixelStats>,
+    splats: Vec<Splat>,
     non_finite: u64,
     counters: PathCounters,
 }
@@ -272,7 +273,12 @@ impl<I: Integrator> Pass<'_, I> {
                 film.pixels_mut()[(y * width + x) as usize] = *p;
             }
             film.non_finite += t.non_finite;
+            film.add_splats(&t.splats);
             total += t.counters;
+        }
+        if self.scene.integrator.splats() {
+            let region = self.settings.region();
+            film.count_light_paths(region.width as u64 * region.height as u64 * self.spp as u64);
         }
         total
     }
@@ -287,7 +293,8 @@ impl<I: Integrator> Pass<'_, I> {
         wavelengths: &Wavelengths<'_, N>,
     ) -> TileResult {
         let (x0, y0, w, h) = (tile.x, tile.y, tile.width, tile.height);
-        let view = self.scene.view();
+        let view = self.scene.view().with_film(self.camera, self.settings.region());
+        let mut splats = Vec::new();
         let mut pixels: Vec<PixelStats> =
             (y0..y0 + h).flat_map(|y| (x0..x0 + w).map(move |x| (x, y))).map(|(x, y)| *film.pixel(x, y)).collect();
         let mut non_finite = 0;
@@ -312,7 +319,13 @@ impl<I: Integrator> Pass<'_, I> {
                 block.push(CameraSample { ray, wl, sampler, radiance: SampledSpectrum::zero() });
                 owners.push(i);
             }
-            self.scene.integrator.radiance_block(&view, &self.settings.path, &mut block, &mut counters);
+            self.scene.integrator.radiance_block_splatting(
+                &view,
+                &self.settings.path,
+                &mut block,
+                &mut counters,
+                &mut splats,
+            );
             for (&i, s) in owners.iter().zip(&block) {
                 if !pixels[i as usize].add(s.wl.to_linear_srgb(&s.radiance)) {
                     non_finite += 1;
@@ -320,6 +333,6 @@ impl<I: Integrator> Pass<'_, I> {
             }
         }
         (self.progress)((w * h) as u64 * self.spp as u64);
-        TileResult { x0, y0, w, pixels, non_finite, counters }
+        TileResult { x0, y0, w, pixels, splats, non_finite, counters }
     }
 }

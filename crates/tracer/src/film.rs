@@ -143,21 +143,102 @@ impl PixelStats {
     }
 }
 
-/// A width × height grid of [`PixelStats`], row-major from the top-left.
+/// A width × height grid of [`PixelStats`], row-major from the top-left, and for
+/// integrators that trace paths from the lights to the camera (bidirectional path
+/// tracing), a *splat* image beside it.
+///
+/// A light path's contribution lands on whatever pixel its last vertex projects to, not
+/// on the pixel whose sample started it: each pixel's splat sum, in the same exact fixed
+/// point as the samples, is divided by the number of light paths traced over the whole
+/// image ([`Film::count_light_paths`]) and added to the pixel's mean (Veach 1997,
+/// §10.3.4). The standard errors ([`Film::std_error_rgb`]) cover the pixel samples only.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Film {
     width: u32,
     height: u32,
     pixels: Vec<PixelStats>,
+    /// Σ round(x · 2⁶⁴) of the splats per pixel and channel (empty until the first).
+    splats: Vec<[i128; 3]>,
+    /// Light paths traced, each of which could have splatted anywhere.
+    light_paths: u64,
     /// Samples that were NaN, infinite or beyond [`MAX_SAMPLE_MAGNITUDE`] and were
-    /// dropped.
+    /// dropped (splats included).
     pub non_finite: u64,
+}
+
+/// One light-path contribution to a pixel, in linear sRGB.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Splat {
+    /// Column.
+    pub x: u32,
+    /// Row.
+    pub y: u32,
+    /// The contribution, before division by the number of light paths.
+    pub rgb: [f32; 3],
 }
 
 impl Film {
     /// An empty film.
     pub fn new(width: u32, height: u32) -> Self {
-        Self { width, height, pixels: vec![PixelStats::default(); width as usize * height as usize], non_finite: 0 }
+        Self {
+            width,
+            height,
+            pixels: vec![PixelStats::default(); width as usize * height as usize],
+            splats: Vec::new(),
+            light_paths: 0,
+            non_finite: 0,
+        }
+    }
+
+    /// Adds light-path contributions (exactly, in any order); a NaN, infinite or
+    /// too-large one, or one outside the film, is dropped and counted in
+    /// [`Film::non_finite`].
+    pub fn add_splats(&mut self, splats: &[Splat]) {
+        if splats.is_empty() {
+            return;
+        }
+        if self.splats.is_empty() {
+            self.splats = vec![[0; 3]; self.pixels.len()];
+        }
+        for s in splats {
+            if s.x >= self.width || s.y >= self.height || !s.rgb.iter().all(|v| v.abs() < MAX_SAMPLE_MAGNITUDE) {
+                self.non_finite += 1;
+                continue;
+            }
+            let sum = &mut self.splats[(s.y * self.width + s.x) as usize];
+            for c in 0..3 {
+                sum[c] += fixed_point(s.rgb[c]).0;
+            }
+        }
+    }
+
+    /// Records that `n` more light paths were traced (the splats' divisor).
+    pub fn count_light_paths(&mut self, n: u64) {
+        self.light_paths += n;
+    }
+
+    /// Light paths traced so far.
+    pub fn light_paths(&self) -> u64 {
+        self.light_paths
+    }
+
+    /// Whether any light path has splatted onto this film.
+    pub fn has_splats(&self) -> bool {
+        !self.splats.is_empty()
+    }
+
+    /// The estimate at pixel index `i` (row-major): its samples' mean plus its splats
+    /// over the light paths traced.
+    #[inline]
+    pub fn pixel_mean(&self, i: usize) -> [f64; 3] {
+        let mut m = self.pixels[i].mean();
+        if let Some(s) = self.splats.get(i).filter(|_| self.light_paths > 0) {
+            let scale = 2f64.powi(-SUM_FRACTION_BITS) / self.light_paths as f64;
+            for c in 0..3 {
+                m[c] += s[c] as f64 * scale;
+            }
+        }
+        m
     }
 
     /// Width in pixels.
@@ -189,6 +270,8 @@ impl Film {
     /// camera move).
     pub fn clear(&mut self) {
         self.pixels.fill(PixelStats::default());
+        self.splats.fill([0; 3]);
+        self.light_paths = 0;
         self.non_finite = 0;
     }
 
@@ -199,9 +282,9 @@ impl Film {
         use rayon::prelude::*;
         // Rows in parallel: a 1080p film is 2M divisions of 128-bit sums.
         let row = self.width.max(1) as usize;
-        out.par_chunks_mut(row).zip(self.pixels.par_chunks(row)).for_each(|(out, pixels)| {
-            for (o, p) in out.iter_mut().zip(pixels) {
-                let [r, g, b] = p.mean().map(|v| spectral::srgb_to_u8(v as f32) as u32);
+        out.par_chunks_mut(row).enumerate().for_each(|(y, out)| {
+            for (x, o) in out.iter_mut().enumerate() {
+                let [r, g, b] = self.pixel_mean(y * row + x).map(|v| spectral::srgb_to_u8(v as f32) as u32);
                 *o = (r << 16) | (g << 8) | b;
             }
         });
@@ -209,7 +292,7 @@ impl Film {
 
     /// The mean image as linear-sRGB floats, row-major RGB.
     pub fn mean_rgb(&self) -> Vec<f32> {
-        self.pixels.iter().flat_map(|p| p.mean().map(|v| v as f32)).collect()
+        (0..self.pixels.len()).flat_map(|i| self.pixel_mean(i).map(|v| v as f32)).collect()
     }
 
     /// The per-pixel standard error of the mean, row-major RGB.
@@ -221,9 +304,10 @@ impl Film {
     pub fn channel_means(&self) -> [f64; 3] {
         let n = self.pixels.len().max(1) as f64;
         let mut sum = [0.0; 3];
-        for p in &self.pixels {
+        for i in 0..self.pixels.len() {
+            let m = self.pixel_mean(i);
             for c in 0..3 {
-                sum[c] += p.mean()[c];
+                sum[c] += m[c];
             }
         }
         sum.map(|s| s / n)
@@ -352,6 +436,40 @@ mod tests {
                 checked += 1;
             }
         }
+    }
+
+    #[test]
+    fn splats_add_exactly_over_the_light_paths_and_bad_ones_are_dropped() {
+        let mut film = Film::new(3, 2);
+        film.pixels_mut()[4].add([0.5, 0.5, 0.5]);
+        let splats = [
+            Splat { x: 1, y: 1, rgb: [2.0, 4.0, 0.25] },
+            Splat { x: 1, y: 1, rgb: [1.0, 0.0, 0.25] },
+            Splat { x: 0, y: 0, rgb: [3.0, 3.0, 3.0] },
+        ];
+        let mut reversed = film.clone();
+        film.add_splats(&splats);
+        for s in splats.iter().rev() {
+            reversed.add_splats(std::slice::from_ref(s));
+        }
+        for f in [&mut film, &mut reversed] {
+            f.count_light_paths(4);
+            f.add_splats(&[
+                Splat { x: 3, y: 0, rgb: [1.0; 3] },
+                Splat { x: 0, y: 1, rgb: [f32::NAN, 0.0, 0.0] },
+                Splat { x: 0, y: 1, rgb: [MAX_SAMPLE_MAGNITUDE, 0.0, 0.0] },
+            ]);
+        }
+        assert_eq!(film, reversed, "order does not matter");
+        assert_eq!(film.non_finite, 3);
+        assert!(film.has_splats() && film.light_paths() == 4);
+        assert_eq!(film.pixel_mean(4), [0.5 + 0.75, 0.5 + 1.0, 0.5 + 0.125]);
+        assert_eq!(film.pixel_mean(0), [0.75; 3]);
+        assert_eq!(film.pixel_mean(1), [0.0; 3]);
+        let rgb = film.mean_rgb();
+        assert_eq!(&rgb[12..15], &[1.25, 1.5, 0.625]);
+        film.clear();
+        assert_eq!((film.pixel_mean(4), film.light_paths()), ([0.0; 3], 0));
     }
 
     #[test]

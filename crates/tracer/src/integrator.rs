@@ -5,10 +5,12 @@
 //! ch. 9; the thesis's "explicit" and "implicit" paths, ch. 5), Russian roulette and
 //! spectral transport at N sampled wavelengths.
 
+use crate::camera::RayGenerator;
 use crate::geometry::{Geometry, HitSurface, InstanceTransform, SceneHit};
 use crate::lights::{LightSample, LightSource, Lights};
 use crate::material::Material;
 use crate::punctual::PunctualLight;
+use crate::render::PixelRect;
 use crate::sampler::Sampler;
 use crate::scene::MeshRef;
 use crate::scene::Scene;
@@ -19,10 +21,13 @@ use shapes::offset::offset_ray_origin;
 
 use spectral::{SampledSpectrum, SampledWavelengths};
 
+pub use crate::film::Splat;
 pub use crate::shading::{ShadingNormals, adapt_shading_normal, shading_normals};
+pub use bdpt::{BDPT_MAX_VERTICES, Bdpt};
 pub use simple::{AmbientOcclusion, DirectLighting};
 pub use whitted::{WHITTED_DEFAULT_DEPTH, Whitted};
 
+mod bdpt;
 mod simple;
 mod whitted;
 
@@ -116,6 +121,40 @@ pub trait Integrator: Send + Sync + 'static {
             s.radiance = self.radiance(view, s.ray, &mut s.wl, settings, &mut s.sampler, counters);
         }
     }
+
+    /// Whether the integrator also adds light to pixels other than its samples' own (it
+    /// traces paths from the lights to the camera). A backend then runs
+    /// [`Integrator::radiance_block_splatting`] with the film in view
+    /// ([`SceneView::with_film`]), adds the splats to its [`crate::Film`] and counts one
+    /// light path per camera sample; one that cannot refuses the integrator.
+    fn splats(&self) -> bool {
+        false
+    }
+
+    /// [`Integrator::radiance_block`], pushing contributions to other pixels onto
+    /// `splats` (in linear sRGB, to be divided by the number of light paths traced over
+    /// the image). The default splats nothing.
+    fn radiance_block_splatting<const N: usize, S: Sampler>(
+        &self,
+        view: &SceneView,
+        settings: &PathSettings,
+        block: &mut [CameraSample<N, S>],
+        counters: &mut PathCounters,
+        splats: &mut Vec<Splat>,
+    ) {
+        let _ = splats;
+        self.radiance_block(view, settings, block, counters);
+    }
+}
+
+/// The camera and the part of the image being rendered, for integrators that connect
+/// paths to the camera.
+#[derive(Clone, Copy, Debug)]
+pub struct FilmView {
+    /// The camera's rays for this image size.
+    pub rays: RayGenerator,
+    /// The pixels sampled in this pass (splats elsewhere are dropped).
+    pub region: PixelRect,
 }
 
 /// Unidirectional path tracing with next-event estimation and MIS (see the module
@@ -136,6 +175,8 @@ pub struct SceneView<'a> {
     /// Whether any material has cut-outs or transparency: rays then pass through
     /// surfaces where its alpha says so (looked up once; scenes without pay nothing).
     cutouts: bool,
+    /// The camera and image, where the backend gives them.
+    film: Option<FilmView>,
 }
 
 /// Surface data at a hit.
@@ -168,7 +209,19 @@ impl<'a> SceneView<'a> {
     pub fn new(scene: &'a Scene, geometry: &'a Geometry, lights: &'a Lights) -> Self {
         let dispersive = scene.materials.iter().any(|m| m.is_dispersive());
         let cutouts = scene.materials.iter().any(|m| m.alpha().is_some());
-        Self { scene, geometry, lights, dispersive, cutouts }
+        Self { scene, geometry, lights, dispersive, cutouts, film: None }
+    }
+
+    /// This view with the camera and the image region being rendered (for integrators
+    /// that trace paths to the camera).
+    pub fn with_film(mut self, rays: RayGenerator, region: PixelRect) -> Self {
+        self.film = Some(FilmView { rays, region });
+        self
+    }
+
+    /// The camera and image region, if the backend gave them.
+    pub fn film(&self) -> Option<&FilmView> {
+        self.film.as_ref()
     }
 
     /// Whether any of the scene's materials disperses light.
@@ -378,7 +431,7 @@ impl<'a> SceneView<'a> {
     }
 
     #[inline]
-    fn material(&self, prim: u32) -> &Material {
+    fn material(&self, prim: u32) -> &'a Material {
         let scene = self.scene;
         let id = match scene.material_ids.get(prim as usize) {
             Some(&m) => m,

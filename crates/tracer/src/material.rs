@@ -225,4 +225,11 @@ impl<const N: usize> Bsdf<N> for MaterialBsdf<'_, N> {
             Self::Custom(b) => b.sample(wo, uc, u),
         }
     }
+    #[inline]
+    fn eta(&self) -> f32 {
+        match self {
+            Self::Builtin(b) => b.eta(),
+            Self::Custom(b) => b.eta(),
+        }
+    }
 }

@@ -122,6 +122,9 @@ impl<const N: usize> Dielectric<N> {
 }
 
 impl<const N: usize> Bsdf<N> for Dielectric<N> {
+    fn eta(&self) -> f32 {
+        self.eta
+    }
     fn flags(&self) -> ScatterFlags {
         let f = ScatterFlags::REFLECTION | ScatterFlags::TRANSMISSION | ScatterFlags::SPECULAR;
         if self.dispersive { f | ScatterFlags::WAVELENGTH_DEPENDENT } else { f }

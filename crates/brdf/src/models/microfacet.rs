@@ -418,6 +418,9 @@ impl<const N: usize> RoughDielectric<N> {
 }
 
 impl<const N: usize> Bsdf<N> for RoughDielectric<N> {
+    fn eta(&self) -> f32 {
+        self.eta
+    }
     fn flags(&self) -> ScatterFlags {
         ScatterFlags::REFLECTION | ScatterFlags::TRANSMISSION | ScatterFlags::GLOSSY
     }
