@@ -273,7 +273,7 @@ fn pdf_light_to<const N: usize>(view: &SceneView, v: &Vertex<'_, N>, next: &Vert
 }
 
 /// The densities of one vertex that a strategy's weight reads.
-#[derive(Clone, Copy, Default)]
+#[derive(Clone, Copy)]
 struct Densities {
     fwd: f32,
     rev: f32,
@@ -310,37 +310,39 @@ impl<const N: usize> Strategy<'_, '_, N> {
         let qs_minus = (s > 1).then(|| &self.light[s - 2]);
         let pt_minus = (t > 1).then(|| &self.camera[t - 2]);
 
-        let mut cam = [Densities::default(); BDPT_MAX_VERTICES];
-        let mut lig = [Densities::default(); BDPT_MAX_VERTICES];
-        for (d, v) in cam.iter_mut().zip(&self.camera[..t]) {
-            *d = Densities { fwd: v.pdf_fwd, rev: v.pdf_rev, delta: v.delta };
-        }
-        for (i, d) in lig.iter_mut().enumerate().take(s) {
-            let v = if i == s - 1 { qs.expect("s > 0") } else { &self.light[i] };
-            *d = Densities { fwd: v.pdf_fwd, rev: v.pdf_rev, delta: v.delta };
-        }
-        // The connection's end points as this strategy sees them: connectible, with the
-        // densities of being reached from the other subpath's side.
-        cam[t - 1].delta = false;
-        match qs {
-            Some(qs) => {
-                cam[t - 1].rev = pdf_to(view, qs, qs_minus.map(|v| v.p), pt);
-                if let Some(pm) = pt_minus {
-                    cam[t - 2].rev = pdf_to(view, pt, Some(qs.p), pm);
+        // The densities of the connection's end points and their neighbours as this
+        // strategy sees them (the end points connectible, reached from the other side);
+        // every other vertex's as its subpath stored them.
+        let (pt_rev, pt_minus_rev, qs_rev, qs_minus_rev) = match qs {
+            Some(qs) => (
+                pdf_to(view, qs, qs_minus.map(|v| v.p), pt),
+                pt_minus.map(|pm| pdf_to(view, pt, Some(qs.p), pm)),
+                pdf_to(view, pt, pt_minus.map(|v| v.p), qs),
+                qs_minus.map(|qm| pdf_to(view, qs, Some(pt.p), qm)),
+            ),
+            None => (pt.origin_pdf, pt_minus.map(|pm| pdf_light_to(view, pt, pm)), 0.0, None),
+        };
+        let cam = |i: usize| -> Densities {
+            let v = &self.camera[i];
+            match t - 1 - i {
+                0 => Densities { fwd: v.pdf_fwd, rev: pt_rev, delta: false },
+                1 => Densities { fwd: v.pdf_fwd, rev: pt_minus_rev.unwrap_or(v.pdf_rev), delta: v.delta },
+                _ => Densities { fwd: v.pdf_fwd, rev: v.pdf_rev, delta: v.delta },
+            }
+        };
+        let lig = |i: usize| -> Densities {
+            match s - 1 - i {
+                0 => Densities { fwd: qs.map_or(0.0, |q| q.pdf_fwd), rev: qs_rev, delta: false },
+                1 => {
+                    let v = &self.light[i];
+                    Densities { fwd: v.pdf_fwd, rev: qs_minus_rev.unwrap_or(v.pdf_rev), delta: v.delta }
                 }
-                lig[s - 1].delta = false;
-                lig[s - 1].rev = pdf_to(view, pt, pt_minus.map(|v| v.p), qs);
-                if let Some(qm) = qs_minus {
-                    lig[s - 2].rev = pdf_to(view, qs, Some(pt.p), qm);
+                _ => {
+                    let v = &self.light[i];
+                    Densities { fwd: v.pdf_fwd, rev: v.pdf_rev, delta: v.delta }
                 }
             }
-            None => {
-                cam[t - 1].rev = pt.origin_pdf;
-                if let Some(pm) = pt_minus {
-                    cam[t - 2].rev = pdf_light_to(view, pt, pm);
-                }
-            }
-        }
+        };
         // Whether the light subpath starts on a point or spot light (the camera path
         // cannot hit one).
         let light0_delta = match s {
@@ -351,17 +353,21 @@ impl<const N: usize> Strategy<'_, '_, N> {
 
         let mut sum = 0.0f32;
         let mut ratio = 1.0f32;
+        let mut here = cam(t - 1);
         for i in (1..t).rev() {
-            ratio *= remap0(cam[i].rev) / remap0(cam[i].fwd);
-            if !cam[i].delta && !cam[i - 1].delta && (i > 1 || self.light_tracing) {
+            let before = cam(i - 1);
+            ratio *= remap0(here.rev) / remap0(here.fwd);
+            if !here.delta && !before.delta && (i > 1 || self.light_tracing) {
                 sum += ratio * ratio;
             }
+            here = before;
         }
         ratio = 1.0;
         for i in (0..s).rev() {
-            ratio *= remap0(lig[i].rev) / remap0(lig[i].fwd);
-            let delta_before = if i > 0 { lig[i - 1].delta } else { light0_delta };
-            if !lig[i].delta && !delta_before {
+            let here = lig(i);
+            ratio *= remap0(here.rev) / remap0(here.fwd);
+            let delta_before = if i > 0 { lig(i - 1).delta } else { light0_delta };
+            if !here.delta && !delta_before {
                 sum += ratio * ratio;
             }
         }
