@@ -864,13 +864,20 @@ fn report(output: &Path, stats: &RenderStats, caps: &Capabilities) {
         stats.non_finite
     );
     if stats.truncated > 0 {
-        eprintln!(
-            "warning: {} paths reached the {} backend's cap of {} bounces and were cut short (a bias; \
-             --backend cpu has no cap)",
-            stats.truncated,
-            caps.backend,
-            caps.max_bounces.map_or("?".into(), |c| c.to_string())
-        );
+        match caps.max_bounces {
+            Some(cap) => eprintln!(
+                "warning: {} paths reached the {} backend's cap of {cap} bounces and were cut short (a bias; \
+                 --backend cpu has no cap)",
+                stats.truncated, caps.backend,
+            ),
+            // The backend has none: the integrator's own (bdpt's subpaths).
+            None => eprintln!(
+                "warning: {} paths reached the {} integrator's cap of {} bounces and were cut short (a bias)",
+                stats.truncated,
+                caps.integrator,
+                tracer::integrator::BDPT_MAX_VERTICES - 2
+            ),
+        }
     }
 }
 
