@@ -104,7 +104,7 @@ pub fn preset(name: &str) -> Option<Vec<Config>> {
     Some(match name {
         "spectral" => each(|c| &mut c.spectral, &["hero", "bins40", "rgb"]),
         "samplers" => each(|c| &mut c.sampler, &["zsobol", "sobol", "independent"]),
-        "integrators" => each(|c| &mut c.integrator, &["path", "bdpt", "direct", "whitted"]),
+        "integrators" => each(|c| &mut c.integrator, &["path", "bdpt", "atlas", "direct", "whitted"]),
         "triangle-tests" => each(|c| &mut c.triangle_test, &["watertight", "moller-trumbore"]),
         "bvh-widths" => each(|c| &mut c.bvh_width, &["4", "8"]),
         _ => return None,

@@ -1,5 +1,6 @@
 //! `spt`: the spectral path tracer's command-line tool.
 
+mod atlas_table;
 mod bvh_table;
 mod compare;
 mod light_arg;
@@ -64,6 +65,9 @@ enum Command {
     /// Print what a scene holds: geometry counts, materials by model, lights, the
     /// environment, the memory its arrays take and its bounds.
     Info(InfoArgs),
+    /// Build the atlas integrator's texture atlas of a scene and time its gather for
+    /// sample counts × atlas resolutions (the atlas thesis's table 1); write its images.
+    Atlas(atlas_table::AtlasArgs),
 }
 
 #[derive(Args)]
@@ -378,6 +382,11 @@ struct SceneArgs {
     /// Maximum number of bounces; 0 = unbounded (Russian roulette only).
     #[arg(long, default_value_t = 0)]
     max_depth: u32,
+    /// Maximum number of diffuse or glossy bounces (mirrors and glass do not count); 0 =
+    /// no limit. 2 is direct light plus one diffuse bounce, what --integrator atlas
+    /// approximates (CPU path tracer).
+    #[arg(long, default_value_t = 0)]
+    max_diffuse_depth: u32,
     /// Bounces before Russian roulette starts.
     #[arg(long, default_value_t = 3)]
     rr_depth: u32,
@@ -427,13 +436,36 @@ struct SceneArgs {
     /// weighted reflections and refractions, direct light only elsewhere; depth
     /// --max-depth, 8 when unbounded), bdpt (bidirectional path tracing: camera and light
     /// subpaths connected in every way, weighted by MIS, light tracing splatted onto the
-    /// image; for small lights and caustics). direct, ao and whitted are biased by design.
+    /// image; for small lights and caustics), atlas (one bounce of diffuse light gathered
+    /// on a texture atlas of the scene, built once per scene; direct light per pixel).
+    /// direct, ao, whitted and atlas are biased by design.
     #[arg(long, default_value = "path", value_parser = INTEGRATORS)]
     integrator: String,
     /// The ao integrator's reach: occluders farther than this from the surface do not
     /// count (scene units; default: any distance).
     #[arg(long, default_value_t = f32::INFINITY, value_parser = parse_distance)]
     ao_distance: f32,
+    /// The atlas integrator's atlas side in texels (its density is the largest whose
+    /// charts fit; grown if they cannot).
+    #[arg(long, default_value_t = 512)]
+    atlas_resolution: u32,
+    /// The atlas's texels per scene unit instead of --atlas-resolution (0: from it).
+    #[arg(long, default_value_t = 0.0)]
+    atlas_density: f32,
+    /// Points gathered per atlas texel for its bounce of indirect light.
+    #[arg(long, default_value_t = 256)]
+    atlas_samples: u32,
+    /// Whether the gather tests visibility (off: light leaks through walls, as in the
+    /// atlas thesis).
+    #[arg(long, default_value = "on", value_parser = ["on", "off"])]
+    atlas_visibility: String,
+    /// What the atlas lookup does at chart borders: dilate (the gathered light fills the
+    /// gutter) or none (the thesis's dark seams).
+    #[arg(long, default_value = "dilate", value_parser = ["dilate", "none"])]
+    atlas_seams: String,
+    /// Light samples per atlas texel for its direct light.
+    #[arg(long, default_value_t = 16)]
+    atlas_direct_samples: u32,
     /// Shading normals: adapted (bent where they disagree with the geometry),
     /// face-forward (the thesis's workaround) or geometric (flat shading).
     #[arg(long, default_value = "adapted", value_parser = parse_shading_normals)]
@@ -749,6 +781,7 @@ fn settings(
             rr_depth: args.rr_depth,
             specular_extension: args.extension,
             shading_normals: args.shading_normals,
+            max_diffuse_depth: args.max_diffuse_depth,
         },
         camera,
         crop: None,
@@ -766,7 +799,7 @@ fn best_sampler(caps: &Capabilities) -> SamplerKind {
 const BACKENDS: [&str; 2] = ["cpu", "gpu"];
 
 /// The integrators `--integrator` accepts.
-const INTEGRATORS: [&str; 5] = ["path", "direct", "ao", "whitted", "bdpt"];
+const INTEGRATORS: [&str; 6] = ["path", "direct", "ao", "whitted", "bdpt", "atlas"];
 
 fn parse_distance(s: &str) -> Result<f32, String> {
     match s.trim().parse::<f32>() {
@@ -784,15 +817,7 @@ fn prepare(
     mode: SpectralMode,
     default_sampler: fn(&Capabilities) -> SamplerKind,
 ) -> Result<(Box<dyn PreparedScene>, RenderSettings)> {
-    let mut scene = load_scene_with(&args.scene, args.camera.as_deref(), args.spec.as_deref(), &args.sets)?;
-    if scene.triangles.is_empty() && scene.shapes.is_empty() && scene.instances.is_empty() {
-        bail!("{}: the scene has no geometry", args.scene.display());
-    }
-    scene.punctual_lights.extend(args.lights.iter().cloned());
-    if args.no_textures {
-        scene.strip_textures();
-    }
-    apply_sky(&mut scene, &args.sky)?;
+    let scene = loaded_scene(args)?;
     let backend = make_backend(args)?;
     let sampler = args.sampler.unwrap_or_else(|| default_sampler(&backend.capabilities()));
     let settings = settings(args, spp, mode, sampler, &scene)?;
@@ -804,9 +829,39 @@ fn prepare(
     Ok((prepared, settings))
 }
 
+/// The scene `args` names, with its extra lights, textures stripped if asked and the
+/// sky applied.
+fn loaded_scene(args: &SceneArgs) -> Result<Scene> {
+    let mut scene = load_scene_with(&args.scene, args.camera.as_deref(), args.spec.as_deref(), &args.sets)?;
+    if scene.triangles.is_empty() && scene.shapes.is_empty() && scene.instances.is_empty() {
+        bail!("{}: the scene has no geometry", args.scene.display());
+    }
+    scene.punctual_lights.extend(args.lights.iter().cloned());
+    if args.no_textures {
+        scene.strip_textures();
+    }
+    apply_sky(&mut scene, &args.sky)?;
+    Ok(scene)
+}
+
 /// The scene-level choices `args` makes.
 fn scene_options(args: &SceneArgs) -> SceneOptions {
     SceneOptions { triangle_test: args.triangle_test, bvh_width: args.bvh_width }
+}
+
+/// The atlas integrator's settings from the command line.
+fn atlas_settings(args: &SceneArgs) -> Result<tracer::AtlasSettings> {
+    let s = tracer::AtlasSettings {
+        density: args.atlas_density,
+        resolution: args.atlas_resolution,
+        samples: args.atlas_samples,
+        visibility: args.atlas_visibility == "on",
+        seams: if args.atlas_seams == "none" { tracer::SeamFix::None } else { tracer::SeamFix::Dilate },
+        direct_samples: args.atlas_direct_samples,
+        seed: args.seed,
+    };
+    s.validate()?;
+    Ok(s)
 }
 
 /// The backend `args` asks for, running the integrator it names; a GPU that cannot be
@@ -818,7 +873,7 @@ fn make_backend(args: &SceneArgs) -> Result<Box<dyn Backend>> {
                 "path" => gpu::kernel::GpuIntegrator::Path,
                 "direct" => gpu::kernel::GpuIntegrator::Direct,
                 "ao" => gpu::kernel::GpuIntegrator::AmbientOcclusion { max_distance: args.ao_distance },
-                "whitted" | "bdpt" => {
+                "whitted" | "bdpt" | "atlas" => {
                     bail!("the gpu backend has no {} integrator yet: use --backend cpu", args.integrator)
                 }
                 other => bail!("unknown integrator '{other}' (known: {})", INTEGRATORS.join(", ")),
@@ -833,6 +888,9 @@ fn make_backend(args: &SceneArgs) -> Result<Box<dyn Backend>> {
             "direct" => Box::new(CpuBackend::with_integrator(args.threads, tracer::DirectLighting)?),
             "whitted" => Box::new(CpuBackend::with_integrator(args.threads, tracer::Whitted)?),
             "bdpt" => Box::new(CpuBackend::with_integrator(args.threads, tracer::Bdpt)?),
+            "atlas" => {
+                Box::new(CpuBackend::with_integrator(args.threads, tracer::AtlasGi::new(atlas_settings(args)?))?)
+            }
             "ao" => {
                 Box::new(CpuBackend::with_integrator(args.threads, tracer::AmbientOcclusion::new(args.ao_distance))?)
             }
@@ -920,7 +978,10 @@ fn run_render(args: RenderArgs) -> Result<()> {
         stats.emitters,
         stats.accelerator,
         stats.build.as_secs_f64() * 1e3,
-        stats.compile.map_or(String::new(), |c| format!(", kernel compiled in {:.1} ms", c.as_secs_f64() * 1e3)),
+        stats.compile.map_or(String::new(), |c| format!(", kernel compiled in {:.1} ms", c.as_secs_f64() * 1e3))
+            + &stats
+                .integrator
+                .map_or(String::new(), |c| format!(", integrator prepared in {:.1} ms", c.as_secs_f64() * 1e3)),
         settings.width,
         settings.height,
         settings.spp,
@@ -1050,7 +1111,10 @@ fn run_bench(args: BenchArgs) -> Result<()> {
         prepared.scene().triangles.len(),
         stats.accelerator,
         stats.build.as_secs_f64() * 1e3,
-        stats.compile.map_or(String::new(), |c| format!(", kernel compiled in {:.1} ms", c.as_secs_f64() * 1e3)),
+        stats.compile.map_or(String::new(), |c| format!(", kernel compiled in {:.1} ms", c.as_secs_f64() * 1e3))
+            + &stats
+                .integrator
+                .map_or(String::new(), |c| format!(", integrator prepared in {:.1} ms", c.as_secs_f64() * 1e3)),
         stats.total.as_secs_f64() * 1e3
     );
     if let Some(frames) = args.frames {
@@ -1204,6 +1268,7 @@ fn main() -> ExitCode {
         Command::View(a) => run_view(a).context("view failed"),
         Command::Rays(c) => rays::run(c).context("rays failed"),
         Command::Merge(a) => shards::run_merge(a).context("merge failed"),
+        Command::Atlas(a) => atlas_table::run(a).context("atlas failed"),
         Command::Compare(a) => compare::run(a).context("compare failed"),
         Command::Info(a) => run_info(a).context("info failed"),
     };

@@ -405,13 +405,15 @@ fn integrators_are_chosen_by_name() {
     let dir = temp_dir("integrators");
     let scene = write_scene(&dir, OBJ);
     let mut means = Vec::new();
-    for name in ["path", "direct", "ao", "whitted", "bdpt"] {
+    for name in ["path", "direct", "ao", "whitted", "bdpt", "atlas"] {
         let out = dir.join(format!("{name}.exr"));
         let o = render_small(&scene, (16, 16, 32), &out, &["--integrator", name, "--spectral", "rgb"]);
         assert!(o.status.success(), "{name}: {}", stderr(&o));
         means.push(exr_means(&out)[1]);
     }
-    let (path, direct, ao, whitted, bdpt) = (means[0], means[1], means[2], means[3], means[4]);
+    let (path, direct, ao, whitted, bdpt, atlas) = (means[0], means[1], means[2], means[3], means[4], means[5]);
+    // One bounce of indirect light: more than direct light alone, less than all bounces.
+    assert!(direct < atlas && atlas < path * 1.05, "atlas {atlas} vs direct {direct} and path {path}");
     // Bidirectional path tracing estimates what path tracing does (tests/tests/bdpt.rs
     // tests it pixel by pixel; here the image mean of a tiny render).
     assert!((bdpt / path - 1.0).abs() < 0.1, "bdpt {bdpt} vs path {path}");
@@ -434,6 +436,8 @@ fn integrators_are_chosen_by_name() {
         (vec!["--integrator", "mlt"], "invalid value 'mlt'"),
         (vec!["--integrator", "ao", "--ao-distance=-1"], "positive distance"),
         (vec!["--integrator", "ao", "--ao-distance", "0"], "positive distance"),
+        (vec!["--integrator", "atlas", "--atlas-samples", "0"], "atlas samples 0"),
+        (vec!["--integrator", "atlas", "--atlas-resolution", "4"], "atlas resolution 4"),
     ] {
         let o = render_small(&scene, (4, 4, 1), &out, &extra);
         let msg = stderr(&o);
@@ -450,14 +454,14 @@ fn integrators_are_chosen_by_name() {
             let o = render_small(&scene, (8, 8, 4), &out, &["--integrator", integrator, "--backend", "gpu"]);
             assert!(o.status.success(), "{integrator}: {}", stderr(&o));
         }
-        for integrator in ["whitted", "bdpt"] {
+        for integrator in ["whitted", "bdpt", "atlas"] {
             let o = render_small(&scene, (8, 8, 4), &out, &["--integrator", integrator, "--backend", "gpu"]);
             assert!(!o.status.success() && stderr(&o).contains("use --backend cpu"), "{}", stderr(&o));
         }
     }
 }
 
-/// `spt compare` end to end: a rendered reference, four configurations at 1, 2, 4, 8 spp,
+/// `spt compare` end to end: a rendered reference, five configurations at 1, 2, 4, 8 spp,
 /// a CSV row per render with falling error for the unbiased one, and both charts; a
 /// reference of the wrong size and unknown configurations are refused.
 #[test]
@@ -472,7 +476,7 @@ fn compare_charts_error_against_time() {
     assert!(o.status.success(), "{}", stderr(&o));
     let csv = std::fs::read_to_string(out.join("compare.csv")).unwrap();
     let rows: Vec<Vec<&str>> = csv.lines().skip(1).map(|l| l.split(',').collect()).collect();
-    assert_eq!(rows.len(), 16, "{csv}");
+    assert_eq!(rows.len(), 20, "{csv}");
     let error = |config: &str, spp: &str| -> f64 {
         rows.iter().find(|r| r[0] == config && r[1] == spp).unwrap()[4].parse().unwrap()
     };
@@ -486,7 +490,7 @@ fn compare_charts_error_against_time() {
     assert!(image::open(out.join("compare.png")).is_ok());
     // A convergence strip per configuration (a 16-pixel crop at 1, 2, 4, 8 spp and the
     // reference) and a heat map of its error at the largest budget.
-    for config in ["path", "bdpt", "direct", "whitted"] {
+    for config in ["path", "bdpt", "atlas", "direct", "whitted"] {
         let strip = image::open(out.join(format!("strip-{config}.png"))).unwrap();
         assert_eq!((strip.width(), strip.height()), (5 * 16, 16), "{config}");
         let heat = image::open(out.join(format!("heat-{config}.png"))).unwrap().into_rgb8();
@@ -689,6 +693,37 @@ fn scene_files_render_and_their_errors_name_line_and_column() {
     let o = spt(&["render", bad.to_str().unwrap(), "-o", out.to_str().unwrap()]);
     assert!(!o.status.success(), "{}", stderr(&o));
     assert!(stderr(&o).contains("bad.toml:3:15: ") && stderr(&o).contains("reflectance = 1.7"), "{}", stderr(&o));
+}
+
+/// `spt atlas`: a row per resolution × count with its times, and the atlas's images.
+#[test]
+fn atlas_tables_its_gather_and_writes_its_images() {
+    let dir = temp_dir("atlas");
+    let scene = write_scene(&dir, OBJ);
+    let out = dir.join("img");
+    let o = spt(&[
+        "atlas",
+        scene.to_str().unwrap(),
+        "--counts",
+        "4,8",
+        "--resolutions",
+        "32,48",
+        "--threads",
+        "1",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let table = String::from_utf8_lossy(&o.stdout).to_string();
+    let rows: Vec<&str> = table.lines().filter(|l| !l.starts_with('#') && !l.starts_with("resolution")).collect();
+    assert_eq!(rows.len(), 4, "{table}");
+    assert!(rows[0].trim_start().starts_with("32x32") && rows[3].trim_start().starts_with("48x48"), "{table}");
+    for what in ["normal", "position", "direct", "indirect"] {
+        let img = image::open(out.join(format!("atlas-{what}.png"))).unwrap();
+        assert_eq!((img.width(), img.height()), (48, 48), "{what}");
+    }
+    let o = spt(&["atlas", scene.to_str().unwrap(), "--counts", "0", "--resolutions", "32"]);
+    assert!(!o.status.success() && stderr(&o).contains("atlas samples 0"), "{}", stderr(&o));
 }
 
 #[test]

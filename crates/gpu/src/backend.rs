@@ -147,6 +147,7 @@ pub fn capabilities_for(integrator: GpuIntegrator) -> Capabilities {
         bvh_widths: vec![BvhWidth::Auto, BvhWidth::Two, BvhWidth::Four],
         integrator: integrator.name(),
         max_bounces: Some(MAX_BOUNCES),
+        diffuse_depth: false,
         sample_block: SAMPLES_PER_READBACK,
     }
 }
@@ -556,6 +557,7 @@ impl GpuBackend {
         let stats = PrepareStats {
             build: data.build_time,
             compile: Some(compile_time),
+            integrator: None,
             total: start.elapsed(),
             emitters: data.constants.emitters,
             accelerator: match data.options.nodes {

@@ -59,6 +59,9 @@ pub struct Job {
     pub rr_depth: u32,
     /// Extra specular bounces.
     pub extension: u32,
+    /// The limit on diffuse bounces (0: none; absent in partials written before it).
+    #[serde(default)]
+    pub max_diffuse_depth: u32,
     /// Shading-normal mode.
     pub shading_normals: String,
     /// Ray–triangle test.
@@ -94,6 +97,7 @@ impl Job {
             max_depth: settings.path.max_depth,
             rr_depth: settings.path.rr_depth,
             extension: settings.path.specular_extension,
+            max_diffuse_depth: settings.path.max_diffuse_depth,
             shading_normals: settings.path.shading_normals.name().into(),
             triangle_test: options.triangle_test.name().into(),
             backend: capabilities.backend.into(),

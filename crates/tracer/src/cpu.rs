@@ -74,9 +74,16 @@ impl<I: Integrator> CpuBackend<I> {
         if colour_textures {
             spectral::uplift::uplift_table();
         }
+        // The integrator's own per-scene data (the atlas), on this backend's threads.
+        let integrator_start = Instant::now();
+        let prepared = self.pool.install(|| self.integrator.for_scene(&SceneView::new(&scene, &geometry, &lights)))?;
+        let integrator = prepared.map_or_else(|| Arc::clone(&self.integrator), Arc::new);
+        let integrator_time = integrator_start.elapsed();
         let stats = PrepareStats {
             build,
             compile: None,
+            integrator: (integrator_time > std::time::Duration::ZERO && !Arc::ptr_eq(&integrator, &self.integrator))
+                .then_some(integrator_time),
             total: start.elapsed(),
             emitters: lights.emitter_count(),
             accelerator: geometry.triangles.description(),
@@ -88,7 +95,7 @@ impl<I: Integrator> CpuBackend<I> {
             lights,
             stats,
             pool: Arc::clone(&self.pool),
-            integrator: Arc::clone(&self.integrator),
+            integrator,
         })
     }
 }
@@ -106,6 +113,7 @@ fn cpu_capabilities(integrator: &'static str) -> Capabilities {
         bvh_widths: BvhWidth::CPU.to_vec(),
         integrator,
         max_bounces: None,
+        diffuse_depth: true,
         sample_block: 1,
     }
 }

@@ -23,10 +23,12 @@ use spectral::{SampledSpectrum, SampledWavelengths};
 
 pub use crate::film::Splat;
 pub use crate::shading::{ShadingNormals, adapt_shading_normal, shading_normals};
+pub use atlas::{Atlas, AtlasGi, AtlasSettings, AtlasStats, SeamFix};
 pub use bdpt::{BDPT_MAX_VERTICES, Bdpt};
 pub use simple::{AmbientOcclusion, DirectLighting};
 pub use whitted::{WHITTED_DEFAULT_DEPTH, Whitted};
 
+mod atlas;
 mod bdpt;
 mod simple;
 mod whitted;
@@ -44,11 +46,22 @@ pub struct PathSettings {
     pub specular_extension: u32,
     /// How interpolated shading normals are reconciled with the geometric normal.
     pub shading_normals: ShadingNormals,
+    /// The most non-specular (diffuse or glossy) scattering events a path may have; 0 =
+    /// no such limit. Purely specular bounces (mirrors, glass) do not count: 2 is
+    /// direct light plus one diffuse bounce of indirect light wherever the camera looks,
+    /// also through glass — what the atlas integrator approximates.
+    pub max_diffuse_depth: u32,
 }
 
 impl Default for PathSettings {
     fn default() -> Self {
-        Self { max_depth: 0, rr_depth: 3, specular_extension: 0, shading_normals: ShadingNormals::Adapted }
+        Self {
+            max_depth: 0,
+            rr_depth: 3,
+            specular_extension: 0,
+            shading_normals: ShadingNormals::Adapted,
+            max_diffuse_depth: 0,
+        }
     }
 }
 
@@ -108,6 +121,17 @@ pub trait Integrator: Send + Sync + 'static {
         sampler: &mut S,
         counters: &mut PathCounters,
     ) -> SampledSpectrum<N>;
+
+    /// The integrator prepared for one scene, for integrators that precompute something
+    /// per scene (the atlas): backends call it once when they prepare a scene and run
+    /// what it returns (`None`: this one, unchanged — the default).
+    fn for_scene(&self, view: &SceneView) -> crate::Result<Option<Self>>
+    where
+        Self: Sized,
+    {
+        let _ = view;
+        Ok(None)
+    }
 
     /// Fills in the radiance of every sample of `block`.
     fn radiance_block<const N: usize, S: Sampler>(
@@ -317,6 +341,28 @@ impl<'a> SceneView<'a> {
             }
             _ => Vec2::ZERO,
         }
+    }
+
+    /// Texture coordinates at point `p` on triangle primitive `prim` (zero without any).
+    fn uv_at_point(&self, prim: u32, p: Vec3) -> Vec2 {
+        let (mesh, tri, xf) = self.triangle_source(prim);
+        if mesh.uvs.is_empty() {
+            return Vec2::ZERO;
+        }
+        let t = mesh.triangles[tri as usize];
+        let [a, b, c] = t.map(|i| {
+            let q = Vec3::from_array(mesh.positions[i as usize]);
+            xf.map_or(q, |x| x.to_world.transform_point3(q))
+        });
+        let n = (b - a).cross(c - a);
+        let n2 = n.length_squared();
+        if n2 == 0.0 {
+            return Vec2::from_array(mesh.uvs[t[0] as usize]);
+        }
+        let w1 = (p - a).cross(c - a).dot(n) / n2;
+        let w2 = (b - a).cross(p - a).dot(n) / n2;
+        let [t0, t1, t2] = t.map(|i| Vec2::from_array(mesh.uvs[i as usize]));
+        (1.0 - w1 - w2) * t0 + w1 * t1 + w2 * t2
     }
 
     /// The arrays triangle primitive `prim` lives in, its index there, and the transform
@@ -660,6 +706,25 @@ fn lobe_leaks(
         || (material.is_two_sided() && crosses)
 }
 
+/// Counts a non-specular hit towards `max_diffuse_depth`; true if this hit is one more
+/// than the limit allows (the path ends there, its emission counted). Out of line: only
+/// renders with the limit pay for it.
+#[cold]
+#[inline(never)]
+fn diffuse_limit_reached<const N: usize>(
+    material: &Material,
+    it: &Interaction,
+    wl: &SampledWavelengths<N>,
+    diffuse_bounces: &mut u32,
+    settings: &PathSettings,
+) -> bool {
+    if !material.bsdf_at(it.uv, wl).flags().is_non_specular() {
+        return false;
+    }
+    *diffuse_bounces += 1;
+    *diffuse_bounces > settings.max_diffuse_depth
+}
+
 /// [`PathTracer`]'s estimate.
 fn path_radiance<const N: usize, S: Sampler>(
     view: &SceneView,
@@ -679,6 +744,7 @@ fn path_radiance<const N: usize, S: Sampler>(
     let mut prev_p = ray.origin;
     let mut bounce = 0u32;
     let mut extension_left = settings.specular_extension;
+    let mut diffuse_bounces = 0u32;
     loop {
         counters.rays += 1;
         let Some(hit) = view.intersect(&ray) else {
@@ -722,6 +788,9 @@ fn path_radiance<const N: usize, S: Sampler>(
                 break;
             }
             extension_left -= 1;
+        }
+        if settings.max_diffuse_depth > 0 && diffuse_limit_reached(material, &it, wl, &mut diffuse_bounces, settings) {
+            break;
         }
 
         // Dispersion: from here on the path follows one wavelength (a random lane, moved

@@ -39,7 +39,9 @@ pub use camera::Camera;
 pub use cpu::{CpuBackend, CpuScene};
 pub use film::Film;
 pub use geometry::{Geometry, SceneShape, ShapeKind};
-pub use integrator::{AmbientOcclusion, Bdpt, DirectLighting, Integrator, PathTracer, Whitted};
+pub use integrator::{
+    AmbientOcclusion, AtlasGi, AtlasSettings, Bdpt, DirectLighting, Integrator, PathTracer, SeamFix, Whitted,
+};
 pub use material::Material;
 pub use punctual::PunctualLight;
 pub use render::{Backend, PreparedScene, RenderSettings, RenderStats, SceneOptions, render};

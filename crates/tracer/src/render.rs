@@ -185,6 +185,8 @@ pub struct Capabilities {
     /// that reach it with an unbounded `max_depth` are counted as truncated); `None` if
     /// paths end only by the depth limit and Russian roulette.
     pub max_bounces: Option<u32>,
+    /// Whether it limits non-specular bounces (`PathSettings::max_diffuse_depth`).
+    pub diffuse_depth: bool,
     /// Passes that split a render at multiples of this sample index give the same film,
     /// bit for bit, as one pass (1 on the CPU; the GPU sums up to this many samples in f32
     /// before they reach the film's exact sums).
@@ -285,6 +287,12 @@ impl Capabilities {
                 format!("use --sampler {}, or --backend cpu", known.join(" or ")),
             ));
         }
+        if settings.path.max_diffuse_depth > 0 && !self.diffuse_depth {
+            return Err(unsupported(
+                "a limit on diffuse bounces (--max-diffuse-depth)".into(),
+                "use --max-depth, or --backend cpu".into(),
+            ));
+        }
         if let Some(cap) = self.max_bounces {
             let depth = settings.path.max_depth.saturating_add(settings.path.specular_extension);
             if settings.path.max_depth > 0 && depth > cap {
@@ -305,6 +313,8 @@ pub struct PrepareStats {
     pub build: Duration,
     /// Compiling kernels, where the backend compiles any.
     pub compile: Option<Duration>,
+    /// Preparing the integrator's per-scene data (the atlas), where it has any.
+    pub integrator: Option<Duration>,
     /// All of the preparation.
     pub total: Duration,
     /// Primitives that emit light.
