@@ -1,7 +1,10 @@
 //! `spt compare`: render a scene under several configurations at growing sample counts,
 //! measure each image's error against a reference, and chart error against time.
 
-use crate::{SceneArgs, best_sampler, parse_bvh_width, parse_sampler, parse_triangle_test, prepare};
+use crate::{
+    SceneArgs, best_sampler, parse_bvh_builder, parse_bvh_width, parse_sampler, parse_shading_normals,
+    parse_triangle_test, prepare,
+};
 use anyhow::{Context, Result, anyhow, bail};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
@@ -17,9 +20,11 @@ pub struct CompareArgs {
     #[command(flatten)]
     scene: SceneArgs,
     /// The configurations: a preset (spectral, samplers, integrators, triangle-tests,
-    /// bvh-widths) or a JSON file: a list of objects with "name" and any of
-    /// "integrator", "spectral", "sampler", "triangle_test", "bvh_width", "backend"
-    /// (unset fields take the command line's values).
+    /// bvh-widths, bvh-builders, shading-normals) or a JSON file: a list of objects with
+    /// "name" and any of "integrator", "spectral", "sampler", "triangle_test",
+    /// "bvh_width", "bvh_builder", "shading_normals", "backend", "max_depth" and "set" (a
+    /// list of KEY=VALUE changes to a .toml scene, e.g. a material's parameter: BSDF
+    /// variants); unset fields take the command line's values.
     #[arg(long, default_value = "samplers")]
     configs: String,
     /// The reference image (linear EXR of the same size), e.g. a Mitsuba render.
@@ -32,6 +37,15 @@ pub struct CompareArgs {
     /// The largest sample count; each configuration renders at 1, 2, 4, … up to it.
     #[arg(long, default_value_t = 64)]
     spp_max: u32,
+    /// A time budget instead: each configuration doubles its sample count until a render
+    /// takes at least this many seconds (or reaches --spp-max).
+    #[arg(long)]
+    time_max: Option<f64>,
+    /// Chart and rate each render by its preparation (BVH build, atlas, kernel compile)
+    /// plus its sampling time, not its sampling time alone: what a builder or an
+    /// integrator's precomputation costs end to end.
+    #[arg(long)]
+    end_to_end: bool,
     /// Directory for compare.csv, compare.png and compare.svg.
     #[arg(short, long, default_value = "compare")]
     output: PathBuf,
@@ -47,7 +61,12 @@ pub struct Config {
     sampler: Option<String>,
     triangle_test: Option<String>,
     bvh_width: Option<String>,
+    bvh_builder: Option<String>,
+    shading_normals: Option<String>,
     backend: Option<String>,
+    max_depth: Option<u32>,
+    #[serde(default)]
+    set: Vec<String>,
 }
 
 impl Config {
@@ -81,6 +100,16 @@ impl Config {
         if let Some(w) = &self.bvh_width {
             args.bvh_width = parse_bvh_width(w).map_err(|e| named("bvh_width", e))?;
         }
+        if let Some(b) = &self.bvh_builder {
+            args.bvh_builder = Some(parse_bvh_builder(b).map_err(|e| named("bvh_builder", e))?);
+        }
+        if let Some(n) = &self.shading_normals {
+            args.shading_normals = parse_shading_normals(n).map_err(|e| named("shading_normals", e))?;
+        }
+        if let Some(d) = self.max_depth {
+            args.max_depth = d;
+        }
+        args.sets.extend(self.set.iter().cloned());
         let mode = match &self.spectral {
             Some(m) => m.parse().map_err(|e: String| named("spectral", e))?,
             None => mode,
@@ -107,11 +136,13 @@ pub fn preset(name: &str) -> Option<Vec<Config>> {
         "integrators" => each(|c| &mut c.integrator, &["path", "bdpt", "atlas", "direct", "whitted"]),
         "triangle-tests" => each(|c| &mut c.triangle_test, &["watertight", "moller-trumbore"]),
         "bvh-widths" => each(|c| &mut c.bvh_width, &["4", "8"]),
+        "bvh-builders" => each(|c| &mut c.bvh_builder, &["binned_sah", "sweep_sah", "midpoint", "hybrid"]),
+        "shading-normals" => each(|c| &mut c.shading_normals, &["adapted", "face-forward", "geometric"]),
         _ => return None,
     })
 }
 
-const PRESETS: &str = "spectral, samplers, integrators, triangle-tests, bvh-widths";
+const PRESETS: &str = "spectral, samplers, integrators, triangle-tests, bvh-widths, bvh-builders, shading-normals";
 
 fn configs(spec: &str) -> Result<Vec<Config>> {
     if let Some(c) = preset(spec) {
@@ -147,6 +178,14 @@ pub struct Measurement {
     pub ssim: f64,
 }
 
+impl Measurement {
+    /// The seconds a render is rated by: sampling alone, or with the configuration's
+    /// preparation (`--end-to-end`).
+    fn seconds(&self, end_to_end: bool) -> f64 {
+        if end_to_end { self.render_s + self.prepare_s } else { self.render_s }
+    }
+}
+
 /// `spt compare`.
 pub fn run(args: CompareArgs) -> Result<()> {
     if args.spp_max == 0 {
@@ -172,8 +211,14 @@ pub fn run(args: CompareArgs) -> Result<()> {
     if (rw, rh) != (w, h) {
         bail!("{}: the reference is {rw}×{rh}, the renders {w}×{h}", reference.display());
     }
+    if let Some(t) = args.time_max
+        && !(t > 0.0 && t.is_finite())
+    {
+        bail!("--time-max {t} must be a positive number of seconds");
+    }
     let budgets: Vec<u32> =
         std::iter::successors(Some(1u32), |&n| (n < args.spp_max).then(|| (2 * n).min(args.spp_max))).collect();
+    // With a time budget the bar counts the sample-count budgets (its end is unknown).
     let total: u64 = configs.len() as u64 * budgets.iter().map(|&n| n as u64).sum::<u64>() * w as u64 * h as u64;
     let bar = ProgressBar::new(total)
         .with_style(ProgressStyle::with_template("{bar:40} {percent:>3}% {msg} ETA {eta}").expect("static template"));
@@ -185,13 +230,14 @@ pub fn run(args: CompareArgs) -> Result<()> {
         let (prepared, base) = prepare(&scene_args, args.spp_max, mode, best_sampler)
             .with_context(|| format!("configuration '{}'", config.name))?;
         let prepare_s = prepared.stats().total.as_secs_f64();
-        for &spp in &budgets {
+        for (k, &spp) in budgets.iter().enumerate() {
             bar.set_message(format!("{} at {spp} spp", config.name));
             let settings = tracer::RenderSettings { spp, ..base.clone() };
             let (film, stats) = tracer::render(prepared.as_ref(), &settings, &|n| bar.inc(n))?;
             let rgb = film.mean_rgb();
             strip.push(crop.cut(&rgb, w));
-            if spp == *budgets.last().expect("at least one budget") {
+            let out_of_time = args.time_max.is_some_and(|t| stats.wall.as_secs_f64() >= t);
+            if k + 1 == budgets.len() || out_of_time {
                 let heat = heat_map(&rgb, &reference_rgb);
                 let path = args.output.join(format!("heat-{}.png", file_name(&config.name)));
                 image::save_buffer(&path, &heat, w, h, image::ColorType::Rgb8)
@@ -205,6 +251,9 @@ pub fn run(args: CompareArgs) -> Result<()> {
                 rel_mse: rel_mse(&rgb, &reference_rgb),
                 ssim: ssim(&luminance_srgb(&rgb), &luminance_srgb(&reference_rgb), w as usize, h as usize),
             });
+            if out_of_time {
+                break;
+            }
         }
         strip.push(crop.cut(&reference_rgb, w));
         let path = args.output.join(format!("strip-{}.png", file_name(&config.name)));
@@ -212,14 +261,15 @@ pub fn run(args: CompareArgs) -> Result<()> {
     }
     bar.finish_and_clear();
     let csv_path = args.output.join("compare.csv");
-    std::fs::write(&csv_path, csv(&rows)).with_context(|| format!("writing {}", csv_path.display()))?;
+    std::fs::write(&csv_path, csv(&rows, args.end_to_end))
+        .with_context(|| format!("writing {}", csv_path.display()))?;
     let title = format!("{} — relMSE against {}", args.scene.scene.display(), reference.display());
     // Both backends lay text out with the registered font.
     if crate::stability::load_font() {
-        chart(&args.output.join("compare.svg"), &title, &rows, false)?;
-        chart(&args.output.join("compare.png"), &title, &rows, true)?;
+        chart(&args.output.join("compare.svg"), &title, &rows, false, args.end_to_end)?;
+        chart(&args.output.join("compare.png"), &title, &rows, true, args.end_to_end)?;
     }
-    print!("{}", table(&rows));
+    print!("{}", table(&rows, args.end_to_end));
     eprintln!("wrote {} and its charts", csv_path.display());
     Ok(())
 }
@@ -369,7 +419,7 @@ fn config_names(rows: &[Measurement]) -> Vec<&str> {
     names
 }
 
-fn csv(rows: &[Measurement]) -> String {
+fn csv(rows: &[Measurement], end_to_end: bool) -> String {
     let mut out = String::from("config,spp,render_s,prepare_s,rel_mse,ssim,efficiency\n");
     for r in rows {
         let quoted = if r.config.contains([',', '"']) {
@@ -384,7 +434,7 @@ fn csv(rows: &[Measurement]) -> String {
             r.prepare_s,
             r.rel_mse,
             r.ssim,
-            1.0 / (r.rel_mse * r.render_s).max(1e-300)
+            1.0 / (r.rel_mse * r.seconds(end_to_end)).max(1e-300)
         );
     }
     out
@@ -392,14 +442,19 @@ fn csv(rows: &[Measurement]) -> String {
 
 /// A table: per configuration, the largest budget's figures and its efficiency
 /// 1 / (relMSE · seconds) relative to the first configuration's.
-fn table(rows: &[Measurement]) -> String {
+fn table(rows: &[Measurement], end_to_end: bool) -> String {
     let names = config_names(rows);
     let last = |name: &str| rows.iter().filter(|r| r.config == name).max_by_key(|r| r.spp);
-    let efficiency = |r: &Measurement| 1.0 / (r.rel_mse * r.render_s).max(1e-300);
+    let efficiency = |r: &Measurement| 1.0 / (r.rel_mse * r.seconds(end_to_end)).max(1e-300);
     let first = names.first().and_then(|n| last(n)).map(efficiency).unwrap_or(1.0);
     let mut out = format!(
         "{:<20} {:>6} {:>10} {:>12} {:>8} {:>12}\n",
-        "config", "spp", "render_s", "relMSE", "SSIM", "efficiency"
+        "config",
+        "spp",
+        if end_to_end { "total_s" } else { "render_s" },
+        "relMSE",
+        "SSIM",
+        "efficiency"
     );
     for name in names {
         if let Some(r) = last(name) {
@@ -407,7 +462,7 @@ fn table(rows: &[Measurement]) -> String {
                 "{:<20} {:>6} {:>10.3} {:>12.5e} {:>8.4} {:>11.2}×\n",
                 name,
                 r.spp,
-                r.render_s,
+                r.seconds(end_to_end),
                 r.rel_mse,
                 r.ssim,
                 efficiency(r) / first
@@ -420,13 +475,13 @@ fn table(rows: &[Measurement]) -> String {
 /// relMSE against render time, log–log, one line per configuration, with the 1/t slope
 /// of an unbiased estimator through the first configuration's first point as a guide
 /// (a biased method's line flattens away from it).
-fn chart(path: &Path, title: &str, rows: &[Measurement], bitmap: bool) -> Result<()> {
+fn chart(path: &Path, title: &str, rows: &[Measurement], bitmap: bool, end_to_end: bool) -> Result<()> {
     if bitmap {
         let root = BitMapBackend::new(path, (1000, 680)).into_drawing_area();
-        draw_chart(root, title, rows)
+        draw_chart(root, title, rows, end_to_end)
     } else {
         let root = SVGBackend::new(path, (1000, 680)).into_drawing_area();
-        draw_chart(root, title, rows)
+        draw_chart(root, title, rows, end_to_end)
     }
 }
 
@@ -434,12 +489,14 @@ fn draw_chart<DB: DrawingBackend>(
     root: DrawingArea<DB, plotters::coord::Shift>,
     title: &str,
     rows: &[Measurement],
+    end_to_end: bool,
 ) -> Result<()>
 where
     DB::ErrorType: 'static,
 {
     let err = |e: &dyn std::fmt::Display| anyhow!("drawing the chart: {e}");
-    let points: Vec<(f64, f64)> = rows.iter().map(|r| (r.render_s.max(1e-6), r.rel_mse.max(1e-12))).collect();
+    let points: Vec<(f64, f64)> =
+        rows.iter().map(|r| (r.seconds(end_to_end).max(1e-6), r.rel_mse.max(1e-12))).collect();
     let (x0, x1) = points.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), p| (lo.min(p.0), hi.max(p.0)));
     let (y0, y1) = points.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), p| (lo.min(p.1), hi.max(p.1)));
     if !(x0.is_finite() && y0.is_finite()) {
@@ -455,7 +512,7 @@ where
         .map_err(|e| err(&e))?;
     chart
         .configure_mesh()
-        .x_desc("render time, s")
+        .x_desc(if end_to_end { "preparation + render time, s" } else { "render time, s" })
         .y_desc("relMSE")
         .x_labels(8)
         .y_labels(8)
@@ -586,10 +643,14 @@ mod tests {
             ssim: 0.9,
         };
         let rows = [m("a", 1, 1.0, 0.4), m("a", 2, 2.0, 0.2), m("b, quoted", 1, 1.0, 0.1)];
-        let text = csv(&rows);
+        let text = csv(&rows, false);
         assert_eq!(text.lines().count(), 4);
         assert!(text.contains("\"b, quoted\""));
         // b reaches 4× the efficiency of a at its largest budget: 1/(0.1·1) against 1/(0.2·2).
-        assert!(table(&rows).contains("4.00×"), "{}", table(&rows));
+        assert!(table(&rows, false).contains("4.00×"), "{}", table(&rows, false));
+        // End to end, each render also pays its preparation: 1/(0.1·1.01) against 1/(0.2·2.01).
+        let slow_prepare = [m("a", 2, 2.0, 0.2), Measurement { prepare_s: 1.0, ..m("b", 1, 1.0, 0.1) }];
+        assert!(table(&slow_prepare, true).contains("2.01×"), "{}", table(&slow_prepare, true));
+        assert!(table(&slow_prepare, true).contains("total_s"));
     }
 }

@@ -418,6 +418,11 @@ struct SceneArgs {
     /// 4-wide nodes on the GPU) or 8 (AVX2, CPU only).
     #[arg(long, default_value = "auto", value_parser = parse_bvh_width)]
     bvh_width: BvhWidth,
+    /// How the triangle BVH's nodes are split: binned_sah (the default), sweep_sah (full
+    /// sweep, the thesis's Algorithm 8.2), midpoint, or hybrid (midpoint above 1000
+    /// triangles, sweep below); CPU only.
+    #[arg(long, value_parser = parse_bvh_builder)]
+    bvh_builder: Option<bvh::SplitMethod>,
     /// Where to trace: cpu (rayon, every feature) or gpu (wgpu compute; hero mode, triangle
     /// meshes, registered BSDFs). A request outside a backend's capabilities is refused
     /// before any work, with the way out.
@@ -588,6 +593,13 @@ fn parse_bvh_width(s: &str) -> Result<BvhWidth, String> {
         .into_iter()
         .find(|w| w.name() == s)
         .ok_or_else(|| format!("unknown BVH width '{s}' (known: auto, 2, 4, 8)"))
+}
+
+fn parse_bvh_builder(s: &str) -> Result<bvh::SplitMethod, String> {
+    bvh::SplitMethod::ALL.into_iter().find(|m| m.name() == s).ok_or_else(|| {
+        let known: Vec<&str> = bvh::SplitMethod::ALL.iter().map(|m| m.name()).collect();
+        format!("unknown BVH builder '{s}' (known: {})", known.join(", "))
+    })
 }
 
 fn parse_sampler(s: &str) -> Result<SamplerKind, String> {
@@ -846,7 +858,7 @@ fn loaded_scene(args: &SceneArgs) -> Result<Scene> {
 
 /// The scene-level choices `args` makes.
 fn scene_options(args: &SceneArgs) -> SceneOptions {
-    SceneOptions { triangle_test: args.triangle_test, bvh_width: args.bvh_width }
+    SceneOptions { triangle_test: args.triangle_test, bvh_width: args.bvh_width, bvh_builder: args.bvh_builder }
 }
 
 /// The atlas integrator's settings from the command line.

@@ -458,6 +458,10 @@ fn integrators_are_chosen_by_name() {
             let o = render_small(&scene, (8, 8, 4), &out, &["--integrator", integrator, "--backend", "gpu"]);
             assert!(!o.status.success() && stderr(&o).contains("use --backend cpu"), "{}", stderr(&o));
         }
+        for extra in [["--bvh-builder", "midpoint"], ["--max-diffuse-depth", "2"]] {
+            let o = render_small(&scene, (8, 8, 4), &out, &[&["--backend", "gpu"][..], &extra].concat());
+            assert!(!o.status.success() && stderr(&o).contains("--backend cpu"), "{extra:?}: {}", stderr(&o));
+        }
     }
 }
 
@@ -693,6 +697,66 @@ fn scene_files_render_and_their_errors_name_line_and_column() {
     let o = spt(&["render", bad.to_str().unwrap(), "-o", out.to_str().unwrap()]);
     assert!(!o.status.success(), "{}", stderr(&o));
     assert!(stderr(&o).contains("bad.toml:3:15: ") && stderr(&o).contains("reflectance = 1.7"), "{}", stderr(&o));
+}
+
+/// `spt compare`'s other axes: BVH builders under a time budget (each configuration
+/// stops after the first render that takes the budget), and a configuration file that
+/// changes a material of a scene file (a BSDF variant), the shading normals and the depth.
+#[test]
+fn compare_takes_time_budgets_builders_and_scene_changes() {
+    let dir = temp_dir("compare-axes");
+    let scene = write_scene(&dir, OBJ);
+    let out = dir.join("builders");
+    let size = ["--width", "16", "--height", "12", "--reference-spp", "64"];
+    let o = spt(&[
+        &["compare", scene.to_str().unwrap()][..],
+        &size,
+        &["--configs", "bvh-builders", "--spp-max", "8", "--time-max", "1e-9", "--end-to-end"],
+        &["-o", out.to_str().unwrap()],
+    ]
+    .concat());
+    assert!(o.status.success(), "{}", stderr(&o));
+    let csv = std::fs::read_to_string(out.join("compare.csv")).unwrap();
+    let configs: Vec<&str> = csv.lines().skip(1).map(|l| l.split(',').next().unwrap()).collect();
+    assert_eq!(configs, ["binned_sah", "sweep_sah", "midpoint", "hybrid"], "one render each: {csv}");
+    assert!(String::from_utf8_lossy(&o.stdout).contains("total_s"));
+
+    let toml = dir.join("room.toml");
+    std::fs::write(
+        &toml,
+        "[materials.glass]\nmodel = \"dielectric\"\nior = 1.5\n\
+         [materials.lamp]\nmodel = \"lambert\"\nreflectance = 0\nemission = 5\n\
+         [[shape]]\ntype = \"sphere\"\ncenter = [0, 0, 0]\nradius = 0.5\nmaterial = \"glass\"\n\
+         [[shape]]\ntype = \"sphere\"\ncenter = [0, 2, 0]\nradius = 0.3\nmaterial = \"lamp\"\n\
+         [camera]\neye = [0, 0.5, 3]\ncenter = [0, 0.5, 0]\n",
+    )
+    .unwrap();
+    let configs = dir.join("variants.json");
+    std::fs::write(
+        &configs,
+        r#"[{"name": "exact"}, {"name": "schlick", "set": ["materials.glass.schlick=true"]},
+            {"name": "flat", "shading_normals": "geometric", "max_depth": 3}]"#,
+    )
+    .unwrap();
+    let out = dir.join("variants");
+    let o = spt(&[
+        &["compare", toml.to_str().unwrap()][..],
+        &size,
+        &["--configs", configs.to_str().unwrap(), "--spp-max", "2", "-o", out.to_str().unwrap()],
+    ]
+    .concat());
+    assert!(o.status.success(), "{}", stderr(&o));
+    let csv = std::fs::read_to_string(out.join("compare.csv")).unwrap();
+    assert_eq!(csv.lines().count(), 1 + 3 * 2, "{csv}");
+    let bad = dir.join("bad.json");
+    std::fs::write(&bad, r#"[{"name": "x", "bvh_builder": "octree"}]"#).unwrap();
+    let o = spt(&[
+        &["compare", scene.to_str().unwrap()][..],
+        &size,
+        &["--configs", bad.to_str().unwrap(), "-o", out.to_str().unwrap()],
+    ]
+    .concat());
+    assert!(!o.status.success() && stderr(&o).contains("'x': bvh_builder"), "{}", stderr(&o));
 }
 
 /// `spt atlas`: a row per resolution × count with its times, and the atlas's images.

@@ -148,6 +148,7 @@ pub fn capabilities_for(integrator: GpuIntegrator) -> Capabilities {
         integrator: integrator.name(),
         max_bounces: Some(MAX_BOUNCES),
         diffuse_depth: false,
+        bvh_builders: false,
         sample_block: SAMPLES_PER_READBACK,
     }
 }

@@ -61,7 +61,7 @@ impl<I: Integrator> CpuBackend<I> {
         self.capabilities().check_scene(&scene, options)?;
         scene.validate()?;
         let start = Instant::now();
-        let geometry = Geometry::build(&scene, options.triangle_test, options.bvh_width)?;
+        let geometry = Geometry::build(&scene, options)?;
         let build = start.elapsed();
         let lights = Lights::new(&scene);
         // Colour textures uplift through a table built on first use (~0.8 s): build it
@@ -114,6 +114,7 @@ fn cpu_capabilities(integrator: &'static str) -> Capabilities {
         integrator,
         max_bounces: None,
         diffuse_depth: true,
+        bvh_builders: true,
         sample_block: 1,
     }
 }

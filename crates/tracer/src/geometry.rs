@@ -1,6 +1,7 @@
 //! Everything a ray can hit: the triangle meshes' 4-wide BVH and a BVH over the analytic
 //! shapes, queried together. Primitive ids number the triangles first, then the shapes.
 
+use crate::render::SceneOptions;
 use crate::scene::Scene;
 use crate::{Error, Result};
 use bvh::{Accelerator, BoxBvh, BuildConfig, BvhWidth, Instance, Ray, TriangleTest, TwoLevel, WideBvh};
@@ -129,11 +130,12 @@ impl Instanced {
 }
 
 impl Geometry {
-    /// Builds both accelerators, the triangles' with the given ray–triangle test and
-    /// node width.
-    pub fn build(scene: &Scene, test: TriangleTest, width: BvhWidth) -> Result<Self> {
-        let triangles =
-            WideBvh::build(&scene.triangle_soup(), Self::triangle_build_config(), width)?.with_triangle_test(test);
+    /// Builds both accelerators, the triangles' with the options' ray–triangle test, node
+    /// width and split method.
+    pub fn build(scene: &Scene, options: &SceneOptions) -> Result<Self> {
+        let (test, width) = (options.triangle_test, options.bvh_width);
+        let config = Self::triangle_build_config_with(options.bvh_builder);
+        let triangles = WideBvh::build(&scene.triangle_soup(), config, width)?.with_triangle_test(test);
         let boxes: Vec<_> = scene.shapes.iter().map(|s| s.shape.shape().bounds()).collect();
         let shapes = BoxBvh::build(&boxes, BuildConfig { max_leaf_size: 2, ..BuildConfig::default() })?;
         let count = scene.triangles.len() as u64 + scene.shapes.len() as u64 + scene.instanced_triangle_count();
@@ -141,17 +143,17 @@ impl Geometry {
             return Err(Error::Setting(format!("{count} primitives exceed the 2^32 − 1 a scene can index")));
         }
         let instances =
-            if scene.instances.is_empty() { None } else { Some(Self::build_instances(scene, test, width)?) };
+            if scene.instances.is_empty() { None } else { Some(Self::build_instances(scene, test, width, config)?) };
         Ok(Self { triangles, shapes, instances, triangle_count: scene.triangles.len() as u32 })
     }
 
-    fn build_instances(scene: &Scene, test: TriangleTest, width: BvhWidth) -> Result<Instanced> {
+    fn build_instances(scene: &Scene, test: TriangleTest, width: BvhWidth, config: BuildConfig) -> Result<Instanced> {
         let objects = scene
             .objects
             .iter()
             .map(|o| {
                 let soup: Vec<_> = (0..o.triangles.len()).map(|i| o.triangle_vertices(i)).collect();
-                Ok(WideBvh::build(&soup, Self::triangle_build_config(), width)?.with_triangle_test(test))
+                Ok(WideBvh::build(&soup, config, width)?.with_triangle_test(test))
             })
             .collect::<Result<Vec<_>>>()?;
         let mut first = (scene.triangles.len() + scene.shapes.len()) as u32;
@@ -178,6 +180,12 @@ impl Geometry {
     /// at most four triangles (one SIMD test).
     pub fn triangle_build_config() -> BuildConfig {
         BuildConfig { max_leaf_size: 4, ..BuildConfig::default() }
+    }
+
+    /// [`Geometry::triangle_build_config`] with another split method (`None`: the default).
+    pub fn triangle_build_config_with(method: Option<bvh::SplitMethod>) -> BuildConfig {
+        let config = Self::triangle_build_config();
+        BuildConfig { method: method.unwrap_or(config.method), ..config }
     }
 
     /// Number of triangles (the first shape's primitive id).

@@ -153,6 +153,8 @@ pub struct SceneOptions {
     /// Children per node of the CPU's triangle BVH ([`BvhWidth::Auto`]: 8 where the CPU
     /// has AVX2, else 4).
     pub bvh_width: BvhWidth,
+    /// How the triangle BVH's nodes are split (`None`: binned SAH, the default).
+    pub bvh_builder: Option<bvh::SplitMethod>,
 }
 
 /// What a backend can render. [`Capabilities::check_scene`] and
@@ -187,6 +189,9 @@ pub struct Capabilities {
     pub max_bounces: Option<u32>,
     /// Whether it limits non-specular bounces (`PathSettings::max_diffuse_depth`).
     pub diffuse_depth: bool,
+    /// Whether it builds its BVH with the split method asked for
+    /// ([`SceneOptions::bvh_builder`]).
+    pub bvh_builders: bool,
     /// Passes that split a render at multiples of this sample index give the same film,
     /// bit for bit, as one pass (1 on the CPU; the GPU sums up to this many samples in f32
     /// before they reach the film's exact sums).
@@ -201,6 +206,14 @@ impl Capabilities {
             feature,
             way_out: way_out.to_string(),
         };
+        if !self.bvh_builders
+            && let Some(m) = options.bvh_builder
+        {
+            return Err(unsupported(
+                format!("a choice of BVH builder ({})", m.name()),
+                "leave --bvh-builder at its default, or use --backend cpu",
+            ));
+        }
         if !self.analytic_shapes && !scene.shapes.is_empty() {
             let kinds: Vec<&str> = scene.shapes.iter().map(|s| s.shape.name()).collect();
             let mut kinds = kinds;

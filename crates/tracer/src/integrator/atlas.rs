@@ -844,7 +844,7 @@ mod tests {
         let mut scene = Scene::default();
         scene.add(&quad(Vec3::ZERO, Vec3::Y, 0.05), grey.clone());
         scene.add(&quad(Vec3::new(0.0, 1.0, 0.0), -Vec3::Y, 1.0), grey);
-        let geometry = Geometry::build(&scene, Default::default(), Default::default()).unwrap();
+        let geometry = Geometry::build(&scene, &Default::default()).unwrap();
         let lights = Lights::new(&scene);
         let view = SceneView::new(&scene, &geometry, &lights);
         let settings = AtlasSettings {
