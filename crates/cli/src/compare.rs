@@ -176,6 +176,8 @@ pub struct Measurement {
     pub rel_mse: f64,
     /// SSIM of the sRGB-encoded luminance against the reference's.
     pub ssim: f64,
+    /// Mean ꟻLIP error of the sRGB-encoded image against the reference's (0 = the same).
+    pub flip: f64,
 }
 
 impl Measurement {
@@ -250,6 +252,7 @@ pub fn run(args: CompareArgs) -> Result<()> {
                 prepare_s,
                 rel_mse: rel_mse(&rgb, &reference_rgb),
                 ssim: ssim(&luminance_srgb(&rgb), &luminance_srgb(&reference_rgb), w as usize, h as usize),
+                flip: flip(&rgb, &reference_rgb, w, h),
             });
             if out_of_time {
                 break;
@@ -354,6 +357,18 @@ pub fn rel_mse(image: &[f32], reference: &[f32]) -> f64 {
     sum / image.len().max(1) as f64
 }
 
+/// The mean ꟻLIP error (Andersson, Nilsson, Akenine-Möller, Oskarsson, Åström &
+/// Fairchild 2020, "FLIP: A Difference Evaluator for Alternating Images") of two linear
+/// RGB images, as a viewer sees them: sRGB-encoded, clamped, at NVIDIA's default 67
+/// pixels per degree (LDR-ꟻLIP, through the `nv-flip` bindings).
+pub fn flip(image: &[f32], reference: &[f32], width: u32, height: u32) -> f64 {
+    let encode = |rgb: &[f32]| -> Vec<u8> { rgb.iter().map(|&v| spectral::srgb_to_u8(v)).collect() };
+    let test = nv_flip::FlipImageRgb8::with_data(width, height, &encode(image));
+    let reference = nv_flip::FlipImageRgb8::with_data(width, height, &encode(reference));
+    let error = nv_flip::flip(reference, test, nv_flip::DEFAULT_PIXELS_PER_DEGREE);
+    nv_flip::FlipPool::from_image(&error).mean() as f64
+}
+
 /// Per pixel: the luminance of the sRGB-encoded, clamped colour (what a viewer sees).
 fn luminance_srgb(rgb: &[f32]) -> Vec<f64> {
     rgb.chunks_exact(3)
@@ -420,7 +435,7 @@ fn config_names(rows: &[Measurement]) -> Vec<&str> {
 }
 
 fn csv(rows: &[Measurement], end_to_end: bool) -> String {
-    let mut out = String::from("config,spp,render_s,prepare_s,rel_mse,ssim,efficiency\n");
+    let mut out = String::from("config,spp,render_s,prepare_s,rel_mse,ssim,flip,efficiency\n");
     for r in rows {
         let quoted = if r.config.contains([',', '"']) {
             format!("\"{}\"", r.config.replace('"', "\"\""))
@@ -428,12 +443,13 @@ fn csv(rows: &[Measurement], end_to_end: bool) -> String {
             r.config.clone()
         };
         out += &format!(
-            "{quoted},{},{:.6},{:.6},{:.6e},{:.6},{:.6e}\n",
+            "{quoted},{},{:.6},{:.6},{:.6e},{:.6},{:.6},{:.6e}\n",
             r.spp,
             r.render_s,
             r.prepare_s,
             r.rel_mse,
             r.ssim,
+            r.flip,
             1.0 / (r.rel_mse * r.seconds(end_to_end)).max(1e-300)
         );
     }
@@ -448,23 +464,25 @@ fn table(rows: &[Measurement], end_to_end: bool) -> String {
     let efficiency = |r: &Measurement| 1.0 / (r.rel_mse * r.seconds(end_to_end)).max(1e-300);
     let first = names.first().and_then(|n| last(n)).map(efficiency).unwrap_or(1.0);
     let mut out = format!(
-        "{:<20} {:>6} {:>10} {:>12} {:>8} {:>12}\n",
+        "{:<20} {:>6} {:>10} {:>12} {:>8} {:>8} {:>12}\n",
         "config",
         "spp",
         if end_to_end { "total_s" } else { "render_s" },
         "relMSE",
         "SSIM",
+        "FLIP",
         "efficiency"
     );
     for name in names {
         if let Some(r) = last(name) {
             out += &format!(
-                "{:<20} {:>6} {:>10.3} {:>12.5e} {:>8.4} {:>11.2}×\n",
+                "{:<20} {:>6} {:>10.3} {:>12.5e} {:>8.4} {:>8.4} {:>11.2}×\n",
                 name,
                 r.spp,
                 r.seconds(end_to_end),
                 r.rel_mse,
                 r.ssim,
+                r.flip,
                 efficiency(r) / first
             );
         }
@@ -580,6 +598,20 @@ mod tests {
     }
 
     #[test]
+    fn flip_is_zero_for_equal_images_and_grows_with_the_difference() {
+        let (w, h) = (32u32, 24u32);
+        let img: Vec<f32> = (0..w * h * 3).map(|i| ((i % 97) as f32 / 97.0).powi(2)).collect();
+        assert_eq!(flip(&img, &img, w, h), 0.0);
+        let mut rng = rng::Pcg32::seed_from_u64(3);
+        let noisy = |amount: f32, rng: &mut rng::Pcg32| -> Vec<f32> {
+            img.iter().map(|&v| (v + amount * (rng.next_f32() - 0.5)).max(0.0)).collect()
+        };
+        let (a, b) = (noisy(0.05, &mut rng), noisy(0.4, &mut rng));
+        let (fa, fb) = (flip(&a, &img, w, h), flip(&b, &img, w, h));
+        assert!(0.0 < fa && fa < fb && fb < 1.0, "{fa} {fb}");
+    }
+
+    #[test]
     fn ssim_is_one_for_equal_images_and_falls_with_noise() {
         let (w, h) = (24, 20);
         let img: Vec<f64> = (0..w * h).map(|i| (i % w) as f64 / w as f64 * 0.8 + 0.1).collect();
@@ -641,6 +673,7 @@ mod tests {
             prepare_s: 0.01,
             rel_mse,
             ssim: 0.9,
+            flip: 0.1,
         };
         let rows = [m("a", 1, 1.0, 0.4), m("a", 2, 2.0, 0.2), m("b, quoted", 1, 1.0, 0.1)];
         let text = csv(&rows, false);

@@ -487,9 +487,13 @@ fn compare_charts_error_against_time() {
     assert!(error("path", "8") < error("path", "1"), "{csv}");
     assert!(error("bdpt", "8") < error("bdpt", "1"), "{csv}");
     for r in &rows {
-        let ssim: f64 = r[5].parse().unwrap();
-        assert!(ssim > 0.0 && ssim <= 1.0, "{csv}");
+        let (ssim, flip): (f64, f64) = (r[5].parse().unwrap(), r[6].parse().unwrap());
+        assert!(ssim > 0.0 && ssim <= 1.0 && (0.0..1.0).contains(&flip), "{csv}");
     }
+    let flip = |config: &str, spp: &str| -> f64 {
+        rows.iter().find(|r| r[0] == config && r[1] == spp).unwrap()[6].parse().unwrap()
+    };
+    assert!(flip("path", "8") < flip("path", "1"), "{csv}");
     assert!(std::fs::metadata(out.join("compare.svg")).unwrap().len() > 1000);
     assert!(image::open(out.join("compare.png")).is_ok());
     // A convergence strip per configuration (a 16-pixel crop at 1, 2, 4, 8 spp and the
