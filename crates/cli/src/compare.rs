@@ -30,8 +30,9 @@ pub struct CompareArgs {
     /// The reference image (linear EXR of the same size), e.g. a Mitsuba render.
     #[arg(long, conflicts_with = "reference_spp")]
     reference: Option<PathBuf>,
-    /// Without --reference: render one with the path tracer (hero, zsobol) at this many
-    /// samples per pixel (written to DIR/reference.exr and reused if it is there).
+    /// Without --reference: render one with the path tracer (hero, zsobol, another seed)
+    /// at this many samples per pixel (written to DIR/reference.exr and reused if it is
+    /// there).
     #[arg(long, default_value_t = 1024)]
     reference_spp: u32,
     /// The largest sample count; each configuration renders at 1, 2, 4, … up to it.
@@ -188,6 +189,9 @@ impl Measurement {
     }
 }
 
+/// Added to the seed of a reference `spt compare` renders itself.
+const REFERENCE_SEED_OFFSET: u64 = 0x5eed_0f_7e7e;
+
 /// `spt compare`.
 pub fn run(args: CompareArgs) -> Result<()> {
     if args.spp_max == 0 {
@@ -201,10 +205,13 @@ pub fn run(args: CompareArgs) -> Result<()> {
         None => args.output.join("reference.exr"),
     };
     if args.reference.is_none() && !reference.exists() {
-        eprintln!("rendering the reference: path tracer, hero, zsobol, {} spp", args.reference_spp);
+        eprintln!("rendering the reference: path tracer, hero, zsobol, {} spp, another seed", args.reference_spp);
         let mut base = args.scene.clone();
         base.integrator = "path".into();
         base.sampler = None;
+        // Its own seed: with the renders' seed its first samples would be theirs, and a
+        // render at the reference's sample count would measure no error at all.
+        base.seed = base.seed.wrapping_add(REFERENCE_SEED_OFFSET);
         let (prepared, settings) = prepare(&base, args.reference_spp, SpectralMode::Hero, best_sampler)?;
         let (film, _) = tracer::render(prepared.as_ref(), &settings, &|_| {})?;
         write_image(&reference, w, h, &film.mean_rgb())?;
