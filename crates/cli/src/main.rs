@@ -1003,6 +1003,12 @@ fn run_render(args: RenderArgs) -> Result<()> {
     if !s.has_lights() {
         eprintln!("warning: the scene has no light (no Ke > 0, and --sky none): the image will be black");
     }
+    if args.scene.integrator == "atlas" && !s.shapes.is_empty() {
+        eprintln!(
+            "warning: the atlas holds triangles only: the {} analytic shapes get no indirect light and give none",
+            s.shapes.len()
+        );
+    }
     if let Some(reference) = &args.reference {
         let p = &args.pieces;
         if p.shard.is_some() || p.time.is_some() || p.write_partial.is_some() || p.partial.is_some() {

@@ -210,10 +210,8 @@ impl Atlas {
         let start = Instant::now();
         let triangles = world_triangles(view);
         let (mut charts, prim_chart) = make_charts(&triangles);
-        if charts.is_empty() {
-            return Err(Error::Setting("the atlas integrator needs triangles: the scene has none".into()));
-        }
-        let (width, height, density) = pack(&mut charts, settings)?;
+        // Without triangles (analytic shapes only) the atlas is empty: no indirect light.
+        let (width, height, density) = if charts.is_empty() { (1, 1, 1.0) } else { pack(&mut charts, settings)? };
         let texels = rasterise(&triangles, &charts, &prim_chart, width, height, density);
         let unwrap = start.elapsed();
 
@@ -259,6 +257,11 @@ impl Atlas {
         let texel_area = 1.0 / (self.density * self.density);
         let used: Vec<u32> = (0..self.texels.len() as u32).filter(|&i| self.texels[i as usize].prim != EMPTY).collect();
         let estimator_scale = used.len() as f32 * texel_area / n as f32;
+        if used.is_empty() {
+            self.irradiance = vec![[0.0; 3]; self.texels.len()];
+            self.stats.gather = start.elapsed();
+            return;
+        }
         let this = &*self;
         let mut irradiance: Vec<[f32; 3]> = (0..this.texels.len())
             .into_par_iter()
@@ -877,6 +880,24 @@ mod tests {
         }
         let thesis = sum / n as f64;
         assert!((thesis / expected - 1.0).abs() > 0.2, "eq. 9 gives {thesis}, closed form {expected}");
+    }
+
+    #[test]
+    fn a_scene_of_shapes_alone_has_an_empty_atlas() {
+        let mut scene = Scene::default();
+        let grey = Material::diffuse("grey", Colour::constant(0.5)).unwrap();
+        scene.add_shape(
+            crate::geometry::ShapeKind::Sphere(
+                shapes::sphere::Sphere::new(Vec3::ZERO, 1.0, Default::default()).unwrap(),
+            ),
+            grey,
+        );
+        let geometry = Geometry::build(&scene, &Default::default()).unwrap();
+        let lights = Lights::new(&scene);
+        let view = SceneView::new(&scene, &geometry, &lights);
+        let atlas = Atlas::build(&view, &AtlasSettings::default()).unwrap();
+        assert_eq!((atlas.stats.charts, atlas.stats.texels_used), (0, 0));
+        assert_eq!(atlas.irradiance_at(0, Vec3::X), None, "the sphere is not in the atlas");
     }
 
     #[test]
