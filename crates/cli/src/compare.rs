@@ -190,7 +190,7 @@ impl Measurement {
 }
 
 /// Added to the seed of a reference `spt compare` renders itself.
-const REFERENCE_SEED_OFFSET: u64 = 0x5eed_0f_7e7e;
+const REFERENCE_SEED_OFFSET: u64 = 0x005e_ed0f_7e7e;
 
 /// `spt compare`.
 pub fn run(args: CompareArgs) -> Result<()> {
