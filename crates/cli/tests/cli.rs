@@ -763,6 +763,53 @@ fn compare_takes_time_budgets_builders_and_scene_changes() {
     assert!(!o.status.success() && stderr(&o).contains("'x': bvh_builder"), "{}", stderr(&o));
 }
 
+/// Every preset runs end to end at a tiny size (CI's run of the charts docs/ shows full
+/// size): a row per configuration and budget, and both charts.
+#[test]
+fn every_compare_preset_runs() {
+    let dir = temp_dir("compare-presets");
+    let scene = write_scene(&dir, OBJ);
+    let reference = dir.join("reference.exr");
+    let o = spt(&[
+        "render",
+        scene.to_str().unwrap(),
+        "--width",
+        "8",
+        "--height",
+        "6",
+        "--spp",
+        "16",
+        "-o",
+        reference.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    for preset in
+        ["spectral", "samplers", "integrators", "triangle-tests", "bvh-widths", "bvh-builders", "shading-normals"]
+    {
+        let out = dir.join(preset);
+        let o = spt(&[
+            "compare",
+            scene.to_str().unwrap(),
+            "--width",
+            "8",
+            "--height",
+            "6",
+            "--reference",
+            reference.to_str().unwrap(),
+            "--spp-max",
+            "2",
+            "--configs",
+            preset,
+            "-o",
+            out.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{preset}: {}", stderr(&o));
+        let rows = std::fs::read_to_string(out.join("compare.csv")).unwrap().lines().count() - 1;
+        assert!(rows >= 4 && rows % 2 == 0, "{preset}: {rows} rows");
+        assert!(out.join("compare.png").exists() && out.join("compare.svg").exists(), "{preset}");
+    }
+}
+
 /// `spt atlas`: a row per resolution × count with its times, and the atlas's images.
 #[test]
 fn atlas_tables_its_gather_and_writes_its_images() {
