@@ -805,7 +805,7 @@ fn every_compare_preset_runs() {
         ]);
         assert!(o.status.success(), "{preset}: {}", stderr(&o));
         let rows = std::fs::read_to_string(out.join("compare.csv")).unwrap().lines().count() - 1;
-        assert!(rows >= 4 && rows % 2 == 0, "{preset}: {rows} rows");
+        assert!(rows >= 4 && rows.is_multiple_of(2), "{preset}: {rows} rows");
         assert!(out.join("compare.png").exists() && out.join("compare.svg").exists(), "{preset}");
     }
 }
