@@ -953,10 +953,10 @@ fn report(output: &Path, stats: &RenderStats, caps: &Capabilities) {
 
 fn run_render(args: RenderArgs) -> Result<()> {
     let outputs = args.pieces.outputs(&args.output)?;
-    if args.scene.integrator == "bdpt" && (outputs.partial.is_some() || args.pieces.write_partial.is_some()) {
+    if args.scene.integrator == "bdpt" && outputs.shard.is_some() && args.pieces.shard_by == shard::Split::Tiles {
         bail!(
-            "--integrator bdpt splats light paths over the whole image, which partial renders do not carry yet: \
-             render it without --shard, --partial and --write-partial"
+            "--integrator bdpt splats each light path wherever it lands on the image, so a band of rows cannot \
+             be rendered on its own: shard it by samples (--shard-by samples, the default)"
         );
     }
     if let Some(p) = &args.stderr

@@ -228,6 +228,41 @@ fn a_render_stopped_by_its_time_budget_continues_to_the_same_bytes() {
     assert!(bytes(&out) == bytes(&whole), "the continued render differs from an uninterrupted one");
 }
 
+/// Bidirectional path tracing's splats travel in partials (the whole image's splat sums,
+/// and the light paths that made them): sample shards merge to the unsharded bytes, and
+/// a render stopped by its time budget continues to them. Tile shards are refused.
+#[test]
+fn bdpt_shards_and_resumes_to_the_same_bytes() {
+    let dir = temp_dir("shards-bdpt");
+    let scene = write_scene(&dir, OBJ);
+    let bdpt = ["--integrator", "bdpt"];
+    let full = dir.join("full.exr");
+    ok(render_small(&scene, SIZE, &full, &bdpt));
+    let parts = shards(&scene, &dir, 3, "samples", &bdpt);
+    let out = dir.join("merged.exr");
+    ok(merge(&parts, &out, &[]));
+    assert!(bytes(&out) == bytes(&full), "bdpt shards merged differ from the unsharded render");
+    // A partial without light paths is the old format, byte for byte: none carry splats.
+    let path_part = dir.join("path.partial");
+    ok(render_small(&scene, SIZE, &path_part, &["--shard", "1/3"]));
+    let (bdpt_len, path_len) = (bytes(&parts[0]).len(), bytes(&path_part).len());
+    let splat_bytes = (SIZE.0 * SIZE.1) as usize * 48;
+    assert!(
+        bdpt_len > path_len + splat_bytes - 64 && bdpt_len < path_len + splat_bytes + 256,
+        "{bdpt_len} vs {path_len}"
+    );
+
+    let size = (32, 32, 4096);
+    let timed = dir.join("timed.exr");
+    let o = ok(render_small(&scene, size, &timed, &[&bdpt[..], &["--threads", "1", "--time", "0.15s"]].concat()));
+    assert!(stderr(&o).contains("stopped at the time budget"), "{}", stderr(&o));
+    let partial = dir.join("timed.exr.partial");
+    ok(render_small(&scene, size, &timed, &[&bdpt[..], &["--threads", "1", "--partial", s(&partial)]].concat()));
+    let whole = dir.join("whole.exr");
+    ok(render_small(&scene, size, &whole, &bdpt));
+    assert!(bytes(&timed) == bytes(&whole), "the continued bdpt render differs from an uninterrupted one");
+}
+
 /// The recipes in deploy/ as a scheduler would run them: the local script (N processes
 /// and the merge), and the shard entry point with each scheduler's index variable
 /// (Kubernetes' 0-based JOB_COMPLETION_INDEX, Slurm's SLURM_ARRAY_TASK_ID through the

@@ -140,6 +140,11 @@ pub struct Manifest {
     pub non_finite: u64,
     /// Rays traced.
     pub rays: u64,
+    /// Light paths traced (bidirectional path tracing, whose light paths splat anywhere
+    /// on the image): when non-zero, the file holds the whole image's splat sums after
+    /// its pixels. Absent (0) in partials of other integrators.
+    #[serde(default)]
+    pub light_paths: u64,
 }
 
 impl Manifest {

@@ -10,6 +10,7 @@
 //! | 4 | `u32` M: length of the manifest |
 //! | M | the [`Manifest`] as UTF-8 JSON |
 //! | 100 per pixel | the region's pixels, row by row: `u32` count, then Σx per channel as three `i128`, then Σx² per channel as three `u128` — the film's fixed-point sums ([`tracer::film::PixelStats`]: x · 2⁶⁴ and x² · 2³⁶ rounded per sample) |
+//! | 48 per pixel, only if the manifest's `light_paths` > 0 | the whole image's splat sums, row by row: Σx per channel as three `i128` (x · 2⁶⁴; [`tracer::film::Film::splat_sums`]) |
 //! | 32 | SHA-256 of every byte before it |
 //!
 //! The file is written under a temporary name in the same directory, synced and renamed,
@@ -31,6 +32,9 @@ pub const MAGIC: &[u8; 8] = b"SPTPART1";
 
 /// Bytes per pixel record.
 pub const PIXEL_BYTES: usize = 4 + 3 * 16 + 3 * 16;
+
+/// Bytes per pixel of the splat section.
+pub const SPLAT_BYTES: usize = 3 * 16;
 
 /// The longest manifest accepted (a real one is under 2 KiB).
 const MAX_MANIFEST_BYTES: u32 = 1 << 20;
@@ -60,6 +64,7 @@ impl Partial {
             sample_block,
             non_finite: 0,
             rays: 0,
+            light_paths: 0,
         };
         Partial { manifest, film }
     }
@@ -67,14 +72,13 @@ impl Partial {
     /// Writes the partial to `path` atomically (temporary file, sync, rename). The
     /// manifest's count of dropped samples is the film's.
     pub fn write(&self, path: &Path) -> Result<()> {
-        let m = &Manifest { non_finite: self.film.non_finite, ..self.manifest.clone() };
+        let m = &Manifest {
+            non_finite: self.film.non_finite,
+            light_paths: self.film.light_paths(),
+            ..self.manifest.clone()
+        };
         if self.film.width() != m.job.width || self.film.height() != m.job.height {
             return Err(Error::Mismatch("film size differs from the manifest's".into()));
-        }
-        if self.film.has_splats() {
-            return Err(Error::Mismatch(
-                "the film holds light-tracing splats (the bdpt integrator), which partial files do not carry".into(),
-            ));
         }
         let json = serde_json::to_vec_pretty(m).expect("manifests serialise");
         atomically(path, |tmp| {
@@ -87,6 +91,16 @@ impl Partial {
             for y in r.y..r.y + r.height {
                 for x in r.x..r.x + r.width {
                     out.write_all(&encode(self.film.pixel(x, y))).map_err(io)?;
+                }
+            }
+            if m.light_paths > 0 {
+                let none = [[0i128; 3]];
+                let sums = self.film.splat_sums().unwrap_or(&none);
+                for i in 0..self.film.pixels().len() {
+                    let s = sums.get(i).unwrap_or(&[0; 3]);
+                    for c in s {
+                        out.write_all(&c.to_le_bytes()).map_err(io)?;
+                    }
                 }
             }
             let digest = out.hash.finalize();
@@ -142,7 +156,12 @@ impl Reader {
         let manifest: Manifest =
             serde_json::from_slice(&json).map_err(|e| corrupt(format!("its manifest is not valid: {e}")))?;
         manifest.validate().map_err(|e| corrupt(format!("its manifest is not valid: {e}")))?;
-        let expected = 8 + 4 + m as u64 + manifest.work.region.pixel_count() * PIXEL_BYTES as u64 + 32;
+        let splats = if manifest.light_paths > 0 {
+            manifest.job.width as u64 * manifest.job.height as u64 * SPLAT_BYTES as u64
+        } else {
+            0
+        };
+        let expected = 8 + 4 + m as u64 + manifest.work.region.pixel_count() * PIXEL_BYTES as u64 + splats + 32;
         if len != expected {
             return Err(corrupt(format!(
                 "{len} bytes, but its manifest ({}) makes {expected}: the file is truncated or was altered",
@@ -184,6 +203,14 @@ impl Reader {
                 film.pixels_mut()[(y * width + x) as usize].merge(&p);
             }
         }
+        if m.light_paths > 0 {
+            let mut record = [0u8; SPLAT_BYTES];
+            for i in 0..film.pixels().len() {
+                read_hashed(&mut self.input, &mut self.hash, &mut record, "a splat", &self.path)?;
+                let word = |c: usize| -> [u8; 16] { record[16 * c..16 * c + 16].try_into().expect("16 bytes") };
+                film.add_splat_sum(i, std::array::from_fn(|c| i128::from_le_bytes(word(c))));
+            }
+        }
         let digest = std::mem::take(&mut self.hash).finalize();
         let mut stored = [0u8; 32];
         self.input.read_exact(&mut stored).map_err(|e| Error::Corrupt {
@@ -197,6 +224,7 @@ impl Reader {
             });
         }
         film.non_finite += m.non_finite;
+        film.count_light_paths(m.light_paths);
         Ok(())
     }
 }

@@ -227,6 +227,25 @@ impl Film {
         !self.splats.is_empty()
     }
 
+    /// Each pixel's splat sums (Σ round(x · 2⁶⁴) per channel, row-major), if any light
+    /// path has splatted: for partial renders on disk.
+    pub fn splat_sums(&self) -> Option<&[[i128; 3]]> {
+        (!self.splats.is_empty()).then_some(&self.splats[..])
+    }
+
+    /// Adds splat sums read back from disk to pixel `index` (row-major).
+    pub fn add_splat_sum(&mut self, index: usize, sum: [i128; 3]) {
+        if sum == [0; 3] {
+            return;
+        }
+        if self.splats.is_empty() {
+            self.splats = vec![[0; 3]; self.pixels.len()];
+        }
+        for c in 0..3 {
+            self.splats[index][c] += sum[c];
+        }
+    }
+
     /// The estimate at pixel index `i` (row-major): its samples' mean plus its splats
     /// over the light paths traced.
     #[inline]
