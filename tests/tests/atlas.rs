@@ -143,6 +143,26 @@ fn without_visibility_light_leaks_through_walls() {
     assert!(mean(&leaky) > 1e-3, "the thesis's gather leaks: {}", mean(&leaky));
 }
 
+/// A floor placed as a mirrored instance (its world winding reversed; its front, as the
+/// renderer keeps it, still up) is lit in the atlas as the plain floor is.
+#[test]
+fn mirrored_instances_keep_their_front_in_the_atlas() {
+    let plain = room();
+    let mut mirrored = room();
+    // Swap the floor (its first two triangles) for a placement of it mirrored in x.
+    let white = Material::diffuse("white", Colour::constant(0.75)).unwrap();
+    let mut floor = Scene::default();
+    floor.add(&quad(Vec3::ZERO, Vec3::Y, 1.0), white);
+    mirrored.triangles.drain(..2);
+    mirrored.material_ids.drain(..2);
+    let object = mirrored.add_object(floor, None).unwrap();
+    mirrored.place(object, glam::Mat4::from_scale(Vec3::new(-1.0, 1.0, 1.0))).unwrap();
+    let atlas = || AtlasGi::new(AtlasSettings { resolution: 96, samples: 256, ..Default::default() });
+    let a = mean(&render(atlas(), &plain, &settings(16, PathSettings::default())));
+    let b = mean(&render(atlas(), &mirrored, &settings(16, PathSettings::default())));
+    assert!((b / a - 1.0).abs() < 0.03, "mirrored {b} vs plain {a}");
+}
+
 /// Without dilation, lookups at chart borders blend with the empty gutter: the room's
 /// edges darken (the seams); with it they match the interior.
 #[test]

@@ -53,6 +53,43 @@ fn beer_lambert_matches_exp_minus_alpha_s() {
     assert!(m[0] < m[1] && m[1] < m[2], "{m:?}");
 }
 
+/// A glowing ball inside an absorbing ball of index 1: the light that reaches the camera
+/// crossed the absorbing shell between them, though the segment inside ends on the glowing
+/// ball (not on the glass's back face): e^(−α·gap), in the path tracer and in
+/// bidirectional path tracing alike (the segment is found inside by where it left).
+#[test]
+fn light_from_inside_absorbing_glass_is_attenuated() {
+    let alpha = [1.0f32, 0.5, 0.25];
+    let mut scene = Scene::default();
+    scene.add(
+        &uv_sphere(Vec3::ZERO, 0.5, 32, 64, false),
+        glass(&[("ior", ParamValue::Scalar(1.0)), ("absorption", ParamValue::Rgb(alpha))]),
+    );
+    let glow = Material::diffuse("glow", Colour::constant(0.0)).unwrap().with_emission(Colour::constant(2.0));
+    scene.add(&uv_sphere(Vec3::ZERO, 0.2, 32, 64, false), glow);
+    let eye = Vec3::new(0.0, 0.0, 3.0);
+    scene.camera = Some(Camera { eye, center: Vec3::ZERO, up: Vec3::Y, fov_y_deg: 0.05 });
+    let settings = RenderSettings { width: 1, height: 1, spp: 16, mode: SpectralMode::Rgb, ..Default::default() };
+    let path = CpuBackend::new(2).unwrap().prepare_cpu(scene.clone(), &SceneOptions::default()).unwrap();
+    let enter = path.geometry().triangles.intersect(&Ray::new(eye, -Vec3::Z)).unwrap().t;
+    let glow_at =
+        path.geometry().triangles.intersect(&Ray::segment(eye, -Vec3::Z, enter + 1e-4, f32::INFINITY)).unwrap().t;
+    let gap = glow_at - enter;
+    assert!((gap - 0.3).abs() < 0.01, "gap {gap}");
+    let bdpt =
+        CpuBackend::with_integrator(2, tracer::Bdpt).unwrap().prepare_cpu(scene, &SceneOptions::default()).unwrap();
+    for (name, film) in [
+        ("path", tracer::render(&path, &settings, &|_| {}).unwrap().0),
+        ("bdpt", tracer::render(&bdpt, &settings, &|_| {}).unwrap().0),
+    ] {
+        let m = film.pixel_mean(0);
+        for c in 0..3 {
+            let expected = 2.0 * (-alpha[c] * gap).exp() as f64;
+            assert!((m[c] / expected - 1.0).abs() < 1e-3, "{name} channel {c}: {} vs 2e^(−α·gap) = {expected}", m[c]);
+        }
+    }
+}
+
 fn furnace_with(object: Material) -> CpuScene {
     let mut scene = Scene::default();
     let white = || Material::diffuse("white", Colour::constant(1.0)).unwrap();

@@ -59,8 +59,9 @@ pub struct Job {
     pub rr_depth: u32,
     /// Extra specular bounces.
     pub extension: u32,
-    /// The limit on diffuse bounces (0: none; absent in partials written before it).
-    #[serde(default)]
+    /// The limit on diffuse bounces (0: none, and then not written, as in partials
+    /// written before it).
+    #[serde(default, skip_serializing_if = "is_zero_u32")]
     pub max_diffuse_depth: u32,
     /// Shading-normal mode.
     pub shading_normals: String,
@@ -143,8 +144,16 @@ pub struct Manifest {
     /// Light paths traced (bidirectional path tracing, whose light paths splat anywhere
     /// on the image): when non-zero, the file holds the whole image's splat sums after
     /// its pixels. Absent (0) in partials of other integrators.
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "is_zero_u64")]
     pub light_paths: u64,
+}
+
+fn is_zero_u32(v: &u32) -> bool {
+    *v == 0
+}
+
+fn is_zero_u64(v: &u64) -> bool {
+    *v == 0
 }
 
 impl Manifest {

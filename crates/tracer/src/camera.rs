@@ -160,7 +160,7 @@ mod tests {
     }
 
     #[test]
-    fn film_positions_invert_rays_and_the_pixel_density_integrates_to_the_pixel_count() {
+    fn film_positions_invert_rays_and_the_pixel_density_is_their_jacobian() {
         let cam =
             Camera { eye: Vec3::new(0.3, 1.0, 3.9), center: Vec3::new(0.0, 0.8, 0.0), up: Vec3::Y, fov_y_deg: 50.0 };
         let (w, h) = (64, 48);

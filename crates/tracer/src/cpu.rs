@@ -2,9 +2,9 @@
 //! a given seed whatever the thread count.
 
 use crate::camera::RayGenerator;
-use crate::film::{Film, PixelStats};
+use crate::film::{Film, PixelStats, SplatImage};
 use crate::geometry::Geometry;
-use crate::integrator::{CameraSample, Integrator, PathCounters, PathTracer, SceneView, Splat};
+use crate::integrator::{CameraSample, Integrator, PathCounters, PathTracer, SceneView};
 use crate::lights::Lights;
 use crate::render::{
     Backend, Capabilities, PixelRect, PrepareStats, PreparedScene, RenderSettings, SceneOptions, check_pass,
@@ -19,6 +19,9 @@ use rayon::prelude::*;
 use spectral::{SampledSpectrum, SampledWavelengths, SpectralMode};
 use std::sync::Arc;
 use std::time::Instant;
+
+/// Splats a tile holds before it adds them to the pass's shared splat image.
+const SPLAT_FLUSH: usize = 1 << 14;
 
 /// Tile side in pixels.
 pub const TILE: u32 = 16;
@@ -113,7 +116,8 @@ fn cpu_capabilities(integrator: &'static str) -> Capabilities {
         bvh_widths: BvhWidth::CPU.to_vec(),
         integrator,
         max_bounces: None,
-        diffuse_depth: true,
+        // Only the path tracer limits diffuse bounces; the others would ignore it.
+        diffuse_depth: integrator == "path",
         bvh_builders: true,
         sample_block: 1,
     }
@@ -244,7 +248,6 @@ struct TileResult {
     y0: u32,
     w: u32,
     pixels: Vec<PixelStats>,
-    splats: Vec<Splat>,
     non_finite: u64,
     counters: PathCounters,
 }
@@ -273,8 +276,14 @@ impl<I: Integrator> Pass<'_, I> {
         let width = film.width();
         let tiles = tiles_of(self.settings.region());
         let existing: &Film = film;
-        let results: Vec<TileResult> =
-            tiles.par_iter().map(|tile| self.tile(existing, tile, sampler, &wavelengths)).collect();
+        // Splats go straight into one shared image (in flushes of a few thousand), not
+        // into the tiles' results: a pass holds a few blocks of them, not all.
+        let splat_image =
+            self.scene.integrator.splats().then(|| std::sync::Mutex::new(SplatImage::new(film.width(), film.height())));
+        let results: Vec<TileResult> = tiles
+            .par_iter()
+            .map(|tile| self.tile(existing, tile, sampler, &wavelengths, splat_image.as_ref()))
+            .collect();
         let mut total = PathCounters::default();
         for t in results {
             for (i, p) in t.pixels.iter().enumerate() {
@@ -282,12 +291,11 @@ impl<I: Integrator> Pass<'_, I> {
                 film.pixels_mut()[(y * width + x) as usize] = *p;
             }
             film.non_finite += t.non_finite;
-            film.add_splats(&t.splats);
             total += t.counters;
         }
-        if self.scene.integrator.splats() {
-            let region = self.settings.region();
-            film.count_light_paths(region.width as u64 * region.height as u64 * self.spp as u64);
+        if let Some(image) = splat_image {
+            film.add_splat_image(&image.into_inner().expect("no thread panicked holding it"));
+            film.count_light_paths(self.spp as u64);
         }
         total
     }
@@ -300,6 +308,7 @@ impl<I: Integrator> Pass<'_, I> {
         tile: &PixelRect,
         sampler: &(dyn Fn(u32, u32, u32) -> S + Sync),
         wavelengths: &Wavelengths<'_, N>,
+        splat_image: Option<&std::sync::Mutex<SplatImage>>,
     ) -> TileResult {
         let (x0, y0, w, h) = (tile.x, tile.y, tile.width, tile.height);
         let view = self.scene.view().with_film(self.camera, self.settings.region());
@@ -340,8 +349,14 @@ impl<I: Integrator> Pass<'_, I> {
                     non_finite += 1;
                 }
             }
+            if splats.len() >= SPLAT_FLUSH || (samples.peek().is_none() && !splats.is_empty()) {
+                if let Some(image) = splat_image {
+                    image.lock().expect("no thread panicked holding it").add(&splats);
+                }
+                splats.clear();
+            }
         }
         (self.progress)((w * h) as u64 * self.spp as u64);
-        TileResult { x0, y0, w, pixels, splats, non_finite, counters }
+        TileResult { x0, y0, w, pixels, non_finite, counters }
     }
 }

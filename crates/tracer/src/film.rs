@@ -149,9 +149,9 @@ impl PixelStats {
 ///
 /// A light path's contribution lands on whatever pixel its last vertex projects to, not
 /// on the pixel whose sample started it: each pixel's splat sum, in the same exact fixed
-/// point as the samples, is divided by the number of light paths traced over the whole
-/// image ([`Film::count_light_paths`]) and added to the pixel's mean (Veach 1997,
-/// §10.3.4). The standard errors ([`Film::std_error_rgb`]) cover the pixel samples only.
+/// point as the samples, is divided by the number of light paths traced per pixel
+/// ([`Film::count_light_paths`]; each splat was divided by the region's pixel count) and
+/// added to the pixel's mean (Veach 1997, §10.3.4). The standard errors ([`Film::std_error_rgb`]) cover the pixel samples only.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Film {
     width: u32,
@@ -166,6 +166,53 @@ pub struct Film {
     pub non_finite: u64,
 }
 
+/// `a + b` per channel, or `None` if a channel overflows.
+fn checked_sum(a: [i128; 3], b: [i128; 3]) -> Option<[i128; 3]> {
+    Some([a[0].checked_add(b[0])?, a[1].checked_add(b[1])?, a[2].checked_add(b[2])?])
+}
+
+/// Adds `splats` to the row-major `sums` of a `width` × `height` image in fixed point;
+/// returns how many were dropped (outside, not finite, too large, or overflowing).
+fn accumulate_splats(sums: &mut [[i128; 3]], width: u32, height: u32, splats: &[Splat]) -> u64 {
+    let mut dropped = 0;
+    for s in splats {
+        if s.x >= width || s.y >= height || !s.rgb.iter().all(|v| v.abs() < MAX_SAMPLE_MAGNITUDE) {
+            dropped += 1;
+            continue;
+        }
+        let sum = &mut sums[(s.y * width + s.x) as usize];
+        match checked_sum(*sum, s.rgb.map(|v| fixed_point(v).0)) {
+            Some(new) => *sum = new,
+            None => dropped += 1,
+        }
+    }
+    dropped
+}
+
+/// Splat sums gathered apart from a film (a backend's threads flush theirs into one,
+/// so that a render holds at most a few blocks of splats in memory), then added to it
+/// with [`Film::add_splat_image`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct SplatImage {
+    width: u32,
+    height: u32,
+    sums: Vec<[i128; 3]>,
+    /// Splats dropped (outside, not finite, too large or overflowing).
+    pub dropped: u64,
+}
+
+impl SplatImage {
+    /// An empty image of the film's size.
+    pub fn new(width: u32, height: u32) -> Self {
+        Self { width, height, sums: vec![[0; 3]; width as usize * height as usize], dropped: 0 }
+    }
+
+    /// Adds splats (exactly: the sums do not depend on the order).
+    pub fn add(&mut self, splats: &[Splat]) {
+        self.dropped += accumulate_splats(&mut self.sums, self.width, self.height, splats);
+    }
+}
+
 /// One light-path contribution to a pixel, in linear sRGB.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Splat {
@@ -173,7 +220,8 @@ pub struct Splat {
     pub x: u32,
     /// Row.
     pub y: u32,
-    /// The contribution, before division by the number of light paths.
+    /// The contribution divided by the rendered region's pixel count, before division
+    /// by the light paths traced per pixel ([`Film::count_light_paths`]).
     pub rgb: [f32; 3],
 }
 
@@ -191,8 +239,8 @@ impl Film {
     }
 
     /// Adds light-path contributions (exactly, in any order); a NaN, infinite or
-    /// too-large one, or one outside the film, is dropped and counted in
-    /// [`Film::non_finite`].
+    /// too-large one, one outside the film, or one whose sum would overflow, is dropped
+    /// and counted in [`Film::non_finite`].
     pub fn add_splats(&mut self, splats: &[Splat]) {
         if splats.is_empty() {
             return;
@@ -200,24 +248,26 @@ impl Film {
         if self.splats.is_empty() {
             self.splats = vec![[0; 3]; self.pixels.len()];
         }
-        for s in splats {
-            if s.x >= self.width || s.y >= self.height || !s.rgb.iter().all(|v| v.abs() < MAX_SAMPLE_MAGNITUDE) {
-                self.non_finite += 1;
-                continue;
-            }
-            let sum = &mut self.splats[(s.y * self.width + s.x) as usize];
-            for c in 0..3 {
-                sum[c] += fixed_point(s.rgb[c]).0;
-            }
-        }
+        self.non_finite += accumulate_splats(&mut self.splats, self.width, self.height, splats);
     }
 
-    /// Records that `n` more light paths were traced (the splats' divisor).
+    /// Adds the sums a backend's threads gathered into a [`SplatImage`] of this size.
+    pub fn add_splat_image(&mut self, image: &SplatImage) {
+        assert_eq!((image.width, image.height), (self.width, self.height), "a splat image of the film's size");
+        for (i, &sum) in image.sums.iter().enumerate() {
+            self.add_splat_sum(i, sum);
+        }
+        self.non_finite += image.dropped;
+    }
+
+    /// Records that `n` more light paths were traced from each pixel of the region
+    /// rendered (one per pixel sample: the splats' divisor; the integrator has divided
+    /// each splat by the region's pixel count already).
     pub fn count_light_paths(&mut self, n: u64) {
         self.light_paths += n;
     }
 
-    /// Light paths traced so far.
+    /// Light paths traced so far, per pixel of the region rendered.
     pub fn light_paths(&self) -> u64 {
         self.light_paths
     }
@@ -233,7 +283,9 @@ impl Film {
         (!self.splats.is_empty()).then_some(&self.splats[..])
     }
 
-    /// Adds splat sums read back from disk to pixel `index` (row-major).
+    /// Adds splat sums (read back from disk, or gathered by a backend) to pixel `index`
+    /// (row-major); sums that would overflow are dropped and counted in
+    /// [`Film::non_finite`].
     pub fn add_splat_sum(&mut self, index: usize, sum: [i128; 3]) {
         if sum == [0; 3] {
             return;
@@ -241,8 +293,10 @@ impl Film {
         if self.splats.is_empty() {
             self.splats = vec![[0; 3]; self.pixels.len()];
         }
-        for c in 0..3 {
-            self.splats[index][c] += sum[c];
+        let old = self.splats[index];
+        match checked_sum(old, sum) {
+            Some(new) => self.splats[index] = new,
+            None => self.non_finite += 1,
         }
     }
 
@@ -489,6 +543,24 @@ mod tests {
         assert_eq!(&rgb[12..15], &[1.25, 1.5, 0.625]);
         film.clear();
         assert_eq!((film.pixel_mean(4), film.light_paths()), ([0.0; 3], 0));
+    }
+
+    #[test]
+    fn a_splat_image_adds_what_the_film_would_and_overflow_is_dropped() {
+        let splats = [Splat { x: 2, y: 0, rgb: [1.5, 0.25, 3.0] }, Splat { x: 2, y: 0, rgb: [0.5, 0.0, 1.0] }];
+        let mut direct = Film::new(3, 2);
+        direct.add_splats(&splats);
+        let mut image = SplatImage::new(3, 2);
+        image.add(&splats[..1]);
+        image.add(&splats[1..]);
+        let mut via = Film::new(3, 2);
+        via.add_splat_image(&image);
+        assert_eq!(direct, via);
+        // Sums that would overflow an i128 are dropped, not wrapped.
+        let mut film = Film::new(1, 1);
+        film.add_splat_sum(0, [i128::MAX - 5, 0, 0]);
+        film.add_splat_sum(0, [10, 0, 0]);
+        assert_eq!((film.splat_sums().unwrap()[0][0], film.non_finite), (i128::MAX - 5, 1));
     }
 
     #[test]

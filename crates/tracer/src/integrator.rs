@@ -199,6 +199,8 @@ pub struct SceneView<'a> {
     /// Whether any material has cut-outs or transparency: rays then pass through
     /// surfaces where its alpha says so (looked up once; scenes without pay nothing).
     cutouts: bool,
+    /// Whether any transmissive material absorbs inside (Beer–Lambert).
+    absorbing: bool,
     /// The camera and image, where the backend gives them.
     film: Option<FilmView>,
 }
@@ -233,7 +235,8 @@ impl<'a> SceneView<'a> {
     pub fn new(scene: &'a Scene, geometry: &'a Geometry, lights: &'a Lights) -> Self {
         let dispersive = scene.materials.iter().any(|m| m.is_dispersive());
         let cutouts = scene.materials.iter().any(|m| m.alpha().is_some());
-        Self { scene, geometry, lights, dispersive, cutouts, film: None }
+        let absorbing = scene.materials.iter().any(|m| !m.is_two_sided() && m.absorption().is_some());
+        Self { scene, geometry, lights, dispersive, cutouts, absorbing, film: None }
     }
 
     /// This view with the camera and the image region being rendered (for integrators
@@ -620,6 +623,12 @@ fn light_contribution<const N: usize, B: Bsdf<N>>(
     if f.is_black() {
         return None;
     }
+    // A shadow ray into the back of absorbing glass runs inside it (Beer–Lambert).
+    let le = match entered_medium(view, at.material, it.ng, wi_world) {
+        Some(_) if !dist.is_finite() => return None,
+        Some(alpha) => le * alpha.sample(wl).map(|a| (-a * dist).exp()),
+        None => le,
+    };
     let origin = it.spawn_origin(wi_world);
     let shadow = if dist.is_finite() {
         Ray::segment(origin, ls.point - origin, 0.0, SHADOW_T_MAX)
@@ -669,6 +678,24 @@ fn punctual_incidence<const N: usize>(
     let wi = d / dist;
     let falloff = falloff_of.map_or(1.0, |(axis, ci, co)| PunctualLight::spot_falloff(-wi.dot(axis), ci, co));
     Some((wi, dist, intensity.sample(wl) * (falloff / dist2)))
+}
+
+/// The absorption inside the surface a ray leaving it along `dir` enters: a direction into
+/// the back (against the front normal `ng`) of an absorbing transmissive material runs
+/// inside it. With [`interior_transmittance`] (which looks at where a segment *arrives*)
+/// every segment inside an absorbing object is attenuated, whichever way it was traced and
+/// whatever it ends on (an object inside the glass, a light).
+#[inline(always)]
+fn entered_medium<'m>(
+    view: &SceneView,
+    material: &'m Material,
+    ng: Vec3,
+    dir: Vec3,
+) -> Option<&'m spectral::spectrum::Colour> {
+    if !view.absorbing || material.is_two_sided() || dir.dot(ng) >= 0.0 {
+        return None;
+    }
+    material.absorption()
 }
 
 /// Beer–Lambert: a ray reaching the back of an absorbing transmissive surface travelled
@@ -745,6 +772,8 @@ fn path_radiance<const N: usize, S: Sampler>(
     let mut bounce = 0u32;
     let mut extension_left = settings.specular_extension;
     let mut diffuse_bounces = 0u32;
+    // The absorbing material the last segment left its vertex into, if any.
+    let mut inside: Option<&spectral::spectrum::Colour> = None;
     loop {
         counters.rays += 1;
         let Some(hit) = view.intersect(&ray) else {
@@ -765,6 +794,8 @@ fn path_radiance<const N: usize, S: Sampler>(
 
         if let Some(transmittance) = interior_transmittance(material, front, hit.t, wl) {
             beta *= transmittance;
+        } else if let Some(alpha) = inside {
+            beta *= alpha.sample(wl).map(|a| (-a * hit.t).exp());
         }
 
         // Emission seen by this path (one-sided: front face only).
@@ -834,6 +865,7 @@ fn path_radiance<const N: usize, S: Sampler>(
         prev_pdf = s.pdf;
         prev_specular = s.flags.is_specular();
         prev_p = it.p;
+        inside = entered_medium(view, material, it.ng, wi_world);
         ray = Ray::new(it.spawn_origin(wi_world), wi_world);
         bounce += 1;
 

@@ -187,7 +187,8 @@ pub struct Capabilities {
     /// that reach it with an unbounded `max_depth` are counted as truncated); `None` if
     /// paths end only by the depth limit and Russian roulette.
     pub max_bounces: Option<u32>,
-    /// Whether it limits non-specular bounces (`PathSettings::max_diffuse_depth`).
+    /// Whether its integrator limits non-specular bounces
+    /// (`PathSettings::max_diffuse_depth`; the CPU's path tracer does).
     pub diffuse_depth: bool,
     /// Whether it builds its BVH with the split method asked for
     /// ([`SceneOptions::bvh_builder`]).
@@ -302,8 +303,8 @@ impl Capabilities {
         }
         if settings.path.max_diffuse_depth > 0 && !self.diffuse_depth {
             return Err(unsupported(
-                "a limit on diffuse bounces (--max-diffuse-depth)".into(),
-                "use --max-depth, or --backend cpu".into(),
+                format!("a limit on diffuse bounces (--max-diffuse-depth) with the '{}' integrator", self.integrator),
+                "use --max-depth, or the CPU's path integrator (--backend cpu --integrator path)".into(),
             ));
         }
         if let Some(cap) = self.max_bounces {

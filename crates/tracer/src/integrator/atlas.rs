@@ -126,7 +126,8 @@ pub struct Chart {
 impl Chart {
     /// Size in texels, gutter included.
     fn texels(&self, density: f32) -> UVec2 {
-        (self.size * density).ceil().as_uvec2().max(UVec2::ONE) + UVec2::splat(2 * GUTTER)
+        // Clamped far below u32's range: pack() refuses atlases beyond 2²⁸ texels.
+        (self.size * density).ceil().min(Vec2::splat(1_048_576.0)).as_uvec2().max(UVec2::ONE) + UVec2::splat(2 * GUTTER)
     }
 
     /// Continuous atlas coordinates (texel centres at i + ½) of a point on its plane.
@@ -403,10 +404,13 @@ fn world_triangles(view: &SceneView) -> Vec<Option<[Vec3; 3]>> {
             }
             let (mesh, tri, xf) = view.triangle_source(prim as u32);
             let t = mesh.triangles[tri as usize];
-            Some(t.map(|i| {
+            let [a, b, c] = t.map(|i| {
                 let p = Vec3::from_array(mesh.positions[i as usize]);
                 xf.map_or(p, |x| x.to_world.transform_point3(p))
-            }))
+            });
+            // A mirroring placement reverses the world winding; the object's front stays
+            // its front (as the renderer and the lights see it).
+            Some(if xf.is_some_and(|x| x.orientation < 0.0) { [a, c, b] } else { [a, b, c] })
         })
         .collect()
 }
@@ -507,14 +511,14 @@ fn pack(charts: &mut [Chart], settings: &AtlasSettings) -> Result<(u32, u32, f32
             }
             if x + t.x > width {
                 x = 0;
-                y += shelf;
+                y = y.saturating_add(shelf);
                 shelf = 0;
             }
             charts[i].offset = UVec2::new(x, y);
             x += t.x;
             shelf = shelf.max(t.y);
         }
-        let height = y + shelf;
+        let height = y.saturating_add(shelf);
         if settings.density > 0.0 {
             if height as u64 * width as u64 > 1 << 28 {
                 return Err(Error::Setting(format!(
@@ -748,6 +752,13 @@ impl Integrator for AtlasGi {
     ) -> SampledSpectrum<N> {
         let mut l = SampledSpectrum::<N>::zero();
         let mut beta = SampledSpectrum::<N>::one();
+        // Dispersive glass on the way: one wavelength per sample, as the Whitted
+        // integrator does.
+        if view.has_dispersion() && !wl.is_rgb() && !wl.is_collapsed() {
+            let k = ((sampler.next_1d() * N as f32) as usize).min(N - 1);
+            wl.collapse_to(k);
+        }
+        let wl = &*wl;
         for _ in 0..=SPECULAR_CHAIN {
             counters.rays += 1;
             let Some(hit) = view.intersect(&ray) else {

@@ -46,8 +46,9 @@ pub const BDPT_MAX_VERTICES: usize = 66;
 /// tracer (at a higher cost per sample); where it pays is small lights and caustics seen
 /// through glass on a diffuse surface, which only light tracing finds efficiently.
 ///
-/// Unbiased with an unbounded depth (up to [`BDPT_MAX_VERTICES`]); with `max_depth` D,
-/// paths of at most D bounces, as the path tracer's. Point lights are not visible to
+/// Unbiased with an unbounded depth (up to [`BDPT_MAX_VERTICES`] − 2 bounces; paths cut
+/// there are counted as truncated); with `max_depth` D, paths of at most D bounces, as
+/// the path tracer's. Point lights are not visible to
 /// the camera directly (as in the path tracer); `specular_extension` is ignored. Where
 /// shading normals are bent ([`crate::integrator::ShadingNormals::Adapted`] at
 /// silhouettes) the densities used for the weights are those of the frame the subpath
@@ -637,6 +638,8 @@ fn walk<'v, const N: usize, S: Sampler>(
     let view = cx.view;
     let settings = cx.settings;
     let mut specular = true;
+    // The absorbing material the last segment left its vertex into, if any.
+    let mut inside: Option<&spectral::spectrum::Colour> = None;
     loop {
         counters.rays += 1;
         let Some(hit) = view.intersect(&ray) else {
@@ -649,6 +652,8 @@ fn walk<'v, const N: usize, S: Sampler>(
         let front = wo_world.dot(it.ng) > 0.0;
         if let Some(transmittance) = interior_transmittance(material, front, hit.t, wl) {
             beta *= transmittance;
+        } else if let Some(alpha) = inside {
+            beta *= alpha.sample(wl).map(|a| (-a * hit.t).exp());
         }
         let (ng, ns) = shading_normals(settings.shading_normals, it.ng, it.ns, wo_world, material.is_two_sided());
         let frame = Frame::from_normal_tangent(ns, it.tangent);
@@ -679,7 +684,8 @@ fn walk<'v, const N: usize, S: Sampler>(
             origin_pdf,
         });
         if path.len() >= max_vertices {
-            if settings.max_depth == 0 {
+            // The depth asked for ends here; the cap (unbounded or deeper than it) cuts.
+            if settings.max_depth == 0 || settings.max_depth as usize + 2 > BDPT_MAX_VERTICES {
                 counters.truncated += 1;
             }
             return None;
@@ -704,6 +710,7 @@ fn walk<'v, const N: usize, S: Sampler>(
         }
         let (fwd, rev) = if specular { (0.0, 0.0) } else { (bs.pdf, s.bsdf.pdf(bs.wi, wo)) };
         let origin = s.it.spawn_origin(wi_world);
+        inside = super::entered_medium(view, s.material, s.it.ng, wi_world);
         path[k].delta = specular;
         let prev_p = path[k - 1].p;
         let prev_n = path[k - 1].n;
@@ -843,7 +850,7 @@ fn connect<const N: usize>(
     let f_p = surface_f(sp, sp.wo_world, -w, Transport::Radiance);
     let g = sq.frame.n.dot(w).abs() * sp.frame.n.dot(w).abs() / dist2;
     let mut c = qs.beta * f_q * f_p * pt.beta * g;
-    if c.is_black() || !visible(cx.view, qs, pt, counters) {
+    if c.is_black() || !c.0.iter().all(|v| v.is_finite()) || !visible(cx.view, qs, pt, counters) {
         return SampledSpectrum::zero();
     }
     if let Some(tr) = connection_transmittance(qs, w, dist, wl).or_else(|| connection_transmittance(pt, -w, dist, wl)) {
@@ -882,10 +889,12 @@ fn splat_to_eye<const N: usize>(
     }
     let dist = dist2.sqrt();
     let w = d / dist;
-    let importance = film.rays.pixels_per_steradian(-w);
+    // W(ω) per pixel, over the region's pixel count: the film divides by the light paths
+    // traced per pixel.
+    let importance = film.rays.pixels_per_steradian(-w) / (r.width as f32 * r.height as f32);
     let f = surface_f(sq, sq.wo_world, w, Transport::Importance);
     let mut c = qs.beta * f * (sq.frame.n.dot(w).abs() * importance / dist2);
-    if c.is_black() || !visible(view, qs, eye, counters) {
+    if c.is_black() || !c.0.iter().all(|v| v.is_finite()) || !visible(view, qs, eye, counters) {
         return;
     }
     if let Some(tr) = connection_transmittance(qs, w, dist, wl) {
