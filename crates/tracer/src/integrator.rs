@@ -624,11 +624,7 @@ fn light_contribution<const N: usize, B: Bsdf<N>>(
         return None;
     }
     // A shadow ray into the back of absorbing glass runs inside it (Beer–Lambert).
-    let le = match entered_medium(view, at.material, it.ng, wi_world) {
-        Some(_) if !dist.is_finite() => return None,
-        Some(alpha) => le * alpha.sample(wl).map(|a| (-a * dist).exp()),
-        None => le,
-    };
+    let le = if view.absorbing { shadow_absorption(view, at, wi_world, dist, wl, le)? } else { le };
     let origin = it.spawn_origin(wi_world);
     let shadow = if dist.is_finite() {
         Ray::segment(origin, ls.point - origin, 0.0, SHADOW_T_MAX)
@@ -696,6 +692,45 @@ fn entered_medium<'m>(
         return None;
     }
     material.absorption()
+}
+
+/// `le` after a shadow segment of length `dist` from `at` along `wi_world`: attenuated
+/// where it runs inside absorbing glass, `None` where it would run inside to infinity.
+/// Out of line: only scenes with absorbing glass call it.
+#[cold]
+#[inline(never)]
+fn shadow_absorption<const N: usize>(
+    view: &SceneView,
+    at: &Shading,
+    wi_world: Vec3,
+    dist: f32,
+    wl: &SampledWavelengths<N>,
+    le: SampledSpectrum<N>,
+) -> Option<SampledSpectrum<N>> {
+    match entered_medium(view, at.material, at.it.ng, wi_world) {
+        Some(_) if !dist.is_finite() => None,
+        Some(alpha) => Some(le * alpha.sample(wl).map(|a| (-a * dist).exp())),
+        None => Some(le),
+    }
+}
+
+/// Beer–Lambert over a segment of length `t` that ended on `material` (front or back), in
+/// a scene with absorbing glass: inside if it arrived at an absorbing back face, or if it
+/// left its previous vertex into the absorbing material `inside`. Out of line: scenes
+/// without absorbing glass never call it.
+#[cold]
+#[inline(never)]
+fn segment_transmittance<const N: usize>(
+    material: &Material,
+    front: bool,
+    t: f32,
+    inside: Option<&spectral::spectrum::Colour>,
+    wl: &SampledWavelengths<N>,
+) -> SampledSpectrum<N> {
+    match interior_transmittance(material, front, t, wl) {
+        Some(transmittance) => transmittance,
+        None => inside.map_or(SampledSpectrum::one(), |alpha| alpha.sample(wl).map(|a| (-a * t).exp())),
+    }
 }
 
 /// Beer–Lambert: a ray reaching the back of an absorbing transmissive surface travelled
@@ -792,10 +827,8 @@ fn path_radiance<const N: usize, S: Sampler>(
         let wo_world = -ray.dir;
         let front = wo_world.dot(it.ng) > 0.0;
 
-        if let Some(transmittance) = interior_transmittance(material, front, hit.t, wl) {
-            beta *= transmittance;
-        } else if let Some(alpha) = inside {
-            beta *= alpha.sample(wl).map(|a| (-a * hit.t).exp());
+        if view.absorbing {
+            beta *= segment_transmittance(material, front, hit.t, inside, wl);
         }
 
         // Emission seen by this path (one-sided: front face only).
@@ -865,7 +898,9 @@ fn path_radiance<const N: usize, S: Sampler>(
         prev_pdf = s.pdf;
         prev_specular = s.flags.is_specular();
         prev_p = it.p;
-        inside = entered_medium(view, material, it.ng, wi_world);
+        if view.absorbing {
+            inside = entered_medium(view, material, it.ng, wi_world);
+        }
         ray = Ray::new(it.spawn_origin(wi_world), wi_world);
         bounce += 1;
 
