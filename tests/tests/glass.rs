@@ -55,8 +55,8 @@ fn beer_lambert_matches_exp_minus_alpha_s() {
 
 /// A glowing ball inside an absorbing ball of index 1: the light that reaches the camera
 /// crossed the absorbing shell between them, though the segment inside ends on the glowing
-/// ball (not on the glass's back face): e^(−α·gap), in the path tracer and in
-/// bidirectional path tracing alike (the segment is found inside by where it left).
+/// ball (not on the glass's back face): e^(−α·gap), in every integrator that follows glass
+/// (the segment is found inside by where it left).
 #[test]
 fn light_from_inside_absorbing_glass_is_attenuated() {
     let alpha = [1.0f32, 0.5, 0.25];
@@ -76,11 +76,17 @@ fn light_from_inside_absorbing_glass_is_attenuated() {
         path.geometry().triangles.intersect(&Ray::segment(eye, -Vec3::Z, enter + 1e-4, f32::INFINITY)).unwrap().t;
     let gap = glow_at - enter;
     assert!((gap - 0.3).abs() < 0.01, "gap {gap}");
-    let bdpt =
-        CpuBackend::with_integrator(2, tracer::Bdpt).unwrap().prepare_cpu(scene, &SceneOptions::default()).unwrap();
+    let options = SceneOptions::default();
+    let bdpt = CpuBackend::with_integrator(2, tracer::Bdpt).unwrap().prepare_cpu(scene.clone(), &options).unwrap();
+    let whitted =
+        CpuBackend::with_integrator(2, tracer::Whitted).unwrap().prepare_cpu(scene.clone(), &options).unwrap();
+    let atlas = tracer::AtlasGi::new(tracer::AtlasSettings { resolution: 64, samples: 4, ..Default::default() });
+    let atlas = CpuBackend::with_integrator(2, atlas).unwrap().prepare_cpu(scene, &options).unwrap();
     for (name, film) in [
         ("path", tracer::render(&path, &settings, &|_| {}).unwrap().0),
         ("bdpt", tracer::render(&bdpt, &settings, &|_| {}).unwrap().0),
+        ("whitted", tracer::render(&whitted, &settings, &|_| {}).unwrap().0),
+        ("atlas", tracer::render(&atlas, &settings, &|_| {}).unwrap().0),
     ] {
         let m = film.pixel_mean(0);
         for c in 0..3 {

@@ -181,6 +181,26 @@ pub struct FilmView {
     pub region: PixelRect,
 }
 
+impl FilmView {
+    /// The pixel of the region that film position `f` lies in, if any.
+    #[inline]
+    pub fn pixel(&self, f: Vec2) -> Option<(u32, u32)> {
+        if !(f.x >= 0.0 && f.y >= 0.0) {
+            return None;
+        }
+        let (x, y) = (f.x as u32, f.y as u32);
+        self.region.contains(x, y).then_some((x, y))
+    }
+
+    /// The solid-angle density of a camera ray towards `dir` with one sample per pixel of
+    /// the region: the pixel's importance W(ω) over the region's pixel count (pbrt's
+    /// film-normalised importance; light tracing's splats use the same).
+    #[inline]
+    pub fn density(&self, dir: Vec3) -> f32 {
+        self.rays.pixels_per_steradian(dir) / self.region.pixel_count() as f32
+    }
+}
+
 /// Unidirectional path tracing with next-event estimation and MIS (see the module
 /// documentation): unbiased with an unbounded depth.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -624,7 +644,7 @@ fn light_contribution<const N: usize, B: Bsdf<N>>(
         return None;
     }
     // A shadow ray into the back of absorbing glass runs inside it (Beer–Lambert).
-    let le = if view.absorbing { shadow_absorption(view, at, wi_world, dist, wl, le)? } else { le };
+    let le = if view.absorbing { shadow_absorption(at, wi_world, dist, wl, le)? } else { le };
     let origin = it.spawn_origin(wi_world);
     let shadow = if dist.is_finite() {
         Ray::segment(origin, ls.point - origin, 0.0, SHADOW_T_MAX)
@@ -678,20 +698,27 @@ fn punctual_incidence<const N: usize>(
 
 /// The absorption inside the surface a ray leaving it along `dir` enters: a direction into
 /// the back (against the front normal `ng`) of an absorbing transmissive material runs
-/// inside it. With [`interior_transmittance`] (which looks at where a segment *arrives*)
+/// inside it. With [`segment_transmittance`] (which also looks at where a segment *arrives*)
 /// every segment inside an absorbing object is attenuated, whichever way it was traced and
-/// whatever it ends on (an object inside the glass, a light).
+/// whatever it ends on (an object inside the glass, a light). Callers test
+/// [`SceneView`]'s `absorbing` first: scenes without absorbing glass skip it.
 #[inline(always)]
-fn entered_medium<'m>(
-    view: &SceneView,
-    material: &'m Material,
-    ng: Vec3,
-    dir: Vec3,
-) -> Option<&'m spectral::spectrum::Colour> {
-    if !view.absorbing || material.is_two_sided() || dir.dot(ng) >= 0.0 {
+fn entered_medium(material: &Material, ng: Vec3, dir: Vec3) -> Option<&spectral::spectrum::Colour> {
+    if dir.dot(ng) >= 0.0 || material.is_two_sided() {
         return None;
     }
     material.absorption()
+}
+
+/// Beer–Lambert: what is left of light after `dist` inside a material of absorption
+/// coefficient `alpha`, exp(−α·dist) per wavelength.
+#[inline]
+fn beer_lambert<const N: usize>(
+    alpha: &spectral::spectrum::Colour,
+    dist: f32,
+    wl: &SampledWavelengths<N>,
+) -> SampledSpectrum<N> {
+    alpha.sample(wl).map(|a| (-a * dist).exp())
 }
 
 /// `le` after a shadow segment of length `dist` from `at` along `wi_world`: attenuated
@@ -700,23 +727,23 @@ fn entered_medium<'m>(
 #[cold]
 #[inline(never)]
 fn shadow_absorption<const N: usize>(
-    view: &SceneView,
     at: &Shading,
     wi_world: Vec3,
     dist: f32,
     wl: &SampledWavelengths<N>,
     le: SampledSpectrum<N>,
 ) -> Option<SampledSpectrum<N>> {
-    match entered_medium(view, at.material, at.it.ng, wi_world) {
+    match entered_medium(at.material, at.it.ng, wi_world) {
         Some(_) if !dist.is_finite() => None,
-        Some(alpha) => Some(le * alpha.sample(wl).map(|a| (-a * dist).exp())),
+        Some(alpha) => Some(le * beer_lambert(alpha, dist, wl)),
         None => Some(le),
     }
 }
 
-/// Beer–Lambert over a segment of length `t` that ended on `material` (front or back), in
-/// a scene with absorbing glass: inside if it arrived at an absorbing back face, or if it
-/// left its previous vertex into the absorbing material `inside`. Out of line: scenes
+/// Beer–Lambert over a segment of length `t` that ended on `material`, reached on its
+/// front or not: inside if it arrived at the back face of an absorbing transmissive
+/// material (rays are unit length, so `t` is the distance), or if it left its previous
+/// vertex into the absorbing material `inside` ([`entered_medium`]). Out of line: scenes
 /// without absorbing glass never call it.
 #[cold]
 #[inline(never)]
@@ -727,26 +754,8 @@ fn segment_transmittance<const N: usize>(
     inside: Option<&spectral::spectrum::Colour>,
     wl: &SampledWavelengths<N>,
 ) -> SampledSpectrum<N> {
-    match interior_transmittance(material, front, t, wl) {
-        Some(transmittance) => transmittance,
-        None => inside.map_or(SampledSpectrum::one(), |alpha| alpha.sample(wl).map(|a| (-a * t).exp())),
-    }
-}
-
-/// Beer–Lambert: a ray reaching the back of an absorbing transmissive surface travelled
-/// inside it (rays are unit length, so `t` is the distance), and arrives with exp(−α·t)
-/// of its radiance; `None` where nothing absorbs.
-#[inline(always)]
-fn interior_transmittance<const N: usize>(
-    material: &Material,
-    front: bool,
-    t: f32,
-    wl: &SampledWavelengths<N>,
-) -> Option<SampledSpectrum<N>> {
-    if front || material.is_two_sided() {
-        return None;
-    }
-    material.absorption().map(|alpha| alpha.sample(wl).map(|a| (-a * t).exp()))
+    let arrived_inside = (!front && !material.is_two_sided()).then(|| material.absorption()).flatten();
+    arrived_inside.or(inside).map_or(SampledSpectrum::one(), |alpha| beer_lambert(alpha, t, wl))
 }
 
 /// Whether a sampled lobe disagrees with the geometry, the direction a path must not go:
@@ -899,7 +908,7 @@ fn path_radiance<const N: usize, S: Sampler>(
         prev_specular = s.flags.is_specular();
         prev_p = it.p;
         if view.absorbing {
-            inside = entered_medium(view, material, it.ng, wi_world);
+            inside = entered_medium(material, it.ng, wi_world);
         }
         ray = Ray::new(it.spawn_origin(wi_world), wi_world);
         bounce += 1;

@@ -6,8 +6,8 @@
 //! not depend on the view, so a moving camera keeps it.
 
 use super::{
-    Interaction, Mis, PathCounters, PathSettings, SceneView, Shading, interior_transmittance, light_contribution,
-    lobe_leaks, shading_normals,
+    Interaction, Mis, PathCounters, PathSettings, SceneView, Shading, entered_medium, light_contribution, lobe_leaks,
+    shading_normals,
 };
 use crate::integrator::Integrator;
 use crate::lights::ONE_MINUS_EPSILON;
@@ -759,6 +759,8 @@ impl Integrator for AtlasGi {
             wl.collapse_to(k);
         }
         let wl = &*wl;
+        // The absorbing material the last segment left its vertex into, if any.
+        let mut inside = None;
         for _ in 0..=SPECULAR_CHAIN {
             counters.rays += 1;
             let Some(hit) = view.intersect(&ray) else {
@@ -768,8 +770,8 @@ impl Integrator for AtlasGi {
             let it = view.interaction(&hit, material, settings.shading_normals);
             let wo_world = -ray.dir;
             let front = wo_world.dot(it.ng) > 0.0;
-            if let Some(t) = interior_transmittance(material, front, hit.t, wl) {
-                beta *= t;
+            if view.absorbing {
+                beta *= super::segment_transmittance(material, front, hit.t, inside, wl);
             }
             if front && let Some(le) = material.emission_at(it.uv, wl) {
                 l += beta * le;
@@ -815,6 +817,9 @@ impl Integrator for AtlasGi {
                 return l;
             }
             beta *= s.f * (s.wi.z.abs() / s.pdf);
+            if view.absorbing {
+                inside = entered_medium(material, it.ng, wi_world);
+            }
             ray = Ray::new(it.spawn_origin(wi_world), wi_world);
         }
         l

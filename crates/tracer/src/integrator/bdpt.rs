@@ -4,8 +4,8 @@
 //! by the power heuristic over all the ways the same path could have been sampled.
 
 use super::{
-    Interaction, Mis, PathCounters, PathSettings, RR_MIN_TERMINATION, SHADOW_T_MAX, SceneView, Shading,
-    interior_transmittance, light_contribution, lobe_leaks, power_heuristic, shading_normals,
+    Interaction, Mis, PathCounters, PathSettings, RR_MIN_TERMINATION, SHADOW_T_MAX, SceneView, Shading, beer_lambert,
+    entered_medium, light_contribution, lobe_leaks, power_heuristic, segment_transmittance, shading_normals,
 };
 use crate::integrator::{CameraSample, Integrator, Splat};
 use crate::lights::{LightSample, LightSource};
@@ -192,21 +192,13 @@ fn emission_pdf(view: &SceneView, kind: Kind, n: Vec3, dir: Vec3) -> f32 {
     }
 }
 
-/// The camera's density for a ray towards `dir`, per solid angle, with one sample per
-/// pixel of the region: a pixel's density over the region's pixel count (0 outside it).
+/// The camera's density for a ray towards `dir`, per solid angle ([`super::FilmView::density`]),
+/// 0 outside the region rendered (or without a film).
 fn camera_pdf(view: &SceneView, dir: Vec3) -> f32 {
     let Some(film) = view.film() else { return 0.0 };
-    let r = film.region;
-    match film.rays.film_position(film.rays.eye() + dir) {
-        Some(f)
-            if f.x >= r.x as f32
-                && f.y >= r.y as f32
-                && f.x < (r.x + r.width) as f32
-                && f.y < (r.y + r.height) as f32 =>
-        {
-            film.rays.pixels_per_steradian(dir) / (r.width as f32 * r.height as f32)
-        }
-        _ => 0.0,
+    match film.rays.film_position(film.rays.eye() + dir).and_then(|f| film.pixel(f)) {
+        Some(_) => film.density(dir),
+        None => 0.0,
     }
 }
 
@@ -650,10 +642,8 @@ fn walk<'v, const N: usize, S: Sampler>(
         let it = view.interaction(&hit, material, settings.shading_normals);
         let wo_world = -ray.dir;
         let front = wo_world.dot(it.ng) > 0.0;
-        if let Some(transmittance) = interior_transmittance(material, front, hit.t, wl) {
-            beta *= transmittance;
-        } else if let Some(alpha) = inside {
-            beta *= alpha.sample(wl).map(|a| (-a * hit.t).exp());
+        if view.absorbing {
+            beta *= segment_transmittance(material, front, hit.t, inside, wl);
         }
         let (ng, ns) = shading_normals(settings.shading_normals, it.ng, it.ns, wo_world, material.is_two_sided());
         let frame = Frame::from_normal_tangent(ns, it.tangent);
@@ -710,7 +700,9 @@ fn walk<'v, const N: usize, S: Sampler>(
         }
         let (fwd, rev) = if specular { (0.0, 0.0) } else { (bs.pdf, s.bsdf.pdf(bs.wi, wo)) };
         let origin = s.it.spawn_origin(wi_world);
-        inside = super::entered_medium(view, s.material, s.it.ng, wi_world);
+        if view.absorbing {
+            inside = entered_medium(s.material, s.it.ng, wi_world);
+        }
         path[k].delta = specular;
         let prev_p = path[k - 1].p;
         let prev_n = path[k - 1].n;
@@ -798,8 +790,8 @@ fn next_event<const N: usize, S: Sampler>(
     pt.beta * f * le * (k * w)
 }
 
-/// Beer–Lambert along a connection that runs inside an absorbing material: it does
-/// where it leaves a vertex into the back of that vertex's surface.
+/// Beer–Lambert along a connection that leaves vertex `v` along `dir` into the back of
+/// an absorbing material (with the other end's test, the rule the walks use).
 fn connection_transmittance<const N: usize>(
     v: &Vertex<'_, N>,
     dir: Vec3,
@@ -807,8 +799,7 @@ fn connection_transmittance<const N: usize>(
     wl: &SampledWavelengths<N>,
 ) -> Option<SampledSpectrum<N>> {
     let s = v.surface.as_ref()?;
-    let front = dir.dot(s.it.ng) > 0.0;
-    interior_transmittance(s.material, front, dist, wl)
+    entered_medium(s.material, s.it.ng, dir).map(|alpha| beer_lambert(alpha, dist, wl))
 }
 
 /// Whether nothing blocks the segment between two vertices.
@@ -876,12 +867,7 @@ fn splat_to_eye<const N: usize>(
     let qs = &light[s - 1];
     let Some(sq) = qs.surface.as_ref().filter(|_| qs.connectible()) else { return };
     let eye = &camera[0];
-    let Some(pos) = film.rays.film_position(qs.p) else { return };
-    let r = film.region;
-    let (x, y) = (pos.x.floor(), pos.y.floor());
-    if !(x >= r.x as f32 && y >= r.y as f32 && x < (r.x + r.width) as f32 && y < (r.y + r.height) as f32) {
-        return;
-    }
+    let Some((x, y)) = film.rays.film_position(qs.p).and_then(|f| film.pixel(f)) else { return };
     let d = eye.p - qs.p;
     let dist2 = d.length_squared();
     if dist2.is_nan() || dist2 <= 0.0 {
@@ -889,9 +875,8 @@ fn splat_to_eye<const N: usize>(
     }
     let dist = dist2.sqrt();
     let w = d / dist;
-    // W(ω) per pixel, over the region's pixel count: the film divides by the light paths
-    // traced per pixel.
-    let importance = film.rays.pixels_per_steradian(-w) / (r.width as f32 * r.height as f32);
+    // W(ω) over the region's pixel count: the film divides by the light paths per pixel.
+    let importance = film.density(-w);
     let f = surface_f(sq, sq.wo_world, w, Transport::Importance);
     let mut c = qs.beta * f * (sq.frame.n.dot(w).abs() * importance / dist2);
     if c.is_black() || !c.0.iter().all(|v| v.is_finite()) || !visible(view, qs, eye, counters) {
@@ -901,5 +886,5 @@ fn splat_to_eye<const N: usize>(
         c *= tr;
     }
     let weight = Strategy { light, camera, sampled: None, s, t: 1, light_tracing: true }.weight(view);
-    splats.push(Splat { x: x as u32, y: y as u32, rgb: wl.to_linear_srgb(&(c * weight)) });
+    splats.push(Splat { x, y, rgb: wl.to_linear_srgb(&(c * weight)) });
 }

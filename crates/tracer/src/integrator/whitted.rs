@@ -2,8 +2,7 @@
 //! Shaded Display", CACM 23(6), 1980; the lecture's `traceRay`).
 
 use super::{
-    Integrator, Mis, PathCounters, PathSettings, SceneView, Shading, interior_transmittance, light_contribution,
-    lobe_leaks,
+    Integrator, Mis, PathCounters, PathSettings, SceneView, Shading, entered_medium, light_contribution, lobe_leaks,
 };
 use crate::lights::{LightSource, Lights, ONE_MINUS_EPSILON};
 use crate::sampler::Sampler;
@@ -54,11 +53,12 @@ impl Integrator for Whitted {
             wl.collapse_to(k);
         }
         let max_depth = if settings.max_depth > 0 { settings.max_depth } else { WHITTED_DEFAULT_DEPTH };
-        trace(view, ray, wl, settings, max_depth, 0, sampler, counters)
+        trace(view, ray, wl, settings, max_depth, 0, None, sampler, counters)
     }
 }
 
-/// The radiance along `ray`, which has already scattered `depth` times.
+/// The radiance along `ray`, which has already scattered `depth` times and left its
+/// origin into the absorbing material `inside`, if any.
 #[allow(clippy::too_many_arguments)]
 fn trace<const N: usize, S: Sampler>(
     view: &SceneView,
@@ -67,6 +67,7 @@ fn trace<const N: usize, S: Sampler>(
     settings: &PathSettings,
     max_depth: u32,
     depth: u32,
+    inside: Option<&spectral::spectrum::Colour>,
     sampler: &mut S,
     counters: &mut PathCounters,
 ) -> SampledSpectrum<N> {
@@ -81,7 +82,11 @@ fn trace<const N: usize, S: Sampler>(
     let front = wo_world.dot(it.ng) > 0.0;
     let mut l = SampledSpectrum::<N>::zero();
     // Beer–Lambert inside absorbing glass, as in the path tracer.
-    let attenuation = interior_transmittance(material, front, hit.t, wl).unwrap_or(SampledSpectrum::one());
+    let attenuation = if view.absorbing {
+        super::segment_transmittance(material, front, hit.t, inside, wl)
+    } else {
+        SampledSpectrum::one()
+    };
     if front && let Some(le) = material.emission_at(it.uv, wl) {
         l += le;
     }
@@ -139,7 +144,8 @@ fn trace<const N: usize, S: Sampler>(
             continue;
         }
         let child_ray = Ray::new(it.spawn_origin(wi_world), wi_world);
-        let child = trace(view, child_ray, wl, settings, max_depth, depth + 1, sampler, counters);
+        let entered = if view.absorbing { entered_medium(material, it.ng, wi_world) } else { None };
+        let child = trace(view, child_ray, wl, settings, max_depth, depth + 1, entered, sampler, counters);
         l += weight * child;
     }
     l * attenuation
