@@ -238,19 +238,6 @@ impl Film {
         }
     }
 
-    /// Adds light-path contributions (exactly, in any order); a NaN, infinite or
-    /// too-large one, one outside the film, or one whose sum would overflow, is dropped
-    /// and counted in [`Film::non_finite`].
-    pub fn add_splats(&mut self, splats: &[Splat]) {
-        if splats.is_empty() {
-            return;
-        }
-        if self.splats.is_empty() {
-            self.splats = vec![[0; 3]; self.pixels.len()];
-        }
-        self.non_finite += accumulate_splats(&mut self.splats, self.width, self.height, splats);
-    }
-
     /// Adds the sums a backend's threads gathered into a [`SplatImage`] of this size.
     pub fn add_splat_image(&mut self, image: &SplatImage) {
         assert_eq!((image.width, image.height), (self.width, self.height), "a splat image of the film's size");
@@ -511,6 +498,13 @@ mod tests {
         }
     }
 
+    /// Adds `splats` to `film` through a splat image, as a backend does.
+    fn add_splats(film: &mut Film, splats: &[Splat]) {
+        let mut image = SplatImage::new(film.width(), film.height());
+        image.add(splats);
+        film.add_splat_image(&image);
+    }
+
     #[test]
     fn splats_add_exactly_over_the_light_paths_and_bad_ones_are_dropped() {
         let mut film = Film::new(3, 2);
@@ -521,17 +515,20 @@ mod tests {
             Splat { x: 0, y: 0, rgb: [3.0, 3.0, 3.0] },
         ];
         let mut reversed = film.clone();
-        film.add_splats(&splats);
+        add_splats(&mut film, &splats);
         for s in splats.iter().rev() {
-            reversed.add_splats(std::slice::from_ref(s));
+            add_splats(&mut reversed, std::slice::from_ref(s));
         }
         for f in [&mut film, &mut reversed] {
             f.count_light_paths(4);
-            f.add_splats(&[
-                Splat { x: 3, y: 0, rgb: [1.0; 3] },
-                Splat { x: 0, y: 1, rgb: [f32::NAN, 0.0, 0.0] },
-                Splat { x: 0, y: 1, rgb: [MAX_SAMPLE_MAGNITUDE, 0.0, 0.0] },
-            ]);
+            add_splats(
+                f,
+                &[
+                    Splat { x: 3, y: 0, rgb: [1.0; 3] },
+                    Splat { x: 0, y: 1, rgb: [f32::NAN, 0.0, 0.0] },
+                    Splat { x: 0, y: 1, rgb: [MAX_SAMPLE_MAGNITUDE, 0.0, 0.0] },
+                ],
+            );
         }
         assert_eq!(film, reversed, "order does not matter");
         assert_eq!(film.non_finite, 3);
@@ -546,16 +543,14 @@ mod tests {
     }
 
     #[test]
-    fn a_splat_image_adds_what_the_film_would_and_overflow_is_dropped() {
+    fn splat_images_add_exactly_and_overflow_is_dropped() {
         let splats = [Splat { x: 2, y: 0, rgb: [1.5, 0.25, 3.0] }, Splat { x: 2, y: 0, rgb: [0.5, 0.0, 1.0] }];
         let mut direct = Film::new(3, 2);
-        direct.add_splats(&splats);
-        let mut image = SplatImage::new(3, 2);
-        image.add(&splats[..1]);
-        image.add(&splats[1..]);
+        add_splats(&mut direct, &splats);
         let mut via = Film::new(3, 2);
-        via.add_splat_image(&image);
-        assert_eq!(direct, via);
+        add_splats(&mut via, &splats[1..]);
+        add_splats(&mut via, &splats[..1]);
+        assert_eq!(direct, via, "one image or two, in any order");
         // Sums that would overflow an i128 are dropped, not wrapped.
         let mut film = Film::new(1, 1);
         film.add_splat_sum(0, [i128::MAX - 5, 0, 0]);
