@@ -44,6 +44,18 @@ impl BoxBvh {
         self.nodes.len()
     }
 
+    /// The nodes (root first, the left child after its parent; a leaf's `index..index +
+    /// count` are slots of [`BoxBvh::order`]), for backends that traverse the tree elsewhere
+    /// (the GPU).
+    pub fn nodes(&self) -> &[BvhNode] {
+        &self.nodes
+    }
+
+    /// Leaf slot → primitive index.
+    pub fn order(&self) -> &[u32] {
+        &self.order
+    }
+
     /// Visits the leaves `ray` enters within (t_min, `t_max`], nearest box first, calling
     /// `hit(prim, t_max)` for each primitive there; the callback returns the distance of a
     /// hit closer than the `t_max` it was given (which then shrinks) or `None`. With

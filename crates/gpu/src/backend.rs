@@ -9,7 +9,8 @@
 //!   map, the CIE 1931 tables, the environment's spectrum, the light distribution, and
 //!   the material kernel from [`crate::materials`]), checks every buffer against the
 //!   device's limits, uploads it and compiles the kernel ([`crate::kernel`]) for the
-//!   scene's materials and the requested triangle test. The result, a [`GpuScene`], owns
+//!   scene's materials, the requested triangle test, and whether it has analytic shapes
+//!   and punctual lights (without, their code is not in the kernel). The result, a [`GpuScene`], owns
 //!   all of that: an interactive viewer calling `render_pass` once per frame pays only
 //!   for the frame's samples.
 //! * A pass renders the image in bands of rows (so that the per-pixel accumulators fit
@@ -37,7 +38,14 @@
 //! What differs:
 //!
 //! * Hero mode only (four wavelengths); `bins40` and `rgb` are refused up front by the
-//!   capability check, as are analytic shapes and custom (out-of-workspace) BSDFs.
+//!   capability check, as are implicit surfaces (their solver works in f64), textures and
+//!   custom (out-of-workspace) BSDFs.
+//! * Spheres, boxes and polygons (`wgsl/shapes.wgsl`) are records in the tables with a
+//!   binary BVH of their own, traversed after the triangles' as on the CPU; the polygon's
+//!   inside test evaluates its orientation determinant in f32 (f64 on the CPU), which can
+//!   differ for points within rounding of an edge. Point, spot and directional lights
+//!   (with a sun's disk) are entries of the light table; their spectra are tabulated at
+//!   1 nm, as the environment's.
 //! * A path has at most [`MAX_BOUNCES`] scattering events. A `max_depth` beyond it is
 //!   refused; with `max_depth` 0 (unbounded on the CPU) paths that reach it are counted
 //!   ([`PathCounters::truncated`], printed by the CLI): with Russian roulette
@@ -67,8 +75,9 @@
 
 use crate::accumulation::DeviceAccumulation;
 use crate::kernel::{
-    FILM_HEADER_BYTES, GpuIntegrator, HAS_ENVIRONMENT, HAS_NORMALS, HAS_TANGENTS, KernelOptions, LIGHT_FLOATS,
-    NodeLayout, Params, PixelAccum, SEEDS_OFFSET, UNIFORM_BYTES, WideNode,
+    FILM_HEADER_BYTES, GpuIntegrator, HAS_ENVIRONMENT, HAS_NORMALS, HAS_TANGENTS, KernelOptions, LIGHT_CDF,
+    LIGHT_FLOATS, LIGHT_KIND, LIGHT_MATERIAL, LIGHT_PMF, LightKind, NodeLayout, Params, PixelAccum, SEEDS_OFFSET,
+    ShapeCode, UNIFORM_BYTES, WideNode,
 };
 use crate::wide::WideBvh;
 use crate::{GpuContext, GpuError};
@@ -78,15 +87,17 @@ use spectral::SpectralMode;
 use spectral::tables::{CIE_SAMPLES, CIE_X, CIE_Y, CIE_Z};
 use std::sync::{Arc, Mutex, MutexGuard, PoisonError};
 use std::time::{Duration, Instant};
-use tracer::Scene;
 use tracer::accumulation::{Accumulation, FilmAccumulation};
 use tracer::film::{Film, PixelStats};
 use tracer::integrator::PathCounters;
+use tracer::punctual::PunctualLight;
+use tracer::render::ShapeSupport;
 use tracer::render::{
     Backend, Capabilities, PixelRect, PrepareStats, PreparedScene, RenderSettings, SceneOptions, check_pass,
     check_sample_range,
 };
 use tracer::sampler::SamplerKind;
+use tracer::{Scene, ShapeKind};
 use wgpu::util::DeviceExt;
 
 /// The most scattering events a GPU path may have, whatever `max_depth` says (paths cut
@@ -108,6 +119,91 @@ pub const SAMPLES_PER_READBACK: u32 = 1024;
 /// The kernel's workgroup side (8 × 8 invocations, one per pixel).
 const WORKGROUP: u32 = 8;
 
+/// A spectrum tabulated at 1 nm over the CIE tables' range, as the kernel interpolates it
+/// (`pt_table_spectrum`).
+fn tabulate(spectrum: &spectral::spectrum::Spectrum) -> impl Iterator<Item = f32> + '_ {
+    (0..CIE_SAMPLES).map(move |i| spectrum.eval(spectral::tables::CIE_LAMBDA_MIN + i as f32))
+}
+
+/// The record of an analytic shape in the kernel's tables (`wgsl/shapes.wgsl`): kind,
+/// material id, light pmf and area, then the shape's own numbers.
+pub fn shape_record(shape: &ShapeKind, material: u32, pmf: f32) -> Vec<f32> {
+    let bits = f32::from_bits;
+    let (code, own): (ShapeCode, Vec<f32>) = match shape {
+        ShapeKind::Sphere(s) => {
+            let mut v = s.centre.to_array().to_vec();
+            v.extend([s.radius, bits(crate::kernel::sphere_method_code(s.method))]);
+            (ShapeCode::Sphere, v)
+        }
+        ShapeKind::Cuboid(b) => {
+            let mut v = vec![bits(b.is_axis_aligned() as u32)];
+            v.extend(b.centre().to_array());
+            v.extend(b.half_extent().to_array());
+            v.extend(b.axes().iter().flat_map(|a| a.to_array()));
+            let corners = if b.is_axis_aligned() { shapes::Shape::bounds(b) } else { bvh::Aabb::EMPTY };
+            v.extend(corners.min.to_array());
+            v.extend(corners.max.to_array());
+            (ShapeCode::Cuboid, v)
+        }
+        ShapeKind::Polygon(p) => {
+            let mut v = vec![
+                bits(crate::kernel::polygon_test_code(p.inside_test())),
+                bits(p.dropped_axis() as u32),
+                bits(p.projected().len() as u32),
+            ];
+            v.extend(p.normal().to_array());
+            v.extend(p.anchor().to_array());
+            v.push(bits(p.triangles().len() as u32));
+            v.extend(p.projected().iter().flat_map(|q| q.to_array()));
+            for (t, &cdf) in p.triangles().iter().zip(p.triangle_cdf()) {
+                v.extend(t.iter().flat_map(|q| q.to_array()));
+                v.push(cdf);
+            }
+            (ShapeCode::Polygon, v)
+        }
+        ShapeKind::Implicit(_) => unreachable!("implicit surfaces are refused before"),
+    };
+    let mut record = vec![bits(code as u32), bits(material), pmf, shape.shape().area()];
+    record.extend(own);
+    record
+}
+
+/// Fills a punctual light's floats of its light-table entry (`LightKind`'s layout), its
+/// spectrum table at `spectrum` (bits), and returns its kind.
+fn punctual_entry(light: &PunctualLight, spectrum: f32, entry: &mut [f32; LIGHT_FLOATS]) -> LightKind {
+    let put =
+        |entry: &mut [f32; LIGHT_FLOATS], at: usize, v: glam::Vec3| entry[at..at + 3].copy_from_slice(&v.to_array());
+    match *light {
+        PunctualLight::Point { position, .. } => {
+            put(entry, 0, position);
+            entry[3] = spectrum;
+            LightKind::Point
+        }
+        PunctualLight::Spot { position, direction, cos_inner, cos_outer, .. } => {
+            put(entry, 0, position);
+            put(entry, 3, direction);
+            entry[6] = cos_inner;
+            entry[7] = cos_outer;
+            entry[8] = spectrum;
+            LightKind::Spot
+        }
+        PunctualLight::Directional { .. } => {
+            let towards = light.towards();
+            // The sampling frame of a sun's disk, as `Lights::sample_punctual` builds it.
+            let (t, b) = towards.any_orthonormal_pair();
+            let (cos_radius, solid_angle) = light.disk().map_or((1.0, 0.0), |(_, c, sa)| (c, sa));
+            put(entry, 0, towards);
+            entry[3] = cos_radius;
+            entry[4] = solid_angle;
+            entry[5] = light.disk_radiance_scale();
+            entry[6] = spectrum;
+            put(entry, 7, t);
+            put(entry, 13, b);
+            LightKind::Directional
+        }
+    }
+}
+
 /// log₂ of `n` rounded up to a power of two (at least 1): the bits of a Sobol index or a
 /// Morton coordinate below `n`.
 fn sobol_bits(n: u32) -> u32 {
@@ -123,6 +219,14 @@ const FILM_BAND_CAP: u64 = 64 << 20;
 /// Storage buffers the kernel binds (six of ours, two of the material kernel's).
 const STORAGE_BUFFERS: u32 = 8;
 
+/// The analytic shapes the kernel intersects (`wgsl/shapes.wgsl`).
+const GPU_SHAPES: [&str; 3] = ["sphere", "box", "polygon"];
+
+/// Why implicit surfaces are refused.
+const IMPLICIT_NOT_PORTED: &str = "implicit surfaces are not ported to the GPU: their root finder (closed forms, \
+     Laguerre's method with deflation and polishing, clipping to the bounds) works in f64, which WGSL does not have \
+     (wgpu offers f64 only as a native extension, which lavapipe and many GPUs lack)";
+
 /// What the GPU backend running the path tracer can render: hero wavelengths, triangle
 /// meshes, registered models, both triangle tests, at most [`MAX_BOUNCES`] bounces.
 pub fn capabilities() -> Capabilities {
@@ -137,9 +241,9 @@ pub fn capabilities_for(integrator: GpuIntegrator) -> Capabilities {
         // ZSobol first (the default): on an H100 it reaches the independent sampler's error
         // 1.76× sooner on the Cornell box (docs/gpu.md).
         samplers: vec![SamplerKind::ZSobol, SamplerKind::Sobol, SamplerKind::Independent],
-        analytic_shapes: false,
+        analytic_shapes: ShapeSupport { kinds: GPU_SHAPES.to_vec(), why_not: IMPLICIT_NOT_PORTED },
         custom_bsdfs: false,
-        punctual_lights: false,
+        punctual_lights: true,
         textures: false,
         triangle_tests: vec![TriangleTest::Watertight, TriangleTest::MollerTrumbore],
         // Auto is the binary tree: on an H100 the 4-wide one (`crate::wide`) renders 1.2–1.8×
@@ -162,7 +266,11 @@ struct SceneConstants {
     sobol_offset: u32,
     node_count: u32,
     light_count: u32,
+    punctual_first: u32,
     lights_offset: u32,
+    shape_nodes_offset: u32,
+    shape_node_count: u32,
+    shape_slots_offset: u32,
     env_offset: u32,
     env_pmf: f32,
     scene_flags: u32,
@@ -190,11 +298,11 @@ pub struct SceneData {
 impl SceneData {
     /// Flattens `scene` (validated, within the backend's capabilities) for a kernel with
     /// `options`: builds its BVH and light distribution and generates its materials.
-    /// Fails with [`GpuError::Unsupported`] for what the kernel cannot trace (analytic
-    /// shapes, custom BSDFs) and passes on the material code generator's errors.
+    /// Fails with [`GpuError::Unsupported`] for what the kernel cannot trace (implicit
+    /// surfaces, custom BSDFs) and passes on the material code generator's errors.
     pub fn new(scene: &Scene, options: KernelOptions) -> Result<Self, GpuError> {
-        if !scene.shapes.is_empty() {
-            return Err(GpuError::Unsupported("analytic shapes (spheres, boxes, …)".into()));
+        if let Some(s) = scene.shapes.iter().find(|s| !GPU_SHAPES.contains(&s.shape.name())) {
+            return Err(GpuError::Unsupported(format!("{} ({IMPLICIT_NOT_PORTED})", s.shape.name())));
         }
         if !scene.instances.is_empty() {
             return Err(GpuError::Unsupported("instances (flatten them first: Scene::flatten_instances)".into()));
@@ -221,7 +329,12 @@ impl SceneData {
                 (bytes.to_vec(), std::mem::size_of::<WideNode>(), wide.nodes.len(), layout)
             }
         };
-        let options = KernelOptions { nodes: layout, ..options };
+        let options = KernelOptions {
+            nodes: layout,
+            shapes: !scene.shapes.is_empty(),
+            punctual_lights: !scene.punctual_lights.is_empty(),
+            ..options
+        };
         let build_time = start.elapsed();
         let lights = tracer::lights::Lights::new(scene);
         let pmfs = lights.prim_pmfs();
@@ -281,21 +394,81 @@ impl SceneData {
         // The Sobol samplers' second dimension: the CPU's bit-reversed byte tables.
         let sobol_offset = tables.len() as u32;
         tables.extend(tracer::sampler::SOBOL_1_REVERSED.iter().flatten().map(|&v| f32::from_bits(v)));
-        let lights_offset = tables.len() as u32;
-        for (&prim, &cdf) in lights.prims().iter().zip(lights.cdf()) {
-            // Shapes are rejected above, so every sampled emitter is a triangle.
-            let v = scene.triangle_vertices(prim as usize);
-            tables.extend(v.iter().flat_map(|p| p.to_array()));
-            tables.extend([cdf, pmfs[prim as usize], f32::from_bits(scene.material_ids[prim as usize])]);
+        // The analytic shapes: their records, the slot table in the BVH's leaf order, and
+        // the BVH's nodes.
+        let mut shape_records = vec![0u32; scene.shapes.len()];
+        for (k, shape) in scene.shapes.iter().enumerate() {
+            shape_records[k] = tables.len() as u32;
+            let prim = scene.triangles.len() + k;
+            tables.extend(shape_record(&shape.shape, shape.material, pmfs.get(prim).copied().unwrap_or(0.0)));
         }
+        let (shape_nodes_offset, shape_node_count, shape_slots_offset) = if scene.shapes.is_empty() {
+            (0, 0, 0)
+        } else {
+            let boxes: Vec<_> = scene.shapes.iter().map(|s| s.shape.shape().bounds()).collect();
+            let shape_bvh = bvh::BoxBvh::build(&boxes, tracer::Geometry::shape_build_config())
+                .map_err(|e| GpuError::Unsupported(format!("these shapes ({e})")))?;
+            let nodes_offset = tables.len() as u32;
+            for n in shape_bvh.nodes() {
+                tables.extend(n.min);
+                tables.push(f32::from_bits(n.index));
+                tables.extend(n.max);
+                tables.push(f32::from_bits(n.count));
+            }
+            let slots_offset = tables.len() as u32;
+            tables.extend(shape_bvh.order().iter().map(|&k| f32::from_bits(shape_records[k as usize])));
+            (nodes_offset, shape_bvh.node_count() as u32, slots_offset)
+        };
+
+        // The light table, in the order of the CPU's cdf: emissive triangles and shapes,
+        // then the punctual lights (each with its spectrum tabulated at 1 nm after the table).
+        let lights_offset = tables.len() as u32;
+        let mut punctual_spectra = Vec::new();
+        let entries = lights.cdf().len();
+        let spectra_offset = lights_offset as usize + LIGHT_FLOATS * entries;
+        for (k, &cdf) in lights.cdf().iter().enumerate() {
+            let mut entry = [0.0f32; LIGHT_FLOATS];
+            let (kind, material, pmf) = match lights.prims().get(k) {
+                Some(&prim) if (prim as usize) < scene.triangles.len() => {
+                    let v = scene.triangle_vertices(prim as usize);
+                    for (i, p) in v.iter().enumerate() {
+                        entry[3 * i..3 * i + 3].copy_from_slice(&p.to_array());
+                    }
+                    (LightKind::Triangle, scene.material_ids[prim as usize], pmfs[prim as usize])
+                }
+                Some(&prim) => {
+                    let shape = prim as usize - scene.triangles.len();
+                    entry[0] = f32::from_bits(shape_records[shape]);
+                    (LightKind::Shape, scene.shapes[shape].material, pmfs[prim as usize])
+                }
+                None => {
+                    let index = k - lights.prims().len();
+                    let light = &scene.punctual_lights[index];
+                    let spectrum = f32::from_bits((spectra_offset + punctual_spectra.len()) as u32);
+                    punctual_spectra.extend(tabulate(&light.colour().spectrum));
+                    let kind = punctual_entry(light, spectrum, &mut entry);
+                    (kind, u32::MAX, lights.punctual_pmf(index))
+                }
+            };
+            entry[LIGHT_CDF as usize] = cdf;
+            entry[LIGHT_PMF as usize] = pmf;
+            entry[LIGHT_MATERIAL as usize] = f32::from_bits(material);
+            entry[LIGHT_KIND] = f32::from_bits(kind as u32);
+            tables.extend(entry);
+        }
+        tables.extend(punctual_spectra);
 
         let constants = SceneConstants {
             integrator: options.integrator,
             white_offset,
             sobol_offset,
             node_count: node_count as u32,
-            light_count: lights.prims().len() as u32,
+            light_count: lights.cdf().len() as u32,
+            punctual_first: lights.prims().len() as u32,
             lights_offset,
+            shape_nodes_offset,
+            shape_node_count,
+            shape_slots_offset,
             env_offset,
             env_pmf: lights.environment_pmf(),
             scene_flags,
@@ -495,6 +668,9 @@ impl GpuBackend {
                 integrator: self.integrator,
                 // The kernel a render with the default sampler uses; others compile on demand.
                 sampler: capabilities_for(self.integrator).samplers[0],
+                // (Set from the scene.)
+                shapes: false,
+                punctual_lights: false,
             },
         )?;
         data.check_limits(&self.ctx.limits)?;
@@ -629,6 +805,10 @@ impl GpuScene {
             scene_flags: self.constants.scene_flags,
             node_count: self.constants.node_count,
             light_count: self.constants.light_count,
+            punctual_first: self.constants.punctual_first,
+            shape_nodes_offset: self.constants.shape_nodes_offset,
+            shape_node_count: self.constants.shape_node_count,
+            shape_slots_offset: self.constants.shape_slots_offset,
             env_pmf: self.constants.env_pmf,
             eye: v4(eye),
             forward: v4(forward),

@@ -128,7 +128,7 @@ wgsl_struct! {
         scene_flags: u32,
         /// BVH nodes.
         node_count: u32,
-        /// Emissive triangles.
+        /// Entries of the light table (emissive triangles and shapes, then punctual lights).
         light_count: u32,
         /// Probability of sampling the environment in next-event estimation.
         env_pmf: f32,
@@ -162,6 +162,16 @@ wgsl_struct! {
         zseed_lo: u32,
         /// ZSobol: `mix64(seed)`, high word.
         zseed_hi: u32,
+        /// Offset in `pt_tables` of the analytic shapes' BVH (binary nodes of 8 words).
+        shape_nodes_offset: u32,
+        /// Nodes of the shapes' BVH (0: no shapes).
+        shape_node_count: u32,
+        /// Offset in `pt_tables` of the shapes' leaf slots: slot → the offset of its
+        /// shape's record (bits).
+        shape_slots_offset: u32,
+        /// Entries of the light table before the punctual lights (emissive triangles and
+        /// shapes); `light_count` counts all.
+        punctual_first: u32,
     }
 }
 
@@ -301,14 +311,53 @@ pub const HAS_TANGENTS: u32 = 2;
 /// Scene flag: the scene has an environment light.
 pub const HAS_ENVIRONMENT: u32 = 4;
 
-/// Floats per light in the light table: three vertices, cdf, pmf, material id (bits).
-pub const LIGHT_FLOATS: usize = 12;
+/// Floats per light in the light table: nine of the light's own (a triangle's vertices,
+/// a shape's record offset, a punctual light's position, axis, cone and spectrum), cdf,
+/// pmf, material id (bits), kind ([`LightKind`], bits) and three more of its own.
+pub const LIGHT_FLOATS: usize = 16;
 /// Index of the cdf within a light's floats.
-const LIGHT_CDF: u32 = 9;
+pub const LIGHT_CDF: u32 = 9;
 /// Index of the pmf within a light's floats.
-const LIGHT_PMF: u32 = 10;
+pub const LIGHT_PMF: u32 = 10;
 /// Index of the material id (bits) within a light's floats.
-const LIGHT_MATERIAL: u32 = 11;
+pub const LIGHT_MATERIAL: u32 = 11;
+/// Index of the kind (bits) within a light's floats.
+pub const LIGHT_KIND: usize = 12;
+
+/// What an entry of the light table is (`PT_LIGHT_*`), and what its own floats hold.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LightKind {
+    /// An emissive triangle: its vertices (0..9).
+    Triangle = 0,
+    /// An emissive analytic shape: its record's offset in `pt_tables` (0, bits).
+    Shape = 1,
+    /// A point light: position (0..3), its intensity's spectrum table (3, bits).
+    Point = 2,
+    /// A spot light: position (0..3), axis (3..6), cos of the inner and outer cones (6, 7),
+    /// its intensity's spectrum table (8, bits).
+    Spot = 3,
+    /// A directional light or sun: direction towards it (0..3), cos of its angular radius
+    /// (3; 1 for a delta direction), solid angle (4), radiance / irradiance (5), its
+    /// irradiance's spectrum table (6, bits), the sampling frame's two tangents (7..9,
+    /// 13..16).
+    Directional = 4,
+}
+
+/// What a record of the analytic-shape table is (`PT_SHAPE_*`). Every record starts with
+/// the kind, the material id (bits), the light pmf and the area; see
+/// `crate::backend::shape_record` for the rest.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ShapeCode {
+    /// `shapes::sphere::Sphere`.
+    Sphere = 0,
+    /// `shapes::boxes::Cuboid`.
+    Cuboid = 1,
+    /// `shapes::polygon::Polygon`.
+    Polygon = 2,
+}
+
+/// A shape hit's primitive id in the kernel: this bit set, the record's offset below it.
+pub const SHAPE_PRIM_BIT: u32 = 0x8000_0000;
 
 /// Entries of the traversal stack (the BVH builders' depth limit is 62).
 const STACK_ENTRIES: u32 = 64;
@@ -326,6 +375,28 @@ pub struct KernelOptions {
     pub integrator: GpuIntegrator,
     /// The sampler compiled in (`PT_SAMPLER`): a render with another gets another kernel.
     pub sampler: SamplerKind,
+    /// Whether the scene has analytic shapes (`PT_HAS_SHAPES`: without, their traversal
+    /// and surfaces are not in the kernel).
+    pub shapes: bool,
+    /// Whether the scene has point, spot or directional lights (`PT_HAS_PUNCTUAL`).
+    pub punctual_lights: bool,
+}
+
+/// A sphere method's code in a shape record (`PT_SPHERE_*`).
+pub fn sphere_method_code(method: shapes::sphere::SphereMethod) -> u32 {
+    match method {
+        shapes::sphere::SphereMethod::Geometric => 0,
+        shapes::sphere::SphereMethod::AlgebraicNaive => 1,
+        shapes::sphere::SphereMethod::AlgebraicStable => 2,
+    }
+}
+
+/// A polygon inside test's code in a shape record (`PT_POLYGON_*`).
+pub fn polygon_test_code(test: shapes::polygon::InsideTest) -> u32 {
+    match test {
+        shapes::polygon::InsideTest::WindingNumber => 0,
+        shapes::polygon::InsideTest::CrossingNumber => 1,
+    }
 }
 
 /// An f32 as a WGSL literal that parses back to the same value.
@@ -380,6 +451,23 @@ pub fn header(options: &KernelOptions) -> String {
     u("PT_LIGHT_CDF", LIGHT_CDF);
     u("PT_LIGHT_PMF", LIGHT_PMF);
     u("PT_LIGHT_MATERIAL", LIGHT_MATERIAL);
+    u("PT_LIGHT_KIND", LIGHT_KIND as u32);
+    for kind in [LightKind::Triangle, LightKind::Shape, LightKind::Point, LightKind::Spot, LightKind::Directional] {
+        u(&format!("PT_LIGHT_{}", format!("{kind:?}").to_ascii_uppercase()), kind as u32);
+    }
+    for code in [ShapeCode::Sphere, ShapeCode::Cuboid, ShapeCode::Polygon] {
+        u(&format!("PT_SHAPE_{}", format!("{code:?}").to_ascii_uppercase()), code as u32);
+    }
+    u("PT_SHAPE_PRIM_BIT", SHAPE_PRIM_BIT);
+    for (name, method) in [
+        ("GEOMETRIC", shapes::sphere::SphereMethod::Geometric),
+        ("ALGEBRAIC_NAIVE", shapes::sphere::SphereMethod::AlgebraicNaive),
+        ("ALGEBRAIC_STABLE", shapes::sphere::SphereMethod::AlgebraicStable),
+    ] {
+        u(&format!("PT_SPHERE_{name}"), sphere_method_code(method));
+    }
+    u("PT_POLYGON_WINDING", polygon_test_code(shapes::polygon::InsideTest::WindingNumber));
+    u("PT_POLYGON_CROSSING", polygon_test_code(shapes::polygon::InsideTest::CrossingNumber));
     u("PT_STACK", stack);
     u("PT_INTEGRATOR", options.integrator.code());
     u("PT_SAMPLER", sampler_code(options.sampler));
@@ -395,6 +483,8 @@ pub fn header(options: &KernelOptions) -> String {
     u("PT_INTEGRATOR_AO", GpuIntegrator::AmbientOcclusion { max_distance: 0.0 }.code());
     u("PT_WIDE_EMPTY", WIDE_EMPTY);
     u("PT_MAX_BOUNCES", options.max_bounces);
+    let _ = writeln!(out, "const PT_HAS_SHAPES: bool = {};", options.shapes);
+    let _ = writeln!(out, "const PT_HAS_PUNCTUAL: bool = {};", options.punctual_lights);
     for (name, v) in [
         ("PT_LAMBDA_MIN", LAMBDA_MIN),
         ("PT_LAMBDA_MAX", LAMBDA_MAX),
@@ -436,7 +526,7 @@ pub fn header(options: &KernelOptions) -> String {
 }
 
 /// The hand-written files, in the order they are concatenated.
-const FILES: [(&str, &str); 10] = [
+const FILES: [(&str, &str); 11] = [
     ("rng.wgsl", include_str!("wgsl/rng.wgsl")),
     ("sampler.wgsl", include_str!("wgsl/sampler.wgsl")),
     ("spectral.wgsl", include_str!("wgsl/spectral.wgsl")),
@@ -444,6 +534,7 @@ const FILES: [(&str, &str); 10] = [
     ("offset.wgsl", include_str!("wgsl/offset.wgsl")),
     ("shading.wgsl", include_str!("wgsl/shading.wgsl")),
     ("ray.wgsl", include_str!("wgsl/ray.wgsl")),
+    ("shapes.wgsl", include_str!("wgsl/shapes.wgsl")),
     ("lights.wgsl", include_str!("wgsl/lights.wgsl")),
     ("path.wgsl", include_str!("wgsl/path.wgsl")),
     ("simple.wgsl", include_str!("wgsl/simple.wgsl")),

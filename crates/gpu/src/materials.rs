@@ -49,6 +49,7 @@
 //! fn material_dispersive(m: u32) -> bool;
 //! fn material_emission(m: u32, lambda: vec4f) -> vec4f;
 //! fn material_absorption(m: u32, lambda: vec4f) -> vec4f;
+//! fn material_absorbing(m: u32) -> bool;
 //! fn bsdf_eval(m: u32, wo: vec3f, wi: vec3f, lambda: vec4f) -> vec4f;
 //! fn bsdf_pdf(m: u32, wo: vec3f, wi: vec3f, lambda: vec4f) -> f32;
 //! fn bsdf_sample(m: u32, wo: vec3f, uc: f32, u: vec2f, lambda: vec4f) -> BsdfSample;
@@ -523,6 +524,15 @@ pub fn wgsl_for(
         }
         out.push_str("    return vec4f(0.0);\n}\n\n");
     }
+    // `Material::absorption().is_some()`: the medium test of Beer–Lambert (a constant false
+    // when no material absorbs, so that the kernel's absorption code compiles away).
+    out.push_str("fn material_absorbing(m: u32) -> bool {\n");
+    if features.absorption {
+        let _ = writeln!(out, "    return mat_header(m, {}u) != MAT_NO_SPECTRUM;", header::ABSORPTION);
+    } else {
+        out.push_str("    return false;\n");
+    }
+    out.push_str("}\n\n");
     let dispatch = |out: &mut String, signature: &str, suffix: &str, args: &str, zero: &str| {
         let _ = writeln!(out, "fn bsdf_{suffix}({signature} {{");
         let _ = writeln!(out, "    let base = mat_header(m, {}u);", header::PARAMS);

@@ -15,6 +15,8 @@ fn options(triangle_test: bvh::TriangleTest) -> KernelOptions {
         nodes: gpu::kernel::NodeLayout::Wide4 { stack: 24 },
         integrator: gpu::kernel::GpuIntegrator::Path,
         sampler: tracer::sampler::SamplerKind::ZSobol,
+        shapes: true,
+        punctual_lights: true,
     }
 }
 
@@ -61,7 +63,13 @@ fn generated_structs_have_the_host_layout() {
     let mut problems = mismatches::<Params>(&module);
     problems.extend(mismatches::<gpu::kernel::WideNode>(&module));
     problems.extend(mismatches::<PixelAccum>(&module));
-    let binary = KernelOptions { nodes: gpu::kernel::NodeLayout::Binary, ..options(bvh::TriangleTest::Watertight) };
+    // (The binary one without shapes and punctual lights: both specialisations parse.)
+    let binary = KernelOptions {
+        nodes: gpu::kernel::NodeLayout::Binary,
+        shapes: false,
+        punctual_lights: false,
+        ..options(bvh::TriangleTest::Watertight)
+    };
     let (_, binary_module) = kernel_module(&binary);
     problems.extend(mismatches::<bvh::BvhNode>(&binary_module));
     assert!(problems.is_empty(), "{problems:#?}");

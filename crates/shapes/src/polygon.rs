@@ -338,6 +338,27 @@ impl Polygon {
         self.test
     }
 
+    /// The point on the plane the 2D coordinates are taken from (the vertex centroid).
+    pub fn anchor(&self) -> Vec3 {
+        self.anchor
+    }
+
+    /// The axis dropped by the projection (the normal's largest component); the 2D
+    /// coordinates are the axes (k + 1, k + 2) mod 3 relative to [`Polygon::anchor`].
+    pub fn dropped_axis(&self) -> usize {
+        self.axis
+    }
+
+    /// The vertices projected to the 2D frame the inside test runs in.
+    pub fn projected(&self) -> &[Vec2] {
+        &self.poly2d
+    }
+
+    /// Cumulative areas of [`Polygon::triangles`], for picking one ∝ area.
+    pub fn triangle_cdf(&self) -> &[f32] {
+        &self.cdf
+    }
+
     /// True if no two edges meet except adjacent ones at their shared vertex. Only simple
     /// polygons have a triangulation, hence area sampling: a self-intersecting polygon
     /// can be rendered but not be a light.

@@ -108,7 +108,7 @@ fn cpu_capabilities(integrator: &'static str) -> Capabilities {
         backend: "cpu",
         spectral_modes: vec![SpectralMode::Hero, SpectralMode::Bins40, SpectralMode::Rgb],
         samplers: vec![SamplerKind::ZSobol, SamplerKind::Sobol, SamplerKind::Independent],
-        analytic_shapes: true,
+        analytic_shapes: crate::render::ShapeSupport::all(),
         custom_bsdfs: true,
         punctual_lights: true,
         textures: true,

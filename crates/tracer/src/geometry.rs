@@ -36,13 +36,16 @@ impl ShapeKind {
         }
     }
 
+    /// Every kind's [`ShapeKind::name`].
+    pub const NAMES: [&'static str; 4] = ["sphere", "box", "polygon", "implicit surface"];
+
     /// A short name for messages.
     pub fn name(&self) -> &'static str {
         match self {
-            Self::Sphere(_) => "sphere",
-            Self::Cuboid(_) => "box",
-            Self::Polygon(_) => "polygon",
-            Self::Implicit(_) => "implicit surface",
+            Self::Sphere(_) => Self::NAMES[0],
+            Self::Cuboid(_) => Self::NAMES[1],
+            Self::Polygon(_) => Self::NAMES[2],
+            Self::Implicit(_) => Self::NAMES[3],
         }
     }
 }
@@ -137,7 +140,7 @@ impl Geometry {
         let config = Self::triangle_build_config_with(options.bvh_builder);
         let triangles = WideBvh::build(&scene.triangle_soup(), config, width)?.with_triangle_test(test);
         let boxes: Vec<_> = scene.shapes.iter().map(|s| s.shape.shape().bounds()).collect();
-        let shapes = BoxBvh::build(&boxes, BuildConfig { max_leaf_size: 2, ..BuildConfig::default() })?;
+        let shapes = BoxBvh::build(&boxes, Self::shape_build_config())?;
         let count = scene.triangles.len() as u64 + scene.shapes.len() as u64 + scene.instanced_triangle_count();
         if count >= u32::MAX as u64 {
             return Err(Error::Setting(format!("{count} primitives exceed the 2^32 − 1 a scene can index")));
@@ -186,6 +189,11 @@ impl Geometry {
     pub fn triangle_build_config_with(method: Option<bvh::SplitMethod>) -> BuildConfig {
         let config = Self::triangle_build_config();
         BuildConfig { method: method.unwrap_or(config.method), ..config }
+    }
+
+    /// How the analytic shapes' BVH is built (two shapes per leaf at most).
+    pub fn shape_build_config() -> BuildConfig {
+        BuildConfig { max_leaf_size: 2, ..BuildConfig::default() }
     }
 
     /// Number of triangles (the first shape's primitive id).

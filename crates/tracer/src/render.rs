@@ -168,8 +168,9 @@ pub struct Capabilities {
     pub spectral_modes: Vec<SpectralMode>,
     /// Samplers it draws from, the best (the CLI's default) first.
     pub samplers: Vec<SamplerKind>,
-    /// Whether it intersects analytic shapes (spheres, boxes, polygons, implicit surfaces).
-    pub analytic_shapes: bool,
+    /// The kinds of analytic shape it intersects ([`crate::ShapeKind::name`]), and why not
+    /// the others.
+    pub analytic_shapes: ShapeSupport,
     /// Whether it runs BSDFs written outside the workspace ([`brdf::DynBsdfBuilder`]).
     pub custom_bsdfs: bool,
     /// Whether it samples point, spot and directional lights ([`crate::PunctualLight`]).
@@ -199,6 +200,22 @@ pub struct Capabilities {
     pub sample_block: u32,
 }
 
+/// Which analytic shapes a backend intersects.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ShapeSupport {
+    /// The kinds it intersects, by [`crate::ShapeKind::name`].
+    pub kinds: Vec<&'static str>,
+    /// Why the others are not (for the error message).
+    pub why_not: &'static str,
+}
+
+impl ShapeSupport {
+    /// Every kind of shape.
+    pub fn all() -> Self {
+        Self { kinds: crate::ShapeKind::NAMES.to_vec(), why_not: "" }
+    }
+}
+
 impl Capabilities {
     /// Everything the scene and its options need, against what the backend can do.
     pub fn check_scene(&self, scene: &Scene, options: &SceneOptions) -> Result<()> {
@@ -215,13 +232,12 @@ impl Capabilities {
                 "leave --bvh-builder at its default, or use --backend cpu",
             ));
         }
-        if !self.analytic_shapes && !scene.shapes.is_empty() {
-            let kinds: Vec<&str> = scene.shapes.iter().map(|s| s.shape.name()).collect();
-            let mut kinds = kinds;
-            kinds.dedup();
+        if let Some(s) = scene.shapes.iter().find(|s| !self.analytic_shapes.kinds.contains(&s.shape.name())) {
+            let kind = s.shape.name();
+            let count = scene.shapes.iter().filter(|t| t.shape.name() == kind).count();
             return Err(unsupported(
-                format!("analytic shapes ({} in this scene: {})", scene.shapes.len(), kinds.join(", ")),
-                "tessellate them into triangles, or use --backend cpu",
+                format!("analytic shapes of kind {kind} ({count} in this scene)"),
+                &format!("{}; tessellate them into triangles, or use --backend cpu", self.analytic_shapes.why_not),
             ));
         }
         if !self.punctual_lights

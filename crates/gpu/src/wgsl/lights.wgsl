@@ -40,18 +40,33 @@ fn pt_environment(lambda: vec4f) -> vec4f {
     return pt_table_spectrum(pt_params.env_offset, lambda);
 }
 
+// What a light sample was taken on (besides the table's `PT_LIGHT_*` kinds).
+const PT_LIGHT_ENVIRONMENT: u32 = 0xffu;
+
 struct PtLightSample {
-    // Point on a triangle, or the direction for the environment.
+    // Point on a triangle or shape, a punctual light's position, or the direction for the
+    // environment and directional lights.
     point: vec3f,
     normal: vec3f,
     pdf: f32,
-    // Material of the triangle; PT_NO_HIT for the environment.
+    // Material of the triangle or shape; PT_NO_HIT for the others.
     material: u32,
+    // PT_LIGHT_* (PT_LIGHT_ENVIRONMENT for the environment) and the table entry.
+    kind: u32,
+    entry: u32,
     valid: bool,
 }
 
 fn pt_light_f(k: u32, j: u32) -> f32 {
     return pt_tables[pt_params.lights_offset + PT_LIGHT_FLOATS * k + j];
+}
+
+fn pt_light_u(k: u32, j: u32) -> u32 {
+    return bitcast<u32>(pt_light_f(k, j));
+}
+
+fn pt_light_v3(k: u32, j: u32) -> vec3f {
+    return vec3f(pt_light_f(k, j), pt_light_f(k, j + 1u), pt_light_f(k, j + 2u));
 }
 
 // `x` in [lo, hi) mapped to [0, 1), kept below 1 (lights.rs: `rescale`).
@@ -67,6 +82,7 @@ fn pt_rescale(x: f32, lo: f32, hi: f32) -> f32 {
 fn pt_sample_light(u_in: vec2f) -> PtLightSample {
     var ls: PtLightSample;
     ls.valid = false;
+    ls.material = PT_NO_HIT;
     let count = pt_params.light_count;
     if count == 0u && pt_params.env_pmf == 0.0 {
         return ls;
@@ -75,7 +91,7 @@ fn pt_sample_light(u_in: vec2f) -> PtLightSample {
         ls.point = pt_uniform_sphere(vec2f(pt_rescale(u_in.x, 0.0, pt_params.env_pmf), u_in.y));
         ls.normal = vec3f(0.0);
         ls.pdf = pt_params.env_pmf * PT_INV_4PI;
-        ls.material = PT_NO_HIT;
+        ls.kind = PT_LIGHT_ENVIRONMENT;
         ls.valid = true;
         return ls;
     }
@@ -96,17 +112,118 @@ fn pt_sample_light(u_in: vec2f) -> PtLightSample {
         below = pt_light_f(k - 1u, PT_LIGHT_CDF);
     }
     let u = vec2f(pt_rescale(u_in.x, below, pt_light_f(k, PT_LIGHT_CDF)), u_in.y);
-    let v0 = vec3f(pt_light_f(k, 0u), pt_light_f(k, 1u), pt_light_f(k, 2u));
-    let v1 = vec3f(pt_light_f(k, 3u), pt_light_f(k, 4u), pt_light_f(k, 5u));
-    let v2 = vec3f(pt_light_f(k, 6u), pt_light_f(k, 7u), pt_light_f(k, 8u));
     let pmf = pt_light_f(k, PT_LIGHT_PMF);
-    let b = pt_uniform_triangle(u);
-    ls.point = b.x * v0 + b.y * v1 + (1.0 - b.x - b.y) * v2;
-    let c = cross(v1 - v0, v2 - v0);
-    let area = 0.5 * length(c);
-    ls.normal = normalize(c);
-    ls.pdf = pmf / area;
-    ls.material = bitcast<u32>(pt_light_f(k, PT_LIGHT_MATERIAL));
+    ls.kind = pt_light_u(k, PT_LIGHT_KIND);
+    ls.entry = k;
+    ls.material = pt_light_u(k, PT_LIGHT_MATERIAL);
     ls.valid = true;
+    if ls.kind == PT_LIGHT_TRIANGLE {
+        let v0 = pt_light_v3(k, 0u);
+        let v1 = pt_light_v3(k, 3u);
+        let v2 = pt_light_v3(k, 6u);
+        let b = pt_uniform_triangle(u);
+        ls.point = b.x * v0 + b.y * v1 + (1.0 - b.x - b.y) * v2;
+        let c = cross(v1 - v0, v2 - v0);
+        let area = 0.5 * length(c);
+        ls.normal = normalize(c);
+        ls.pdf = pmf / area;
+        return ls;
+    }
+    if PT_HAS_SHAPES && ls.kind == PT_LIGHT_SHAPE {
+        let rec = pt_light_u(k, 0u);
+        let s = pt_shape_sample(rec, u);
+        ls.point = s.p;
+        ls.normal = s.n;
+        ls.pdf = pmf / pt_tables[rec + 3u];
+        return ls;
+    }
+    // A punctual light (`Lights::sample_punctual`): its position or direction with the
+    // probability of choosing it, or a direction in a sun's disk by solid angle.
+    ls.normal = vec3f(0.0);
+    ls.point = pt_light_v3(k, 0u);
+    ls.pdf = pmf;
+    if ls.kind == PT_LIGHT_DIRECTIONAL {
+        let cos_radius = pt_light_f(k, 3u);
+        if cos_radius < 1.0 {
+            let cos_theta = 1.0 - u.x * (1.0 - cos_radius);
+            let sin_theta = sqrt(max(1.0 - cos_theta * cos_theta, 0.0));
+            let phi = 2.0 * PT_PI * u.y;
+            let t = pt_light_v3(k, 7u);
+            let b = pt_light_v3(k, 13u);
+            ls.point = normalize(cos_theta * ls.point + sin_theta * (cos(phi) * t + sin(phi) * b));
+            ls.pdf = (1.0 / pt_light_f(k, 4u)) * pmf;
+        }
+    }
     return ls;
+}
+
+// What a punctual light sends to `p` (`punctual_incidence`): direction, distance (PT_FAR
+// for a directional light) and I·falloff/d² (or E, or a sun disk's radiance); `delta`
+// for lights no BSDF sample can find.
+struct PtIncidence {
+    wi: vec3f,
+    dist: f32,
+    le: vec4f,
+    delta: bool,
+    valid: bool,
+}
+
+fn pt_punctual_incidence(ls: PtLightSample, p: vec3f, lambda: vec4f) -> PtIncidence {
+    var out = PtIncidence(vec3f(0.0), 0.0, vec4f(0.0), true, false);
+    let k = ls.entry;
+    if ls.kind == PT_LIGHT_DIRECTIONAL {
+        let e = pt_table_spectrum(pt_light_u(k, 6u), lambda) * pt_light_f(k, 5u);
+        return PtIncidence(ls.point, PT_FAR, e, pt_light_f(k, 3u) >= 1.0, true);
+    }
+    let d = ls.point - p;
+    let dist2 = dot(d, d);
+    if !(dist2 > 0.0 && dist2 < PT_FAR) {
+        return out; // a light on the surface itself: no direction
+    }
+    let dist = sqrt(dist2);
+    let wi = d / dist;
+    var falloff = 1.0;
+    var spectrum = pt_light_u(k, 3u);
+    if ls.kind == PT_LIGHT_SPOT {
+        falloff = pt_spot_falloff(-dot(wi, pt_light_v3(k, 3u)), pt_light_f(k, 6u), pt_light_f(k, 7u));
+        spectrum = pt_light_u(k, 8u);
+    }
+    return PtIncidence(wi, dist, pt_table_spectrum(spectrum, lambda) * (falloff / dist2), true, true);
+}
+
+// `PunctualLight::spot_falloff`: 1 inside the inner cone, 0 outside the outer, the squared
+// linear ramp in cos θ between.
+fn pt_spot_falloff(cos_theta: f32, cos_inner: f32, cos_outer: f32) -> f32 {
+    if cos_theta >= cos_inner {
+        return 1.0;
+    }
+    let width = cos_inner - cos_outer;
+    if width <= 0.0 {
+        return 0.0;
+    }
+    let t = clamp((cos_theta - cos_outer) / width, 0.0, 1.0);
+    return t * t;
+}
+
+// `SceneView::suns_seen`: the sun disks a ray escaping along `dir` sees, each weighted by
+// the power heuristic against its light-sampling pdf when `weighted` (a BSDF sample of
+// pdf `bsdf_pdf`), else 1.
+fn pt_suns_seen(dir: vec3f, lambda: vec4f, bsdf_pdf: f32, weighted: bool) -> vec4f {
+    var l = vec4f(0.0);
+    if !PT_HAS_PUNCTUAL {
+        return l;
+    }
+    for (var k = pt_params.punctual_first; k < pt_params.light_count; k++) {
+        let cos_radius = pt_light_f(k, 3u);
+        if pt_light_u(k, PT_LIGHT_KIND) == PT_LIGHT_DIRECTIONAL && cos_radius < 1.0
+            && dot(dir, pt_light_v3(k, 0u)) >= cos_radius {
+            let le = pt_table_spectrum(pt_light_u(k, 6u), lambda) * pt_light_f(k, 5u);
+            var w = 1.0;
+            if weighted {
+                w = pt_power_heuristic(bsdf_pdf, pt_light_f(k, PT_LIGHT_PMF) / pt_light_f(k, 4u));
+            }
+            l += le * w;
+        }
+    }
+    return l;
 }

@@ -1,8 +1,8 @@
 // The path tracer, mirroring crates/tracer/src/integrator.rs (`PathTracer`) for N = 4:
 // next-event estimation with one light sample and power-heuristic MIS, BSDF-sampled
 // continuation, Russian roulette, hero-wavelength transport (collapsing to one
-// wavelength at dispersive surfaces) and Beer–Lambert absorption inside transmissive
-// materials.
+// wavelength at dispersive surfaces) and Beer–Lambert absorption along every segment
+// inside absorbing glass (`segment_transmittance`, `entered_medium`, `shadow_absorption`).
 
 fn pt_power_heuristic(a: f32, b: f32) -> f32 {
     let a2 = a * a;
@@ -22,7 +22,8 @@ fn pt_is_non_specular(f: u32) -> bool {
 }
 
 // A surface hit: position from the vertices, geometric and shading normals, tangent
-// (`SceneView::interaction`), and the triangle's material, light pmf and area.
+// (`SceneView::interaction`), and the primitive's material, light pmf and area. A shape's
+// surface is its intersection with the ray (o, d) again: the same root as in the traversal.
 struct PtSurface {
     p: vec3f,
     ng: vec3f,
@@ -33,7 +34,12 @@ struct PtSurface {
     area: f32,
 }
 
-fn pt_surface(hit: PtHit) -> PtSurface {
+fn pt_surface(hit: PtHit, o: vec3f, d: vec3f) -> PtSurface {
+    if pt_is_shape(hit.prim) {
+        let rec = hit.prim & ~PT_SHAPE_PRIM_BIT;
+        let h = pt_shape_hit(rec, o, d, 0.0, PT_FAR);
+        return PtSurface(h.p, h.n, h.n, vec3f(0.0), pt_tu(rec + 1u), pt_tables[rec + 2u], pt_tables[rec + 3u]);
+    }
     let i = hit.prim;
     let q0 = pt_tri_verts[3u * i];
     let q1 = pt_tri_verts[3u * i + 1u];
@@ -97,25 +103,40 @@ fn pt_next_event(
     let p = sf.p;
     var wi_world: vec3f;
     var finite_light = true;
+    var dist = 0.0;
     var light_pdf = 0.0;
     var le = vec4f(0.0);
-    if ls.material != PT_NO_HIT {
+    var delta = false;
+    if ls.kind == PT_LIGHT_TRIANGLE || ls.kind == PT_LIGHT_SHAPE {
         let dl = ls.point - p;
         let dist2 = dot(dl, dl);
-        let dist = sqrt(dist2);
+        dist = sqrt(dist2);
         wi_world = dl / dist;
         let cos_l = -dot(wi_world, ls.normal);
         if cos_l > 0.0 {
             light_pdf = ls.pdf * dist2 / cos_l;
             le = material_emission(ls.material, lambda);
         }
-    } else {
+    } else if ls.kind == PT_LIGHT_ENVIRONMENT {
         wi_world = ls.point;
         finite_light = false;
         light_pdf = ls.pdf;
         if (pt_params.scene_flags & PT_HAS_ENVIRONMENT) != 0u {
             le = pt_environment(lambda);
         }
+    } else if PT_HAS_PUNCTUAL {
+        // A delta light: I·falloff/d² (or E) stands for the radiance and the pdf is the
+        // probability of choosing it.
+        let inc = pt_punctual_incidence(ls, p, lambda);
+        if !inc.valid {
+            return out;
+        }
+        wi_world = inc.wi;
+        dist = inc.dist;
+        finite_light = inc.dist < PT_FAR;
+        light_pdf = ls.pdf;
+        le = inc.le;
+        delta = inc.delta;
     }
     let wi = pt_to_local(frame, wi_world);
     // Reflection must stay on the geometric side it came from (no light leaks).
@@ -126,6 +147,14 @@ fn pt_next_event(
     let f = bsdf_eval(m, wo, wi, lambda);
     if all(f == vec4f(0.0)) {
         return out;
+    }
+    // A shadow ray into the back of absorbing glass runs inside it (Beer–Lambert), and
+    // never reaches a light at infinity.
+    if material_absorbing(m) && !two_sided && dot(wi_world, sf.ng) < 0.0 {
+        if !finite_light {
+            return out;
+        }
+        le *= exp(-material_absorption(m, lambda) * dist);
     }
     let off = pt_offset_ray_origin(p, select(-sf.ng, sf.ng, dot(wi_world, sf.ng) > 0.0));
     *rays += 1u;
@@ -139,7 +168,7 @@ fn pt_next_event(
         return out;
     }
     var w = 1.0;
-    if mis {
+    if mis && !delta {
         w = pt_power_heuristic(light_pdf, bsdf_pdf(m, wo, wi, lambda));
     }
     return PtNextEvent(f, le, abs(wi.z) * w / light_pdf, true);
@@ -163,6 +192,8 @@ fn pt_radiance(
     var prev_p = origin;
     var bounce = 0u;
     var extension_left = pt_params.specular_extension;
+    // The absorbing material the last segment left its vertex into (PT_NO_HIT: none).
+    var inside = PT_NO_HIT;
     loop {
         *rays += 1u;
         let hit = pt_trace(o, d, 0.0, PT_FAR, false);
@@ -175,10 +206,11 @@ fn pt_radiance(
                 }
                 l += beta * le * w;
             }
+            l += beta * pt_suns_seen(d, (*wl).lambda, prev_pdf, !prev_specular);
             break;
         }
 
-        let sf = pt_surface(hit);
+        let sf = pt_surface(hit, o, d);
         let m = sf.m;
         let p = sf.p;
         let it_ng = sf.ng;
@@ -190,11 +222,15 @@ fn pt_radiance(
         let front = dot(wo_world, it_ng) > 0.0;
         let two_sided = material_two_sided(m);
 
-        // Beer–Lambert: a ray reaching the back of a transmissive surface travelled inside
-        // it (directions are unit length, so t is the distance).
-        if !front && !two_sided {
-            let a = material_absorption(m, (*wl).lambda);
-            beta *= exp(-a * hit.t);
+        // Beer–Lambert (`segment_transmittance`): the segment ran inside absorbing glass if
+        // it arrived at the back of one, or left its last vertex into one (directions are
+        // unit length, so t is the distance).
+        var medium = inside;
+        if !front && !two_sided && material_absorbing(m) {
+            medium = m;
+        }
+        if medium != PT_NO_HIT {
+            beta *= exp(-material_absorption(medium, (*wl).lambda) * hit.t);
         }
 
         // Emission seen by this path (one-sided: front face only).
@@ -281,6 +317,7 @@ fn pt_radiance(
         prev_pdf = s.pdf;
         prev_specular = pt_is_specular(s.flags);
         prev_p = p;
+        inside = select(PT_NO_HIT, m, dot(wi_world, it_ng) < 0.0 && !two_sided && material_absorbing(m));
         o = pt_offset_ray_origin(p, select(-it_ng, it_ng, dot(wi_world, it_ng) > 0.0));
         d = wi_world;
         bounce += 1u;

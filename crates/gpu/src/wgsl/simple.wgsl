@@ -9,12 +9,14 @@ fn pt_direct(origin: vec3f, dir: vec3f, wl: PtWavelengths, smp: ptr<function, Pt
     *rays += 1u;
     let hit = pt_trace(origin, dir, 0.0, PT_FAR, false);
     if hit.prim == PT_NO_HIT {
+        // `SceneView::escaped_radiance`: the environment and any sun disk.
+        var env = vec4f(0.0);
         if (pt_params.scene_flags & PT_HAS_ENVIRONMENT) != 0u {
-            return pt_environment(lambda);
+            env = pt_environment(lambda);
         }
-        return vec4f(0.0);
+        return env + pt_suns_seen(dir, lambda, 0.0, false);
     }
-    let sf = pt_surface(hit);
+    let sf = pt_surface(hit, origin, dir);
     let wo_world = -dir;
     var l = vec4f(0.0);
     if dot(wo_world, sf.ng) > 0.0 {
@@ -45,7 +47,7 @@ fn pt_ambient_occlusion(
     if hit.prim == PT_NO_HIT {
         return vec4f(0.0);
     }
-    let sf = pt_surface(hit);
+    let sf = pt_surface(hit, origin, dir);
     // The hemisphere on the viewer's side.
     let side = select(-1.0, 1.0, dot(dir, sf.ng) < 0.0);
     let ng = sf.ng * side;

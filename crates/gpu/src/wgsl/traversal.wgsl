@@ -17,8 +17,9 @@ fn pt_slab_enter(node: PtNode, r: PtRay, t_max: f32) -> f32 {
     return PT_MISS;
 }
 
-// The closest hit in (t_min, t_max), or with `any_hit` the first found.
-fn pt_trace(o: vec3f, d: vec3f, t_min: f32, t_max_in: f32, any_hit: bool) -> PtHit {
+// The closest triangle hit in (t_min, t_max), or with `any_hit` the first found (shapes.wgsl
+// adds the analytic shapes).
+fn pt_trace_triangles(o: vec3f, d: vec3f, t_min: f32, t_max_in: f32, any_hit: bool) -> PtHit {
     var best = PtHit(t_max_in, 0.0, 0.0, PT_NO_HIT);
     if pt_params.node_count == 0u {
         return best;

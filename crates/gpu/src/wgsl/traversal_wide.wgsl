@@ -26,8 +26,9 @@ fn pt_wide_leaf(first: u32, count: u32, r: PtRay, s: ptr<function, PtWideState>,
     }
 }
 
-// The closest hit in (t_min, t_max), or with `any_hit` the first found.
-fn pt_trace(o: vec3f, d: vec3f, t_min: f32, t_max_in: f32, any_hit: bool) -> PtHit {
+// The closest triangle hit in (t_min, t_max), or with `any_hit` the first found (shapes.wgsl
+// adds the analytic shapes).
+fn pt_trace_triangles(o: vec3f, d: vec3f, t_min: f32, t_max_in: f32, any_hit: bool) -> PtHit {
     var s = PtWideState(t_max_in, PtHit(t_max_in, 0.0, 0.0, PT_NO_HIT), false);
     if pt_params.node_count == 0u {
         return s.best;
