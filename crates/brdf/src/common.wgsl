@@ -11,7 +11,13 @@ const MAT_FRAC_PI_4: f32 = 0.785398163397448309615660845819875721;
 
 // The linear interpolation in a 1-nm table the contract promises: `offset` is the
 // table's first entry in `spectra` (λ = SPECTRUM_LAMBDA_MIN), λ is clamped to the table.
+// In RGB mode (MAT_RGB, declared by the generated code) a colour's linear-sRGB value,
+// stored after its table, instead (`Colour::sample`'s RGB case).
 fn spectrum_at(offset: u32, lambda: vec4f) -> vec4f {
+    if MAT_RGB {
+        let o = offset + SPECTRUM_SAMPLES;
+        return vec4f(spectra[o], spectra[o + 1u], spectra[o + 2u], 0.0);
+    }
     let last = f32(SPECTRUM_SAMPLES - 1u);
     let x = clamp(lambda - vec4f(SPECTRUM_LAMBDA_MIN), vec4f(0.0), vec4f(last));
     let i = min(vec4u(x), vec4u(SPECTRUM_SAMPLES - 2u));

@@ -241,7 +241,7 @@ impl DeviceAccumulation {
         let pixels = width as u64 * height as u64;
         let per_dispatch = (DISPATCH_BUDGET / pixels.max(1)).clamp(1, MAX_SAMPLES_PER_DISPATCH) as u32;
         let mut params = scene.kernel_params(&self.settings);
-        let pipeline = scene.pipeline(self.settings.sampler)?;
+        let pipeline = scene.pipeline(&self.settings)?;
         scene.write_seeds(&self.buffers.params, &self.settings);
         params.band_y0 = 0;
         params.band_rows = height;

@@ -37,9 +37,10 @@
 //! a GPU path starts as the CPU path of the same pixel sample and usually stays on it.
 //! What differs:
 //!
-//! * Hero mode only (four wavelengths); `bins40` and `rgb` are refused up front by the
-//!   capability check, as are implicit surfaces (their solver works in f64), textures and
-//!   custom (out-of-workspace) BSDFs.
+//! * Hero mode (four wavelengths) and RGB mode (three channels, a kernel of its own:
+//!   colours as their linear-sRGB values, metals at the CPU's channel wavelengths, no
+//!   dispersion); `bins40` is refused up front by the capability check, as are implicit
+//!   surfaces (their solver works in f64), textures and custom (out-of-workspace) BSDFs.
 //! * Spheres, boxes and polygons (`wgsl/shapes.wgsl`) are records in the tables with a
 //!   binary BVH of their own, traversed after the triangles' as on the CPU; the polygon's
 //!   inside test evaluates its orientation determinant in f32 (f64 on the CPU), which can
@@ -119,10 +120,11 @@ pub const SAMPLES_PER_READBACK: u32 = 1024;
 /// The kernel's workgroup side (8 × 8 invocations, one per pixel).
 const WORKGROUP: u32 = 8;
 
-/// A spectrum tabulated at 1 nm over the CIE tables' range, as the kernel interpolates it
-/// (`pt_table_spectrum`).
-fn tabulate(spectrum: &spectral::spectrum::Spectrum) -> impl Iterator<Item = f32> + '_ {
-    (0..CIE_SAMPLES).map(move |i| spectrum.eval(spectral::tables::CIE_LAMBDA_MIN + i as f32))
+/// A colour as the kernel's tables hold it (`pt_table_spectrum`): its spectrum at 1 nm over
+/// the CIE tables' range, then its linear-sRGB value (RGB mode's).
+fn tabulate(colour: &spectral::spectrum::Colour) -> impl Iterator<Item = f32> + '_ {
+    let table = (0..CIE_SAMPLES).map(move |i| colour.spectrum.eval(spectral::tables::CIE_LAMBDA_MIN + i as f32));
+    table.chain(colour.rgb)
 }
 
 /// The record of an analytic shape in the kernel's tables (`wgsl/shapes.wgsl`): kind,
@@ -237,7 +239,7 @@ pub fn capabilities() -> Capabilities {
 pub fn capabilities_for(integrator: GpuIntegrator) -> Capabilities {
     Capabilities {
         backend: "gpu",
-        spectral_modes: vec![SpectralMode::Hero],
+        spectral_modes: vec![SpectralMode::Hero, SpectralMode::Rgb],
         // ZSobol first (the default): on an H100 it reaches the independent sampler's error
         // 1.76× sooner on the Cornell box (docs/gpu.md).
         samplers: vec![SamplerKind::ZSobol, SamplerKind::Sobol, SamplerKind::Independent],
@@ -376,20 +378,15 @@ impl SceneData {
             tables.extend([CIE_X[i], CIE_Y[i], CIE_Z[i]]);
         }
         let env_offset = tables.len() as u32;
-        for i in 0..CIE_SAMPLES {
-            let lambda = spectral::tables::CIE_LAMBDA_MIN + i as f32;
-            tables.push(scene.environment.as_ref().map_or(0.0, |e| e.radiance.spectrum.eval(lambda)));
-        }
+        let black = spectral::spectrum::Colour::constant(0.0);
+        tables.extend(tabulate(scene.environment.as_ref().map_or(&black, |e| &e.radiance)));
         if scene.environment.is_some() {
             scene_flags |= HAS_ENVIRONMENT;
         }
         // Ambient occlusion's white: the CPU's `AmbientOcclusion` value, tabulated.
         let white_offset = tables.len() as u32;
         if let GpuIntegrator::AmbientOcclusion { .. } = options.integrator {
-            let white = tracer::AmbientOcclusion::white();
-            for i in 0..CIE_SAMPLES {
-                tables.push(white.spectrum.eval(spectral::tables::CIE_LAMBDA_MIN + i as f32));
-            }
+            tables.extend(tabulate(&tracer::AmbientOcclusion::white()));
         }
         // The Sobol samplers' second dimension: the CPU's bit-reversed byte tables.
         let sobol_offset = tables.len() as u32;
@@ -445,7 +442,7 @@ impl SceneData {
                     let index = k - lights.prims().len();
                     let light = &scene.punctual_lights[index];
                     let spectrum = f32::from_bits((spectra_offset + punctual_spectra.len()) as u32);
-                    punctual_spectra.extend(tabulate(&light.colour().spectrum));
+                    punctual_spectra.extend(tabulate(light.colour()));
                     let kind = punctual_entry(light, spectrum, &mut entry);
                     (kind, u32::MAX, lights.punctual_pmf(index))
                 }
@@ -560,7 +557,8 @@ pub struct GpuScene {
     scene: Scene,
     bounds: Aabb,
     /// The kernels compiled so far, one per sampler (the sampler is compiled in).
-    pipelines: Mutex<Vec<(SamplerKind, wgpu::ComputePipeline)>>,
+    /// The kernels compiled so far, by (sampler, RGB mode).
+    pipelines: Mutex<Vec<((SamplerKind, bool), wgpu::ComputePipeline)>>,
     pipeline_layout: wgpu::PipelineLayout,
     /// What another sampler's kernel is generated from.
     material_wgsl: String,
@@ -671,6 +669,7 @@ impl GpuBackend {
                 // (Set from the scene.)
                 shapes: false,
                 punctual_lights: false,
+                rgb: false,
             },
         )?;
         data.check_limits(&self.ctx.limits)?;
@@ -746,7 +745,7 @@ impl GpuBackend {
             ctx: Arc::clone(&self.ctx),
             bounds: scene.bounds(),
             scene,
-            pipelines: Mutex::new(vec![(data.options.sampler, pipeline)]),
+            pipelines: Mutex::new(vec![((data.options.sampler, data.options.rgb), pipeline)]),
             pipeline_layout,
             material_wgsl: data.material_wgsl,
             kernel_options: data.options,
@@ -869,7 +868,7 @@ impl GpuScene {
         let fb = film_slot.as_ref().expect("just made");
 
         let mut params = self.kernel_params(settings);
-        let pipeline = self.pipeline(settings.sampler)?;
+        let pipeline = self.pipeline(settings)?;
         self.write_seeds(&self.params, settings);
 
         // A crop window renders its rows whole; only its columns reach the film.
@@ -969,22 +968,24 @@ impl GpuScene {
         FilmBuffers { pixels, accum, readback, bind_group }
     }
 
-    /// The samplers whose kernels are compiled, in the order they were.
+    /// The samplers whose kernels are compiled, in the order they were (one per sampler
+    /// and spectral mode).
     pub fn compiled_samplers(&self) -> Vec<SamplerKind> {
-        lock(&self.pipelines).iter().map(|(s, _)| *s).collect()
+        lock(&self.pipelines).iter().map(|((s, _), _)| *s).collect()
     }
 
-    /// The kernel for `sampler`, compiled on first use (the scene's buffers and layout
-    /// stay; only the sampler's constant differs).
-    pub(crate) fn pipeline(&self, sampler: SamplerKind) -> Result<wgpu::ComputePipeline, GpuError> {
+    /// The kernel for the settings' sampler and spectral mode, compiled on first use (the
+    /// scene's buffers and layout stay; only those constants differ).
+    pub(crate) fn pipeline(&self, settings: &RenderSettings) -> Result<wgpu::ComputePipeline, GpuError> {
+        let key = (settings.sampler, settings.mode == SpectralMode::Rgb);
         let mut pipelines = lock(&self.pipelines);
-        if let Some((_, p)) = pipelines.iter().find(|(s, _)| *s == sampler) {
+        if let Some((_, p)) = pipelines.iter().find(|(k, _)| *k == key) {
             return Ok(p.clone());
         }
-        let options = KernelOptions { sampler, ..self.kernel_options };
+        let options = KernelOptions { sampler: key.0, rgb: key.1, ..self.kernel_options };
         let pipeline =
             compile(&self.ctx, &self.pipeline_layout, &crate::kernel::source(&self.material_wgsl, &options))?;
-        pipelines.push((sampler, pipeline.clone()));
+        pipelines.push((key, pipeline.clone()));
         Ok(pipeline)
     }
 
@@ -1121,9 +1122,9 @@ impl PreparedScene for GpuScene {
         Ok(self.render_gpu(settings, film, first_sample, spp, progress)?)
     }
 
-    /// Compiles the kernel for the settings' sampler (one per sampler, kept).
+    /// Compiles the kernel for the settings' sampler and mode (one per pair, kept).
     fn warm_up(&self, settings: &RenderSettings) -> tracer::Result<()> {
-        self.pipeline(settings.sampler)?;
+        self.pipeline(settings)?;
         Ok(())
     }
 

@@ -380,6 +380,9 @@ pub struct KernelOptions {
     pub shapes: bool,
     /// Whether the scene has point, spot or directional lights (`PT_HAS_PUNCTUAL`).
     pub punctual_lights: bool,
+    /// RGB mode (`PT_RGB`, the materials' `MAT_RGB`): three colour channels instead of
+    /// four hero wavelengths; a render in the other mode gets another kernel.
+    pub rgb: bool,
 }
 
 /// A sphere method's code in a shape record (`PT_SPHERE_*`).
@@ -485,6 +488,10 @@ pub fn header(options: &KernelOptions) -> String {
     u("PT_MAX_BOUNCES", options.max_bounces);
     let _ = writeln!(out, "const PT_HAS_SHAPES: bool = {};", options.shapes);
     let _ = writeln!(out, "const PT_HAS_PUNCTUAL: bool = {};", options.punctual_lights);
+    let _ = writeln!(out, "const PT_RGB: bool = {};", options.rgb);
+    let [r, g, b] = brdf::models::metal::RGB_LAMBDA;
+    // RGB mode's "wavelengths": where metals take their (n, k) per channel (`RGB_LAMBDA`).
+    let _ = writeln!(out, "const PT_RGB_LAMBDA: vec4f = vec4f({}, {}, {}, {});", f(r), f(g), f(b), f(b));
     for (name, v) in [
         ("PT_LAMBDA_MIN", LAMBDA_MIN),
         ("PT_LAMBDA_MAX", LAMBDA_MAX),
@@ -560,7 +567,7 @@ pub fn source(material_wgsl: &str, options: &KernelOptions) -> String {
         TriangleTest::MollerTrumbore => include_str!("wgsl/triangle_moller_trumbore.wgsl"),
     };
     let mut out = String::with_capacity(material_wgsl.len() + 64 * 1024);
-    out.push_str(material_wgsl);
+    out.push_str(&crate::materials::for_mode(material_wgsl, options.rgb));
     out.push('\n');
     out.push_str(&header(options));
     out.push_str("\nconst PT_PI: f32 = 3.14159265358979323846;\nconst PT_INV_4PI: f32 = 0.07957747154594767;\n");

@@ -74,10 +74,11 @@
 //! | 4 | `ABSORPTION` | offset of the absorption coefficient in `spectra`, or [`NO_SPECTRUM`] |
 //! | 5 | `PARAMS` | word index of the material's parameters (one word per declared parameter) |
 //!
-//! `spectra` (f32): every distinct spectrum the materials use (parameters, emission,
+//! `spectra` (f32): every distinct colour the materials use (parameters, emission,
 //! absorption), each tabulated at 1 nm from [`SPECTRUM_LAMBDA_MIN`] ([`SPECTRUM_SAMPLES`]
-//! values, [`tabulate`]), identical tables stored once; then the (λ, n, k) rows of the
-//! metal presets in use. Neither vector is ever empty (a zero is stored if nothing else).
+//! values, [`tabulate`]) and followed by its linear-sRGB value (RGB mode reads that:
+//! [`COLOUR_FLOATS`] in all), identical entries stored once; then the (λ, n, k) rows of
+//! the metal presets in use. Neither vector is ever empty (a zero is stored if nothing else).
 
 use crate::GpuError;
 use brdf::models::{Metal, MetalPreset};
@@ -219,6 +220,21 @@ pub fn tabulate(colour: &Colour) -> Vec<f32> {
         .collect()
 }
 
+/// Floats of a colour's entry in `spectra`: its [`tabulate`] table, then its linear-sRGB
+/// value (what `spectrum_at` reads in RGB mode).
+pub const COLOUR_FLOATS: usize = SPECTRUM_SAMPLES + 3;
+
+/// The line of the generated WGSL that says which mode the materials run in; a kernel for
+/// RGB mode takes the WGSL through [`for_rgb`].
+const HERO_MODE_LINE: &str = "const MAT_RGB: bool = false;\n";
+
+/// The materials WGSL of `generate` for an RGB-mode kernel (`MAT_RGB`: colours as their
+/// linear-sRGB values, no dispersion), or unchanged for the spectral modes.
+pub fn for_mode(wgsl: &str, rgb: bool) -> String {
+    assert!(wgsl.contains(HERO_MODE_LINE), "not the generator's WGSL");
+    if rgb { wgsl.replacen(HERO_MODE_LINE, "const MAT_RGB: bool = true;\n", 1) } else { wgsl.to_string() }
+}
+
 /// The CPU twin of WGSL `spectrum_at` for one wavelength: linear interpolation in a
 /// table made by [`tabulate`], λ clamped to the table.
 pub fn spectrum_lookup(table: &[f32], lambda: f32) -> f32 {
@@ -246,9 +262,10 @@ impl SpectrumPool {
         })
     }
 
-    /// The offset of `colour`'s table, adding it if new.
+    /// The offset of `colour`'s entry ([`COLOUR_FLOATS`]), adding it if new.
     fn colour(&mut self, colour: &Colour) -> Result<u32, GpuError> {
-        let table = tabulate(colour);
+        let mut table = tabulate(colour);
+        table.extend(colour.rgb);
         let key: Vec<u32> = table.iter().map(|v| v.to_bits()).collect();
         if let Some(&o) = self.index.get(&key) {
             return Ok(o);
@@ -451,6 +468,8 @@ pub fn wgsl_for(
     let _ = writeln!(out, "const MAT_NO_SPECTRUM: u32 = {NO_SPECTRUM}u;");
     let _ = writeln!(out, "const MAT_PROPERTY_TWO_SIDED: u32 = {PROPERTY_TWO_SIDED}u;");
     let _ = writeln!(out, "const MAT_PROPERTY_DISPERSIVE: u32 = {PROPERTY_DISPERSIVE}u;");
+    out.push_str("// RGB mode (`for_mode`): colours are their linear-sRGB values, nothing disperses.\n");
+    out.push_str(HERO_MODE_LINE);
     for m in models {
         let _ = writeln!(out, "const MAT_MODEL_{}: u32 = {}u;", m.def.name.to_ascii_uppercase(), m.id);
     }
@@ -509,7 +528,7 @@ pub fn wgsl_for(
     );
     let _ = writeln!(
         out,
-        "fn material_dispersive(m: u32) -> bool {{\n    return (mat_header(m, {}u) & MAT_PROPERTY_DISPERSIVE) != 0u;\n}}\n",
+        "fn material_dispersive(m: u32) -> bool {{\n    return !MAT_RGB && (mat_header(m, {}u) & MAT_PROPERTY_DISPERSIVE) != 0u;\n}}\n",
         header::PROPERTIES
     );
     for (name, word, enabled) in

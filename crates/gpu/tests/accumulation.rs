@@ -113,8 +113,14 @@ fn the_gpu_scene_accumulates_on_the_device_and_refuses_what_it_cannot() {
         .expect("a crop window is refused")
         .to_string();
     assert!(err.contains("crop"), "{err}");
+    let bins = RenderSettings { mode: SpectralMode::Bins40, ..s.clone() };
+    assert!(acc.restart(&bins).is_err(), "bins40 mode is beyond the GPU backend");
+    // RGB mode restarts the accumulation with its own kernel: the film of a render in it.
     let rgb = RenderSettings { mode: SpectralMode::Rgb, ..s.clone() };
-    assert!(acc.restart(&rgb).is_err(), "rgb mode is beyond the GPU backend");
+    acc.restart(&rgb).unwrap();
+    acc.add(2).unwrap();
+    let (two, _) = tracer::render(scene.as_ref(), &RenderSettings { spp: 2, ..rgb.clone() }, &|_| {}).unwrap();
+    assert_eq!(acc.film().unwrap(), two);
 
     let limits = &scene.context().limits;
     assert!(DeviceAccumulation::fits(limits, 8, 8));

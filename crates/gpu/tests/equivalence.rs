@@ -185,6 +185,7 @@ fn kernel_options() -> gpu::kernel::KernelOptions {
         sampler: tracer::sampler::SamplerKind::ZSobol,
         shapes: false,
         punctual_lights: false,
+        rgb: false,
     }
 }
 
@@ -414,11 +415,10 @@ fn unsupported_scenes_and_modes_are_clear_errors() {
     textured.strip_textures();
     caps.check_scene(&textured, &SceneOptions::default()).unwrap();
     let s = settings(8, 8, 1);
-    for mode in [SpectralMode::Rgb, SpectralMode::Bins40] {
-        let err = caps.check_settings(&RenderSettings { mode, ..s.clone() }).unwrap_err().to_string();
-        assert!(err.contains(mode.name()) && err.contains("--backend cpu"), "{err}");
-        println!("{err}");
-    }
+    caps.check_settings(&RenderSettings { mode: SpectralMode::Rgb, ..s.clone() }).unwrap();
+    let err = caps.check_settings(&RenderSettings { mode: SpectralMode::Bins40, ..s.clone() }).unwrap_err().to_string();
+    assert!(err.contains("bins40") && err.contains("--backend cpu"), "{err}");
+    println!("{err}");
     let deep = RenderSettings { path: PathSettings { max_depth: 1000, ..s.path }, ..s.clone() };
     let err = caps.check_settings(&deep).unwrap_err().to_string();
     assert!(err.contains("1000 bounces") && err.contains("256"), "{err}");
@@ -434,10 +434,9 @@ fn unsupported_scenes_and_modes_are_clear_errors() {
     assert!(err.contains("does not support analytic shapes of kind implicit surface"), "{err}");
     let scene = model_scene(Material::diffuse("grey", Colour::constant(0.5)).unwrap());
     let prepared = gpu.prepare_gpu(scene, &SceneOptions::default()).unwrap();
-    for mode in [SpectralMode::Rgb, SpectralMode::Bins40] {
-        let err = tracer::render(&prepared, &RenderSettings { mode, ..s.clone() }, &|_| {}).unwrap_err().to_string();
-        assert!(err.contains(mode.name()) && err.contains("--backend cpu"), "{err}");
-    }
+    let bins = RenderSettings { mode: SpectralMode::Bins40, ..s.clone() };
+    let err = tracer::render(&prepared, &bins, &|_| {}).unwrap_err().to_string();
+    assert!(err.contains("bins40") && err.contains("--backend cpu"), "{err}");
 }
 
 #[test]
@@ -768,5 +767,26 @@ fn light_inside_absorbing_glass_matches_the_cpu() {
     scene.add_shape(ShapeKind::Cuboid(case), glass);
     let r = render_three(&GpuBackend::with_context(ctx), &scene, &settings(32, 32, 128)).unwrap();
     let failures = compare_all("ball in absorbing glass", &r);
+    assert!(failures.is_empty(), "{failures:#?}");
+}
+
+/// RGB mode (`--spectral rgb`): colours as their linear-sRGB values, metals' (n, k) at the
+/// CPU's three channel wavelengths, no dispersion, no wavelength drawn by the camera — on
+/// every model (and the dispersive, absorbing glass), the analytic shapes and the punctual
+/// lights' scenes, and the Cornell box.
+#[test]
+fn rgb_mode_matches_the_cpu() {
+    let Some(ctx) = gpu::require_gpu() else { return };
+    let gpu = GpuBackend::with_context(ctx);
+    let s = RenderSettings { mode: SpectralMode::Rgb, ..settings(24, 24, 96) };
+    let mut scenes: Vec<(String, Scene)> = model_cases().into_iter().map(|(name, m)| (name, model_scene(m))).collect();
+    scenes.push(("analytic shapes".into(), shape_scene()));
+    scenes.push(("punctual lights".into(), punctual_scene()));
+    scenes.extend(cornell().map(|c| ("Cornell box".to_string(), c)));
+    let mut failures = Vec::new();
+    for (name, scene) in scenes {
+        let r = render_three(&gpu, &scene, &s).unwrap();
+        failures.extend(compare_all(&format!("{name} (rgb)"), &r));
+    }
     assert!(failures.is_empty(), "{failures:#?}");
 }

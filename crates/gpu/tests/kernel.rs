@@ -17,6 +17,7 @@ fn options(triangle_test: bvh::TriangleTest) -> KernelOptions {
         sampler: tracer::sampler::SamplerKind::ZSobol,
         shapes: true,
         punctual_lights: true,
+        rgb: true,
     }
 }
 

@@ -337,7 +337,7 @@ fn features_follow_the_materials() {
     let k = generate(&metals, true).unwrap();
     assert_eq!(k.features.metals, vec![brdf::models::Metal::Gold, brdf::models::Metal::Aluminium]);
     let rows: usize = k.features.metals.iter().map(|m| m.table().len()).sum();
-    assert_eq!(k.spectra.len(), 3 * rows + materials::SPECTRUM_SAMPLES, "two metal tables and one (white) tint");
+    assert_eq!(k.spectra.len(), 3 * rows + materials::COLOUR_FLOATS, "two metal tables and one (white) tint");
     naga_validate(&k.wgsl).unwrap_or_else(|e| panic!("{e}"));
 }
 

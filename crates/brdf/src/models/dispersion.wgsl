@@ -15,7 +15,11 @@ fn mat_sellmeier(b: vec3f, c: vec3f, lambda_nm: f32) -> f32 {
 
 // Dispersion::from_preset(preset, cauchy_b).ior(ior, λ): the DispersionPreset choice
 // (none, Cauchy anchored at n(λ_d) = ior, N-BK7, fused silica).
+// RGB mode has no wavelengths: the base index, as the CPU's dielectrics use it there.
 fn mat_dispersion_ior(preset: u32, cauchy_b: f32, ior: f32, lambda_nm: f32) -> f32 {
+    if MAT_RGB {
+        return ior;
+    }
     if preset == MAT_DISPERSION_CAUCHY {
         let l = lambda_nm * 1e-3;
         let ld = MAT_LAMBDA_D * 1e-3;

@@ -20,9 +20,14 @@ fn pt_uniform_triangle(u: vec2f) -> vec2f {
     return vec2f(u.x - b1, b1);
 }
 
-// A spectrum tabulated at 1 nm over 360–830 nm from `offset` in the tables, linearly
-// interpolated (as `pt_environment`).
+// A colour tabulated at 1 nm over 360–830 nm from `offset` in the tables (its
+// linear-sRGB value after the table), linearly interpolated (as `pt_environment`).
 fn pt_table_spectrum(offset: u32, lambda: vec4f) -> vec4f {
+    // RGB mode: the colour's linear-sRGB value, stored after its table.
+    if PT_RGB {
+        let o = offset + PT_CIE_SAMPLES;
+        return vec4f(pt_tables[o], pt_tables[o + 1u], pt_tables[o + 2u], 0.0);
+    }
     var out = vec4f(0.0);
     for (var k = 0u; k < 4u; k++) {
         let x = clamp(lambda[k] - PT_CIE_LAMBDA_MIN, 0.0, f32(PT_CIE_SAMPLES - 1u));

@@ -18,8 +18,13 @@ fn pt_main(@builtin(global_invocation_id) gid: vec3u) {
     var truncated = 0u;
     for (var k = 0u; k < pt_params.samples; k++) {
         var smp = pt_sampler_for(x, y, pixel, pt_params.first_sample + k);
-        let cam = pt_camera(&smp);
-        var wl = pt_sample_hero(cam.x);
+        let cam = pt_camera(&smp, !PT_RGB);
+        var wl: PtWavelengths;
+        if PT_RGB {
+            wl = pt_rgb_wavelengths();
+        } else {
+            wl = pt_sample_hero(cam.x);
+        }
         let jitter = cam.yz;
         let film = vec2f(f32(x), f32(y)) + jitter;
         let ndc = vec2f(2.0 * film.x * pt_params.inv_size.x - 1.0, 1.0 - 2.0 * film.y * pt_params.inv_size.y);

@@ -185,7 +185,8 @@ fn pt_radiance(
     var o = origin;
     var d = dir;
     var l = vec4f(0.0);
-    var beta = vec4f(1.0);
+    // (RGB mode: three channels; the fourth lane carries nothing.)
+    var beta = select(vec4f(1.0), vec4f(1.0, 1.0, 1.0, 0.0), PT_RGB);
     // The pdf of the previous BSDF sample, and whether it was a delta (no MIS then).
     var prev_pdf = 0.0;
     var prev_specular = true;

@@ -155,16 +155,22 @@ fn pt_next_2d(s: ptr<function, PtSampler>) -> vec2f {
     return vec2f(a, b);
 }
 
-// `Sampler::camera` with a sampled wavelength: (wavelength value, jitter). The
+// `Sampler::camera`: (wavelength value, or 0 without a sampled wavelength, jitter). The
 // independent sampler draws the wavelength first; the Sobol samplers give their best
 // stratified first pair to the jitter.
-fn pt_camera(s: ptr<function, PtSampler>) -> vec3f {
+fn pt_camera(s: ptr<function, PtSampler>, wavelength: bool) -> vec3f {
     if PT_SAMPLER == PT_SAMPLER_INDEPENDENT {
-        let u = pt_next_1d(s);
+        var u = 0.0;
+        if wavelength {
+            u = pt_next_1d(s);
+        }
         let j = pt_next_2d(s);
         return vec3f(u, j);
     }
     let j = pt_next_2d(s);
-    let u = pt_next_1d(s);
+    var u = 0.0;
+    if wavelength {
+        u = pt_next_1d(s);
+    }
     return vec3f(u, j);
 }

@@ -23,6 +23,13 @@ fn pt_sample_hero(u: f32) -> PtWavelengths {
     return wl;
 }
 
+// `SampledWavelengths::rgb` for the kernel: RGB mode's channels carry the wavelengths at
+// which metals take their (n, k) per channel (`RGB_LAMBDA`; the fourth lane repeats blue
+// and carries nothing: its weight is 0).
+fn pt_rgb_wavelengths() -> PtWavelengths {
+    return PtWavelengths(PT_RGB_LAMBDA, vec4f(1.0, 1.0, 1.0, 0.0), false);
+}
+
 // `spectral::colour::cie_xyz`: the 1 nm tables, linearly interpolated.
 fn pt_cie_xyz(lambda: f32) -> vec3f {
     let x = lambda - PT_CIE_LAMBDA_MIN;
@@ -36,8 +43,11 @@ fn pt_cie_xyz(lambda: f32) -> vec3f {
     return a + (b - a) * f;
 }
 
-// `SampledWavelengths::to_linear_srgb`.
+// `SampledWavelengths::to_linear_srgb` (RGB mode: the channels themselves).
 fn pt_to_linear_srgb(l: vec4f, wl: PtWavelengths) -> vec3f {
+    if PT_RGB {
+        return l.xyz;
+    }
     var xyz = vec3f(0.0);
     for (var i = 0u; i < 4u; i++) {
         let v = l[i] * wl.weight[i];
