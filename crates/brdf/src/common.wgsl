@@ -13,7 +13,22 @@ const MAT_FRAC_PI_4: f32 = 0.785398163397448309615660845819875721;
 // table's first entry in `spectra` (λ = SPECTRUM_LAMBDA_MIN), λ is clamped to the table.
 // In RGB mode (MAT_RGB, declared by the generated code) a colour's linear-sRGB value,
 // stored after its table, instead (`Colour::sample`'s RGB case).
+// With textures (MAT_TEXTURES, generated), the tables of a textured parameter (its own
+// copy) come out multiplied by the hit's texel.
 fn spectrum_at(offset: u32, lambda: vec4f) -> vec4f {
+    let v = mat_table_at(offset, lambda);
+    if MAT_TEXTURES {
+        if offset == mat_tex_base_at {
+            return v * mat_tex_base;
+        }
+        if offset == mat_tex_spec_at {
+            return v * mat_tex_spec;
+        }
+    }
+    return v;
+}
+
+fn mat_table_at(offset: u32, lambda: vec4f) -> vec4f {
     if MAT_RGB {
         let o = offset + SPECTRUM_SAMPLES;
         return vec4f(spectra[o], spectra[o + 1u], spectra[o + 2u], 0.0);

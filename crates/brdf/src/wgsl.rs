@@ -40,6 +40,33 @@ pub struct ModelWgsl {
     pub needs: &'static [WgslPiece],
     /// Constants it shares with its Rust code, declared before its source.
     pub constants: &'static [WgslConstant],
+    /// What its texture slots ([`crate::Model::TEXTURE_SLOTS`]) drive in the WGSL.
+    pub texture: WgslTextureSlots,
+}
+
+/// Where a model's texture slots act in its WGSL twin, so that the GPU applies textures as
+/// the model's `bsdf_textured` does: the base-colour and specular texels multiply the
+/// spectra of the parameters named here (the generator gives those parameters their own
+/// tables, which `spectrum_at` multiplies), and a model with the metallic–roughness slot
+/// defines `fn name_textured(p: NameParams, roughness: f32, metallic: f32) -> NameParams`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct WgslTextureSlots {
+    /// The spectrum parameter the base-colour texel multiplies.
+    pub base_colour: Option<&'static str>,
+    /// The spectrum parameter the specular texel multiplies.
+    pub specular: Option<&'static str>,
+    /// Whether the twin defines `name_textured` for the metallic–roughness texel.
+    pub metallic_roughness: bool,
+}
+
+impl WgslTextureSlots {
+    /// No texture slots.
+    pub const NONE: Self = Self { base_colour: None, specular: None, metallic_roughness: false };
+
+    /// The base colour multiplies `param`.
+    pub const fn base(param: &'static str) -> Self {
+        Self { base_colour: Some(param), ..Self::NONE }
+    }
 }
 
 /// A constant the WGSL shares with Rust, so that it is written once (in Rust).

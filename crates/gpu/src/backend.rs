@@ -76,7 +76,7 @@
 
 use crate::accumulation::DeviceAccumulation;
 use crate::kernel::{
-    FILM_HEADER_BYTES, GpuIntegrator, HAS_ENVIRONMENT, HAS_NORMALS, HAS_TANGENTS, KernelOptions, LIGHT_CDF,
+    FILM_HEADER_BYTES, GpuIntegrator, HAS_ENVIRONMENT, HAS_NORMALS, HAS_TANGENTS, HAS_UVS, KernelOptions, LIGHT_CDF,
     LIGHT_FLOATS, LIGHT_KIND, LIGHT_MATERIAL, LIGHT_PMF, LightKind, NodeLayout, Params, PixelAccum, SEEDS_OFFSET,
     ShapeCode, UNIFORM_BYTES, WideNode,
 };
@@ -128,8 +128,8 @@ fn tabulate(colour: &spectral::spectrum::Colour) -> impl Iterator<Item = f32> + 
 }
 
 /// The record of an analytic shape in the kernel's tables (`wgsl/shapes.wgsl`): kind,
-/// material id, light pmf and area, then the shape's own numbers.
-pub fn shape_record(shape: &ShapeKind, material: u32, pmf: f32) -> Vec<f32> {
+/// material id, light pmf, area and the CPU's primitive id, then the shape's own numbers.
+pub fn shape_record(shape: &ShapeKind, material: u32, pmf: f32, prim: u32) -> Vec<f32> {
     let bits = f32::from_bits;
     let (code, own): (ShapeCode, Vec<f32>) = match shape {
         ShapeKind::Sphere(s) => {
@@ -165,7 +165,7 @@ pub fn shape_record(shape: &ShapeKind, material: u32, pmf: f32) -> Vec<f32> {
         }
         ShapeKind::Implicit(_) => unreachable!("implicit surfaces are refused before"),
     };
-    let mut record = vec![bits(code as u32), bits(material), pmf, shape.shape().area()];
+    let mut record = vec![bits(code as u32), bits(material), pmf, shape.shape().area(), bits(prim)];
     record.extend(own);
     record
 }
@@ -204,6 +204,98 @@ fn punctual_entry(light: &PunctualLight, spectrum: f32, entry: &mut [f32; LIGHT_
             LightKind::Directional
         }
     }
+}
+
+/// The textures of a scene as the kernel reads them (`wgsl/textures.wgsl`): each image's
+/// texels once, however many maps use it, and the maps' descriptors and the materials'
+/// records in the tables.
+#[derive(Default)]
+struct TexelUpload {
+    /// RGBA8 texels, red in the lowest byte.
+    texels: Vec<u32>,
+    /// Each image's first texel, by its address.
+    images: std::collections::HashMap<*const tracer::texture::TextureImage, u32>,
+}
+
+impl TexelUpload {
+    /// Appends `textures`' record (and its maps' descriptors) to `tables`; its offset.
+    fn material(&mut self, textures: &tracer::texture::MaterialTextures, tables: &mut Vec<f32>) -> u32 {
+        use tracer::texture::AlphaMode;
+        let none = f32::from_bits(u32::MAX);
+        let mut map = |m: Option<&tracer::texture::TextureMap>, tables: &mut Vec<f32>| {
+            m.map_or(none, |m| f32::from_bits(self.map(m, tables)))
+        };
+        let own = [
+            map(textures.base_colour.as_ref(), tables),
+            map(textures.specular.as_ref(), tables),
+            map(textures.metallic_roughness.as_ref(), tables),
+            map(textures.emissive.as_ref(), tables),
+            map(textures.normal.as_ref().map(|n| &n.map), tables),
+            textures.normal.as_ref().map_or(1.0, |n| n.scale),
+            map(textures.bump.as_ref().map(|b| &b.map), tables),
+            textures.bump.as_ref().map_or(1.0, |b| b.scale),
+        ];
+        let alpha = textures.alpha.as_ref();
+        let (mode, cutoff) = match alpha.map(|a| a.mode) {
+            None | Some(AlphaMode::Opaque) => (0, 0.0),
+            Some(AlphaMode::Mask { cutoff }) => (1, cutoff),
+            Some(AlphaMode::Blend) => (2, 0.0),
+        };
+        let alpha_map = map(alpha.and_then(|a| a.map.as_ref()), tables);
+        let record = tables.len() as u32;
+        tables.extend(own);
+        tables.extend([f32::from_bits(mode), cutoff, alpha.map_or(1.0, |a| a.factor), alpha_map]);
+        record
+    }
+
+    /// Appends the descriptor of `map` to `tables` (and its image's texels, the first
+    /// time); its offset.
+    fn map(&mut self, map: &tracer::texture::TextureMap, tables: &mut Vec<f32>) -> u32 {
+        use tracer::texture::{Encoding, Wrap};
+        let image = &*map.image;
+        let texels = &mut self.texels;
+        let first = *self.images.entry(image as *const _).or_insert_with(|| {
+            let first = texels.len() as u32;
+            for y in 0..image.height() {
+                texels.extend((0..image.width()).map(|x| u32::from_le_bytes(image.texel(x, y))));
+            }
+            first
+        });
+        let wrap = |w: Wrap| match w {
+            Wrap::Repeat => 0,
+            Wrap::Clamp => 1,
+            Wrap::Mirror => 2,
+        };
+        let bits = f32::from_bits;
+        let t = map.transform;
+        let offset = tables.len() as u32;
+        tables.extend([
+            bits(first),
+            bits(image.width()),
+            bits(image.height()),
+            bits(wrap(map.wrap[0])),
+            bits(wrap(map.wrap[1])),
+            bits(if map.encoding == Encoding::Srgb { 0 } else { 1 }),
+            bits(image.has_alpha() as u32),
+            bits((t == glam::Mat3::IDENTITY) as u32),
+            t.x_axis.x,
+            t.x_axis.y,
+            t.y_axis.x,
+            t.y_axis.y,
+            t.z_axis.x,
+            t.z_axis.y,
+        ]);
+        offset
+    }
+}
+
+/// Whether the adapter is a software rasteriser driven through Vulkan (Mesa's lavapipe):
+/// there the binary traversal's kernel renders Sponza 6.5 % too bright (lost hits: the same
+/// WGSL through lavapipe's OpenGL sibling, and the 4-wide traversal through Vulkan, agree
+/// with the CPU within 0.6 %; the binary tree itself agrees with the CPU's on every one of
+/// 200 000 rays), so `auto` takes the 4-wide tree there. docs/gpu.md has the measurements.
+fn software_vulkan(info: &wgpu::AdapterInfo) -> bool {
+    info.backend == wgpu::Backend::Vulkan && info.device_type == wgpu::DeviceType::Cpu
 }
 
 /// log₂ of `n` rounded up to a power of two (at least 1): the bits of a Sobol index or a
@@ -246,10 +338,12 @@ pub fn capabilities_for(integrator: GpuIntegrator) -> Capabilities {
         analytic_shapes: ShapeSupport { kinds: GPU_SHAPES.to_vec(), why_not: IMPLICIT_NOT_PORTED },
         custom_bsdfs: false,
         punctual_lights: true,
-        textures: false,
+        textures: true,
+        environment_maps: false,
         triangle_tests: vec![TriangleTest::Watertight, TriangleTest::MollerTrumbore],
         // Auto is the binary tree: on an H100 the 4-wide one (`crate::wide`) renders 1.2–1.8×
-        // slower in this megakernel; it stays selectable for comparisons.
+        // slower in this megakernel; it stays selectable for comparisons, and is auto's
+        // choice on lavapipe (`software_vulkan`).
         bvh_widths: vec![BvhWidth::Auto, BvhWidth::Two, BvhWidth::Four],
         integrator: integrator.name(),
         max_bounces: Some(MAX_BOUNCES),
@@ -273,6 +367,9 @@ struct SceneConstants {
     shape_nodes_offset: u32,
     shape_node_count: u32,
     shape_slots_offset: u32,
+    material_textures_offset: u32,
+    uplift_offset: u32,
+    decode_offset: u32,
     env_offset: u32,
     env_pmf: f32,
     scene_flags: u32,
@@ -287,6 +384,8 @@ pub struct SceneData {
     node_bytes: usize,
     tri_verts: Vec<[f32; 4]>,
     tri_vidx: Vec<[u32; 4]>,
+    /// The textures' texels (RGBA8 words), empty without textures.
+    texels: Vec<u32>,
     attrs: Vec<[f32; 4]>,
     tables: Vec<f32>,
     material_wgsl: String,
@@ -331,10 +430,13 @@ impl SceneData {
                 (bytes.to_vec(), std::mem::size_of::<WideNode>(), wide.nodes.len(), layout)
             }
         };
+        let textured = scene.materials.iter().any(|m| m.textures.is_some());
         let options = KernelOptions {
             nodes: layout,
             shapes: !scene.shapes.is_empty(),
             punctual_lights: !scene.punctual_lights.is_empty(),
+            textures: textured,
+            cutouts: scene.materials.iter().any(|m| m.alpha().is_some()),
             ..options
         };
         let build_time = start.elapsed();
@@ -357,15 +459,22 @@ impl SceneData {
         if !scene.tangents.is_empty() {
             scene_flags |= HAS_TANGENTS;
         }
-        let (tri_vidx, attrs) = if scene_flags & (HAS_NORMALS | HAS_TANGENTS) != 0 {
+        // Texture coordinates only where a material reads textures.
+        if textured && !scene.uvs.is_empty() {
+            scene_flags |= HAS_UVS;
+        }
+        let (tri_vidx, attrs) = if scene_flags & (HAS_NORMALS | HAS_TANGENTS | HAS_UVS) != 0 {
             let vidx = bvh.prim_ids().iter().map(|&p| {
                 let t = scene.triangles[p as usize];
                 [t[0], t[1], t[2], 0]
             });
+            // Per vertex: normal and u, tangent and v.
+            let uvs = if scene_flags & HAS_UVS != 0 { scene.uvs.as_slice() } else { &[] };
             let attrs = (0..scene.positions.len()).flat_map(|i| {
                 let n = scene.normals.get(i).copied().unwrap_or([0.0; 3]);
                 let t = scene.tangents.get(i).copied().unwrap_or([0.0; 3]);
-                [[n[0], n[1], n[2], 0.0], [t[0], t[1], t[2], 0.0]]
+                let uv = uvs.get(i).copied().unwrap_or([0.0; 2]);
+                [[n[0], n[1], n[2], uv[0]], [t[0], t[1], t[2], uv[1]]]
             });
             (vidx.collect(), attrs.collect())
         } else {
@@ -397,7 +506,8 @@ impl SceneData {
         for (k, shape) in scene.shapes.iter().enumerate() {
             shape_records[k] = tables.len() as u32;
             let prim = scene.triangles.len() + k;
-            tables.extend(shape_record(&shape.shape, shape.material, pmfs.get(prim).copied().unwrap_or(0.0)));
+            let pmf = pmfs.get(prim).copied().unwrap_or(0.0);
+            tables.extend(shape_record(&shape.shape, shape.material, pmf, prim as u32));
         }
         let (shape_nodes_offset, shape_node_count, shape_slots_offset) = if scene.shapes.is_empty() {
             (0, 0, 0)
@@ -416,6 +526,26 @@ impl SceneData {
             tables.extend(shape_bvh.order().iter().map(|&k| f32::from_bits(shape_records[k as usize])));
             (nodes_offset, shape_bvh.node_count() as u32, slots_offset)
         };
+
+        // Textures: the texel decode tables, the uplift table, each material's maps.
+        let (mut decode_offset, mut uplift_offset, mut material_textures_offset) = (0, 0, 0);
+        let mut texels = TexelUpload::default();
+        if textured {
+            decode_offset = tables.len() as u32;
+            tables.extend((0..256).map(|i| spectral::colour::srgb_decode(i as f32 / 255.0)));
+            tables.extend((0..256).map(|i| i as f32 / 255.0));
+            uplift_offset = tables.len() as u32;
+            let uplift = spectral::uplift::uplift_table();
+            tables.extend(uplift.z_nodes());
+            tables.extend(uplift.coefficients().iter().flat_map(|c| [c.c0, c.c1, c.c2]));
+            let records: Vec<u32> = scene
+                .materials
+                .iter()
+                .map(|m| m.textures.as_deref().map_or(u32::MAX, |t| texels.material(t, &mut tables)))
+                .collect();
+            material_textures_offset = tables.len() as u32;
+            tables.extend(records.into_iter().map(f32::from_bits));
+        }
 
         // The light table, in the order of the CPU's cdf: emissive triangles and shapes,
         // then the punctual lights (each with its spectrum tabulated at 1 nm after the table).
@@ -466,6 +596,9 @@ impl SceneData {
             shape_nodes_offset,
             shape_node_count,
             shape_slots_offset,
+            material_textures_offset,
+            uplift_offset,
+            decode_offset,
             env_offset,
             env_pmf: lights.environment_pmf(),
             scene_flags,
@@ -477,6 +610,7 @@ impl SceneData {
             node_bytes,
             tri_verts,
             tri_vidx,
+            texels: texels.texels,
             attrs,
             tables,
             material_wgsl: kernel.wgsl,
@@ -490,7 +624,7 @@ impl SceneData {
     /// What each storage buffer holds and how many bytes it needs, in binding order
     /// (the per-pixel accumulators are not included: their size follows the image and
     /// is split into bands to fit).
-    pub fn buffer_sizes(&self) -> [(&'static str, u64); 7] {
+    pub fn buffer_sizes(&self) -> [(&'static str, u64); 8] {
         let bytes = |n: usize, each: usize| (n * each) as u64;
         [
             ("BVH nodes", self.nodes.len() as u64),
@@ -500,6 +634,7 @@ impl SceneData {
             ("spectral tables and lights", bytes(self.tables.len(), 4)),
             ("material parameters", bytes(self.material_data.len(), 4)),
             ("material spectra", bytes(self.spectra.len(), 4)),
+            ("texels", bytes(self.texels.len(), 4)),
         ]
     }
 
@@ -508,11 +643,14 @@ impl SceneData {
     /// `max_storage_buffers_per_shader_stage`; the error names the buffer, the limit and
     /// both sizes.
     pub fn check_limits(&self, limits: &wgpu::Limits) -> Result<(), GpuError> {
-        if limits.max_storage_buffers_per_shader_stage < STORAGE_BUFFERS {
+        // One more for the texels where a material reads textures.
+        let storage_buffers = STORAGE_BUFFERS + u32::from(self.options.textures);
+        if limits.max_storage_buffers_per_shader_stage < storage_buffers {
             return Err(GpuError::Unsupported(format!(
                 "a device with {} storage buffers per shader stage (max_storage_buffers_per_shader_stage; the kernel \
-                 binds {STORAGE_BUFFERS})",
-                limits.max_storage_buffers_per_shader_stage
+                 binds {storage_buffers}{})",
+                limits.max_storage_buffers_per_shader_stage,
+                if self.options.textures { ", one of them for the textures" } else { "" }
             )));
         }
         for (what, needed) in self.buffer_sizes() {
@@ -655,6 +793,7 @@ impl GpuBackend {
         let start = Instant::now();
         let nodes = match options.bvh_width {
             BvhWidth::Four => NodeLayout::Wide4 { stack: 0 },
+            BvhWidth::Auto if software_vulkan(&self.ctx.info) => NodeLayout::Wide4 { stack: 0 },
             _ => NodeLayout::Binary,
         };
         let data = SceneData::new(
@@ -670,6 +809,8 @@ impl GpuBackend {
                 shapes: false,
                 punctual_lights: false,
                 rgb: false,
+                textures: false,
+                cutouts: false,
             },
         )?;
         data.check_limits(&self.ctx.limits)?;
@@ -698,7 +839,10 @@ impl GpuBackend {
             storage("tables", bytemuck::cast_slice(&data.tables), 16),
             storage("material data", bytemuck::cast_slice(&data.material_data), 16),
             storage("material spectra", bytemuck::cast_slice(&data.spectra), 16),
-        ];
+        ]
+        .into_iter()
+        .chain(data.options.textures.then(|| storage("texels", bytemuck::cast_slice(&data.texels), 16)))
+        .collect::<Vec<_>>();
         let params = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("params"),
             size: UNIFORM_BYTES,
@@ -710,6 +854,7 @@ impl GpuBackend {
         let entries: Vec<_> = [(0, wgpu::BufferBindingType::Uniform), (7, wgpu::BufferBindingType::Uniform)]
             .into_iter()
             .chain([1, 2, 3, 4, 5, 10, 11].map(|b| (b, read)))
+            .chain(data.options.textures.then_some((12, read)))
             .chain([(6, wgpu::BufferBindingType::Storage { read_only: false })])
             .map(|(b, ty)| buffer_entry(b, ty))
             .collect();
@@ -808,6 +953,9 @@ impl GpuScene {
             shape_nodes_offset: self.constants.shape_nodes_offset,
             shape_node_count: self.constants.shape_node_count,
             shape_slots_offset: self.constants.shape_slots_offset,
+            material_textures_offset: self.constants.material_textures_offset,
+            uplift_offset: self.constants.uplift_offset,
+            decode_offset: self.constants.decode_offset,
             env_pmf: self.constants.env_pmf,
             eye: v4(eye),
             forward: v4(forward),
@@ -931,8 +1079,11 @@ impl GpuScene {
             wgpu::BindGroupEntry { binding: 0, resource: range(0, std::mem::size_of::<Params>() as u64) },
             wgpu::BindGroupEntry { binding: 7, resource: range(SEEDS_OFFSET, UNIFORM_BYTES - SEEDS_OFFSET) },
         ];
-        let bindings =
-            [(1, &b[0]), (2, &b[1]), (3, &b[2]), (4, &b[3]), (5, &b[4]), (6, accum), (10, &b[5]), (11, &b[6])];
+        let mut bindings =
+            vec![(1, &b[0]), (2, &b[1]), (3, &b[2]), (4, &b[3]), (5, &b[4]), (6, accum), (10, &b[5]), (11, &b[6])];
+        if let Some(texels) = b.get(7) {
+            bindings.push((12, texels));
+        }
         let entries: Vec<_> = uniforms
             .into_iter()
             .chain(

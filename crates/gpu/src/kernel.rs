@@ -172,6 +172,14 @@ wgsl_struct! {
         /// Entries of the light table before the punctual lights (emissive triangles and
         /// shapes); `light_count` counts all.
         punctual_first: u32,
+        /// Offset in `pt_tables` of the material → texture record table (`wgsl/textures.wgsl`).
+        material_textures_offset: u32,
+        /// Offset in `pt_tables` of the uplift table: 32 z nodes, then the coefficients.
+        uplift_offset: u32,
+        /// Offset in `pt_tables` of the texel decode tables (sRGB, then linear; 256 each).
+        decode_offset: u32,
+        /// Padding to the uniform block's 16-byte multiple.
+        pad2: u32,
     }
 }
 
@@ -310,6 +318,8 @@ pub const HAS_NORMALS: u32 = 1;
 pub const HAS_TANGENTS: u32 = 2;
 /// Scene flag: the scene has an environment light.
 pub const HAS_ENVIRONMENT: u32 = 4;
+/// Scene flag: vertices have texture coordinates (in the `w` of their attributes).
+pub const HAS_UVS: u32 = 8;
 
 /// Floats per light in the light table: nine of the light's own (a triangle's vertices,
 /// a shape's record offset, a punctual light's position, axis, cone and spectrum), cdf,
@@ -383,6 +393,11 @@ pub struct KernelOptions {
     /// RGB mode (`PT_RGB`, the materials' `MAT_RGB`): three colour channels instead of
     /// four hero wavelengths; a render in the other mode gets another kernel.
     pub rgb: bool,
+    /// Whether materials read textures (`PT_HAS_TEXTURES`, and the texel buffer at binding
+    /// 12).
+    pub textures: bool,
+    /// Whether some material is cut out or transparent by its alpha (`PT_HAS_CUTOUTS`).
+    pub cutouts: bool,
 }
 
 /// A sphere method's code in a shape record (`PT_SPHERE_*`).
@@ -440,6 +455,12 @@ pub fn header(options: &KernelOptions) -> String {
          @group(0) @binding(7) var<uniform> pt_dims: array<vec4u, PT_SEED_DIMENSIONS>;\n\n"
             .replace("NODE_STRUCT", node_struct),
     );
+    // The texels only where a material reads them (a binding more than the device may have).
+    out.push_str(if options.textures {
+        "@group(0) @binding(12) var<storage, read> pt_texels: array<u32>;\n\n"
+    } else {
+        "var<private> pt_texels: array<u32, 1>; // (no textures)\n\n"
+    });
     let mut u = |name: &str, v: u32| {
         let _ = writeln!(out, "const {name}: u32 = {v}u;");
     };
@@ -449,6 +470,7 @@ pub fn header(options: &KernelOptions) -> String {
     u("PT_HAS_NORMALS", HAS_NORMALS);
     u("PT_HAS_TANGENTS", HAS_TANGENTS);
     u("PT_HAS_ENVIRONMENT", HAS_ENVIRONMENT);
+    u("PT_HAS_UVS", HAS_UVS);
     u("PT_CIE_SAMPLES", CIE_SAMPLES as u32);
     u("PT_LIGHT_FLOATS", LIGHT_FLOATS as u32);
     u("PT_LIGHT_CDF", LIGHT_CDF);
@@ -489,6 +511,8 @@ pub fn header(options: &KernelOptions) -> String {
     let _ = writeln!(out, "const PT_HAS_SHAPES: bool = {};", options.shapes);
     let _ = writeln!(out, "const PT_HAS_PUNCTUAL: bool = {};", options.punctual_lights);
     let _ = writeln!(out, "const PT_RGB: bool = {};", options.rgb);
+    let _ = writeln!(out, "const PT_HAS_TEXTURES: bool = {};", options.textures);
+    let _ = writeln!(out, "const PT_HAS_CUTOUTS: bool = {};", options.cutouts);
     let [r, g, b] = brdf::models::metal::RGB_LAMBDA;
     // RGB mode's "wavelengths": where metals take their (n, k) per channel (`RGB_LAMBDA`).
     let _ = writeln!(out, "const PT_RGB_LAMBDA: vec4f = vec4f({}, {}, {}, {});", f(r), f(g), f(b), f(b));
@@ -533,7 +557,7 @@ pub fn header(options: &KernelOptions) -> String {
 }
 
 /// The hand-written files, in the order they are concatenated.
-const FILES: [(&str, &str); 11] = [
+const FILES: [(&str, &str); 12] = [
     ("rng.wgsl", include_str!("wgsl/rng.wgsl")),
     ("sampler.wgsl", include_str!("wgsl/sampler.wgsl")),
     ("spectral.wgsl", include_str!("wgsl/spectral.wgsl")),
@@ -542,6 +566,7 @@ const FILES: [(&str, &str); 11] = [
     ("shading.wgsl", include_str!("wgsl/shading.wgsl")),
     ("ray.wgsl", include_str!("wgsl/ray.wgsl")),
     ("shapes.wgsl", include_str!("wgsl/shapes.wgsl")),
+    ("textures.wgsl", include_str!("wgsl/textures.wgsl")),
     ("lights.wgsl", include_str!("wgsl/lights.wgsl")),
     ("path.wgsl", include_str!("wgsl/path.wgsl")),
     ("simple.wgsl", include_str!("wgsl/simple.wgsl")),

@@ -50,6 +50,8 @@
 //! fn material_emission(m: u32, lambda: vec4f) -> vec4f;
 //! fn material_absorption(m: u32, lambda: vec4f) -> vec4f;
 //! fn material_absorbing(m: u32) -> bool;
+//! fn mat_set_texels(m: u32, base: vec4f, spec: vec4f, roughness: f32, metallic: f32);
+//! fn mat_clear_texels();
 //! fn bsdf_eval(m: u32, wo: vec3f, wi: vec3f, lambda: vec4f) -> vec4f;
 //! fn bsdf_pdf(m: u32, wo: vec3f, wi: vec3f, lambda: vec4f) -> f32;
 //! fn bsdf_sample(m: u32, wo: vec3f, uc: f32, u: vec2f, lambda: vec4f) -> BsdfSample;
@@ -73,6 +75,8 @@
 //! | 3 | `EMISSION` | offset of the emitted radiance in `spectra`, or [`NO_SPECTRUM`] |
 //! | 4 | `ABSORPTION` | offset of the absorption coefficient in `spectra`, or [`NO_SPECTRUM`] |
 //! | 5 | `PARAMS` | word index of the material's parameters (one word per declared parameter) |
+//! | 6 | `BASE_SLOT` | offset in `spectra` of the parameter a base-colour texture multiplies, or [`NO_SPECTRUM`] |
+//! | 7 | `SPECULAR_SLOT` | the same for a specular texture |
 //!
 //! `spectra` (f32): every distinct colour the materials use (parameters, emission,
 //! absorption), each tabulated at 1 nm from [`SPECTRUM_LAMBDA_MIN`] ([`SPECTRUM_SAMPLES`]
@@ -96,7 +100,7 @@ pub const SPECTRUM_LAMBDA_MIN: f32 = spectral::sampled::LAMBDA_MIN;
 /// Entries per table: one per nm from 360 to 830 nm inclusive.
 pub const SPECTRUM_SAMPLES: usize = (spectral::sampled::LAMBDA_MAX - spectral::sampled::LAMBDA_MIN) as usize + 1;
 /// Words per material header in `material_data`.
-pub const HEADER_WORDS: u32 = 6;
+pub const HEADER_WORDS: u32 = 8;
 /// The offset that stands for "no spectrum" (no emission, no absorption).
 pub const NO_SPECTRUM: u32 = u32::MAX;
 /// Header property bit: the BSDF acts on both faces alike ([`Material::is_two_sided`]).
@@ -119,6 +123,11 @@ pub mod header {
     pub const ABSORPTION: u32 = 4;
     /// Word index of the parameters.
     pub const PARAMS: u32 = 5;
+    /// The `spectra` offset of the parameter a base-colour texture multiplies (its own
+    /// copy), or [`super::NO_SPECTRUM`] without such a texture.
+    pub const BASE_SLOT: u32 = 6;
+    /// The same for a specular texture.
+    pub const SPECULAR_SLOT: u32 = 7;
 }
 
 /// The optional code paths a kernel contains besides its models.
@@ -132,12 +141,14 @@ pub struct Features {
     pub emission: bool,
     /// The measured metal presets whose tables are uploaded, in [`Metal::ALL`] order.
     pub metals: Vec<Metal>,
+    /// Texels driving BSDF parameters (`mat_set_texels`; without, the code is not compiled in).
+    pub textures: bool,
 }
 
 impl Features {
     /// Everything (the unspecialised kernel).
     pub fn all() -> Self {
-        Self { dispersion: true, absorption: true, emission: true, metals: Metal::ALL.to_vec() }
+        Self { dispersion: true, absorption: true, emission: true, metals: Metal::ALL.to_vec(), textures: true }
     }
 
     /// What `materials` use.
@@ -159,6 +170,7 @@ impl Features {
             absorption: materials.iter().any(|m| m.absorption().is_some()),
             emission: materials.iter().any(|m| m.emission.is_some()),
             metals,
+            textures: materials.iter().any(|m| m.textures.is_some()),
         }
     }
 }
@@ -285,13 +297,16 @@ impl SpectrumPool {
 }
 
 /// One word per declared parameter, in declaration order: a scalar as its f32 bits, a
-/// spectrum or coefficient as the offset of its table in `spectra` (added to `pool`), a
-/// switch as 0 or 1, a choice as its index. The layout `load_<model>` reads.
-fn pack_params(params: &ResolvedParams, pool: &mut SpectrumPool) -> Result<Vec<u32>, GpuError> {
+/// spectrum or coefficient as the offset of its table in `spectra` (added to `pool`; the
+/// parameters at `own` get a copy of their own, which a texture may multiply), a switch as
+/// 0 or 1, a choice as its index. The layout `load_<model>` reads.
+fn pack_params(params: &ResolvedParams, pool: &mut SpectrumPool, own: &[usize]) -> Result<Vec<u32>, GpuError> {
     params
         .values()
         .iter()
-        .map(|v| match v {
+        .enumerate()
+        .map(|(i, v)| match v {
+            Resolved::Colour(c) if own.contains(&i) => pool.raw(tabulate(c).into_iter().chain(c.rgb)),
             Resolved::Scalar(x) => Ok(x.to_bits()),
             Resolved::Colour(c) => pool.colour(c),
             Resolved::Bool(b) => Ok(u32::from(*b)),
@@ -338,7 +353,20 @@ pub fn generate(materials: &[Material], specialise: bool) -> Result<MaterialKern
         let h = k * HEADER_WORDS as usize;
         let base =
             u32::try_from(data.len()).map_err(|_| GpuError::Unsupported("over 2³² words of materials".into()))?;
-        data.extend(pack_params(&params.to_resolved(), &mut pool)?);
+        // The parameters this material's base-colour and specular textures multiply.
+        let textures = material.textures.as_deref();
+        let slot = |param: Option<&str>, textured: bool| {
+            param.filter(|_| textured).and_then(|name| params.model().def().param(name)).map(|(i, _)| i)
+        };
+        let wgsl_slots = params.model().wgsl().texture;
+        let base_slot = slot(wgsl_slots.base_colour, textures.is_some_and(|t| t.base_colour.is_some()));
+        let specular_slot = slot(wgsl_slots.specular, textures.is_some_and(|t| t.specular.is_some()));
+        let own: Vec<usize> = base_slot.into_iter().chain(specular_slot).collect();
+        let words = pack_params(&params.to_resolved(), &mut pool, &own)?;
+        let slot_offset = |i: Option<usize>| i.map_or(NO_SPECTRUM, |i| words[i]);
+        data[h + header::BASE_SLOT as usize] = slot_offset(base_slot);
+        data[h + header::SPECULAR_SLOT as usize] = slot_offset(specular_slot);
+        data.extend(words);
         let emission = match &material.emission {
             Some(c) => pool.colour(c)?,
             None => NO_SPECTRUM,
@@ -470,6 +498,18 @@ pub fn wgsl_for(
     let _ = writeln!(out, "const MAT_PROPERTY_DISPERSIVE: u32 = {PROPERTY_DISPERSIVE}u;");
     out.push_str("// RGB mode (`for_mode`): colours are their linear-sRGB values, nothing disperses.\n");
     out.push_str(HERO_MODE_LINE);
+    let _ = writeln!(out, "const MAT_TEXTURES: bool = {};", features.textures);
+    out.push_str(
+        "// The texels at the current hit (`mat_set_texels`): `spectrum_at` multiplies the tables at\n\
+         // `mat_tex_base_at` and `mat_tex_spec_at` by them; roughness and metalness reach the\n\
+         // models with a metallic-roughness slot through their `_textured` hooks.\n\
+         var<private> mat_tex_base_at: u32 = MAT_NO_SPECTRUM;\n\
+         var<private> mat_tex_base: vec4f = vec4f(1.0);\n\
+         var<private> mat_tex_spec_at: u32 = MAT_NO_SPECTRUM;\n\
+         var<private> mat_tex_spec: vec4f = vec4f(1.0);\n\
+         var<private> mat_tex_roughness: f32 = 1.0;\n\
+         var<private> mat_tex_metallic: f32 = 1.0;\n",
+    );
     for m in models {
         let _ = writeln!(out, "const MAT_MODEL_{}: u32 = {}u;", m.def.name.to_ascii_uppercase(), m.id);
     }
@@ -552,15 +592,34 @@ pub fn wgsl_for(
         out.push_str("    return false;\n");
     }
     out.push_str("}\n\n");
+    // The texels of a hit on material `m` (`Texels`: base colour and specular at the path's
+    // wavelengths, roughness and metalness factors), for the BSDF calls that follow.
+    out.push_str("fn mat_set_texels(m: u32, base: vec4f, spec: vec4f, roughness: f32, metallic: f32) {\n");
+    let _ = writeln!(out, "    mat_tex_base_at = mat_header(m, {}u);", header::BASE_SLOT);
+    let _ = writeln!(out, "    mat_tex_spec_at = mat_header(m, {}u);", header::SPECULAR_SLOT);
+    out.push_str(
+        "    mat_tex_base = base;\n    mat_tex_spec = spec;\n    mat_tex_roughness = roughness;\n    \
+         mat_tex_metallic = metallic;\n}\n\n",
+    );
+    out.push_str(
+        "// No texels: the BSDFs of an untextured hit.\nfn mat_clear_texels() {\n    \
+         mat_tex_base_at = MAT_NO_SPECTRUM;\n    mat_tex_spec_at = MAT_NO_SPECTRUM;\n    \
+         mat_tex_roughness = 1.0;\n    mat_tex_metallic = 1.0;\n}\n\n",
+    );
     let dispatch = |out: &mut String, signature: &str, suffix: &str, args: &str, zero: &str| {
         let _ = writeln!(out, "fn bsdf_{suffix}({signature} {{");
         let _ = writeln!(out, "    let base = mat_header(m, {}u);", header::PARAMS);
         let _ = writeln!(out, "    switch mat_header(m, {}u) {{", header::MODEL);
         for m in models {
             let n = m.def.name;
+            let load = if features.textures && m.wgsl.texture.metallic_roughness {
+                format!("{n}_textured(load_{n}(base), mat_tex_roughness, mat_tex_metallic)")
+            } else {
+                format!("load_{n}(base)")
+            };
             let _ = writeln!(
                 out,
-                "        case MAT_MODEL_{}: {{ return {n}_{suffix}(load_{n}(base), {args}); }}",
+                "        case MAT_MODEL_{}: {{ return {n}_{suffix}({load}, {args}); }}",
                 n.to_ascii_uppercase()
             );
         }

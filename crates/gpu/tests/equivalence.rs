@@ -186,6 +186,8 @@ fn kernel_options() -> gpu::kernel::KernelOptions {
         shapes: false,
         punctual_lights: false,
         rgb: false,
+        textures: false,
+        cutouts: false,
     }
 }
 
@@ -403,17 +405,17 @@ fn unsupported_scenes_and_modes_are_clear_errors() {
     let err = caps.check_scene(&room, &wide).unwrap_err().to_string();
     assert!(err.contains("8-wide triangle BVH") && err.contains("--bvh-width auto"), "{err}");
     caps.check_scene(&room, &SceneOptions::default()).unwrap();
-    // Textures are refused, naming the first textured material, with the ways out.
+    // Textures are read; environment maps are refused with the way out.
     let mut textured = room.clone();
     let image = std::sync::Arc::new(tracer::texture::TextureImage::from_rgba8(1, 1, vec![[9, 9, 9, 255]]).unwrap());
     let map = tracer::texture::TextureMap::new(image, tracer::texture::Encoding::Srgb);
     let textures = tracer::texture::MaterialTextures { base_colour: Some(map), ..Default::default() };
     textured.materials[0] = textured.materials[0].clone().with_textures(textures);
-    let err = caps.check_scene(&textured, &SceneOptions::default()).unwrap_err().to_string();
-    let name = &textured.materials[0].name;
-    assert!(err.contains("textures") && err.contains(name.as_str()) && err.contains("--no-textures"), "{err}");
-    textured.strip_textures();
     caps.check_scene(&textured, &SceneOptions::default()).unwrap();
+    let sky = tracer::envmap::EnvironmentMap::new(2, 1, vec![[1.0, 0.5, 0.25], [0.2, 0.3, 0.4]], 0.0).unwrap();
+    textured.environment = Some(Environment::from_map(sky, 1.0));
+    let err = caps.check_scene(&textured, &SceneOptions::default()).unwrap_err().to_string();
+    assert!(err.contains("environment maps") && err.contains("--sky white"), "{err}");
     let s = settings(8, 8, 1);
     caps.check_settings(&RenderSettings { mode: SpectralMode::Rgb, ..s.clone() }).unwrap();
     let err = caps.check_settings(&RenderSettings { mode: SpectralMode::Bins40, ..s.clone() }).unwrap_err().to_string();
@@ -537,16 +539,19 @@ fn wide_and_binary_bvhs_give_the_same_image() {
         let s =
             RenderSettings { path: PathSettings { max_depth: 5, ..settings(24, 24, 16).path }, ..settings(24, 24, 16) };
         let mut films = Vec::new();
+        // Auto is the binary tree, but the 4-wide one on lavapipe (see `textured_sponza_matches_the_cpu`).
+        let info = &backend.context().info;
+        let lavapipe = info.backend == wgpu::Backend::Vulkan && info.device_type == wgpu::DeviceType::Cpu;
         for width in [bvh::BvhWidth::Two, bvh::BvhWidth::Four, bvh::BvhWidth::Auto] {
             let options = SceneOptions { bvh_width: width, ..SceneOptions::default() };
             let prepared = backend.prepare_gpu(scene.clone(), &options).unwrap();
-            let expected = if width == bvh::BvhWidth::Four { "4-wide BVH" } else { "binary BVH" };
-            assert_eq!(prepared.stats().accelerator, expected);
+            let wide = width == bvh::BvhWidth::Four || (width == bvh::BvhWidth::Auto && lavapipe);
+            assert_eq!(prepared.stats().accelerator, if wide { "4-wide BVH" } else { "binary BVH" });
             films.push(tracer::render(&prepared, &s, &|_| {}).unwrap());
         }
         assert!(films[0].0.samples() > 0);
         assert!(films[0].0 == films[1].0, "{name}: the 4-wide BVH's image differs from the binary's");
-        assert!(films[0].0 == films[2].0, "{name}: auto is the binary BVH");
+        assert!(films[0].0 == films[2].0, "{name}: auto's image differs");
         assert_eq!(films[0].1.rays, films[1].1.rays, "{name}: ray counts");
     }
 }
@@ -788,5 +793,172 @@ fn rgb_mode_matches_the_cpu() {
         let r = render_three(&gpu, &scene, &s).unwrap();
         failures.extend(compare_all(&format!("{name} (rgb)"), &r));
     }
+    assert!(failures.is_empty(), "{failures:#?}");
+}
+
+/// An RGBA8 image from a function of the texel (x, y).
+fn image(w: u32, h: u32, f: impl Fn(u32, u32) -> [u8; 4]) -> std::sync::Arc<tracer::texture::TextureImage> {
+    let texels = (0..h).flat_map(|y| (0..w).map(move |x| (x, y))).map(|(x, y)| f(x, y)).collect();
+    std::sync::Arc::new(tracer::texture::TextureImage::from_rgba8(w, h, texels).unwrap())
+}
+
+/// A small hash of integers to a byte, for texture contents.
+fn byte(a: u32, b: u32, salt: u32) -> u8 {
+    let mut h = a.wrapping_mul(0x9e37_79b9) ^ b.wrapping_mul(0x85eb_ca6b) ^ salt.wrapping_mul(0xc2b2_ae35);
+    h ^= h >> 15;
+    h = h.wrapping_mul(0x2c1b_3c6d);
+    (h >> 24) as u8
+}
+
+/// Every kind of texture a material reads: a checkered, bump-mapped floor tiled by a uv
+/// transform; a metallic–roughness ball with base-colour (mirrored and clamped wraps),
+/// metallic–roughness and normal maps; a cut-out card (alpha mask at 0.5) and a
+/// half-transparent one (blend) in front of it, casting shadows; a wall of Ashikhmin–
+/// Shirley with diffuse and specular maps; a rough glass ball whose roughness is textured;
+/// a panel glowing through an emissive texture; lit by an untextured lamp and a dim sky.
+fn textured_scene() -> Scene {
+    use tracer::texture::{Alpha, AlphaMode, BumpMap, Encoding, MaterialTextures, NormalMap, TextureMap, Wrap};
+    let map = |img, encoding| TextureMap::new(img, encoding);
+    let mut scene = Scene::default();
+    let checker = image(8, 8, |x, y| if (x + y) % 2 == 0 { [230, 200, 40, 255] } else { [30, 60, 200, 255] });
+    let heights = image(16, 16, |x, y| [byte(x, y, 1), 0, 0, 255]);
+    let mut floor_map = map(checker.clone(), Encoding::Srgb);
+    floor_map.transform = tracer::texture::khr_texture_transform([0.1, 0.2], 0.3, [3.0, 2.0]);
+    let floor = Material::diffuse("floor", Colour::constant(0.8)).unwrap().with_textures(MaterialTextures {
+        base_colour: Some(floor_map),
+        bump: Some(BumpMap { map: map(heights, Encoding::Linear), scale: 0.3 }),
+        ..Default::default()
+    });
+    scene.add(&quad(Vec3::ZERO, Vec3::Y, 3.0), floor);
+
+    let mut ball = uv_sphere(Vec3::new(-0.6, 0.8, 0.0), 0.8, 12, 24, false);
+    ball.uvs =
+        (0..=12u32).flat_map(|r| (0..24u32).map(move |s| glam::Vec2::new(s as f32 / 8.0, r as f32 / 10.0))).collect();
+    let mut colours = map(image(4, 4, |x, y| [byte(x, y, 2), byte(x, y, 3), byte(x, y, 4), 255]), Encoding::Srgb);
+    colours.wrap = [Wrap::Mirror, Wrap::Clamp];
+    let mr = image(8, 8, |x, y| [0, 40 + byte(x, y, 5) / 2, byte(x, y, 6), 255]);
+    let normals = image(8, 8, |x, y| [100 + byte(x, y, 7) / 4, 100 + byte(x, y, 8) / 4, 230, 255]);
+    let metal = Material::builtin("metal", ModelId::MetallicRoughness, &[("roughness", ParamValue::Scalar(0.8))])
+        .unwrap()
+        .with_textures(MaterialTextures {
+            base_colour: Some(colours),
+            metallic_roughness: Some(map(mr.clone(), Encoding::Linear)),
+            normal: Some(NormalMap { map: map(normals, Encoding::Linear), scale: 1.0 }),
+            ..Default::default()
+        });
+    scene.add(&ball, metal);
+
+    let card = |name: &str, alpha: Alpha| {
+        Material::diffuse(name, Colour::constant(0.7)).unwrap().with_textures(MaterialTextures {
+            base_colour: Some(map(checker.clone(), Encoding::Srgb)),
+            alpha: Some(alpha),
+            ..Default::default()
+        })
+    };
+    let holes = image(4, 4, |x, y| [255, 255, 255, if (x * 3 + y) % 4 == 0 { 0 } else { 255 }]);
+    let mask = Alpha { mode: AlphaMode::Mask { cutoff: 0.5 }, factor: 1.0, map: Some(map(holes, Encoding::Linear)) };
+    scene.add(&quad(Vec3::new(0.7, 0.7, 0.9), Vec3::Z, 0.6), card("cut-out card", mask));
+    let blend = Alpha { mode: AlphaMode::Blend, factor: 0.6, map: None };
+    scene.add(&quad(Vec3::new(-1.2, 0.5, 1.3), Vec3::Z, 0.4), card("blended card", blend));
+
+    let wall = Material::builtin(
+        "wall",
+        ModelId::Ashikhmin,
+        &[("nu", ParamValue::Scalar(50.0)), ("nv", ParamValue::Scalar(50.0))],
+    )
+    .unwrap()
+    .with_textures(MaterialTextures {
+        base_colour: Some(map(checker.clone(), Encoding::Srgb)),
+        specular: Some(map(image(2, 2, |x, y| [byte(x, y, 9), 128, byte(x, y, 10), 255]), Encoding::Srgb)),
+        ..Default::default()
+    });
+    scene.add(&quad(Vec3::new(0.0, 1.5, -1.5), Vec3::Z, 1.5), wall);
+    let glass = Material::builtin("rough glass", ModelId::RoughDielectric, &[("alpha", ParamValue::Scalar(0.3))])
+        .unwrap()
+        .with_textures(MaterialTextures { metallic_roughness: Some(map(mr, Encoding::Linear)), ..Default::default() });
+    let mut glass_ball = uv_sphere(Vec3::new(1.3, 0.45, -0.2), 0.45, 8, 16, false);
+    glass_ball.uvs =
+        (0..=8u32).flat_map(|r| (0..16u32).map(move |s| glam::Vec2::new(s as f32 / 16.0, r as f32 / 8.0))).collect();
+    scene.add(&glass_ball, glass);
+    let panel = Material::diffuse("panel", Colour::constant(0.1))
+        .unwrap()
+        .with_emission(Colour::illuminant_rgb([2.0, 2.0, 2.0]).unwrap())
+        .with_textures(MaterialTextures { emissive: Some(map(checker, Encoding::Srgb)), ..Default::default() });
+    scene.add(&quad(Vec3::new(-2.2, 1.0, -0.5), Vec3::X, 0.5), panel);
+    let lamp = Material::diffuse("lamp", Colour::constant(0.0))
+        .unwrap()
+        .with_emission(Colour::illuminant_rgb([6.0, 5.5, 4.5]).unwrap());
+    let mut light = quad(Vec3::new(0.5, 3.5, 1.0), -Vec3::Y, 0.8);
+    light.normals.clear();
+    scene.add(&light, lamp);
+    scene.environment = Some(Environment::uniform(Colour::constant(0.2)));
+    scene.camera =
+        Some(Camera { eye: Vec3::new(0.3, 1.8, 4.2), center: Vec3::new(0.0, 0.7, 0.0), up: Vec3::Y, fov_y_deg: 50.0 });
+    scene
+}
+
+#[test]
+fn textures_match_the_cpu() {
+    let Some(ctx) = gpu::require_gpu() else { return };
+    let gpu = GpuBackend::with_context(ctx);
+    let scene = textured_scene();
+    let mut failures = Vec::new();
+    for mode in [SpectralMode::Hero, SpectralMode::Rgb] {
+        let s = RenderSettings { mode, ..settings(32, 32, 128) };
+        let r = render_three(&gpu, &scene, &s).unwrap();
+        assert!(r.cpu.channel_means()[1] > 0.02, "a dark image proves little");
+        failures.extend(compare_all(&format!("textures ({})", mode.name()), &r));
+        // Sharper than the z-tests for what bends normals (a normal map's handedness, a bump
+        // map): the same-seed GPU paths follow the CPU's, so the two images differ far less
+        // than independent renders do — unless the GPU bends a normal otherwise, and every
+        // path that meets it goes elsewhere.
+        let ratio = mean_squared_difference(&r.cpu, &r.same) / mean_squared_difference(&r.cpu, &r.other);
+        println!("textures ({}): same-seed squared difference {ratio:.4} of the independent one", mode.name());
+        if ratio > 0.05 {
+            failures.push(format!("textures ({}): same-seed paths diverge ({ratio:.4} of independent)", mode.name()));
+        }
+    }
+    assert!(failures.is_empty(), "{failures:#?}");
+}
+
+/// Real textures: Sponza's OBJ with its MTL's 36 textured materials (diffuse and bump
+/// maps), seen from inside under a white sky. Its deep, overlapping geometry also guards the
+/// traversal: on lavapipe (Vulkan) the binary tree's kernel rendered it 6.5 % too bright
+/// (untextured, 1024 spp: ±0.4 %), where lavapipe's OpenGL path and the 4-wide tree agree
+/// with the CPU — so `auto` takes the 4-wide tree on lavapipe, and this test, run on a real
+/// GPU, checks the binary one there. Sponza's same-seed paths decorrelate (other BVHs break
+/// its many ties otherwise), so both GPU renders are held to the independent criteria.
+#[test]
+fn textured_sponza_matches_the_cpu() {
+    let path = Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/scenes/sponza/sponza.obj"));
+    if !path.exists() {
+        eprintln!("skipping: {} is absent", path.display());
+        return;
+    }
+    let Some(ctx) = gpu::require_gpu() else { return };
+    let mut scene = tracer::obj::load_obj(path).unwrap();
+    assert!(scene.materials.iter().filter(|m| m.textures.is_some()).count() > 20, "Sponza's textures were not read");
+    scene.environment = Some(Environment::white_sky(1.0));
+    scene.camera = Some(Camera {
+        eye: Vec3::new(-12.0, 3.0, 0.0),
+        center: Vec3::new(10.0, 5.0, 0.0),
+        up: Vec3::Y,
+        fov_y_deg: 60.0,
+    });
+    let gpu = GpuBackend::with_context(ctx);
+    println!(
+        "adapter: {} ({:?}, {:?})",
+        gpu.context().info.name,
+        gpu.context().info.backend,
+        gpu.context().info.device_type
+    );
+    let r = render_three(&gpu, &scene, &settings(40, 24, 256)).unwrap();
+    let mut failures = Vec::new();
+    for (seed, film) in [("same seed", &r.same), ("other seed", &r.other)] {
+        let c = compare(&r.cpu, film);
+        println!("textured Sponza, {seed}: {}", c.summary());
+        failures.extend(c.independent_failures().map(|f| format!("textured Sponza, {seed}: {f}")));
+    }
+    assert!(r.same.non_finite == 0 && r.other.non_finite == 0, "non-finite samples on the GPU");
     assert!(failures.is_empty(), "{failures:#?}");
 }

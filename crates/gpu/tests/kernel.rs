@@ -18,6 +18,8 @@ fn options(triangle_test: bvh::TriangleTest) -> KernelOptions {
         shapes: true,
         punctual_lights: true,
         rgb: true,
+        textures: true,
+        cutouts: true,
     }
 }
 

@@ -74,3 +74,28 @@ fn cpu_loaders_and_gpu_know_the_same_models() {
     assert_eq!(registry.len(), ModelId::ALL.len(), "model names are unique");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Each model's WGSL twin says where its texture slots act (`ModelWgsl::texture`), and that
+/// agrees with its Rust `TEXTURE_SLOTS`: a slot the Rust model has names a spectrum
+/// parameter of the model (or, for metallic–roughness, the twin defines the `_textured`
+/// hook), and a slot it lacks names nothing.
+#[test]
+fn wgsl_texture_slots_agree_with_the_models() {
+    for &model in ModelId::ALL {
+        let slots = model.defaults().texture_slots();
+        let wgsl = model.wgsl().texture;
+        let name = model.name();
+        for (what, has, param) in
+            [("base colour", slots.base_colour, wgsl.base_colour), ("specular", slots.specular, wgsl.specular)]
+        {
+            assert_eq!(has, param.is_some(), "{name}: the {what} slot");
+            if let Some(param) = param {
+                let (_, def) = model.def().param(param).unwrap_or_else(|| panic!("{name}: no parameter '{param}'"));
+                assert!(matches!(def.kind, ParamKind::Spectrum), "{name}: '{param}' is not a spectrum");
+            }
+        }
+        assert_eq!(slots.metallic_roughness, wgsl.metallic_roughness, "{name}: the metallic-roughness slot");
+        let hook = format!("fn {name}_textured(");
+        assert_eq!(wgsl.metallic_roughness, model.wgsl().source.contains(&hook), "{name}: {hook}");
+    }
+}

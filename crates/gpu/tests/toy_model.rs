@@ -68,7 +68,12 @@ fn toy_sample(p: ToyParams, wo: vec3f, uc: f32, u: vec2f, lambda: vec4f) -> Bsdf
 
 impl Model for ToyParams {
     type Bsdf<const N: usize> = Toy<N>;
-    const WGSL: ModelWgsl = ModelWgsl { source: TOY_WGSL, needs: &[WgslPiece::Sampling], constants: &[] };
+    const WGSL: ModelWgsl = ModelWgsl {
+        source: TOY_WGSL,
+        needs: &[WgslPiece::Sampling],
+        constants: &[],
+        texture: brdf::wgsl::WgslTextureSlots::NONE,
+    };
 
     fn bsdf<const N: usize>(&self, wl: &SampledWavelengths<N>) -> Toy<N> {
         Toy { r: self.albedo.sample(wl) * self.gain, front_only: self.front_only }

@@ -112,6 +112,7 @@ fn cpu_capabilities(integrator: &'static str) -> Capabilities {
         custom_bsdfs: true,
         punctual_lights: true,
         textures: true,
+        environment_maps: true,
         triangle_tests: vec![TriangleTest::Watertight, TriangleTest::MollerTrumbore],
         bvh_widths: BvhWidth::CPU.to_vec(),
         integrator,

@@ -175,9 +175,10 @@ pub struct Capabilities {
     pub custom_bsdfs: bool,
     /// Whether it samples point, spot and directional lights ([`crate::PunctualLight`]).
     pub punctual_lights: bool,
-    /// Whether it reads textures: material maps (colour, normal, alpha, emission) and
-    /// environment maps.
+    /// Whether it reads material textures (colour, normal, bump, alpha, emission maps).
     pub textures: bool,
+    /// Whether it lights scenes by environment maps (`--sky MAP`).
+    pub environment_maps: bool,
     /// Ray–triangle tests it implements.
     pub triangle_tests: Vec<TriangleTest>,
     /// Triangle-BVH node widths it can be asked for ([`BvhWidth::Auto`] = its own choice).
@@ -269,7 +270,7 @@ impl Capabilities {
                 "use --backend cpu (or --no-textures to render the materials' factors alone)",
             ));
         }
-        if !self.textures && scene.environment.as_ref().is_some_and(|e| e.map.is_some()) {
+        if !self.environment_maps && scene.environment.as_ref().is_some_and(|e| e.map.is_some()) {
             return Err(unsupported(
                 "environment maps".into(),
                 "use --backend cpu, or a uniform sky (--sky white[:LUMINANCE])",

@@ -22,7 +22,7 @@
 
 use crate::frame::{flip_z, upper_pair};
 use crate::sampling::{cosine_hemisphere, cosine_hemisphere_pdf};
-use crate::wgsl::{ModelWgsl, WgslConstant, WgslPiece, WgslValue};
+use crate::wgsl::{ModelWgsl, WgslConstant, WgslPiece, WgslTextureSlots, WgslValue};
 use crate::{Bsdf, BsdfSample, Model, ScatterFlags, Texels, TextureSlots};
 use glam::{Vec2, Vec3};
 use spectral::{SampledSpectrum, SampledWavelengths};
@@ -53,6 +53,7 @@ crate::model_params! {
 impl Model for AshikhminParams {
     type Bsdf<const N: usize> = Ashikhmin<N>;
     const WGSL: ModelWgsl = ModelWgsl {
+        texture: WgslTextureSlots { base_colour: Some("rd"), specular: Some("rs"), metallic_roughness: false },
         source: include_str!("ashikhmin.wgsl"),
         needs: &[WgslPiece::Sampling],
         constants: &[

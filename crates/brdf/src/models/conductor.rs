@@ -3,7 +3,7 @@
 
 use crate::frame::reflect_local;
 use crate::models::metal::{Metal, MetalPreset, fresnel_spectrum};
-use crate::wgsl::{ModelWgsl, WgslPiece};
+use crate::wgsl::{ModelWgsl, WgslPiece, WgslTextureSlots};
 use crate::{Bsdf, BsdfSample, Model, ScatterFlags};
 use glam::{Vec2, Vec3};
 use spectral::{SampledSpectrum, SampledWavelengths};
@@ -38,6 +38,7 @@ crate::model_params! {
 impl Model for ConductorParams {
     type Bsdf<const N: usize> = Conductor<N>;
     const WGSL: ModelWgsl = ModelWgsl {
+        texture: WgslTextureSlots::NONE,
         source: include_str!("conductor.wgsl"),
         needs: &[WgslPiece::Fresnel, WgslPiece::Metal],
         constants: &[],

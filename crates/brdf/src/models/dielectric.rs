@@ -4,7 +4,7 @@ use crate::frame::reflect_local;
 use crate::fresnel::{fresnel_dielectric, fresnel_schlick, refract_local};
 use crate::models::dispersion::{Dispersion, DispersionPreset};
 use crate::params::Colour;
-use crate::wgsl::{ModelWgsl, WgslPiece};
+use crate::wgsl::{ModelWgsl, WgslPiece, WgslTextureSlots};
 use crate::{Bsdf, BsdfSample, Model, ScatterFlags, Texels, TextureSlots};
 use glam::{Vec2, Vec3};
 use spectral::{SampledSpectrum, SampledWavelengths};
@@ -47,6 +47,7 @@ crate::model_params! {
 impl Model for DielectricParams {
     type Bsdf<const N: usize> = Dielectric<N>;
     const WGSL: ModelWgsl = ModelWgsl {
+        texture: WgslTextureSlots::base("tint"),
         source: include_str!("dielectric.wgsl"),
         needs: &[WgslPiece::Fresnel, WgslPiece::Dispersion],
         constants: &[],

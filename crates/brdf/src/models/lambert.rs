@@ -1,7 +1,7 @@
 //! Lambertian (perfectly diffuse) reflection.
 
 use crate::sampling::{cosine_hemisphere_two_sided, cosine_hemisphere_two_sided_pdf};
-use crate::wgsl::{ModelWgsl, WgslPiece};
+use crate::wgsl::{ModelWgsl, WgslPiece, WgslTextureSlots};
 use crate::{Bsdf, BsdfSample, Model, ScatterFlags, Texels, TextureSlots};
 use glam::{Vec2, Vec3};
 use spectral::{SampledSpectrum, SampledWavelengths};
@@ -17,8 +17,12 @@ crate::model_params! {
 
 impl Model for LambertParams {
     type Bsdf<const N: usize> = Lambert<N>;
-    const WGSL: ModelWgsl =
-        ModelWgsl { source: include_str!("lambert.wgsl"), needs: &[WgslPiece::Sampling], constants: &[] };
+    const WGSL: ModelWgsl = ModelWgsl {
+        texture: WgslTextureSlots::base("reflectance"),
+        source: include_str!("lambert.wgsl"),
+        needs: &[WgslPiece::Sampling],
+        constants: &[],
+    };
 
     const TEXTURE_SLOTS: TextureSlots = TextureSlots::BASE_COLOUR;
 

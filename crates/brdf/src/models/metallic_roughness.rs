@@ -28,7 +28,7 @@
 use crate::frame::{flip_z, reflect, upper_pair};
 use crate::models::microfacet::Ggx;
 use crate::sampling::{cosine_hemisphere, cosine_hemisphere_pdf};
-use crate::wgsl::{ModelWgsl, WgslConstant, WgslPiece, WgslValue};
+use crate::wgsl::{ModelWgsl, WgslConstant, WgslPiece, WgslTextureSlots, WgslValue};
 use crate::{Bsdf, BsdfSample, Model, ScatterFlags, Texels, TextureSlots};
 use glam::{Vec2, Vec3};
 use spectral::{SampledSpectrum, SampledWavelengths};
@@ -73,6 +73,7 @@ crate::model_params! {
 impl Model for MetallicRoughnessParams {
     type Bsdf<const N: usize> = MetallicRoughness<N>;
     const WGSL: ModelWgsl = ModelWgsl {
+        texture: WgslTextureSlots { metallic_roughness: true, ..WgslTextureSlots::base("base_color") },
         source: include_str!("metallic_roughness.wgsl"),
         needs: &[WgslPiece::Sampling, WgslPiece::Ggx],
         constants: &[WgslConstant {

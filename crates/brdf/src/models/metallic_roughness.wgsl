@@ -124,3 +124,11 @@ fn metallicroughness_sample(p: MetallicroughnessParams, wo: vec3f, uc: f32, u: v
     }
     return BsdfSample(wi, f, pdf, flags);
 }
+
+// `bsdf_textured`'s metallic–roughness texel: it multiplies metalness and roughness.
+fn metallicroughness_textured(p: MetallicroughnessParams, roughness: f32, metallic: f32) -> MetallicroughnessParams {
+    var q = p;
+    q.metallic = p.metallic * metallic;
+    q.roughness = p.roughness * roughness;
+    return q;
+}

@@ -26,7 +26,7 @@
 use crate::frame::{flip_z, reflect};
 use crate::fresnel::fresnel_dielectric;
 use crate::models::metal::{MetalPreset, fresnel_spectrum};
-use crate::wgsl::{ModelWgsl, WgslPiece};
+use crate::wgsl::{ModelWgsl, WgslPiece, WgslTextureSlots};
 use crate::{Bsdf, BsdfSample, Model, ScatterFlags, Texels, TextureSlots};
 use glam::{Vec2, Vec3};
 use spectral::{SampledSpectrum, SampledWavelengths};
@@ -63,6 +63,7 @@ crate::model_params! {
 impl Model for RoughConductorParams {
     type Bsdf<const N: usize> = RoughConductor<N>;
     const WGSL: ModelWgsl = ModelWgsl {
+        texture: WgslTextureSlots::NONE,
         source: include_str!("rough_conductor.wgsl"),
         needs: &[WgslPiece::Fresnel, WgslPiece::Metal, WgslPiece::Ggx],
         constants: &[],
@@ -101,6 +102,7 @@ crate::model_params! {
 impl Model for RoughDielectricParams {
     type Bsdf<const N: usize> = RoughDielectric<N>;
     const WGSL: ModelWgsl = ModelWgsl {
+        texture: WgslTextureSlots { metallic_roughness: true, ..WgslTextureSlots::base("tint") },
         source: include_str!("rough_dielectric.wgsl"),
         needs: &[WgslPiece::Fresnel, WgslPiece::Ggx],
         constants: &[],

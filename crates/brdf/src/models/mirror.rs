@@ -1,7 +1,7 @@
 //! The perfect mirror.
 
 use crate::frame::reflect_local;
-use crate::wgsl::ModelWgsl;
+use crate::wgsl::{ModelWgsl, WgslTextureSlots};
 use crate::{Bsdf, BsdfSample, Model, ScatterFlags, Texels, TextureSlots};
 use glam::{Vec2, Vec3};
 use spectral::{SampledSpectrum, SampledWavelengths};
@@ -16,7 +16,12 @@ crate::model_params! {
 
 impl Model for MirrorParams {
     type Bsdf<const N: usize> = Mirror<N>;
-    const WGSL: ModelWgsl = ModelWgsl { source: include_str!("mirror.wgsl"), needs: &[], constants: &[] };
+    const WGSL: ModelWgsl = ModelWgsl {
+        texture: WgslTextureSlots { specular: Some("reflectance"), ..WgslTextureSlots::NONE },
+        source: include_str!("mirror.wgsl"),
+        needs: &[],
+        constants: &[],
+    };
 
     const TEXTURE_SLOTS: TextureSlots = TextureSlots { specular: true, ..TextureSlots::NONE };
 

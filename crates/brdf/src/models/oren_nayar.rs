@@ -2,7 +2,7 @@
 
 use crate::models::lambert::same_hemisphere;
 use crate::sampling::{cosine_hemisphere_two_sided, cosine_hemisphere_two_sided_pdf};
-use crate::wgsl::{ModelWgsl, WgslPiece};
+use crate::wgsl::{ModelWgsl, WgslPiece, WgslTextureSlots};
 use crate::{Bsdf, BsdfSample, Model, ScatterFlags, Texels, TextureSlots};
 use glam::{Vec2, Vec3};
 use spectral::{SampledSpectrum, SampledWavelengths};
@@ -25,8 +25,12 @@ crate::model_params! {
 
 impl Model for OrenNayarParams {
     type Bsdf<const N: usize> = OrenNayar<N>;
-    const WGSL: ModelWgsl =
-        ModelWgsl { source: include_str!("oren_nayar.wgsl"), needs: &[WgslPiece::Sampling], constants: &[] };
+    const WGSL: ModelWgsl = ModelWgsl {
+        texture: WgslTextureSlots::base("reflectance"),
+        source: include_str!("oren_nayar.wgsl"),
+        needs: &[WgslPiece::Sampling],
+        constants: &[],
+    };
 
     const TEXTURE_SLOTS: TextureSlots = TextureSlots::BASE_COLOUR;
 

@@ -115,3 +115,16 @@ fn roughdielectric_sample(p: RoughdielectricParams, wo: vec3f, uc: f32, u: vec2f
     }
     return BsdfSample(wi, spectrum_at(p.tint, lambda) * e.x, e.y, flags);
 }
+
+// `bsdf_textured`'s roughness texel: it multiplies the perceptual roughness √α, so α by
+// its square, kept above 10⁻³ (the metalness is ignored).
+fn roughdielectric_textured(p: RoughdielectricParams, roughness: f32, metallic: f32) -> RoughdielectricParams {
+    if roughness == 1.0 {
+        return p;
+    }
+    var q = p;
+    let k = roughness * roughness;
+    q.alpha = max(p.alpha * k, 1e-3);
+    q.alpha_y = select(0.0, max(p.alpha_y * k, 1e-3), p.alpha_y > 0.0);
+    return q;
+}

@@ -41,7 +41,7 @@
 
 use crate::frame::{flip_z, upper_pair};
 use crate::sampling::{cosine_hemisphere, cosine_hemisphere_pdf};
-use crate::wgsl::{ModelWgsl, WgslConstant, WgslPiece, WgslValue};
+use crate::wgsl::{ModelWgsl, WgslConstant, WgslPiece, WgslTextureSlots, WgslValue};
 use crate::{Bsdf, BsdfSample, Model, ScatterFlags, Texels, TextureSlots};
 use glam::{Vec2, Vec3};
 use spectral::{SampledSpectrum, SampledWavelengths};
@@ -88,6 +88,7 @@ crate::model_params! {
 impl Model for SchlickParams {
     type Bsdf<const N: usize> = Schlick<N>;
     const WGSL: ModelWgsl = ModelWgsl {
+        texture: WgslTextureSlots::base("reflectance"),
         source: include_str!("schlick.wgsl"),
         needs: &[WgslPiece::Sampling],
         constants: &[

@@ -211,7 +211,13 @@ fn pt_radiance(
             break;
         }
 
-        let sf = pt_surface(hit, o, d);
+        var sf = pt_surface(hit, o, d);
+        // Texture coordinates, and the shading normal bent by a normal or bump map.
+        var uv = vec2f(0.0);
+        if PT_HAS_TEXTURES {
+            uv = pt_hit_uv(hit);
+            pt_bend_normal(&sf, hit, uv);
+        }
         let m = sf.m;
         let p = sf.p;
         let it_ng = sf.ng;
@@ -236,7 +242,7 @@ fn pt_radiance(
 
         // Emission seen by this path (one-sided: front face only).
         if front {
-            let le = material_emission(m, (*wl).lambda);
+            let le = pt_emission_at(m, uv, (*wl).lambda);
             if any(le != vec4f(0.0)) {
                 var w = 1.0;
                 if !prev_specular {
@@ -281,6 +287,8 @@ fn pt_radiance(
             beta = vec4f(beta[0], 0.0, 0.0, 0.0);
         }
         let lambda = (*wl).lambda;
+        // The texels the BSDF calls of this hit read (`Material::bsdf_at`).
+        pt_set_texels(m, uv, lambda);
 
         let sn = pt_shading_normals(it_ng, it_ns, wo_world, two_sided);
         let ng = sn.ng;

@@ -2,7 +2,8 @@
 // (`Shape::intersect`, `Shape::sample_area`) and crates/tracer/src/geometry.rs
 // (`Geometry::intersect`/`occluded`: the triangles first, then the shapes' BVH within the
 // closest triangle hit). Each shape is a record in `pt_tables` (written by
-// `gpu::backend::shape_record`): kind, material id, light pmf, area, then its own numbers.
+// `gpu::backend::shape_record`): kind, material id, light pmf, area, the CPU's primitive
+// id, then its own numbers.
 // A shape hit's primitive id is PT_SHAPE_PRIM_BIT | the record's offset. Without shapes
 // (PT_HAS_SHAPES false) none of this runs.
 //
@@ -138,11 +139,11 @@ fn pt_sphere_algebraic(c: vec3f, r: f32, o: vec3f, dir: vec3f, t_min: f32, t_max
     return PT_MISS;
 }
 
-// Record: +4 centre, +7 radius, +8 method. The point is reprojected onto the sphere.
+// Record: +5 centre, +8 radius, +9 method. The point is reprojected onto the sphere.
 fn pt_sphere_hit(rec: u32, o: vec3f, d: vec3f, t_min: f32, t_max: f32) -> PtShapeHit {
-    let c = pt_tv3(rec + 4u);
-    let r = pt_tables[rec + 7u];
-    let method = pt_tu(rec + 8u);
+    let c = pt_tv3(rec + 5u);
+    let r = pt_tables[rec + 8u];
+    let method = pt_tu(rec + 9u);
     var t: f32;
     if method == PT_SPHERE_GEOMETRIC {
         t = pt_sphere_geometric(c, r, o, d, t_min, t_max);
@@ -199,19 +200,19 @@ fn pt_slab_bounds(o: vec3f, d: vec3f, lo: vec3f, hi: vec3f, t_min: f32, t_max: f
     return s;
 }
 
-// Record: +4 axis-aligned (bits), +5 centre, +8 half extents, +11/+14/+17 the three axes,
-// +20 min, +23 max (the exact corners of an axis-aligned box).
+// Record: +5 axis-aligned (bits), +6 centre, +9 half extents, +12/+15/+18 the three axes,
+// +21 min, +24 max (the exact corners of an axis-aligned box).
 fn pt_cuboid_hit(rec: u32, o_world: vec3f, d_world: vec3f, t_min: f32, t_max: f32) -> PtShapeHit {
-    let aligned = pt_tu(rec + 4u) != 0u;
-    let centre = pt_tv3(rec + 5u);
-    let half = pt_tv3(rec + 8u);
-    let a0 = pt_tv3(rec + 11u);
-    let a1 = pt_tv3(rec + 14u);
-    let a2 = pt_tv3(rec + 17u);
+    let aligned = pt_tu(rec + 5u) != 0u;
+    let centre = pt_tv3(rec + 6u);
+    let half = pt_tv3(rec + 9u);
+    let a0 = pt_tv3(rec + 12u);
+    let a1 = pt_tv3(rec + 15u);
+    let a2 = pt_tv3(rec + 18u);
     var o = o_world;
     var d = d_world;
-    var lo = pt_tv3(rec + 20u);
-    var hi = pt_tv3(rec + 23u);
+    var lo = pt_tv3(rec + 21u);
+    var hi = pt_tv3(rec + 24u);
     if !aligned {
         let rel = o_world - centre;
         o = vec3f(dot(a0, rel), dot(a1, rel), dot(a2, rel));
@@ -256,13 +257,13 @@ fn pt_orient(a: vec2f, b: vec2f, c: vec2f) -> f32 {
     return (b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x);
 }
 
-// Record: +4 inside test, +5 dropped axis, +6 vertex count n, +7 normal, +10 anchor,
-// +13 triangle count, +14 the projected vertices (2n), then per triangle its vertices
+// Record: +5 inside test, +6 dropped axis, +7 vertex count n, +8 normal, +11 anchor,
+// +14 triangle count, +15 the projected vertices (2n), then per triangle its vertices
 // (9) and cumulative area (1).
 fn pt_polygon_contains(rec: u32, q: vec2f) -> bool {
-    let n = pt_tu(rec + 6u);
-    let base = rec + 14u;
-    let crossing = pt_tu(rec + 4u) == PT_POLYGON_CROSSING;
+    let n = pt_tu(rec + 7u);
+    let base = rec + 15u;
+    let crossing = pt_tu(rec + 5u) == PT_POLYGON_CROSSING;
     var inside = false;
     var winding = 0i;
     for (var i = 0u; i < n; i++) {
@@ -293,19 +294,19 @@ fn pt_polygon_contains(rec: u32, q: vec2f) -> bool {
 }
 
 fn pt_polygon_hit(rec: u32, o: vec3f, d: vec3f, t_min: f32, t_max: f32) -> PtShapeHit {
-    let n = pt_tv3(rec + 7u);
+    let n = pt_tv3(rec + 8u);
     let denom = dot(n, d);
     if !(abs(denom) > PT_F32_EPSILON * length(d)) {
         return pt_no_shape_hit();
     }
-    let anchor = pt_tv3(rec + 10u);
+    let anchor = pt_tv3(rec + 11u);
     let t = dot(n, anchor - o) / denom;
     if !(t > t_min && t < t_max) {
         return pt_no_shape_hit();
     }
     let p0 = o + t * d;
     let p = p0 - n * dot(n, p0 - anchor);
-    let k = pt_tu(rec + 5u);
+    let k = pt_tu(rec + 6u);
     let rel = p - anchor;
     if !pt_polygon_contains(rec, vec2f(rel[(k + 1u) % 3u], rel[(k + 2u) % 3u])) {
         return pt_no_shape_hit();
@@ -339,13 +340,13 @@ fn pt_shape_sample(rec: u32, u: vec2f) -> PtAreaSample {
     if kind == PT_SHAPE_SPHERE {
         // Archimedes' hat box, as `brdf::sampling::uniform_sphere`.
         let n = pt_uniform_sphere(u);
-        return PtAreaSample(pt_tv3(rec + 4u) + pt_tables[rec + 7u] * n, n);
+        return PtAreaSample(pt_tv3(rec + 5u) + pt_tables[rec + 8u] * n, n);
     }
     if kind == PT_SHAPE_CUBOID {
         // A face ∝ its area with u.x, rescaled to the first in-face coordinate.
-        let aligned = pt_tu(rec + 4u) != 0u;
-        let centre = pt_tv3(rec + 5u);
-        let h = pt_tv3(rec + 8u);
+        let aligned = pt_tu(rec + 5u) != 0u;
+        let centre = pt_tv3(rec + 6u);
+        let h = pt_tv3(rec + 9u);
         let face_area = vec3f(h.y * h.z, h.z * h.x, h.x * h.y);
         let total = 2.0 * (face_area.x + face_area.y + face_area.z);
         var x = clamp(u.x, 0.0, 1.0) * total;
@@ -370,19 +371,19 @@ fn pt_shape_sample(rec: u32, u: vec2f) -> PtAreaSample {
         let e = vec3f(f32(axis == 0u), f32(axis == 1u), f32(axis == 2u));
         if aligned {
             var p = centre + local;
-            p[axis] = select(pt_tables[rec + 20u + axis], pt_tables[rec + 23u + axis], sign > 0.0);
+            p[axis] = select(pt_tables[rec + 21u + axis], pt_tables[rec + 24u + axis], sign > 0.0);
             return PtAreaSample(p, sign * e);
         }
-        let a0 = pt_tv3(rec + 11u);
-        let a1 = pt_tv3(rec + 14u);
-        let a2 = pt_tv3(rec + 17u);
+        let a0 = pt_tv3(rec + 12u);
+        let a1 = pt_tv3(rec + 15u);
+        let a2 = pt_tv3(rec + 18u);
         let p = centre + (a0 * local.x + a1 * local.y + a2 * local.z);
         return PtAreaSample(p, sign * (a0 * e.x + a1 * e.y + a2 * e.z));
     }
     // A polygon: a triangle of its ear clipping ∝ area, then Turk's square-root map.
-    let nv = pt_tu(rec + 6u);
-    let count = pt_tu(rec + 13u);
-    let tris = rec + 14u + 2u * nv;
+    let nv = pt_tu(rec + 7u);
+    let count = pt_tu(rec + 14u);
+    let tris = rec + 15u + 2u * nv;
     let total = pt_tables[tris + 10u * (count - 1u) + 9u];
     let x = clamp(u.x, 0.0, 1.0) * total;
     var lo = 0u;
@@ -411,7 +412,7 @@ fn pt_shape_sample(rec: u32, u: vec2f) -> PtAreaSample {
     let a = pt_tv3(tris + 10u * t);
     let b = pt_tv3(tris + 10u * t + 3u);
     let c = pt_tv3(tris + 10u * t + 6u);
-    return PtAreaSample(a + b1 * (b - a) + b2 * (c - a), pt_tv3(rec + 7u));
+    return PtAreaSample(a + b1 * (b - a) + b2 * (c - a), pt_tv3(rec + 8u));
 }
 
 // The shapes' BVH (`bvh::BoxBvh`, binary nodes of 8 words in `pt_tables`): ordered stack
@@ -513,9 +514,18 @@ fn pt_trace_shapes(r: PtRay, best_in: PtHit, any_hit: bool) -> PtHit {
     return best;
 }
 
+// The closest hit in (t_min, t_max), or with `any_hit` the first found, through the
+// surfaces alpha cuts out (`SceneView::intersect`/`occluded`: a closest-hit query per layer).
+fn pt_trace(o: vec3f, d: vec3f, t_min: f32, t_max: f32, any_hit: bool) -> PtHit {
+    if PT_HAS_CUTOUTS {
+        return pt_through_cutouts(o, d, t_max, pt_trace_opaque(o, d, t_min, t_max, false));
+    }
+    return pt_trace_opaque(o, d, t_min, t_max, any_hit);
+}
+
 // The closest hit in (t_min, t_max) among triangles and shapes, or with `any_hit` the
 // first found (`Geometry::intersect`/`occluded`).
-fn pt_trace(o: vec3f, d: vec3f, t_min: f32, t_max: f32, any_hit: bool) -> PtHit {
+fn pt_trace_opaque(o: vec3f, d: vec3f, t_min: f32, t_max: f32, any_hit: bool) -> PtHit {
     let best = pt_trace_triangles(o, d, t_min, t_max, any_hit);
     if !PT_HAS_SHAPES || (any_hit && best.prim != PT_NO_HIT) {
         return best;

@@ -16,12 +16,18 @@ fn pt_direct(origin: vec3f, dir: vec3f, wl: PtWavelengths, smp: ptr<function, Pt
         }
         return env + pt_suns_seen(dir, lambda, 0.0, false);
     }
-    let sf = pt_surface(hit, origin, dir);
+    var sf = pt_surface(hit, origin, dir);
+    var uv = vec2f(0.0);
+    if PT_HAS_TEXTURES {
+        uv = pt_hit_uv(hit);
+        pt_bend_normal(&sf, hit, uv);
+    }
     let wo_world = -dir;
     var l = vec4f(0.0);
     if dot(wo_world, sf.ng) > 0.0 {
-        l += material_emission(sf.m, lambda);
+        l += pt_emission_at(sf.m, uv, lambda);
     }
+    pt_set_texels(sf.m, uv, lambda);
     let two_sided = material_two_sided(sf.m);
     let sn = pt_shading_normals(sf.ng, sf.ns, wo_world, two_sided);
     let frame = pt_frame_from_normal_tangent(sn.ns, sf.tangent);
@@ -47,7 +53,10 @@ fn pt_ambient_occlusion(
     if hit.prim == PT_NO_HIT {
         return vec4f(0.0);
     }
-    let sf = pt_surface(hit, origin, dir);
+    var sf = pt_surface(hit, origin, dir);
+    if PT_HAS_TEXTURES {
+        pt_bend_normal(&sf, hit, pt_hit_uv(hit));
+    }
     // The hemisphere on the viewer's side.
     let side = select(-1.0, 1.0, dot(dir, sf.ng) < 0.0);
     let ng = sf.ng * side;

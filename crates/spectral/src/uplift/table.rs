@@ -103,6 +103,17 @@ impl UpliftTable {
         SigmoidPolynomial { c0: out[0], c1: out[1], c2: out[2] }
     }
 
+    /// The z nodes (the largest component's grid), increasing from 0 to 1.
+    pub fn z_nodes(&self) -> &[f32; TABLE_RES] {
+        &self.z_nodes
+    }
+
+    /// The 3 × TABLE_RES³ polynomials, entry ((l·n + zi)·n + yi)·n + xi for the largest
+    /// component l (for backends that look the table up elsewhere: the GPU).
+    pub fn coefficients(&self) -> &[SigmoidPolynomial] {
+        &self.coeffs
+    }
+
     /// Bytes the table occupies.
     pub fn size_bytes(&self) -> usize {
         std::mem::size_of_val(self.coeffs.as_slice()) + std::mem::size_of_val(&self.z_nodes)
