@@ -339,7 +339,7 @@ pub fn capabilities_for(integrator: GpuIntegrator) -> Capabilities {
         custom_bsdfs: false,
         punctual_lights: true,
         textures: true,
-        environment_maps: false,
+        environment_maps: true,
         triangle_tests: vec![TriangleTest::Watertight, TriangleTest::MollerTrumbore],
         // Auto is the binary tree: on an H100 the 4-wide one (`crate::wide`) renders 1.2–1.8×
         // slower in this megakernel; it stays selectable for comparisons, and is auto's
@@ -370,6 +370,7 @@ struct SceneConstants {
     material_textures_offset: u32,
     uplift_offset: u32,
     decode_offset: u32,
+    envmap_offset: u32,
     env_offset: u32,
     env_pmf: f32,
     scene_flags: u32,
@@ -431,12 +432,14 @@ impl SceneData {
             }
         };
         let textured = scene.materials.iter().any(|m| m.textures.is_some());
+        let env_map = scene.environment.as_ref().and_then(|e| e.map.as_deref());
         let options = KernelOptions {
             nodes: layout,
             shapes: !scene.shapes.is_empty(),
             punctual_lights: !scene.punctual_lights.is_empty(),
             textures: textured,
             cutouts: scene.materials.iter().any(|m| m.alpha().is_some()),
+            env_map: env_map.is_some(),
             ..options
         };
         let build_time = start.elapsed();
@@ -527,17 +530,52 @@ impl SceneData {
             (nodes_offset, shape_bvh.node_count() as u32, slots_offset)
         };
 
-        // Textures: the texel decode tables, the uplift table, each material's maps.
-        let (mut decode_offset, mut uplift_offset, mut material_textures_offset) = (0, 0, 0);
+        // The uplift table (textures and environment maps turn RGB into spectra by it).
+        let mut uplift_offset = 0;
+        if textured || env_map.is_some() {
+            uplift_offset = tables.len() as u32;
+            let uplift = spectral::uplift::uplift_table();
+            tables.extend(uplift.z_nodes());
+            tables.extend(uplift.coefficients().iter().flat_map(|c| [c.c0, c.c1, c.c2]));
+        }
+        // An environment map: its texels, its sampling distribution, the D65 table.
+        let mut envmap_offset = 0;
+        if let Some(map) = env_map {
+            let parts = map.parts();
+            let (texels, (cos, sin), conditional, marginal) =
+                (parts.texels, parts.rotation, parts.conditional, parts.marginal);
+            let at = |tables: &Vec<f32>| f32::from_bits(tables.len() as u32);
+            let record = tables.len();
+            tables.extend([0.0; 9]);
+            let texels_at = at(&tables);
+            tables.extend(texels.iter().flatten());
+            let conditional_at = at(&tables);
+            tables.extend(conditional);
+            let marginal_at = at(&tables);
+            tables.extend(marginal);
+            let d65_at = at(&tables);
+            tables.extend(spectral::tables::D65);
+            let bits = f32::from_bits;
+            tables[record..record + 9].copy_from_slice(&[
+                bits(map.width()),
+                bits(map.height()),
+                cos,
+                sin,
+                texels_at,
+                conditional_at,
+                marginal_at,
+                d65_at,
+                spectral::uplift::d65_inv_norm(),
+            ]);
+            envmap_offset = record as u32;
+        }
+        // Textures: the texel decode tables, each material's maps.
+        let (mut decode_offset, mut material_textures_offset) = (0, 0);
         let mut texels = TexelUpload::default();
         if textured {
             decode_offset = tables.len() as u32;
             tables.extend((0..256).map(|i| spectral::colour::srgb_decode(i as f32 / 255.0)));
             tables.extend((0..256).map(|i| i as f32 / 255.0));
-            uplift_offset = tables.len() as u32;
-            let uplift = spectral::uplift::uplift_table();
-            tables.extend(uplift.z_nodes());
-            tables.extend(uplift.coefficients().iter().flat_map(|c| [c.c0, c.c1, c.c2]));
             let records: Vec<u32> = scene
                 .materials
                 .iter()
@@ -599,6 +637,7 @@ impl SceneData {
             material_textures_offset,
             uplift_offset,
             decode_offset,
+            envmap_offset,
             env_offset,
             env_pmf: lights.environment_pmf(),
             scene_flags,
@@ -811,6 +850,7 @@ impl GpuBackend {
                 rgb: false,
                 textures: false,
                 cutouts: false,
+                env_map: false,
             },
         )?;
         data.check_limits(&self.ctx.limits)?;
@@ -956,6 +996,7 @@ impl GpuScene {
             material_textures_offset: self.constants.material_textures_offset,
             uplift_offset: self.constants.uplift_offset,
             decode_offset: self.constants.decode_offset,
+            envmap_offset: self.constants.envmap_offset,
             env_pmf: self.constants.env_pmf,
             eye: v4(eye),
             forward: v4(forward),

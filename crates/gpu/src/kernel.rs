@@ -178,8 +178,8 @@ wgsl_struct! {
         uplift_offset: u32,
         /// Offset in `pt_tables` of the texel decode tables (sRGB, then linear; 256 each).
         decode_offset: u32,
-        /// Padding to the uniform block's 16-byte multiple.
-        pad2: u32,
+        /// Offset in `pt_tables` of the environment map's record (`wgsl/envmap.wgsl`).
+        envmap_offset: u32,
     }
 }
 
@@ -398,6 +398,8 @@ pub struct KernelOptions {
     pub textures: bool,
     /// Whether some material is cut out or transparent by its alpha (`PT_HAS_CUTOUTS`).
     pub cutouts: bool,
+    /// Whether the environment is a map (`PT_HAS_ENV_MAP`).
+    pub env_map: bool,
 }
 
 /// A sphere method's code in a shape record (`PT_SPHERE_*`).
@@ -513,6 +515,7 @@ pub fn header(options: &KernelOptions) -> String {
     let _ = writeln!(out, "const PT_RGB: bool = {};", options.rgb);
     let _ = writeln!(out, "const PT_HAS_TEXTURES: bool = {};", options.textures);
     let _ = writeln!(out, "const PT_HAS_CUTOUTS: bool = {};", options.cutouts);
+    let _ = writeln!(out, "const PT_HAS_ENV_MAP: bool = {};", options.env_map);
     let [r, g, b] = brdf::models::metal::RGB_LAMBDA;
     // RGB mode's "wavelengths": where metals take their (n, k) per channel (`RGB_LAMBDA`).
     let _ = writeln!(out, "const PT_RGB_LAMBDA: vec4f = vec4f({}, {}, {}, {});", f(r), f(g), f(b), f(b));
@@ -557,7 +560,7 @@ pub fn header(options: &KernelOptions) -> String {
 }
 
 /// The hand-written files, in the order they are concatenated.
-const FILES: [(&str, &str); 12] = [
+const FILES: [(&str, &str); 13] = [
     ("rng.wgsl", include_str!("wgsl/rng.wgsl")),
     ("sampler.wgsl", include_str!("wgsl/sampler.wgsl")),
     ("spectral.wgsl", include_str!("wgsl/spectral.wgsl")),
@@ -567,6 +570,7 @@ const FILES: [(&str, &str); 12] = [
     ("ray.wgsl", include_str!("wgsl/ray.wgsl")),
     ("shapes.wgsl", include_str!("wgsl/shapes.wgsl")),
     ("textures.wgsl", include_str!("wgsl/textures.wgsl")),
+    ("envmap.wgsl", include_str!("wgsl/envmap.wgsl")),
     ("lights.wgsl", include_str!("wgsl/lights.wgsl")),
     ("path.wgsl", include_str!("wgsl/path.wgsl")),
     ("simple.wgsl", include_str!("wgsl/simple.wgsl")),

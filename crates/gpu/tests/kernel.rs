@@ -20,6 +20,7 @@ fn options(triangle_test: bvh::TriangleTest) -> KernelOptions {
         rgb: true,
         textures: true,
         cutouts: true,
+        env_map: true,
     }
 }
 

@@ -172,6 +172,12 @@ static D65_INV_NORM: LazyLock<f32> = LazyLock::new(|| {
     (den / num) as f32
 });
 
+/// The factor 1 / N [`d65_normalised`] scales the D65 table by (for backends that
+/// evaluate it elsewhere: the GPU).
+pub fn d65_inv_norm() -> f32 {
+    *D65_INV_NORM
+}
+
 /// CIE D65 linearly interpolated from [`crate::tables::D65`] and divided by
 /// N = Σ D65·ȳ / Σ ȳ (1 nm sums over 360–830 nm), so that as a radiance it has
 /// luminance Y = 1: the illuminant of Jakob & Hanika 2019's sRGB fit. Zero outside

@@ -174,6 +174,17 @@ impl EnvironmentMap {
         self.mean_luminance
     }
 
+    /// What the map is made of, for backends that look it up and sample it elsewhere
+    /// (the GPU).
+    pub fn parts(&self) -> EnvironmentMapParts<'_> {
+        EnvironmentMapParts {
+            texels: &self.texels,
+            rotation: self.rotation,
+            conditional: &self.conditional,
+            marginal: &self.marginal,
+        }
+    }
+
     /// Bytes the texels and the distribution take.
     pub fn size_bytes(&self) -> usize {
         self.texels.len() * 12 + (self.conditional.len() + self.marginal.len()) * 4
@@ -284,6 +295,19 @@ impl EnvironmentMap {
         let p_row = self.marginal[row + 1] - self.marginal[row];
         p_row * p_col * (w * self.height as usize) as f32
     }
+}
+
+/// An [`EnvironmentMap`]'s texels, rotation and sampling distribution.
+#[derive(Clone, Copy, Debug)]
+pub struct EnvironmentMapParts<'a> {
+    /// Linear RGB radiance, rows from the top (the zenith).
+    pub texels: &'a [[f32; 3]],
+    /// The rotation about +y as (cos, sin).
+    pub rotation: (f32, f32),
+    /// Per row, the cumulative distribution over its columns (width + 1 entries each).
+    pub conditional: &'a [f32],
+    /// The cumulative distribution over the rows (height + 1 entries).
+    pub marginal: &'a [f32],
 }
 
 /// The bin of a sample `u` ∈ [0, 1) in a cumulative distribution (first entry 0, last 1)

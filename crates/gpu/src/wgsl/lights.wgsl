@@ -93,10 +93,19 @@ fn pt_sample_light(u_in: vec2f) -> PtLightSample {
         return ls;
     }
     if u_in.x < pt_params.env_pmf || count == 0u {
-        ls.point = pt_uniform_sphere(vec2f(pt_rescale(u_in.x, 0.0, pt_params.env_pmf), u_in.y));
+        let u = vec2f(pt_rescale(u_in.x, 0.0, pt_params.env_pmf), u_in.y);
         ls.normal = vec3f(0.0);
-        ls.pdf = pt_params.env_pmf * PT_INV_4PI;
         ls.kind = PT_LIGHT_ENVIRONMENT;
+        if PT_HAS_ENV_MAP {
+            // By the map's luminance (none at the poles).
+            let s = pt_env_sample(u);
+            ls.point = s.xyz;
+            ls.pdf = pt_params.env_pmf * s.w;
+            ls.valid = s.w >= 0.0;
+            return ls;
+        }
+        ls.point = pt_uniform_sphere(u);
+        ls.pdf = pt_params.env_pmf * PT_INV_4PI;
         ls.valid = true;
         return ls;
     }

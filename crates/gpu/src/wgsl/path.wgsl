@@ -122,7 +122,7 @@ fn pt_next_event(
         finite_light = false;
         light_pdf = ls.pdf;
         if (pt_params.scene_flags & PT_HAS_ENVIRONMENT) != 0u {
-            le = pt_environment(lambda);
+            le = pt_env_radiance(wi_world, lambda);
         }
     } else if PT_HAS_PUNCTUAL {
         // A delta light: I·falloff/d² (or E) stands for the radiance and the pdf is the
@@ -200,10 +200,10 @@ fn pt_radiance(
         let hit = pt_trace(o, d, 0.0, PT_FAR, false);
         if hit.prim == PT_NO_HIT {
             if (pt_params.scene_flags & PT_HAS_ENVIRONMENT) != 0u {
-                let le = pt_environment((*wl).lambda);
+                let le = pt_env_radiance(d, (*wl).lambda);
                 var w = 1.0;
                 if !prev_specular {
-                    w = pt_power_heuristic(prev_pdf, pt_params.env_pmf * PT_INV_4PI);
+                    w = pt_power_heuristic(prev_pdf, pt_env_pdf(d));
                 }
                 l += beta * le * w;
             }

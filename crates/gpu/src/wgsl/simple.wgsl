@@ -12,7 +12,7 @@ fn pt_direct(origin: vec3f, dir: vec3f, wl: PtWavelengths, smp: ptr<function, Pt
         // `SceneView::escaped_radiance`: the environment and any sun disk.
         var env = vec4f(0.0);
         if (pt_params.scene_flags & PT_HAS_ENVIRONMENT) != 0u {
-            env = pt_environment(lambda);
+            env = pt_env_radiance(dir, lambda);
         }
         return env + pt_suns_seen(dir, lambda, 0.0, false);
     }
