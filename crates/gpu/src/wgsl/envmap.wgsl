@@ -50,20 +50,11 @@ fn pt_env_rgb(dir: vec3f) -> vec3f {
     let uv = pt_env_uv(dir);
     let w = i32(pt_env_u(0u));
     let h = i32(pt_env_u(1u));
-    var x = uv.x * f32(w) - 0.5;
-    var y = uv.y * f32(h) - 0.5;
-    if !pt_is_finite(x) {
-        x = 0.0;
-    }
-    if !pt_is_finite(y) {
-        y = 0.0;
-    }
-    let x0f = floor(x);
-    let y0f = floor(y);
-    let fx = x - x0f;
-    let fy = y - y0f;
-    let x0 = i32(clamp(x0f, -1073741824.0, 1073741824.0));
-    let y0 = i32(clamp(y0f, -1073741824.0, 1073741824.0));
+    let c = pt_texel_coords(uv, u32(w), u32(h));
+    let x0 = c.x0;
+    let y0 = c.y0;
+    let fx = c.fx;
+    let fy = c.fy;
     let texels = pt_env_u(4u);
     var out = vec3f(0.0);
     for (var dy = 0; dy < 2; dy++) {

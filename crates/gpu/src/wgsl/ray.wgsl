@@ -44,6 +44,21 @@ fn pt_make_ray(o: vec3f, d: vec3f, t_min: f32) -> PtRay {
     return PtRay(o, d, 1.0 / dd, kx, ky, kz, shear, t_min);
 }
 
+// Entry distance into the box [lo, hi] within (t_min, t_max], or PT_MISS (the slab test
+// of the binary traversal and of the shapes' BVH).
+fn pt_box_enter(lo: vec3f, hi: vec3f, r: PtRay, t_max: f32) -> f32 {
+    let t0 = (lo - r.o) * r.inv;
+    let t1 = (hi - r.o) * r.inv;
+    let near = min(t0, t1);
+    let far = max(t0, t1);
+    let t_enter = max(max(max(near.x, near.y), near.z), r.t_min);
+    let t_exit = min(min(min(far.x, far.y), far.z), t_max);
+    if t_enter <= t_exit {
+        return t_enter;
+    }
+    return PT_MISS;
+}
+
 // A traversal stack (both traversals'): nodes still to visit with their entry distances.
 struct PtStack {
     node: array<u32, PT_STACK>,

@@ -431,16 +431,7 @@ fn pt_shape_node(i: u32) -> PtShapeNode {
 }
 
 fn pt_shape_box_enter(n: PtShapeNode, r: PtRay, t_max: f32) -> f32 {
-    let t0 = (n.lo - r.o) * r.inv;
-    let t1 = (n.hi - r.o) * r.inv;
-    let near = min(t0, t1);
-    let far = max(t0, t1);
-    let t_enter = max(max(max(near.x, near.y), near.z), r.t_min);
-    let t_exit = min(min(min(far.x, far.y), far.z), t_max);
-    if t_enter <= t_exit {
-        return t_enter;
-    }
-    return PT_MISS;
+    return pt_box_enter(n.lo, n.hi, r, t_max);
 }
 
 const PT_SHAPE_STACK: u32 = 64u;

@@ -35,6 +35,32 @@ fn pt_wrap(mode: u32, i: i32, n: u32) -> u32 {
     return u32(select(2 * m - 1 - k, k, k < m));
 }
 
+// The bilinear footprint of `uv` on a w × h image (texel centres at half-integers; a
+// non-finite coordinate reads texel 0): the lower-left texel (unfolded) and the weights'
+// fractions.
+struct PtTexelCoords {
+    x0: i32,
+    y0: i32,
+    fx: f32,
+    fy: f32,
+}
+
+fn pt_texel_coords(uv: vec2f, w: u32, h: u32) -> PtTexelCoords {
+    var x = uv.x * f32(w) - 0.5;
+    var y = uv.y * f32(h) - 0.5;
+    if !pt_is_finite(x) {
+        x = 0.0;
+    }
+    if !pt_is_finite(y) {
+        y = 0.0;
+    }
+    let x0 = floor(x);
+    let y0 = floor(y);
+    let lo = -1073741824.0;
+    let hi = 1073741824.0;
+    return PtTexelCoords(i32(clamp(x0, lo, hi)), i32(clamp(y0, lo, hi)), x - x0, y - y0);
+}
+
 // `TextureMap::sample`: bilinear at `uv`, RGB decoded by the map's encoding, alpha linear.
 fn pt_tex_sample(d: u32, uv_in: vec2f) -> vec4f {
     var uv = uv_in;
@@ -45,20 +71,11 @@ fn pt_tex_sample(d: u32, uv_in: vec2f) -> vec4f {
     let first = pt_tu(d);
     let w = pt_tu(d + 1u);
     let h = pt_tu(d + 2u);
-    var x = uv.x * f32(w) - 0.5;
-    var y = uv.y * f32(h) - 0.5;
-    if !pt_is_finite(x) {
-        x = 0.0;
-    }
-    if !pt_is_finite(y) {
-        y = 0.0;
-    }
-    let x0f = floor(x);
-    let y0f = floor(y);
-    let fx = x - x0f;
-    let fy = y - y0f;
-    let x0 = i32(clamp(x0f, -1073741824.0, 1073741824.0));
-    let y0 = i32(clamp(y0f, -1073741824.0, 1073741824.0));
+    let c = pt_texel_coords(uv, w, h);
+    let x0 = c.x0;
+    let y0 = c.y0;
+    let fx = c.fx;
+    let fy = c.fy;
     let wrap_u = pt_tu(d + 3u);
     let wrap_v = pt_tu(d + 4u);
     let xs = vec2u(pt_wrap(wrap_u, x0, w), pt_wrap(wrap_u, x0 + 1, w));

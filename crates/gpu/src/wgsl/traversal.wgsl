@@ -5,16 +5,7 @@
 
 // Entry distance into a node's box within (t_min, t_max], or PT_MISS.
 fn pt_slab_enter(node: PtNode, r: PtRay, t_max: f32) -> f32 {
-    let t0 = (node.min - r.o) * r.inv;
-    let t1 = (node.max - r.o) * r.inv;
-    let near = min(t0, t1);
-    let far = max(t0, t1);
-    let t_enter = max(max(max(near.x, near.y), near.z), r.t_min);
-    let t_exit = min(min(min(far.x, far.y), far.z), t_max);
-    if t_enter <= t_exit {
-        return t_enter;
-    }
-    return PT_MISS;
+    return pt_box_enter(node.min, node.max, r, t_max);
 }
 
 // The closest triangle hit in (t_min, t_max), or with `any_hit` the first found (shapes.wgsl
