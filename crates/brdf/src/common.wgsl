@@ -144,7 +144,12 @@ fn mat_no_sample() -> BsdfSample {
     return BsdfSample(vec3f(0.0), vec4f(0.0), 0.0, 0u);
 }
 
-// The mean of four lanes, summed in the order SampledSpectrum::average sums.
+// The mean of the lanes (four; three in RGB mode), summed in the order
+// SampledSpectrum::average sums.
 fn mat_average(v: vec4f) -> f32 {
+    // RGB mode has three lanes (the CPU's N = 3).
+    if MAT_RGB {
+        return ((v.x + v.y) + v.z) / 3.0;
+    }
     return (((v.x + v.y) + v.z) + v.w) / 4.0;
 }

@@ -19,9 +19,6 @@ use tracer::film::{Film, MAX_PIXEL_SAMPLES};
 use tracer::integrator::PathCounters;
 use tracer::render::{PixelRect, PreparedScene, RenderSettings};
 
-/// The most samples per pixel one dispatch of an accumulation traces.
-const MAX_SAMPLES_PER_DISPATCH: u64 = 64;
-
 /// Bytes of one pixel's accumulator.
 const PIXEL_BYTES: u64 = std::mem::size_of::<PixelAccum>() as u64;
 
@@ -239,7 +236,7 @@ impl DeviceAccumulation {
         let ctx = scene.context();
         let (width, height) = (self.buffers.width, self.buffers.height);
         let pixels = width as u64 * height as u64;
-        let per_dispatch = (DISPATCH_BUDGET / pixels.max(1)).clamp(1, MAX_SAMPLES_PER_DISPATCH) as u32;
+        let per_dispatch = (DISPATCH_BUDGET / pixels.max(1)).clamp(1, scene.max_samples_per_dispatch() as u64) as u32;
         let mut params = scene.kernel_params(&self.settings);
         let pipeline = scene.pipeline(&self.settings)?;
         scene.write_seeds(&self.buffers.params, &self.settings);

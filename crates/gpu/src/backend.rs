@@ -112,6 +112,14 @@ pub const DISPATCH_BUDGET: u64 = 1 << 18;
 /// The most samples per pixel in one dispatch.
 const MAX_SAMPLES_PER_DISPATCH: u32 = 64;
 
+/// The most samples per pixel in one dispatch on a software rasteriser (Mesa's lavapipe
+/// and llvmpipe): their shader compiler bounds the iterations of each loop (gallivm's loop
+/// limiter), and an invocation tracing many samples of deep paths through a deep tree runs
+/// its traversal loop past that bound, which ends the loop early — lost hits. On Sponza
+/// at 64 samples per dispatch the binary traversal rendered 6.5 % too bright; at one, it
+/// agrees with the CPU (docs/gpu.md).
+const SOFTWARE_SAMPLES_PER_DISPATCH: u32 = 1;
+
 /// The most samples per pixel accumulated in f32 on the device before they are read
 /// back and added to the film's exact sums (read-backs fall on multiples of it in the
 /// sample index).
@@ -199,8 +207,8 @@ fn punctual_entry(light: &PunctualLight, spectrum: f32, entry: &mut [f32; LIGHT_
             entry[4] = solid_angle;
             entry[5] = light.disk_radiance_scale();
             entry[6] = spectrum;
-            put(entry, 7, t);
-            put(entry, 13, b);
+            put(entry, 13, t);
+            put(entry, 16, b);
             LightKind::Directional
         }
     }
@@ -289,15 +297,6 @@ impl TexelUpload {
     }
 }
 
-/// Whether the adapter is a software rasteriser driven through Vulkan (Mesa's lavapipe):
-/// there the binary traversal's kernel renders Sponza 6.5 % too bright (lost hits: the same
-/// WGSL through lavapipe's OpenGL sibling, and the 4-wide traversal through Vulkan, agree
-/// with the CPU within 0.6 %; the binary tree itself agrees with the CPU's on every one of
-/// 200 000 rays), so `auto` takes the 4-wide tree there. docs/gpu.md has the measurements.
-fn software_vulkan(info: &wgpu::AdapterInfo) -> bool {
-    info.backend == wgpu::Backend::Vulkan && info.device_type == wgpu::DeviceType::Cpu
-}
-
 /// log₂ of `n` rounded up to a power of two (at least 1): the bits of a Sobol index or a
 /// Morton coordinate below `n`.
 fn sobol_bits(n: u32) -> u32 {
@@ -342,8 +341,7 @@ pub fn capabilities_for(integrator: GpuIntegrator) -> Capabilities {
         environment_maps: true,
         triangle_tests: vec![TriangleTest::Watertight, TriangleTest::MollerTrumbore],
         // Auto is the binary tree: on an H100 the 4-wide one (`crate::wide`) renders 1.2–1.8×
-        // slower in this megakernel; it stays selectable for comparisons, and is auto's
-        // choice on lavapipe (`software_vulkan`).
+        // slower in this megakernel; it stays selectable for comparisons.
         bvh_widths: vec![BvhWidth::Auto, BvhWidth::Two, BvhWidth::Four],
         integrator: integrator.name(),
         max_bounces: Some(MAX_BOUNCES),
@@ -660,6 +658,14 @@ impl SceneData {
         })
     }
 
+    /// The light table's entries as the kernel reads them ([`LIGHT_FLOATS`] each; see
+    /// [`LightKind`] for what each kind's floats hold).
+    pub fn light_entries(&self) -> impl Iterator<Item = &[f32]> {
+        let first = self.constants.lights_offset as usize;
+        let end = first + LIGHT_FLOATS * self.constants.light_count as usize;
+        self.tables[first..end].chunks_exact(LIGHT_FLOATS)
+    }
+
     /// What each storage buffer holds and how many bytes it needs, in binding order
     /// (the per-pixel accumulators are not included: their size follows the image and
     /// is split into bands to fit).
@@ -832,7 +838,6 @@ impl GpuBackend {
         let start = Instant::now();
         let nodes = match options.bvh_width {
             BvhWidth::Four => NodeLayout::Wide4 { stack: 0 },
-            BvhWidth::Auto if software_vulkan(&self.ctx.info) => NodeLayout::Wide4 { stack: 0 },
             _ => NodeLayout::Binary,
         };
         let data = SceneData::new(
@@ -1070,7 +1075,7 @@ impl GpuScene {
             let rows = band_rows_max.min(y_end - y0);
             let band_pixels = rows as u64 * width as u64;
             let band_bytes = FILM_HEADER_BYTES + band_pixels * PIXEL_BYTES;
-            let per_dispatch = (DISPATCH_BUDGET / band_pixels).clamp(1, MAX_SAMPLES_PER_DISPATCH as u64) as u32;
+            let per_dispatch = (DISPATCH_BUDGET / band_pixels).clamp(1, self.max_samples_per_dispatch() as u64) as u32;
             params.band_y0 = y0;
             params.band_rows = rows;
             // Read-backs fall on multiples of SAMPLES_PER_READBACK in the sample index, not
@@ -1158,6 +1163,16 @@ impl GpuScene {
         });
         let bind_group = self.bind_group(&self.params, &accum);
         FilmBuffers { pixels, accum, readback, bind_group }
+    }
+
+    /// The most samples per pixel one dispatch may trace on this device
+    /// ([`SOFTWARE_SAMPLES_PER_DISPATCH`] on a software rasteriser).
+    pub(crate) fn max_samples_per_dispatch(&self) -> u32 {
+        if self.ctx.info.device_type == wgpu::DeviceType::Cpu {
+            SOFTWARE_SAMPLES_PER_DISPATCH
+        } else {
+            MAX_SAMPLES_PER_DISPATCH
+        }
     }
 
     /// The samplers whose kernels are compiled, in the order they were (one per sampler

@@ -323,8 +323,8 @@ pub const HAS_UVS: u32 = 8;
 
 /// Floats per light in the light table: nine of the light's own (a triangle's vertices,
 /// a shape's record offset, a punctual light's position, axis, cone and spectrum), cdf,
-/// pmf, material id (bits), kind ([`LightKind`], bits) and three more of its own.
-pub const LIGHT_FLOATS: usize = 16;
+/// pmf, material id (bits), kind ([`LightKind`], bits) and seven more of its own.
+pub const LIGHT_FLOATS: usize = 20;
 /// Index of the cdf within a light's floats.
 pub const LIGHT_CDF: u32 = 9;
 /// Index of the pmf within a light's floats.
@@ -348,8 +348,8 @@ pub enum LightKind {
     Spot = 3,
     /// A directional light or sun: direction towards it (0..3), cos of its angular radius
     /// (3; 1 for a delta direction), solid angle (4), radiance / irradiance (5), its
-    /// irradiance's spectrum table (6, bits), the sampling frame's two tangents (7..9,
-    /// 13..16).
+    /// irradiance's spectrum table (6, bits), the sampling frame's two tangents (13..16,
+    /// 16..19).
     Directional = 4,
 }
 

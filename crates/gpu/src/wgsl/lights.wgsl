@@ -162,8 +162,8 @@ fn pt_sample_light(u_in: vec2f) -> PtLightSample {
             let cos_theta = 1.0 - u.x * (1.0 - cos_radius);
             let sin_theta = sqrt(max(1.0 - cos_theta * cos_theta, 0.0));
             let phi = 2.0 * PT_PI * u.y;
-            let t = pt_light_v3(k, 7u);
-            let b = pt_light_v3(k, 13u);
+            let t = pt_light_v3(k, 13u);
+            let b = pt_light_v3(k, 16u);
             ls.point = normalize(cos_theta * ls.point + sin_theta * (cos(phi) * t + sin(phi) * b));
             ls.pdf = (1.0 / pt_light_f(k, 4u)) * pmf;
         }
