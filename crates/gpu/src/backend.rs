@@ -37,10 +37,12 @@
 //! a GPU path starts as the CPU path of the same pixel sample and usually stays on it.
 //! What differs:
 //!
-//! * Hero mode (four wavelengths) and RGB mode (three channels, a kernel of its own:
-//!   colours as their linear-sRGB values, metals at the CPU's channel wavelengths, no
-//!   dispersion); `bins40` is refused up front by the capability check, as are implicit
-//!   surfaces (their solver works in f64), textures and custom (out-of-workspace) BSDFs.
+//! * Hero mode (four wavelengths), RGB mode (three channels, a kernel of its own: colours
+//!   as their linear-sRGB values, metals at the CPU's channel wavelengths, no dispersion)
+//!   and bins40 (a kernel tracing each sample as ten paths of four of the 40 bins from the
+//!   same sample values; the CPU carries all 40 in one path). Refused up front by the
+//!   capability check: implicit surfaces (their solver works in f64) and custom
+//!   (out-of-workspace) BSDFs.
 //! * Spheres, boxes and polygons (`wgsl/shapes.wgsl`) are records in the tables with a
 //!   binary BVH of their own, traversed after the triangles' as on the CPU; the polygon's
 //!   inside test evaluates its orientation determinant in f32 (f64 on the CPU), which can
@@ -330,7 +332,7 @@ pub fn capabilities() -> Capabilities {
 pub fn capabilities_for(integrator: GpuIntegrator) -> Capabilities {
     Capabilities {
         backend: "gpu",
-        spectral_modes: vec![SpectralMode::Hero, SpectralMode::Rgb],
+        spectral_modes: vec![SpectralMode::Hero, SpectralMode::Rgb, SpectralMode::Bins40],
         // ZSobol first (the default): on an H100 it reaches the independent sampler's error
         // 1.76× sooner on the Cornell box (docs/gpu.md).
         samplers: vec![SamplerKind::ZSobol, SamplerKind::Sobol, SamplerKind::Independent],
@@ -740,8 +742,8 @@ pub struct GpuScene {
     scene: Scene,
     bounds: Aabb,
     /// The kernels compiled so far, one per sampler (the sampler is compiled in).
-    /// The kernels compiled so far, by (sampler, RGB mode).
-    pipelines: Mutex<Vec<((SamplerKind, bool), wgpu::ComputePipeline)>>,
+    /// The kernels compiled so far, by (sampler, spectral mode).
+    pipelines: Mutex<Vec<((SamplerKind, SpectralMode), wgpu::ComputePipeline)>>,
     pipeline_layout: wgpu::PipelineLayout,
     /// What another sampler's kernel is generated from.
     material_wgsl: String,
@@ -852,7 +854,7 @@ impl GpuBackend {
                 // (Set from the scene.)
                 shapes: false,
                 punctual_lights: false,
-                rgb: false,
+                mode: SpectralMode::Hero,
                 textures: false,
                 cutouts: false,
                 env_map: false,
@@ -935,7 +937,7 @@ impl GpuBackend {
             ctx: Arc::clone(&self.ctx),
             bounds: scene.bounds(),
             scene,
-            pipelines: Mutex::new(vec![((data.options.sampler, data.options.rgb), pipeline)]),
+            pipelines: Mutex::new(vec![((data.options.sampler, data.options.mode), pipeline)]),
             pipeline_layout,
             material_wgsl: data.material_wgsl,
             kernel_options: data.options,
@@ -1184,12 +1186,12 @@ impl GpuScene {
     /// The kernel for the settings' sampler and spectral mode, compiled on first use (the
     /// scene's buffers and layout stay; only those constants differ).
     pub(crate) fn pipeline(&self, settings: &RenderSettings) -> Result<wgpu::ComputePipeline, GpuError> {
-        let key = (settings.sampler, settings.mode == SpectralMode::Rgb);
+        let key = (settings.sampler, settings.mode);
         let mut pipelines = lock(&self.pipelines);
         if let Some((_, p)) = pipelines.iter().find(|(k, _)| *k == key) {
             return Ok(p.clone());
         }
-        let options = KernelOptions { sampler: key.0, rgb: key.1, ..self.kernel_options };
+        let options = KernelOptions { sampler: key.0, mode: key.1, ..self.kernel_options };
         let pipeline =
             compile(&self.ctx, &self.pipeline_layout, &crate::kernel::source(&self.material_wgsl, &options))?;
         pipelines.push((key, pipeline.clone()));

@@ -16,6 +16,7 @@
 //! * the choice of triangle test (only the one a scene asks for is compiled in).
 
 use bvh::{BvhNode, TriangleTest};
+use spectral::SpectralMode;
 use spectral::colour::XYZ_TO_SRGB;
 use spectral::sampled::{LAMBDA_MAX, LAMBDA_MIN, VIS_CENTRE, VIS_K, VIS_TANH_HI, VIS_TANH_LO};
 use spectral::tables::{CIE_LAMBDA_MIN, CIE_SAMPLES, CIE_Y_INTEGRAL};
@@ -390,9 +391,10 @@ pub struct KernelOptions {
     pub shapes: bool,
     /// Whether the scene has point, spot or directional lights (`PT_HAS_PUNCTUAL`).
     pub punctual_lights: bool,
-    /// RGB mode (`PT_RGB`, the materials' `MAT_RGB`): three colour channels instead of
-    /// four hero wavelengths; a render in the other mode gets another kernel.
-    pub rgb: bool,
+    /// The spectral mode (`PT_RGB`, the materials' `MAT_RGB`: three colour channels;
+    /// `PT_BINS40`: the 40 fixed bins as ten paths of four per sample); a render in another
+    /// mode gets another kernel.
+    pub mode: SpectralMode,
     /// Whether materials read textures (`PT_HAS_TEXTURES`, and the texel buffer at binding
     /// 12).
     pub textures: bool,
@@ -512,7 +514,8 @@ pub fn header(options: &KernelOptions) -> String {
     u("PT_MAX_BOUNCES", options.max_bounces);
     let _ = writeln!(out, "const PT_HAS_SHAPES: bool = {};", options.shapes);
     let _ = writeln!(out, "const PT_HAS_PUNCTUAL: bool = {};", options.punctual_lights);
-    let _ = writeln!(out, "const PT_RGB: bool = {};", options.rgb);
+    let _ = writeln!(out, "const PT_RGB: bool = {};", options.mode == SpectralMode::Rgb);
+    let _ = writeln!(out, "const PT_BINS40: bool = {};", options.mode == SpectralMode::Bins40);
     let _ = writeln!(out, "const PT_HAS_TEXTURES: bool = {};", options.textures);
     let _ = writeln!(out, "const PT_HAS_CUTOUTS: bool = {};", options.cutouts);
     let _ = writeln!(out, "const PT_HAS_ENV_MAP: bool = {};", options.env_map);
@@ -596,7 +599,7 @@ pub fn source(material_wgsl: &str, options: &KernelOptions) -> String {
         TriangleTest::MollerTrumbore => include_str!("wgsl/triangle_moller_trumbore.wgsl"),
     };
     let mut out = String::with_capacity(material_wgsl.len() + 64 * 1024);
-    out.push_str(&crate::materials::for_mode(material_wgsl, options.rgb));
+    out.push_str(&crate::materials::for_mode(material_wgsl, options.mode == SpectralMode::Rgb));
     out.push('\n');
     out.push_str(&header(options));
     out.push_str("\nconst PT_PI: f32 = 3.14159265358979323846;\nconst PT_INV_4PI: f32 = 0.07957747154594767;\n");

@@ -113,8 +113,8 @@ fn the_gpu_scene_accumulates_on_the_device_and_refuses_what_it_cannot() {
         .expect("a crop window is refused")
         .to_string();
     assert!(err.contains("crop"), "{err}");
-    let bins = RenderSettings { mode: SpectralMode::Bins40, ..s.clone() };
-    assert!(acc.restart(&bins).is_err(), "bins40 mode is beyond the GPU backend");
+    let deep = RenderSettings { path: tracer::integrator::PathSettings { max_depth: 1000, ..s.path }, ..s.clone() };
+    assert!(acc.restart(&deep).is_err(), "1000 bounces are beyond the GPU backend");
     // RGB mode restarts the accumulation with its own kernel: the film of a render in it.
     let rgb = RenderSettings { mode: SpectralMode::Rgb, ..s.clone() };
     acc.restart(&rgb).unwrap();

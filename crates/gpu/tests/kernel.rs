@@ -17,7 +17,7 @@ fn options(triangle_test: bvh::TriangleTest) -> KernelOptions {
         sampler: tracer::sampler::SamplerKind::ZSobol,
         shapes: true,
         punctual_lights: true,
-        rgb: true,
+        mode: spectral::SpectralMode::Bins40,
         textures: true,
         cutouts: true,
         env_map: true,

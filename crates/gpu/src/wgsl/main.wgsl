@@ -4,6 +4,27 @@
 // count / mean / M2 in f32 (merged into the film's f64 statistics on the CPU after the
 // pass).
 
+// One camera ray's radiance at the wavelengths `wl_in`, in linear sRGB. The integrator is
+// a constant: the others' branches compile away.
+fn pt_trace_sample(
+    dir: vec3f,
+    wl_in: PtWavelengths,
+    smp: ptr<function, PtSampler>,
+    rays: ptr<function, u32>,
+    truncated: ptr<function, u32>,
+) -> vec3f {
+    var wl = wl_in;
+    var l: vec4f;
+    if PT_INTEGRATOR == PT_INTEGRATOR_DIRECT {
+        l = pt_direct(pt_params.eye.xyz, dir, wl, smp, rays);
+    } else if PT_INTEGRATOR == PT_INTEGRATOR_AO {
+        l = pt_ambient_occlusion(pt_params.eye.xyz, dir, wl, smp, rays);
+    } else {
+        l = pt_radiance(pt_params.eye.xyz, dir, &wl, smp, rays, truncated);
+    }
+    return pt_to_linear_srgb(l, wl);
+}
+
 @compute @workgroup_size(8, 8, 1)
 fn pt_main(@builtin(global_invocation_id) gid: vec3u) {
     if gid.x >= pt_params.width || gid.y >= pt_params.band_rows {
@@ -18,27 +39,26 @@ fn pt_main(@builtin(global_invocation_id) gid: vec3u) {
     var truncated = 0u;
     for (var k = 0u; k < pt_params.samples; k++) {
         var smp = pt_sampler_for(x, y, pixel, pt_params.first_sample + k);
-        let cam = pt_camera(&smp, !PT_RGB);
-        var wl: PtWavelengths;
-        if PT_RGB {
-            wl = pt_rgb_wavelengths();
-        } else {
-            wl = pt_sample_hero(cam.x);
-        }
+        // Fixed wavelengths (RGB, bins40) draw no wavelength sample.
+        let cam = pt_camera(&smp, !PT_RGB && !PT_BINS40);
         let jitter = cam.yz;
         let film = vec2f(f32(x), f32(y)) + jitter;
         let ndc = vec2f(2.0 * film.x * pt_params.inv_size.x - 1.0, 1.0 - 2.0 * film.y * pt_params.inv_size.y);
         let dir = normalize(pt_params.forward.xyz + ndc.x * pt_params.right.xyz + ndc.y * pt_params.up.xyz);
-        // The integrator is a constant: the others' branches compile away.
-        var l: vec4f;
-        if PT_INTEGRATOR == PT_INTEGRATOR_DIRECT {
-            l = pt_direct(pt_params.eye.xyz, dir, wl, &smp, &rays);
-        } else if PT_INTEGRATOR == PT_INTEGRATOR_AO {
-            l = pt_ambient_occlusion(pt_params.eye.xyz, dir, wl, &smp, &rays);
+        var rgb = vec3f(0.0);
+        if PT_BINS40 {
+            // The 40 bins as ten paths of four, each from the same sample values: every one
+            // estimates its four bins' share of the image without bias (the CPU carries all
+            // 40 in one path), and the conversion to sRGB is linear in them.
+            for (var g = 0u; g < 10u; g++) {
+                var group = smp;
+                rgb += pt_trace_sample(dir, pt_bins_wavelengths(g), &group, &rays, &truncated);
+            }
+        } else if PT_RGB {
+            rgb = pt_trace_sample(dir, pt_rgb_wavelengths(), &smp, &rays, &truncated);
         } else {
-            l = pt_radiance(pt_params.eye.xyz, dir, &wl, &smp, &rays, &truncated);
+            rgb = pt_trace_sample(dir, pt_sample_hero(cam.x), &smp, &rays, &truncated);
         }
-        let rgb = pt_to_linear_srgb(l, wl);
         if pt_is_finite3(rgb) {
             acc.count += 1u;
             let delta = rgb - acc.mean;

@@ -30,6 +30,13 @@ fn pt_rgb_wavelengths() -> PtWavelengths {
     return PtWavelengths(PT_RGB_LAMBDA, vec4f(1.0, 1.0, 1.0, 0.0), false);
 }
 
+// Group `g` of bins40's fixed wavelengths (`SampledWavelengths::fixed_bins(380, 10)`):
+// lanes 4g..4g+3, each with the Riemann weight of its 10-nm bin.
+fn pt_bins_wavelengths(g: u32) -> PtWavelengths {
+    let first = 380.0 + 40.0 * f32(g);
+    return PtWavelengths(first + vec4f(0.0, 10.0, 20.0, 30.0), vec4f(10.0), false);
+}
+
 // `spectral::colour::cie_xyz`: the 1 nm tables, linearly interpolated.
 fn pt_cie_xyz(lambda: f32) -> vec3f {
     let x = lambda - PT_CIE_LAMBDA_MIN;
