@@ -82,6 +82,7 @@ use crate::kernel::{
     LIGHT_FLOATS, LIGHT_KIND, LIGHT_MATERIAL, LIGHT_PMF, LightKind, NodeLayout, Params, PixelAccum, SEEDS_OFFSET,
     ShapeCode, UNIFORM_BYTES, WideNode,
 };
+use crate::materials::colour_entry;
 use crate::wide::WideBvh;
 use crate::{GpuContext, GpuError};
 use bvh::{Aabb, BuildConfig, Bvh, BvhNode, BvhWidth, SplitMethod, TriangleTest};
@@ -115,11 +116,11 @@ pub const DISPATCH_BUDGET: u64 = 1 << 18;
 const MAX_SAMPLES_PER_DISPATCH: u32 = 64;
 
 /// The most samples per pixel in one dispatch on a software rasteriser (Mesa's lavapipe
-/// and llvmpipe): their shader compiler bounds the iterations of each loop (gallivm's loop
-/// limiter), and an invocation tracing many samples of deep paths through a deep tree runs
-/// its traversal loop past that bound, which ends the loop early — lost hits. On Sponza
-/// at 64 samples per dispatch the binary traversal rendered 6.5 % too bright; at one, it
-/// agrees with the CPU (docs/gpu.md).
+/// and llvmpipe): their shader compiler most likely bounds the iterations of each loop
+/// (gallivm's loop limiter), and an invocation tracing many samples of deep paths through
+/// a deep tree ran its traversal past that bound — lost hits. At 64 samples per dispatch
+/// `textured_sponza_matches_the_cpu` finds Sponza 6 % too bright; at one, it agrees
+/// (docs/gpu.md).
 const SOFTWARE_SAMPLES_PER_DISPATCH: u32 = 1;
 
 /// The most samples per pixel accumulated in f32 on the device before they are read
@@ -129,13 +130,6 @@ pub const SAMPLES_PER_READBACK: u32 = 1024;
 
 /// The kernel's workgroup side (8 × 8 invocations, one per pixel).
 const WORKGROUP: u32 = 8;
-
-/// A colour as the kernel's tables hold it (`pt_table_spectrum`): its spectrum at 1 nm over
-/// the CIE tables' range, then its linear-sRGB value (RGB mode's).
-fn tabulate(colour: &spectral::spectrum::Colour) -> impl Iterator<Item = f32> + '_ {
-    let table = (0..CIE_SAMPLES).map(move |i| colour.spectrum.eval(spectral::tables::CIE_LAMBDA_MIN + i as f32));
-    table.chain(colour.rgb)
-}
 
 /// The record of an analytic shape in the kernel's tables (`wgsl/shapes.wgsl`): kind,
 /// material id, light pmf, area and the CPU's primitive id, then the shape's own numbers.
@@ -214,6 +208,12 @@ fn punctual_entry(light: &PunctualLight, spectrum: f32, entry: &mut [f32; LIGHT_
             LightKind::Directional
         }
     }
+}
+
+/// How the kernel's triangle BVH is built (binned SAH, leaves of at most four triangles
+/// chosen by SAH); the 4-wide tree is collapsed from it.
+pub fn triangle_build_config() -> BuildConfig {
+    BuildConfig { method: SplitMethod::BinnedSah, max_leaf_size: 4, leaf_by_sah: true, ..BuildConfig::default() }
 }
 
 /// The textures of a scene as the kernel reads them (`wgsl/textures.wgsl`): each image's
@@ -411,13 +411,7 @@ impl SceneData {
         }
         let kernel = crate::materials::generate(&scene.materials, true)?;
         let start = Instant::now();
-        let config = BuildConfig {
-            method: SplitMethod::BinnedSah,
-            max_leaf_size: 4,
-            leaf_by_sah: true,
-            ..BuildConfig::default()
-        };
-        let bvh = Bvh::build(&scene.triangle_soup(), config)
+        let bvh = Bvh::build(&scene.triangle_soup(), triangle_build_config())
             .map_err(|e| GpuError::Unsupported(format!("this geometry ({e})")))?;
         let (nodes, node_bytes, node_count, layout) = match options.nodes {
             NodeLayout::Binary => {
@@ -491,14 +485,14 @@ impl SceneData {
         }
         let env_offset = tables.len() as u32;
         let black = spectral::spectrum::Colour::constant(0.0);
-        tables.extend(tabulate(scene.environment.as_ref().map_or(&black, |e| &e.radiance)));
+        tables.extend(colour_entry(scene.environment.as_ref().map_or(&black, |e| &e.radiance)));
         if scene.environment.is_some() {
             scene_flags |= HAS_ENVIRONMENT;
         }
         // Ambient occlusion's white: the CPU's `AmbientOcclusion` value, tabulated.
         let white_offset = tables.len() as u32;
         if let GpuIntegrator::AmbientOcclusion { .. } = options.integrator {
-            tables.extend(tabulate(&tracer::AmbientOcclusion::white()));
+            tables.extend(colour_entry(&tracer::AmbientOcclusion::white()));
         }
         // The Sobol samplers' second dimension: the CPU's bit-reversed byte tables.
         let sobol_offset = tables.len() as u32;
@@ -610,7 +604,7 @@ impl SceneData {
                     let index = k - lights.prims().len();
                     let light = &scene.punctual_lights[index];
                     let spectrum = f32::from_bits((spectra_offset + punctual_spectra.len()) as u32);
-                    punctual_spectra.extend(tabulate(light.colour()));
+                    punctual_spectra.extend(colour_entry(light.colour()));
                     let kind = punctual_entry(light, spectrum, &mut entry);
                     (kind, u32::MAX, lights.punctual_pmf(index))
                 }
@@ -846,18 +840,11 @@ impl GpuBackend {
             &scene,
             KernelOptions {
                 triangle_test: options.triangle_test,
-                max_bounces: MAX_BOUNCES,
                 nodes,
                 integrator: self.integrator,
                 // The kernel a render with the default sampler uses; others compile on demand.
                 sampler: capabilities_for(self.integrator).samplers[0],
-                // (Set from the scene.)
-                shapes: false,
-                punctual_lights: false,
-                mode: SpectralMode::Hero,
-                textures: false,
-                cutouts: false,
-                env_map: false,
+                ..KernelOptions::default()
             },
         )?;
         data.check_limits(&self.ctx.limits)?;

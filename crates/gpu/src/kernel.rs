@@ -404,6 +404,27 @@ pub struct KernelOptions {
     pub env_map: bool,
 }
 
+/// The backend's default kernel: the watertight test, the binary tree, the path tracer,
+/// ZSobol, hero wavelengths; the scene features (shapes … `env_map`) are set by
+/// `SceneData::new` from the scene itself.
+impl Default for KernelOptions {
+    fn default() -> Self {
+        Self {
+            triangle_test: TriangleTest::Watertight,
+            max_bounces: crate::backend::MAX_BOUNCES,
+            nodes: NodeLayout::Binary,
+            integrator: GpuIntegrator::Path,
+            sampler: SamplerKind::ZSobol,
+            shapes: false,
+            punctual_lights: false,
+            mode: SpectralMode::Hero,
+            textures: false,
+            cutouts: false,
+            env_map: false,
+        }
+    }
+}
+
 /// A sphere method's code in a shape record (`PT_SPHERE_*`).
 pub fn sphere_method_code(method: shapes::sphere::SphereMethod) -> u32 {
     match method {

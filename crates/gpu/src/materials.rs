@@ -236,6 +236,14 @@ pub fn tabulate(colour: &Colour) -> Vec<f32> {
 /// value (what `spectrum_at` reads in RGB mode).
 pub const COLOUR_FLOATS: usize = SPECTRUM_SAMPLES + 3;
 
+/// A colour's entry ([`COLOUR_FLOATS`]): its [`tabulate`] table, then its linear sRGB —
+/// as `spectra` and the path kernel's own tables (`pt_table_spectrum`) hold colours.
+pub fn colour_entry(colour: &Colour) -> Vec<f32> {
+    let mut entry = tabulate(colour);
+    entry.extend(colour.rgb);
+    entry
+}
+
 /// The line of the generated WGSL that says which mode the materials run in; a kernel for
 /// RGB mode takes the WGSL through [`for_rgb`].
 const HERO_MODE_LINE: &str = "const MAT_RGB: bool = false;\n";
@@ -276,8 +284,7 @@ impl SpectrumPool {
 
     /// The offset of `colour`'s entry ([`COLOUR_FLOATS`]), adding it if new.
     fn colour(&mut self, colour: &Colour) -> Result<u32, GpuError> {
-        let mut table = tabulate(colour);
-        table.extend(colour.rgb);
+        let table = colour_entry(colour);
         let key: Vec<u32> = table.iter().map(|v| v.to_bits()).collect();
         if let Some(&o) = self.index.get(&key) {
             return Ok(o);
@@ -306,7 +313,7 @@ fn pack_params(params: &ResolvedParams, pool: &mut SpectrumPool, own: &[usize]) 
         .iter()
         .enumerate()
         .map(|(i, v)| match v {
-            Resolved::Colour(c) if own.contains(&i) => pool.raw(tabulate(c).into_iter().chain(c.rgb)),
+            Resolved::Colour(c) if own.contains(&i) => pool.raw(colour_entry(c)),
             Resolved::Scalar(x) => Ok(x.to_bits()),
             Resolved::Colour(c) => pool.colour(c),
             Resolved::Bool(b) => Ok(u32::from(*b)),

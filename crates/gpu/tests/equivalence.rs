@@ -177,19 +177,7 @@ fn compare_all(name: &str, r: &Renders) -> Vec<String> {
 
 /// The kernel options the backend uses by default.
 fn kernel_options() -> gpu::kernel::KernelOptions {
-    gpu::kernel::KernelOptions {
-        triangle_test: bvh::TriangleTest::Watertight,
-        max_bounces: gpu::backend::MAX_BOUNCES,
-        nodes: gpu::kernel::NodeLayout::Binary,
-        integrator: gpu::kernel::GpuIntegrator::Path,
-        sampler: tracer::sampler::SamplerKind::ZSobol,
-        shapes: false,
-        punctual_lights: false,
-        mode: SpectralMode::Hero,
-        textures: false,
-        cutouts: false,
-        env_map: false,
-    }
+    gpu::kernel::KernelOptions::default()
 }
 
 /// Depth 8 without Russian roulette (see the module docs).

@@ -206,16 +206,26 @@ fn pt_emission_at(m: u32, uv: vec2f, lambda: vec4f) -> vec4f {
     return e * pt_tex_reflectance(rec, 3u, uv, lambda);
 }
 
+// The texture coordinates of triangle `prim`'s vertices (zeros where the mesh has none).
+fn pt_triangle_uvs(prim: u32) -> array<vec2f, 3> {
+    if (pt_params.scene_flags & PT_HAS_UVS) == 0u {
+        return array<vec2f, 3>(vec2f(0.0), vec2f(0.0), vec2f(0.0));
+    }
+    let vi = pt_tri_vidx[prim];
+    return array<vec2f, 3>(
+        vec2f(pt_attrs[2u * vi.x].w, pt_attrs[2u * vi.x + 1u].w),
+        vec2f(pt_attrs[2u * vi.y].w, pt_attrs[2u * vi.y + 1u].w),
+        vec2f(pt_attrs[2u * vi.z].w, pt_attrs[2u * vi.z + 1u].w),
+    );
+}
+
 // The hit's texture coordinates (`SceneView::uv_at`: zero for shapes and meshes without).
 fn pt_hit_uv(hit: PtHit) -> vec2f {
     if !PT_HAS_TEXTURES || (pt_params.scene_flags & PT_HAS_UVS) == 0u || pt_is_shape(hit.prim) {
         return vec2f(0.0);
     }
-    let vi = pt_tri_vidx[hit.prim];
-    let t0 = vec2f(pt_attrs[2u * vi.x].w, pt_attrs[2u * vi.x + 1u].w);
-    let t1 = vec2f(pt_attrs[2u * vi.y].w, pt_attrs[2u * vi.y + 1u].w);
-    let t2 = vec2f(pt_attrs[2u * vi.z].w, pt_attrs[2u * vi.z + 1u].w);
-    return (1.0 - hit.u - hit.v) * t0 + hit.u * t1 + hit.v * t2;
+    let t = pt_triangle_uvs(hit.prim);
+    return (1.0 - hit.u - hit.v) * t[0] + hit.u * t[1] + hit.v * t[2];
 }
 
 // The material a hit is on.
@@ -393,16 +403,8 @@ fn pt_bend_normal(sf: ptr<function, PtSurface>, hit: PtHit, uv: vec2f) {
     let p0 = pt_tri_verts[3u * hit.prim].xyz;
     let p1 = pt_tri_verts[3u * hit.prim + 1u].xyz;
     let p2 = pt_tri_verts[3u * hit.prim + 2u].xyz;
-    var uv0 = vec2f(0.0);
-    var uv1 = vec2f(0.0);
-    var uv2 = vec2f(0.0);
-    if (pt_params.scene_flags & PT_HAS_UVS) != 0u {
-        let vi = pt_tri_vidx[hit.prim];
-        uv0 = vec2f(pt_attrs[2u * vi.x].w, pt_attrs[2u * vi.x + 1u].w);
-        uv1 = vec2f(pt_attrs[2u * vi.y].w, pt_attrs[2u * vi.y + 1u].w);
-        uv2 = vec2f(pt_attrs[2u * vi.z].w, pt_attrs[2u * vi.z + 1u].w);
-    }
-    let der = pt_triangle_uv_derivatives(p0, p1, p2, uv0, uv1, uv2);
+    let t = pt_triangle_uvs(hit.prim);
+    let der = pt_triangle_uv_derivatives(p0, p1, p2, t[0], t[1], t[2]);
     var n = (*sf).ns;
     if bump != PT_NO_HIT {
         n = pt_bump_normal(bump, pt_tables[rec + 7u], uv, n, der.dpdu, der.dpdv);
