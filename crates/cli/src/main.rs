@@ -885,7 +885,8 @@ fn make_backend(args: &SceneArgs) -> Result<Box<dyn Backend>> {
                 "path" => gpu::kernel::GpuIntegrator::Path,
                 "direct" => gpu::kernel::GpuIntegrator::Direct,
                 "ao" => gpu::kernel::GpuIntegrator::AmbientOcclusion { max_distance: args.ao_distance },
-                "whitted" | "bdpt" | "atlas" => {
+                "whitted" => gpu::kernel::GpuIntegrator::Whitted,
+                "bdpt" | "atlas" => {
                     bail!("the gpu backend has no {} integrator yet: use --backend cpu", args.integrator)
                 }
                 other => bail!("unknown integrator '{other}' (known: {})", INTEGRATORS.join(", ")),

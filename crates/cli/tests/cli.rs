@@ -458,13 +458,22 @@ fn integrators_are_chosen_by_name() {
         render_small(&scene, (4, 4, 1), &partial, &["--integrator", "bdpt", "--shard", "1/2", "--shard-by", "tiles"]);
     let msg = stderr(&o);
     assert!(!o.status.success() && msg.contains("shard it by samples"), "{msg}");
-    // The GPU runs direct and ao too (its equivalence tests compare them with the CPU's).
+    // The GPU runs direct, ao and whitted too (its equivalence tests compare them with the
+    // CPU's).
     if gpu::require_gpu().is_some() {
-        for integrator in ["direct", "ao"] {
+        for integrator in ["direct", "ao", "whitted"] {
             let o = render_small(&scene, (8, 8, 4), &out, &["--integrator", integrator, "--backend", "gpu"]);
             assert!(o.status.success(), "{integrator}: {}", stderr(&o));
         }
-        for integrator in ["whitted", "bdpt", "atlas"] {
+        // Whitted's recursion is bounded by the kernel's stack.
+        let o = render_small(
+            &scene,
+            (8, 8, 4),
+            &out,
+            &["--integrator", "whitted", "--backend", "gpu", "--max-depth", "17"],
+        );
+        assert!(!o.status.success() && stderr(&o).contains("at most 16"), "{}", stderr(&o));
+        for integrator in ["bdpt", "atlas"] {
             let o = render_small(&scene, (8, 8, 4), &out, &["--integrator", integrator, "--backend", "gpu"]);
             assert!(!o.status.success() && stderr(&o).contains("use --backend cpu"), "{}", stderr(&o));
         }

@@ -30,8 +30,10 @@
 //!
 //! The backend runs one integrator, compiled into its kernel ([`GpuBackend::with_integrator`]):
 //! `wgsl/path.wgsl` is a line-by-line port of `tracer`'s `PathTracer`, `wgsl/simple.wgsl`
-//! of `DirectLighting` and `AmbientOcclusion` (sharing the path tracer's interaction and
-//! next-event code, as the CPU's do). The path kernel is the one described here. It draws
+//! of `DirectLighting` and `AmbientOcclusion`, `wgsl/whitted.wgsl` of `Whitted` (its
+//! recursion as a depth-first walk with a stack of [`crate::kernel::WHITTED_MAX_DEPTH`]
+//! entries, in the CPU's order; all share the path tracer's interaction and light
+//! sampling code, as the CPU's do). The path kernel is the one described here. It draws
 //! the CPU's own sample values (`wgsl/sampler.wgsl`: `Pcg32::for_sample`, `PaddedSobol`
 //! and `ZSobol`, with the 64-bit arithmetic emulated on word pairs) in the CPU's order, so
 //! a GPU path starts as the CPU path of the same pixel sample and usually stays on it.
@@ -78,9 +80,9 @@
 
 use crate::accumulation::DeviceAccumulation;
 use crate::kernel::{
-    FILM_HEADER_BYTES, GpuIntegrator, HAS_ENVIRONMENT, HAS_NORMALS, HAS_TANGENTS, HAS_UVS, KernelOptions, LIGHT_CDF,
-    LIGHT_FLOATS, LIGHT_KIND, LIGHT_MATERIAL, LIGHT_PMF, LightKind, NodeLayout, Params, PixelAccum, SEEDS_OFFSET,
-    ShapeCode, UNIFORM_BYTES, WideNode,
+    FILM_HEADER_BYTES, GpuIntegrator, HAS_DISPERSION, HAS_ENVIRONMENT, HAS_NORMALS, HAS_TANGENTS, HAS_UVS,
+    KernelOptions, LIGHT_CDF, LIGHT_FLOATS, LIGHT_KIND, LIGHT_MATERIAL, LIGHT_PMF, LightKind, NodeLayout, Params,
+    PixelAccum, SEEDS_OFFSET, ShapeCode, UNIFORM_BYTES, WideNode,
 };
 use crate::materials::colour_entry;
 use crate::wide::WideBvh;
@@ -346,7 +348,10 @@ pub fn capabilities_for(integrator: GpuIntegrator) -> Capabilities {
         // slower in this megakernel; it stays selectable for comparisons.
         bvh_widths: vec![BvhWidth::Auto, BvhWidth::Two, BvhWidth::Four],
         integrator: integrator.name(),
-        max_bounces: Some(MAX_BOUNCES),
+        max_bounces: Some(match integrator {
+            GpuIntegrator::Whitted => crate::kernel::WHITTED_MAX_DEPTH,
+            _ => MAX_BOUNCES,
+        }),
         diffuse_depth: false,
         bvh_builders: false,
         sample_block: SAMPLES_PER_READBACK,
@@ -488,6 +493,9 @@ impl SceneData {
         tables.extend(colour_entry(scene.environment.as_ref().map_or(&black, |e| &e.radiance)));
         if scene.environment.is_some() {
             scene_flags |= HAS_ENVIRONMENT;
+        }
+        if scene.materials.iter().any(|m| m.is_dispersive()) {
+            scene_flags |= HAS_DISPERSION;
         }
         // Ambient occlusion's white: the CPU's `AmbientOcclusion` value, tabulated.
         let white_offset = tables.len() as u32;

@@ -205,7 +205,15 @@ pub enum GpuIntegrator {
         /// Occluders farther than this do not count (∞: any).
         max_distance: f32,
     },
+    /// `tracer::Whitted` (`wgsl/whitted.wgsl`), its recursion at most [`WHITTED_MAX_DEPTH`]
+    /// deep.
+    Whitted,
 }
+
+/// The deepest Whitted recursion the GPU traces: its branches wait on a stack of this
+/// many entries in each invocation's private memory (one per level; 2¹⁶ leaves per sample
+/// are far past any useful depth — the CPU's default is [`tracer::integrator::WHITTED_DEFAULT_DEPTH`]).
+pub const WHITTED_MAX_DEPTH: u32 = 16;
 
 impl GpuIntegrator {
     /// The `--integrator` name.
@@ -214,6 +222,7 @@ impl GpuIntegrator {
             Self::Path => "path",
             Self::Direct => "direct",
             Self::AmbientOcclusion { .. } => "ao",
+            Self::Whitted => "whitted",
         }
     }
 
@@ -223,6 +232,7 @@ impl GpuIntegrator {
             Self::Path => 0,
             Self::Direct => 1,
             Self::AmbientOcclusion { .. } => 2,
+            Self::Whitted => 3,
         }
     }
 }
@@ -321,6 +331,8 @@ pub const HAS_TANGENTS: u32 = 2;
 pub const HAS_ENVIRONMENT: u32 = 4;
 /// Scene flag: vertices have texture coordinates (in the `w` of their attributes).
 pub const HAS_UVS: u32 = 8;
+/// Scene flag: some material disperses light (`SceneView::has_dispersion`).
+pub const HAS_DISPERSION: u32 = 16;
 
 /// Floats per light in the light table: nine of the light's own (a triangle's vertices,
 /// a shape's record offset, a punctual light's position, axis, cone and spectrum), cdf,
@@ -496,6 +508,7 @@ pub fn header(options: &KernelOptions) -> String {
     u("PT_HAS_TANGENTS", HAS_TANGENTS);
     u("PT_HAS_ENVIRONMENT", HAS_ENVIRONMENT);
     u("PT_HAS_UVS", HAS_UVS);
+    u("PT_HAS_DISPERSION", HAS_DISPERSION);
     u("PT_CIE_SAMPLES", CIE_SAMPLES as u32);
     u("PT_LIGHT_FLOATS", LIGHT_FLOATS as u32);
     u("PT_LIGHT_CDF", LIGHT_CDF);
@@ -531,6 +544,10 @@ pub fn header(options: &KernelOptions) -> String {
     u("PT_INTEGRATOR_PATH", GpuIntegrator::Path.code());
     u("PT_INTEGRATOR_DIRECT", GpuIntegrator::Direct.code());
     u("PT_INTEGRATOR_AO", GpuIntegrator::AmbientOcclusion { max_distance: 0.0 }.code());
+    u("PT_INTEGRATOR_WHITTED", GpuIntegrator::Whitted.code());
+    u("PT_WHITTED_DEFAULT_DEPTH", tracer::integrator::WHITTED_DEFAULT_DEPTH);
+    // (The stack only where it is used: private arrays cost registers or local memory.)
+    u("PT_WHITTED_STACK", if options.integrator == GpuIntegrator::Whitted { WHITTED_MAX_DEPTH } else { 1 });
     u("PT_WIDE_EMPTY", WIDE_EMPTY);
     u("PT_MAX_BOUNCES", options.max_bounces);
     let _ = writeln!(out, "const PT_HAS_SHAPES: bool = {};", options.shapes);
@@ -584,7 +601,7 @@ pub fn header(options: &KernelOptions) -> String {
 }
 
 /// The hand-written files, in the order they are concatenated.
-const FILES: [(&str, &str); 13] = [
+const FILES: [(&str, &str); 14] = [
     ("rng.wgsl", include_str!("wgsl/rng.wgsl")),
     ("sampler.wgsl", include_str!("wgsl/sampler.wgsl")),
     ("spectral.wgsl", include_str!("wgsl/spectral.wgsl")),
@@ -598,6 +615,7 @@ const FILES: [(&str, &str); 13] = [
     ("lights.wgsl", include_str!("wgsl/lights.wgsl")),
     ("path.wgsl", include_str!("wgsl/path.wgsl")),
     ("simple.wgsl", include_str!("wgsl/simple.wgsl")),
+    ("whitted.wgsl", include_str!("wgsl/whitted.wgsl")),
 ];
 
 /// The kernel's entry point, last.

@@ -1069,3 +1069,58 @@ fn bins40_matches_the_cpu() {
     }
     assert!(failures.is_empty(), "{failures:#?}");
 }
+
+/// Whitted ray tracing (`--integrator whitted --backend gpu`): the CPU's recursion walked
+/// depth first with a stack, every punctual light by its own shadow ray. On dispersive,
+/// absorbing glass beside a mirror ball under a point light, a sun with a disk and a delta
+/// directional light (hero and RGB, the default depth and a short one), and on the room of
+/// analytic shapes (a glass ball, glowing shapes, the sky).
+#[test]
+fn whitted_matches_the_cpu() {
+    use gpu::kernel::GpuIntegrator;
+    use tracer::punctual::PunctualLight;
+    use tracer::{Backend, Whitted};
+    let Some(ctx) = gpu::require_gpu() else { return };
+    let cases = model_cases();
+    let glass = cases.iter().find(|(n, _)| n == "dispersive absorbing glass").unwrap().1.clone();
+    let mut glass_scene = model_scene(glass);
+    let mirror = Material::builtin("mirror", ModelId::Conductor, &[]).unwrap();
+    let ball = shapes::sphere::Sphere::new(Vec3::new(1.4, 0.5, 0.4), 0.5, Default::default()).unwrap();
+    glass_scene.add_shape(tracer::ShapeKind::Sphere(ball), mirror);
+    let rgb = |c: [f32; 3]| Colour::illuminant_rgb(c).unwrap();
+    glass_scene.punctual_lights = vec![
+        PunctualLight::point(Vec3::new(1.5, 2.5, 1.5), rgb([6.0, 5.0, 4.0])),
+        PunctualLight::sun(Vec3::new(-0.3, -1.0, -0.5), rgb([1.5, 1.3, 1.0]), 10f32.to_radians()),
+        PunctualLight::directional(Vec3::new(0.6, -1.0, 0.2), rgb([0.4, 0.4, 0.5])),
+    ];
+    let backend = GpuBackend::with_context(ctx).with_integrator(GpuIntegrator::Whitted);
+    assert_eq!(backend.capabilities().integrator, "whitted");
+    let cpu = CpuBackend::with_integrator(2, Whitted).unwrap();
+    let options = SceneOptions::default();
+    let deep = RenderSettings { path: PathSettings::default(), ..settings(24, 24, 64) };
+    let short = RenderSettings { path: PathSettings { max_depth: 3, ..PathSettings::default() }, ..deep.clone() };
+    let rgb_mode = RenderSettings { mode: SpectralMode::Rgb, ..deep.clone() };
+    let mut failures = Vec::new();
+    for (name, scene, runs) in [
+        ("glass and mirror", glass_scene, vec![("default depth", &deep), ("depth 3", &short), ("rgb", &rgb_mode)]),
+        ("analytic shapes", shape_scene(), vec![("default depth", &deep)]),
+    ] {
+        let cpu_scene = cpu.prepare(scene.clone(), &options).unwrap();
+        let gpu_scene = backend.prepare_gpu(scene, &options).unwrap();
+        for (run, s) in runs {
+            let r = render_three_with(cpu_scene.as_ref(), &gpu_scene, s).unwrap();
+            assert!(r.cpu.channel_means()[1] > 0.02, "{name}: a dark image proves little");
+            let ratio = mean_squared_difference(&r.cpu, &r.same) / mean_squared_difference(&r.cpu, &r.other);
+            println!("whitted, {name}, {run}: same-seed squared difference {ratio:.4} of the independent one");
+            if ratio > 0.05 {
+                failures.push(format!("whitted, {name}, {run}: same-seed trees diverge ({ratio:.4} of independent)"));
+            }
+            failures.extend(compare_all(&format!("whitted, {name}, {run}"), &r));
+        }
+    }
+    // Deeper than the stack: refused up front, naming the limit.
+    let too_deep = RenderSettings { path: PathSettings { max_depth: 17, ..PathSettings::default() }, ..deep };
+    let err = backend.capabilities().check_settings(&too_deep).unwrap_err().to_string();
+    assert!(err.contains("16"), "{err}");
+    assert!(failures.is_empty(), "{failures:#?}");
+}

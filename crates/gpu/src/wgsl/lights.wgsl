@@ -151,8 +151,18 @@ fn pt_sample_light(u_in: vec2f) -> PtLightSample {
         ls.pdf = pmf / pt_tables[rec + 3u];
         return ls;
     }
-    // A punctual light (`Lights::sample_punctual`): its position or direction with the
-    // probability of choosing it, or a direction in a sun's disk by solid angle.
+    return pt_sample_punctual(k, u, pmf);
+}
+
+// A punctual light, entry `k` of the light table (`Lights::sample_punctual`): its position
+// or direction with pdf `pmf` (the probability of choosing it), or a direction in a sun's
+// disk by solid angle (pdf `pmf` / the disk's solid angle).
+fn pt_sample_punctual(k: u32, u: vec2f, pmf: f32) -> PtLightSample {
+    var ls: PtLightSample;
+    ls.kind = pt_light_u(k, PT_LIGHT_KIND);
+    ls.entry = k;
+    ls.material = PT_NO_HIT;
+    ls.valid = true;
     ls.normal = vec3f(0.0);
     ls.point = pt_light_v3(k, 0u);
     ls.pdf = pmf;
@@ -169,6 +179,11 @@ fn pt_sample_light(u_in: vec2f) -> PtLightSample {
         }
     }
     return ls;
+}
+
+// Whether punctual light `k` is a sun with a disk (its samples draw a direction in it).
+fn pt_punctual_has_disk(k: u32) -> bool {
+    return pt_light_u(k, PT_LIGHT_KIND) == PT_LIGHT_DIRECTIONAL && pt_light_f(k, 3u) < 1.0;
 }
 
 // What a punctual light sends to `p` (`punctual_incidence`): direction, distance (PT_FAR

@@ -94,11 +94,28 @@ fn pt_next_event(
     mis: bool,
     rays: ptr<function, u32>,
 ) -> PtNextEvent {
-    var out = PtNextEvent(vec4f(0.0), vec4f(0.0), 0.0, false);
     let ls = pt_sample_light(u);
     if !ls.valid {
-        return out;
+        return PtNextEvent(vec4f(0.0), vec4f(0.0), 0.0, false);
     }
+    return pt_light_contribution(sf, frame, ng, wo_world, wo, two_sided, lambda, ls, mis, rays);
+}
+
+// A light sample's contribution (`light_contribution`): its shadow ray, and f, Le and
+// |cos θi| · w / pdf.
+fn pt_light_contribution(
+    sf: PtSurface,
+    frame: PtFrame,
+    ng: vec3f,
+    wo_world: vec3f,
+    wo: vec3f,
+    two_sided: bool,
+    lambda: vec4f,
+    ls: PtLightSample,
+    mis: bool,
+    rays: ptr<function, u32>,
+) -> PtNextEvent {
+    var out = PtNextEvent(vec4f(0.0), vec4f(0.0), 0.0, false);
     let m = sf.m;
     let p = sf.p;
     var wi_world: vec3f;
@@ -172,6 +189,16 @@ fn pt_next_event(
         w = pt_power_heuristic(light_pdf, bsdf_pdf(m, wo, wi, lambda));
     }
     return PtNextEvent(f, le, abs(wi.z) * w / light_pdf, true);
+}
+
+// `SampledWavelengths::collapse_to`: lane `k` moved to lane 0, the only one left, its
+// weight multiplied by the lane count.
+fn pt_collapse_wavelengths(wl: ptr<function, PtWavelengths>, k: u32) {
+    let lk = (*wl).lambda[k];
+    (*wl).lambda[k] = (*wl).lambda[0];
+    (*wl).lambda[0] = lk;
+    (*wl).weight = vec4f((*wl).weight[k] * 4.0, 0.0, 0.0, 0.0);
+    (*wl).collapsed = true;
 }
 
 fn pt_radiance(
@@ -270,14 +297,7 @@ fn pt_radiance(
         // to lane 0).
         if material_dispersive(m) && !(*wl).collapsed {
             let k = min(u32(pt_next_1d(smp) * 4.0), 3u);
-            let lk = (*wl).lambda[k];
-            (*wl).lambda[k] = (*wl).lambda[0];
-            (*wl).lambda[0] = lk;
-            let wk = (*wl).weight[k];
-            (*wl).weight[k] = (*wl).weight[0];
-            (*wl).weight[0] = wk * 4.0;
-            (*wl).weight = vec4f((*wl).weight[0], 0.0, 0.0, 0.0);
-            (*wl).collapsed = true;
+            pt_collapse_wavelengths(wl, k);
             let bk = beta[k];
             beta[k] = beta[0];
             beta[0] = bk;
