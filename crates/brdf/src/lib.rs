@@ -126,6 +126,14 @@ pub trait Bsdf<const N: usize> {
 pub trait BsdfBuilder: Send + Sync + 'static {
     /// The BSDF for the path's wavelengths (or RGB channels).
     fn build<const N: usize>(&self, wl: &spectral::SampledWavelengths<N>) -> impl Bsdf<N> + 'static;
+
+    /// Its GPU twin, if it ships one: WGSL `eval`/`pdf`/`sample` over a declared parameter
+    /// set and this material's values. Without one, a GPU backend refuses the material
+    /// (and says so); with one, it compiles the twin into its kernel like a registered
+    /// model's (see `examples/custom_brdf.rs` in the tracer crate).
+    fn wgsl_twin(&self) -> Option<wgsl::WgslTwin> {
+        None
+    }
 }
 
 /// The object-safe form of [`BsdfBuilder`] for the lane counts the renderer uses (3 for
@@ -138,6 +146,8 @@ pub trait DynBsdfBuilder: Send + Sync {
     fn build_3(&self, wl: &spectral::SampledWavelengths<3>) -> Box<dyn Bsdf<3>>;
     /// 40-bin BSDF.
     fn build_40(&self, wl: &spectral::SampledWavelengths<40>) -> Box<dyn Bsdf<40>>;
+    /// [`BsdfBuilder::wgsl_twin`].
+    fn wgsl_twin(&self) -> Option<wgsl::WgslTwin>;
 }
 
 impl<T: BsdfBuilder> DynBsdfBuilder for T {
@@ -149,6 +159,9 @@ impl<T: BsdfBuilder> DynBsdfBuilder for T {
     }
     fn build_40(&self, wl: &spectral::SampledWavelengths<40>) -> Box<dyn Bsdf<40>> {
         Box::new(self.build(wl))
+    }
+    fn wgsl_twin(&self) -> Option<wgsl::WgslTwin> {
+        BsdfBuilder::wgsl_twin(self)
     }
 }
 

@@ -27,9 +27,29 @@
 
 use crate::models::dispersion::{BK7, DispersionPreset, FUSED_SILICA, LAMBDA_D};
 use crate::models::microfacet::Ggx;
+use crate::params::{ModelDef, ResolvedParams};
 
 /// Helpers every model's WGSL may use (see the module documentation).
 pub const COMMON: &str = include_str!("common.wgsl");
+
+/// The WGSL twin of a BSDF written outside the registry ([`crate::BsdfBuilder::wgsl_twin`]):
+/// what a registered model has in its [`ModelDef`] and [`ModelWgsl`], plus the material's
+/// own values. The GPU generator treats it as one more model — a `<Name>Params` struct
+/// generated from `def` (so `def.name` must be a lower-case identifier, distinct from the
+/// registered models'), the values packed by their declarations, `wgsl.source` defining
+/// `<name>_eval`, `<name>_pdf` and `<name>_sample` — so the same equivalence harness checks
+/// it against its Rust. Texture slots are ignored: a custom BSDF is never textured on the
+/// CPU either.
+#[derive(Clone, Debug, PartialEq)]
+pub struct WgslTwin {
+    /// The parameter declaration (e.g. `<P as ParamSet>::DEF` of a [`crate::model_params!`]
+    /// struct).
+    pub def: ModelDef,
+    /// The WGSL source and the shared pieces it calls.
+    pub wgsl: ModelWgsl,
+    /// This material's values, in `def`'s order (e.g. `ParamSet::to_resolved`).
+    pub params: ResolvedParams,
+}
 
 /// A model's WGSL twin.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -44,7 +44,8 @@
 //!   and bins40 (a kernel tracing each sample as ten paths of four of the 40 bins from the
 //!   same sample values; the CPU carries all 40 in one path). Refused up front by the
 //!   capability check: implicit surfaces (their solver works in f64) and custom
-//!   (out-of-workspace) BSDFs.
+//!   (out-of-workspace) BSDFs that ship no WGSL twin (`brdf::BsdfBuilder::wgsl_twin`;
+//!   those that do are compiled in as one more model).
 //! * Spheres, boxes and polygons (`wgsl/shapes.wgsl`) are records in the tables with a
 //!   binary BVH of their own, traversed after the triangles' as on the CPU; the polygon's
 //!   inside test evaluates its orientation determinant in f32 (f64 on the CPU), which can
@@ -97,11 +98,11 @@ use tracer::accumulation::{Accumulation, FilmAccumulation};
 use tracer::film::{Film, PixelStats};
 use tracer::integrator::PathCounters;
 use tracer::punctual::PunctualLight;
-use tracer::render::ShapeSupport;
 use tracer::render::{
     Backend, Capabilities, PixelRect, PrepareStats, PreparedScene, RenderSettings, SceneOptions, check_pass,
     check_sample_range,
 };
+use tracer::render::{CustomBsdfs, ShapeSupport};
 use tracer::sampler::SamplerKind;
 use tracer::{Scene, ShapeKind};
 use wgpu::util::DeviceExt;
@@ -339,7 +340,7 @@ pub fn capabilities_for(integrator: GpuIntegrator) -> Capabilities {
         // 1.76× sooner on the Cornell box (docs/gpu.md).
         samplers: vec![SamplerKind::ZSobol, SamplerKind::Sobol, SamplerKind::Independent],
         analytic_shapes: ShapeSupport { kinds: GPU_SHAPES.to_vec(), why_not: IMPLICIT_NOT_PORTED },
-        custom_bsdfs: false,
+        custom_bsdfs: CustomBsdfs::WithWgslTwin,
         punctual_lights: true,
         textures: true,
         environment_maps: true,
@@ -406,7 +407,8 @@ impl SceneData {
     /// Flattens `scene` (validated, within the backend's capabilities) for a kernel with
     /// `options`: builds its BVH and light distribution and generates its materials.
     /// Fails with [`GpuError::Unsupported`] for what the kernel cannot trace (implicit
-    /// surfaces, custom BSDFs) and passes on the material code generator's errors.
+    /// surfaces, custom BSDFs without a WGSL twin) and passes on the material code
+    /// generator's errors.
     pub fn new(scene: &Scene, options: KernelOptions) -> Result<Self, GpuError> {
         if let Some(s) = scene.shapes.iter().find(|s| !GPU_SHAPES.contains(&s.shape.name())) {
             return Err(GpuError::Unsupported(format!("{} ({IMPLICIT_NOT_PORTED})", s.shape.name())));

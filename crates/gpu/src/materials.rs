@@ -196,24 +196,72 @@ pub fn model_id(model: ModelId) -> u32 {
     model.index()
 }
 
-/// What the generator needs of a registered model: its id in `material_data` headers,
-/// its declaration and its WGSL twin. The generator compiles the models of any registry
-/// ([`ModelEntry::of`] for the built-in one; `tests/toy_model.rs` registers another).
-#[derive(Clone, Copy, Debug)]
+/// What the generator needs of a model: its id in `material_data` headers, its
+/// declaration and its WGSL twin. The generator compiles the models of any registry
+/// ([`ModelEntry::of`] for the built-in one; `tests/toy_model.rs` registers another) and
+/// the twins custom BSDFs ship ([`brdf::wgsl::WgslTwin`]; ids after the registry's).
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ModelEntry {
     /// The id the headers carry (the model's index in its registry).
     pub id: u32,
     /// The parameter declaration.
-    pub def: &'static ModelDef,
+    pub def: ModelDef,
     /// The hand-written WGSL.
-    pub wgsl: &'static ModelWgsl,
+    pub wgsl: ModelWgsl,
 }
 
 impl ModelEntry {
     /// The entry of a model of the built-in registry.
     pub fn of(model: ModelId) -> Self {
-        Self { id: model_id(model), def: model.def(), wgsl: model.wgsl() }
+        Self { id: model_id(model), def: *model.def(), wgsl: *model.wgsl() }
     }
+}
+
+/// Whether a resolved value has the kind its declaration says (a custom twin's values
+/// come from its builder, unchecked by the registry).
+fn kind_matches(kind: ParamKind, value: &Resolved) -> bool {
+    matches!(
+        (kind, value),
+        (ParamKind::Scalar, Resolved::Scalar(_))
+            | (ParamKind::Spectrum | ParamKind::Coefficient, Resolved::Colour(_))
+            | (ParamKind::Bool, Resolved::Bool(_))
+            | (ParamKind::Choice(_), Resolved::Choice(_))
+    )
+}
+
+/// The entry and values of custom material `m`'s WGSL twin; `twins` holds the twins seen so
+/// far (one entry per twin name, ids after the registry's).
+fn twin_entry(m: &Material, twins: &mut Vec<ModelEntry>) -> Result<(ModelEntry, ResolvedParams), GpuError> {
+    let twin = m.wgsl_twin().ok_or_else(|| {
+        GpuError::Unsupported(format!(
+            "custom BSDF without a WGSL twin in material '{}' (give its BsdfBuilder a wgsl_twin)",
+            m.name
+        ))
+    })?;
+    let bad =
+        |what: String| GpuError::Shader(format!("the WGSL twin '{}' of material '{}': {what}", twin.def.name, m.name));
+    let values = twin.params.values();
+    if values.len() != twin.def.params.len() {
+        return Err(bad(format!("{} values for {} declared parameters", values.len(), twin.def.params.len())));
+    }
+    if let Some((p, v)) = twin.def.params.iter().zip(values).find(|(p, v)| !kind_matches(p.kind, v)) {
+        return Err(bad(format!("parameter '{}' is declared {:?} but given {v:?}", p.name, p.kind)));
+    }
+    if ModelId::ALL.iter().any(|b| b.def().name == twin.def.name) {
+        return Err(bad("a registered model has that name (its WGSL identifiers would collide)".into()));
+    }
+    // Textures never reach a custom BSDF (on the CPU neither).
+    let wgsl = ModelWgsl { texture: brdf::wgsl::WgslTextureSlots::NONE, ..twin.wgsl };
+    let entry = match twins.iter().find(|e| e.def.name == twin.def.name) {
+        Some(e) if e.def == twin.def && e.wgsl == wgsl => *e,
+        Some(_) => return Err(bad("another material's twin has that name but other WGSL or parameters".into())),
+        None => {
+            let id = (ModelId::ALL.len() + twins.len()) as u32;
+            twins.push(ModelEntry { id, def: twin.def, wgsl });
+            twins[twins.len() - 1]
+        }
+    };
+    Ok((entry, twin.params))
 }
 
 /// The name of the generated params struct of a model: its declared name, capitalised,
@@ -336,40 +384,41 @@ fn material_flags(material: &Material) -> u32 {
 
 /// Builds the WGSL and buffers for `materials` (in scene order: material index `m` in the
 /// WGSL is `materials[m]`). `specialise`: compile in only the models and features the
-/// materials use (else all). Custom BSDFs cannot run on the GPU.
+/// materials use (else all). A custom BSDF runs through the WGSL twin its builder ships
+/// (compiled in as one more model); one without a twin is refused.
 pub fn generate(materials: &[Material], specialise: bool) -> Result<MaterialKernel, GpuError> {
-    let mut builtin = Vec::with_capacity(materials.len());
+    // Each material's model and values: a registered model's, or its custom BSDF's twin.
+    let mut twins = Vec::new();
+    let mut resolved = Vec::with_capacity(materials.len());
     for m in materials {
-        match &m.surface {
-            Surface::Builtin(params) => builtin.push((m, params)),
-            Surface::Custom { .. } => {
-                return Err(GpuError::Unsupported(format!("custom BSDF in material '{}'", m.name)));
-            }
-        }
+        resolved.push(match &m.surface {
+            Surface::Builtin(params) => (ModelEntry::of(params.model()), params.to_resolved()),
+            Surface::Custom { .. } => twin_entry(m, &mut twins)?,
+        });
     }
     let models: Vec<ModelId> = ModelId::ALL
         .iter()
         .copied()
-        .filter(|&model| !specialise || builtin.iter().any(|(_, p)| p.model() == model))
+        .filter(|&model| !specialise || materials.iter().any(|m| m.model() == Some(model)))
         .collect();
     let features = if specialise { Features::of(materials) } else { Features::all() };
 
     let mut pool = SpectrumPool::default();
     let mut data = vec![0u32; materials.len() * HEADER_WORDS as usize];
-    for (k, (material, params)) in builtin.iter().enumerate() {
+    for (k, (material, (entry, values))) in materials.iter().zip(&resolved).enumerate() {
         let h = k * HEADER_WORDS as usize;
         let base =
             u32::try_from(data.len()).map_err(|_| GpuError::Unsupported("over 2³² words of materials".into()))?;
         // The parameters this material's base-colour and specular textures multiply.
         let textures = material.textures.as_deref();
         let slot = |param: Option<&str>, textured: bool| {
-            param.filter(|_| textured).and_then(|name| params.model().def().param(name)).map(|(i, _)| i)
+            param.filter(|_| textured).and_then(|name| entry.def.param(name)).map(|(i, _)| i)
         };
-        let wgsl_slots = params.model().wgsl().texture;
+        let wgsl_slots = entry.wgsl.texture;
         let base_slot = slot(wgsl_slots.base_colour, textures.is_some_and(|t| t.base_colour.is_some()));
         let specular_slot = slot(wgsl_slots.specular, textures.is_some_and(|t| t.specular.is_some()));
         let own: Vec<usize> = base_slot.into_iter().chain(specular_slot).collect();
-        let words = pack_params(&params.to_resolved(), &mut pool, &own)?;
+        let words = pack_params(values, &mut pool, &own)?;
         let slot_offset = |i: Option<usize>| i.map_or(NO_SPECTRUM, |i| words[i]);
         data[h + header::BASE_SLOT as usize] = slot_offset(base_slot);
         data[h + header::SPECULAR_SLOT as usize] = slot_offset(specular_slot);
@@ -389,14 +438,14 @@ pub fn generate(materials: &[Material], specialise: bool) -> Result<MaterialKern
         if material.is_dispersive() {
             properties |= PROPERTY_DISPERSIVE;
         }
-        data[h + header::MODEL as usize] = model_id(params.model());
+        data[h + header::MODEL as usize] = entry.id;
         data[h + header::FLAGS as usize] = material_flags(material);
         data[h + header::PROPERTIES as usize] = properties;
         data[h + header::EMISSION as usize] = emission;
         data[h + header::ABSORPTION as usize] = absorption;
         data[h + header::PARAMS as usize] = base;
     }
-    let entries: Vec<ModelEntry> = models.iter().map(|&m| ModelEntry::of(m)).collect();
+    let entries: Vec<ModelEntry> = models.iter().map(|&m| ModelEntry::of(m)).chain(twins).collect();
     let mut metal_tables = Vec::new();
     if entries.iter().any(|e| e.wgsl.needs.contains(&WgslPiece::Metal)) {
         for &metal in &features.metals {
@@ -557,7 +606,7 @@ pub fn wgsl_for(
 
     for m in models {
         out.push('\n');
-        params_wgsl(m.def, &mut out)?;
+        params_wgsl(&m.def, &mut out)?;
         for c in m.wgsl.constants {
             let _ = writeln!(out, "{}", c.declaration());
         }

@@ -36,6 +36,9 @@ use tracer::scene::{Environment, Scene};
 use tracer::{Camera, SpectralMode};
 use tracer::{CpuBackend, CpuScene};
 
+#[path = "../../tracer/examples/support/phong.rs"]
+mod phong;
+
 const CORNELL: &str =
     concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/scenes/cornell-box/CornellBox-Original.obj");
 
@@ -1122,5 +1125,44 @@ fn whitted_matches_the_cpu() {
     let too_deep = RenderSettings { path: PathSettings { max_depth: 17, ..PathSettings::default() }, ..deep };
     let err = backend.capabilities().check_settings(&too_deep).unwrap_err().to_string();
     assert!(err.contains("16"), "{err}");
+    assert!(failures.is_empty(), "{failures:#?}");
+}
+
+/// A custom BSDF (the modified Phong model of the tracer's `examples/custom_brdf.rs`,
+/// outside the registry) renders on the GPU through the WGSL twin its builder ships: the
+/// Cornell box's two blocks in glossy Phong, and the model scene's ball in a sharper one,
+/// hero and RGB.
+#[test]
+fn custom_bsdf_twins_match_the_cpu() {
+    let Some(ctx) = gpu::require_gpu() else { return };
+    let gpu = GpuBackend::with_context(ctx);
+    let phong = |kd, ks, exponent| {
+        let params = phong::PhongParams {
+            kd: Colour::reflectance_rgb(kd).unwrap(),
+            ks: Colour::reflectance_rgb(ks).unwrap(),
+            exponent,
+        };
+        std::sync::Arc::new(params)
+    };
+    let mut scenes = vec![(
+        "ball".to_string(),
+        model_scene(Material::custom("phong ball", phong([0.2, 0.3, 0.5], [0.6, 0.5, 0.3], 300.0), false)),
+    )];
+    if let Some(mut box_) = cornell() {
+        let blocks = phong([0.35, 0.3, 0.25], [0.5, 0.5, 0.5], 60.0);
+        for m in &mut box_.materials {
+            if m.name == "shortBox" || m.name == "tallBox" {
+                *m = Material::custom(&m.name, blocks.clone(), false);
+            }
+        }
+        scenes.push(("Cornell box".to_string(), box_));
+    }
+    let mut failures = Vec::new();
+    for (name, scene) in scenes {
+        for mode in [SpectralMode::Hero, SpectralMode::Rgb] {
+            let r = render_three(&gpu, &scene, &RenderSettings { mode, ..settings(24, 24, 64) }).unwrap();
+            failures.extend(compare_all(&format!("phong {name} ({})", mode.name()), &r));
+        }
+    }
     assert!(failures.is_empty(), "{failures:#?}");
 }

@@ -1,10 +1,12 @@
 //! The generated materials WGSL (`gpu::materials`).
 //!
 //! * Generator tests (no GPU): specialisation keeps exactly the models and features a
-//!   scene uses, the packing follows the parameter declarations, custom BSDFs are
-//!   refused, and the generated WGSL parses and validates with naga.
+//!   scene uses, the packing follows the parameter declarations, custom BSDFs without a
+//!   WGSL twin (or with a malformed one) are refused, and the generated WGSL parses and
+//!   validates with naga.
 //! * GPU tests (lavapipe in CI; `SPT_REQUIRE_GPU=1` makes a missing adapter a failure):
-//!   every model's hand-written WGSL `eval`/`pdf`/`sample`, the Fresnel routines and the
+//!   every model's hand-written WGSL `eval`/`pdf`/`sample` — and the twin of the custom
+//!   Phong BSDF of the tracer's `examples/custom_brdf.rs` — the Fresnel routines and the
 //!   spectrum lookup are run on the GPU and compared with the CPU crates for the same
 //!   inputs.
 //!
@@ -37,6 +39,9 @@ use std::collections::BTreeMap;
 use std::time::Instant;
 use tracer::material::{Material, ModelId};
 use wgpu::util::DeviceExt;
+
+#[path = "../../tracer/examples/support/phong.rs"]
+mod phong;
 
 /// Relative tolerance of every GPU–CPU comparison.
 const TOLERANCE: f64 = 1e-4;
@@ -161,7 +166,41 @@ fn test_materials() -> Vec<Material> {
     for (name, model, params) in extras {
         out.push(builtin(name, model, &params));
     }
+    // A custom BSDF through its WGSL twin: broad, glossy and sharp lobes.
+    for (name, exponent, kd, ks) in [
+        ("phong broad", 1.0, [0.5; 3], [0.3; 3]),
+        ("phong", 60.0, COLOURS[0], COLOURS[1]),
+        ("phong sharp", 2000.0, [0.1; 3], COLOURS[2]),
+    ] {
+        out.push(phong_material(name, exponent, kd, ks));
+    }
     out
+}
+
+/// A material of the custom Phong BSDF.
+fn phong_material(name: &str, exponent: f32, kd: [f32; 3], ks: [f32; 3]) -> Material {
+    let reflectance = |c| Colour::reflectance_rgb(c).unwrap();
+    let params = phong::PhongParams { kd: reflectance(kd), ks: reflectance(ks), exponent };
+    Material::custom(name, std::sync::Arc::new(params), false)
+}
+
+/// The model's name (a registered model's, or the custom BSDF's twin's).
+fn model_name(m: &Material) -> &'static str {
+    match m.model() {
+        Some(model) => model.def().name,
+        None => m.wgsl_twin().expect("a WGSL twin").def.name,
+    }
+}
+
+/// The material's declaration and values (a registered model's, or its twin's).
+fn declaration(m: &Material) -> (brdf::params::ModelDef, ResolvedParams) {
+    match m.params() {
+        Some(p) => (*p.model().def(), p.to_resolved()),
+        None => {
+            let twin = m.wgsl_twin().expect("a WGSL twin");
+            (twin.def, twin.params)
+        }
+    }
 }
 
 /// The CPU reference for `m`: every colour replaced by its 1-nm table, as the GPU sees it.
@@ -172,9 +211,8 @@ fn tabulated(c: &Colour) -> Colour {
 }
 
 fn reference(m: &Material) -> Material {
-    let params = m.params().expect("a registered model");
+    let (_, params) = declaration(m);
     let values = params
-        .to_resolved()
         .values()
         .iter()
         .map(|v| match v {
@@ -182,12 +220,15 @@ fn reference(m: &Material) -> Material {
             other => other.clone(),
         })
         .collect();
-    let params = params.model().from_resolved(&ResolvedParams::from_values(values));
-    Material { emission: m.emission.as_ref().map(tabulated), ..Material::from_params(&m.name, params) }
-}
-
-fn model_of(m: &Material) -> ModelId {
-    m.model().expect("a registered model")
+    let values = ResolvedParams::from_values(values);
+    let material = match m.params() {
+        Some(params) => Material::from_params(&m.name, params.model().from_resolved(&values)),
+        None => {
+            use brdf::params::ParamSet;
+            Material::custom(&m.name, std::sync::Arc::new(phong::PhongParams::from_resolved(&values)), false)
+        }
+    };
+    Material { emission: m.emission.as_ref().map(tabulated), ..material }
 }
 
 fn dir(theta_deg: f32, phi_deg: f32) -> Vec3 {
@@ -349,11 +390,15 @@ fn every_model_and_feature_combination_validates() {
         naga_validate(&k.wgsl).unwrap_or_else(|e| panic!("specialise={specialise}: {e}"));
     }
     for &model in ModelId::ALL {
-        let one: Vec<Material> = all.iter().filter(|m| model_of(m) == model).take(1).cloned().collect();
+        let one: Vec<Material> = all.iter().filter(|m| m.model() == Some(model)).take(1).cloned().collect();
         let k = generate(&one, true).unwrap();
         assert_eq!(k.models, vec![model]);
         naga_validate(&k.wgsl).unwrap_or_else(|e| panic!("{} alone: {e}", model.def().name));
     }
+    // A custom twin alone: no registered model compiled in.
+    let k = generate(&[phong_material("phong", 60.0, [0.5; 3], [0.3; 3])], true).unwrap();
+    assert!(k.models.is_empty() && k.wgsl.contains("struct PhongParams"));
+    naga_validate(&k.wgsl).unwrap_or_else(|e| panic!("phong alone: {e}"));
     naga_validate(&generate(&[], true).unwrap().wgsl).unwrap_or_else(|e| panic!("empty scene: {e}"));
 }
 
@@ -363,12 +408,13 @@ fn params_are_packed_in_declaration_order() {
     let k = generate(&all, true).unwrap();
     let module = naga_validate(&k.wgsl).unwrap();
     for (index, m) in all.iter().enumerate() {
-        let model = model_of(m);
-        let params = m.params().unwrap().to_resolved();
+        let (def, params) = declaration(m);
         let h = index * materials::HEADER_WORDS as usize;
-        assert_eq!(k.data[h + materials::header::MODEL as usize], materials::model_id(model));
+        // Custom twins take the ids after the registry's.
+        let id = m.model().map_or(ModelId::ALL.len() as u32, materials::model_id);
+        assert_eq!(k.data[h + materials::header::MODEL as usize], id);
         let base = k.data[h + materials::header::PARAMS as usize] as usize;
-        for (i, (p, value)) in model.def().params.iter().zip(params.values()).enumerate() {
+        for (i, (p, value)) in def.params.iter().zip(params.values()).enumerate() {
             let word = k.data[base + i];
             match value {
                 Resolved::Scalar(v) => assert_eq!(f32::from_bits(word), *v, "{}.{}", m.name, p.name),
@@ -390,8 +436,8 @@ fn params_are_packed_in_declaration_order() {
         );
     }
     // The generated structs have the declared fields, in order, with the declared types.
-    for &model in ModelId::ALL {
-        let def = model.def();
+    let twin = phong_material("phong", 60.0, [0.5; 3], [0.3; 3]).wgsl_twin().unwrap().def;
+    for def in ModelId::ALL.iter().map(|m| m.def()).chain([&twin]) {
         let name = materials::params_struct_name(def);
         let ty = module.types.iter().find(|(_, t)| t.name.as_deref() == Some(name.as_str())).map(|(_, t)| t);
         let Some(naga::Type { inner: naga::TypeInner::Struct { members, .. }, .. }) = ty else {
@@ -404,7 +450,7 @@ fn params_are_packed_in_declaration_order() {
 }
 
 #[test]
-fn custom_bsdfs_are_refused_with_the_material_name() {
+fn custom_bsdfs_without_a_twin_are_refused_with_the_material_name() {
     struct Black;
     impl brdf::BsdfBuilder for Black {
         fn build<const N: usize>(&self, _: &SampledWavelengths<N>) -> impl Bsdf<N> + 'static {
@@ -414,7 +460,54 @@ fn custom_bsdfs_are_refused_with_the_material_name() {
     let scene = [lambert("white", [0.8; 3]), Material::custom("phong floor", std::sync::Arc::new(Black), false)];
     let e = generate(&scene, true).unwrap_err();
     assert!(matches!(e, gpu::GpuError::Unsupported(_)), "{e:?}");
-    assert!(e.to_string().contains("custom BSDF in material 'phong floor'"), "{e}");
+    assert!(e.to_string().contains("custom BSDF without a WGSL twin in material 'phong floor'"), "{e}");
+    // The backend's capability check says so before any work, with the way in.
+    let mut s = tracer::scene::Scene { materials: scene.to_vec(), ..Default::default() };
+    let e = gpu::backend::capabilities().check_scene(&s, &Default::default()).unwrap_err().to_string();
+    assert!(e.contains("without a WGSL twin (material 'phong floor')") && e.contains("wgsl_twin"), "{e}");
+    s.materials = vec![phong_material("phong", 60.0, [0.5; 3], [0.3; 3])];
+    gpu::backend::capabilities().check_scene(&s, &Default::default()).unwrap();
+}
+
+/// A change to a twin.
+type TwinChange = fn(&mut brdf::wgsl::WgslTwin);
+
+/// A builder whose twin is the Phong one changed by `change` (a malformed twin).
+struct Tampered(TwinChange);
+
+impl brdf::BsdfBuilder for Tampered {
+    fn build<const N: usize>(&self, _: &SampledWavelengths<N>) -> impl Bsdf<N> + 'static {
+        brdf::Lambert { reflectance: spectral::SampledSpectrum::zero() }
+    }
+    fn wgsl_twin(&self) -> Option<brdf::wgsl::WgslTwin> {
+        let mut twin = brdf::BsdfBuilder::wgsl_twin(&phong::PhongParams::default())?;
+        (self.0)(&mut twin);
+        Some(twin)
+    }
+}
+
+#[test]
+fn malformed_twins_are_named_errors() {
+    let tampered = |change| Material::custom("odd", std::sync::Arc::new(Tampered(change)), false);
+    let cases: [(TwinChange, &str); 4] = [
+        (|t| t.def.name = "lambert", "a registered model has that name"),
+        (|t| t.params = ResolvedParams::from_values(vec![Resolved::Scalar(1.0)]), "1 values for 3 declared"),
+        (
+            |t| t.params = ResolvedParams::from_values(vec![Resolved::Scalar(1.0); 3]),
+            "parameter 'kd' is declared Spectrum",
+        ),
+        (|t| t.wgsl.source = "", "another material's twin has that name"),
+    ];
+    for (change, expected) in cases {
+        let scene = [phong_material("phong", 60.0, [0.5; 3], [0.3; 3]), tampered(change)];
+        let e = generate(&scene, true).unwrap_err().to_string();
+        assert!(e.contains(expected) && e.contains("material 'odd'"), "{e}");
+    }
+    // Two materials of one twin share its code.
+    let two = [phong_material("a", 60.0, [0.5; 3], [0.3; 3]), phong_material("b", 5.0, [0.2; 3], [0.1; 3])];
+    let k = generate(&two, true).unwrap();
+    assert_eq!(k.wgsl.matches("fn phong_eval").count(), 1);
+    naga_validate(&k.wgsl).unwrap_or_else(|e| panic!("{e}"));
 }
 
 // ---------------------------------------------------------------------------------------
@@ -793,10 +886,9 @@ fn every_model_matches_the_cpu_on_the_gpu() {
     for (n, c) in cases.iter().enumerate() {
         let g = &out[n * 32..n * 32 + 32];
         let material = &refs[c.m as usize];
-        let model = model_of(material);
         let wl = &wls[c.wl];
         let bsdf = material.bsdf(wl);
-        let r = reports.entry(model.def().name).or_default();
+        let r = reports.entry(model_name(material)).or_default();
         r.cases += 1;
         let at =
             || format!("'{}' wo={:?} wi={:?} uc={} u={:?} λ={:?}", material.name, c.wo, c.wi, c.uc, c.u, wl.lambda);
@@ -885,7 +977,8 @@ fn every_model_matches_the_cpu_on_the_gpu() {
         let cpu_flags = bsdf.flags().bits() as u32;
         let extra = flags & !cpu_flags;
         let diffuse = brdf::ScatterFlags::DIFFUSE.bits() as u32;
-        if cpu_flags & !flags != 0 || (extra != 0 && !(model == ModelId::Ashikhmin && extra == diffuse)) {
+        let ashikhmin = material.model() == Some(ModelId::Ashikhmin);
+        if cpu_flags & !flags != 0 || (extra != 0 && !(ashikhmin && extra == diffuse)) {
             failures.push(format!("material flags: gpu {flags} cpu {cpu_flags} at {}", at()));
         }
         let props = g[15].to_bits();
@@ -954,7 +1047,7 @@ fn every_model_matches_the_cpu_on_the_gpu() {
         }
     }
     println!("emission/absorption: max error {:.2e}", accessor_worst.err);
-    assert_eq!(reports.len(), ModelId::ALL.len());
+    assert_eq!(reports.len(), ModelId::ALL.len() + 1, "every registered model and the custom twin");
     if !failures.is_empty() {
         for f in failures.iter().take(40) {
             println!("FAIL {f}");

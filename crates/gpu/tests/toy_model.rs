@@ -120,7 +120,7 @@ fn the_registry_knows_the_toy_beside_the_built_ins() {
 #[test]
 fn the_gpu_generator_compiles_the_toy() {
     let entries: Vec<ModelEntry> =
-        ModelId::ALL.iter().map(|m| ModelEntry { id: m.index(), def: m.def(), wgsl: m.wgsl() }).collect();
+        ModelId::ALL.iter().map(|m| ModelEntry { id: m.index(), def: *m.def(), wgsl: *m.wgsl() }).collect();
     let src = wgsl_for(&entries, &Features::all(), &[]).unwrap();
     let module = naga::front::wgsl::parse_str(&src).unwrap_or_else(|e| panic!("{}", e.emit_to_string(&src)));
     naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::default())

@@ -7,8 +7,8 @@ use crate::geometry::Geometry;
 use crate::integrator::{CameraSample, Integrator, PathCounters, PathTracer, SceneView};
 use crate::lights::Lights;
 use crate::render::{
-    Backend, Capabilities, PixelRect, PrepareStats, PreparedScene, RenderSettings, SceneOptions, check_pass,
-    check_sample_range,
+    Backend, Capabilities, CustomBsdfs, PixelRect, PrepareStats, PreparedScene, RenderSettings, SceneOptions,
+    check_pass, check_sample_range,
 };
 use crate::sampler::{PaddedSobol, Pcg32, Sampler, SamplerKind, ZSobolLayout};
 use crate::scene::Scene;
@@ -109,7 +109,7 @@ fn cpu_capabilities(integrator: &'static str) -> Capabilities {
         spectral_modes: vec![SpectralMode::Hero, SpectralMode::Bins40, SpectralMode::Rgb],
         samplers: vec![SamplerKind::ZSobol, SamplerKind::Sobol, SamplerKind::Independent],
         analytic_shapes: crate::render::ShapeSupport::all(),
-        custom_bsdfs: true,
+        custom_bsdfs: CustomBsdfs::Any,
         punctual_lights: true,
         textures: true,
         environment_maps: true,

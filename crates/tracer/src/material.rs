@@ -87,6 +87,15 @@ impl Material {
         self.params().map(ModelParams::model)
     }
 
+    /// The WGSL twin of a custom BSDF, if its builder ships one (`None` for registered
+    /// models, whose twins the registry holds).
+    pub fn wgsl_twin(&self) -> Option<brdf::wgsl::WgslTwin> {
+        match &self.surface {
+            Surface::Builtin(_) => None,
+            Surface::Custom { builder, .. } => builder.wgsl_twin(),
+        }
+    }
+
     /// A material whose BSDF comes from outside the workspace.
     pub fn custom(name: &str, builder: Arc<dyn DynBsdfBuilder>, transmissive: bool) -> Self {
         Self { name: name.into(), surface: Surface::Custom { builder, transmissive }, emission: None, textures: None }

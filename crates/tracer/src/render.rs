@@ -171,8 +171,8 @@ pub struct Capabilities {
     /// The kinds of analytic shape it intersects ([`crate::ShapeKind::name`]), and why not
     /// the others.
     pub analytic_shapes: ShapeSupport,
-    /// Whether it runs BSDFs written outside the workspace ([`brdf::DynBsdfBuilder`]).
-    pub custom_bsdfs: bool,
+    /// Which BSDFs written outside the workspace ([`brdf::DynBsdfBuilder`]) it runs.
+    pub custom_bsdfs: CustomBsdfs,
     /// Whether it samples point, spot and directional lights ([`crate::PunctualLight`]).
     pub punctual_lights: bool,
     /// Whether it reads material textures (colour, normal, bump, alpha, emission maps).
@@ -199,6 +199,17 @@ pub struct Capabilities {
     /// bit for bit, as one pass (1 on the CPU; the GPU sums up to this many samples in f32
     /// before they reach the film's exact sums).
     pub sample_block: u32,
+}
+
+/// Which custom BSDFs ([`crate::material::Surface::Custom`]) a backend runs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CustomBsdfs {
+    /// None.
+    None,
+    /// Those that ship a WGSL twin ([`brdf::BsdfBuilder::wgsl_twin`]).
+    WithWgslTwin,
+    /// Any (the CPU calls their Rust).
+    Any,
 }
 
 /// Which analytic shapes a backend intersects.
@@ -253,13 +264,23 @@ impl Capabilities {
                 "use --backend cpu",
             ));
         }
-        if !self.custom_bsdfs
-            && let Some(m) = scene.materials.iter().find(|m| m.params().is_none())
-        {
-            return Err(unsupported(
-                format!("custom BSDFs (material '{}')", m.name),
-                "register the model in brdf's registry with its WGSL twin, or use --backend cpu",
-            ));
+        let runs = |m: &crate::material::Material| match self.custom_bsdfs {
+            CustomBsdfs::Any => true,
+            CustomBsdfs::WithWgslTwin => m.params().is_some() || m.wgsl_twin().is_some(),
+            CustomBsdfs::None => m.params().is_some(),
+        };
+        if let Some(m) = scene.materials.iter().find(|m| !runs(m)) {
+            return Err(match self.custom_bsdfs {
+                CustomBsdfs::WithWgslTwin => unsupported(
+                    format!("custom BSDFs without a WGSL twin (material '{}')", m.name),
+                    "give its BsdfBuilder a wgsl_twin (see the tracer's examples/custom_brdf.rs), register the model \
+                     in brdf's registry with its twin, or use --backend cpu",
+                ),
+                _ => unsupported(
+                    format!("custom BSDFs (material '{}')", m.name),
+                    "register the model in brdf's registry, or use --backend cpu",
+                ),
+            });
         }
         if !self.textures
             && let Some(m) = scene.materials.iter().find(|m| m.textures.is_some())
