@@ -886,7 +886,8 @@ fn make_backend(args: &SceneArgs) -> Result<Box<dyn Backend>> {
                 "direct" => gpu::kernel::GpuIntegrator::Direct,
                 "ao" => gpu::kernel::GpuIntegrator::AmbientOcclusion { max_distance: args.ao_distance },
                 "whitted" => gpu::kernel::GpuIntegrator::Whitted,
-                "bdpt" | "atlas" => {
+                "atlas" => gpu::kernel::GpuIntegrator::Atlas(atlas_settings(args)?),
+                "bdpt" => {
                     bail!("the gpu backend has no {} integrator yet: use --backend cpu", args.integrator)
                 }
                 other => bail!("unknown integrator '{other}' (known: {})", INTEGRATORS.join(", ")),

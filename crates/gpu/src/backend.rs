@@ -32,8 +32,9 @@
 //! `wgsl/path.wgsl` is a line-by-line port of `tracer`'s `PathTracer`, `wgsl/simple.wgsl`
 //! of `DirectLighting` and `AmbientOcclusion`, `wgsl/whitted.wgsl` of `Whitted` (its
 //! recursion as a depth-first walk with a stack of [`crate::kernel::WHITTED_MAX_DEPTH`]
-//! entries, in the CPU's order; all share the path tracer's interaction and light
-//! sampling code, as the CPU's do). The path kernel is the one described here. It draws
+//! entries, in the CPU's order), `wgsl/atlas.wgsl` of `AtlasGi`'s per-pixel part (its atlas
+//! built and gathered by the CPU's code when the scene is prepared); all share the path
+//! tracer's interaction and light sampling code, as the CPU's do. The path kernel is the one described here. It draws
 //! the CPU's own sample values (`wgsl/sampler.wgsl`: `Pcg32::for_sample`, `PaddedSobol`
 //! and `ZSobol`, with the 64-bit arithmetic emulated on word pairs) in the CPU's order, so
 //! a GPU path starts as the CPU path of the same pixel sample and usually stays on it.
@@ -359,6 +360,20 @@ pub fn capabilities_for(integrator: GpuIntegrator) -> Capabilities {
     }
 }
 
+/// The atlas of `scene` (already flattened) for the atlas integrator, built as the CPU
+/// backend builds it (`AtlasGi::for_scene`: its own BVH, lights and view; the gather runs on
+/// the CPU's threads).
+fn build_atlas(
+    scene: &Scene,
+    settings: &tracer::integrator::AtlasSettings,
+) -> Result<tracer::integrator::Atlas, GpuError> {
+    let failed = |e: tracer::Error| GpuError::Unsupported(format!("an atlas of this scene ({e})"));
+    let geometry = tracer::geometry::Geometry::build(scene, &tracer::SceneOptions::default()).map_err(failed)?;
+    let lights = tracer::lights::Lights::new(scene);
+    let view = tracer::integrator::SceneView::new(scene, &geometry, &lights);
+    tracer::integrator::Atlas::build(&view, settings).map_err(failed)
+}
+
 /// What the kernel's uniforms and the camera need of a scene besides its buffers, kept
 /// from [`SceneData`] into [`GpuScene`].
 #[derive(Clone, Copy, Debug)]
@@ -377,6 +392,7 @@ struct SceneConstants {
     uplift_offset: u32,
     decode_offset: u32,
     envmap_offset: u32,
+    atlas_offset: u32,
     env_offset: u32,
     env_pmf: f32,
     scene_flags: u32,
@@ -534,9 +550,16 @@ impl SceneData {
             (nodes_offset, shape_bvh.node_count() as u32, slots_offset)
         };
 
-        // The uplift table (textures and environment maps turn RGB into spectra by it).
+        // The atlas integrator's atlas, built and gathered here by the CPU's code (the
+        // same atlas the CPU renders with, for the same scene and settings).
+        let atlas = match options.integrator {
+            GpuIntegrator::Atlas(settings) => Some(build_atlas(scene, &settings)?),
+            _ => None,
+        };
+        // The uplift table (textures, environment maps and the atlas's irradiance turn RGB
+        // into spectra by it).
         let mut uplift_offset = 0;
-        if textured || env_map.is_some() {
+        if textured || env_map.is_some() || atlas.is_some() {
             uplift_offset = tables.len() as u32;
             let uplift = spectral::uplift::uplift_table();
             tables.extend(uplift.z_nodes());
@@ -572,6 +595,38 @@ impl SceneData {
                 spectral::uplift::d65_inv_norm(),
             ]);
             envmap_offset = record as u32;
+        }
+        // The atlas: its record, each primitive's chart, the charts' projections, the
+        // gathered irradiance, the D65 table its lookups are uplifted with.
+        let mut atlas_offset = 0;
+        if let Some(atlas) = &atlas {
+            atlas_offset = tables.len() as u32;
+            let record = tables.len();
+            tables.extend([0.0; 9]);
+            let bits = |tables: &Vec<f32>| f32::from_bits(tables.len() as u32);
+            let prim_charts_at = bits(&tables);
+            tables.extend(atlas.prim_charts().iter().map(|&c| f32::from_bits(c)));
+            let charts_at = bits(&tables);
+            for c in atlas.chart_projections() {
+                tables.extend(c.origin.to_array().into_iter().chain(c.u.to_array()).chain(c.v.to_array()));
+                tables.extend(c.min.to_array().into_iter().chain(c.corner.to_array()));
+            }
+            let texels_at = bits(&tables);
+            tables.extend(atlas.irradiance().iter().flatten());
+            let d65_at = bits(&tables);
+            tables.extend(spectral::tables::D65);
+            let (width, height) = atlas.size();
+            tables[record..record + 9].copy_from_slice(&[
+                f32::from_bits(width),
+                f32::from_bits(height),
+                atlas.density(),
+                prim_charts_at,
+                charts_at,
+                texels_at,
+                d65_at,
+                spectral::uplift::d65_inv_norm(),
+                f32::from_bits(atlas.prim_charts().len() as u32),
+            ]);
         }
         // Textures: the texel decode tables, each material's maps.
         let (mut decode_offset, mut material_textures_offset) = (0, 0);
@@ -642,6 +697,7 @@ impl SceneData {
             uplift_offset,
             decode_offset,
             envmap_offset,
+            atlas_offset,
             env_offset,
             env_pmf: lights.environment_pmf(),
             scene_flags,
@@ -1001,6 +1057,7 @@ impl GpuScene {
             uplift_offset: self.constants.uplift_offset,
             decode_offset: self.constants.decode_offset,
             envmap_offset: self.constants.envmap_offset,
+            atlas_offset: self.constants.atlas_offset,
             env_pmf: self.constants.env_pmf,
             eye: v4(eye),
             forward: v4(forward),

@@ -151,8 +151,9 @@ wgsl_struct! {
         white_offset: u32,
         /// The ambient-occlusion probe's reach (finite: `PT_FAR` stands for ∞).
         ao_distance: f32,
-        /// Padding to the uniform block's 16-byte multiple.
-        pad: u32,
+        /// Offset in `pt_tables` of the atlas's record (`wgsl/atlas.wgsl`; the atlas
+        /// integrator only).
+        atlas_offset: u32,
         /// Offset of the Sobol sampler's bit-reversed second-dimension tables in `pt_tables`.
         sobol_offset: u32,
         /// ZSobol: log₂ of the samples per pixel (rounded up to a power of two).
@@ -208,6 +209,10 @@ pub enum GpuIntegrator {
     /// `tracer::Whitted` (`wgsl/whitted.wgsl`), its recursion at most [`WHITTED_MAX_DEPTH`]
     /// deep.
     Whitted,
+    /// `tracer::AtlasGi` with these settings (`wgsl/atlas.wgsl`): the atlas is built and
+    /// gathered on the CPU when the scene is prepared, each pixel's specular chain, direct
+    /// light and atlas lookup on the GPU.
+    Atlas(tracer::integrator::AtlasSettings),
 }
 
 /// The deepest Whitted recursion the GPU traces: its branches wait on a stack of this
@@ -223,6 +228,7 @@ impl GpuIntegrator {
             Self::Direct => "direct",
             Self::AmbientOcclusion { .. } => "ao",
             Self::Whitted => "whitted",
+            Self::Atlas(_) => "atlas",
         }
     }
 
@@ -233,6 +239,7 @@ impl GpuIntegrator {
             Self::Direct => 1,
             Self::AmbientOcclusion { .. } => 2,
             Self::Whitted => 3,
+            Self::Atlas(_) => 4,
         }
     }
 }
@@ -545,6 +552,8 @@ pub fn header(options: &KernelOptions) -> String {
     u("PT_INTEGRATOR_DIRECT", GpuIntegrator::Direct.code());
     u("PT_INTEGRATOR_AO", GpuIntegrator::AmbientOcclusion { max_distance: 0.0 }.code());
     u("PT_INTEGRATOR_WHITTED", GpuIntegrator::Whitted.code());
+    u("PT_INTEGRATOR_ATLAS", GpuIntegrator::Atlas(Default::default()).code());
+    u("PT_ATLAS_SPECULAR_CHAIN", tracer::integrator::ATLAS_SPECULAR_CHAIN);
     u("PT_WHITTED_DEFAULT_DEPTH", tracer::integrator::WHITTED_DEFAULT_DEPTH);
     // (The stack only where it is used: private arrays cost registers or local memory.)
     u("PT_WHITTED_STACK", if options.integrator == GpuIntegrator::Whitted { WHITTED_MAX_DEPTH } else { 1 });
@@ -601,7 +610,7 @@ pub fn header(options: &KernelOptions) -> String {
 }
 
 /// The hand-written files, in the order they are concatenated.
-const FILES: [(&str, &str); 14] = [
+const FILES: [(&str, &str); 15] = [
     ("rng.wgsl", include_str!("wgsl/rng.wgsl")),
     ("sampler.wgsl", include_str!("wgsl/sampler.wgsl")),
     ("spectral.wgsl", include_str!("wgsl/spectral.wgsl")),
@@ -616,6 +625,7 @@ const FILES: [(&str, &str); 14] = [
     ("path.wgsl", include_str!("wgsl/path.wgsl")),
     ("simple.wgsl", include_str!("wgsl/simple.wgsl")),
     ("whitted.wgsl", include_str!("wgsl/whitted.wgsl")),
+    ("atlas.wgsl", include_str!("wgsl/atlas.wgsl")),
 ];
 
 /// The kernel's entry point, last.

@@ -1166,3 +1166,46 @@ fn custom_bsdf_twins_match_the_cpu() {
     }
     assert!(failures.is_empty(), "{failures:#?}");
 }
+
+/// Atlas GI (`--integrator atlas --backend gpu`): the atlas built and gathered by the CPU's
+/// code when the scene is prepared, each pixel's specular chain, direct light and atlas
+/// lookup in the kernel. On the Cornell box (hero and RGB) and on dispersive, absorbing
+/// glass beside a mirror ball (the chain, one wavelength per sample).
+#[test]
+fn atlas_matches_the_cpu() {
+    use gpu::kernel::GpuIntegrator;
+    use tracer::integrator::AtlasSettings;
+    use tracer::{AtlasGi, Backend};
+    let Some(ctx) = gpu::require_gpu() else { return };
+    let atlas = AtlasSettings { resolution: 96, samples: 16, direct_samples: 4, ..AtlasSettings::default() };
+    let backend = GpuBackend::with_context(ctx).with_integrator(GpuIntegrator::Atlas(atlas));
+    assert_eq!(backend.capabilities().integrator, "atlas");
+    let cpu = CpuBackend::with_integrator(2, AtlasGi::new(atlas)).unwrap();
+    let cases = model_cases();
+    let glass = cases.iter().find(|(n, _)| n == "dispersive absorbing glass").unwrap().1.clone();
+    let mut glass_scene = model_scene(glass);
+    let ball = shapes::sphere::Sphere::new(Vec3::new(1.4, 0.5, 0.4), 0.5, Default::default()).unwrap();
+    glass_scene
+        .add_shape(tracer::ShapeKind::Sphere(ball), Material::builtin("mirror", ModelId::Conductor, &[]).unwrap());
+    let mut scenes = vec![("glass and mirror", glass_scene, vec![SpectralMode::Hero])];
+    scenes.extend(cornell().map(|c| ("Cornell box", c, vec![SpectralMode::Hero, SpectralMode::Rgb])));
+    let options = SceneOptions::default();
+    let mut failures = Vec::new();
+    for (name, scene, modes) in scenes {
+        let cpu_scene = cpu.prepare(scene.clone(), &options).unwrap();
+        let gpu_scene = backend.prepare_gpu(scene, &options).unwrap();
+        for mode in modes {
+            let s = RenderSettings { mode, ..settings(24, 24, 64) };
+            let r = render_three_with(cpu_scene.as_ref(), &gpu_scene, &s).unwrap();
+            assert!(r.cpu.channel_means()[1] > 0.02, "{name}: a dark image proves little");
+            let ratio = mean_squared_difference(&r.cpu, &r.same) / mean_squared_difference(&r.cpu, &r.other);
+            let label = format!("atlas, {name} ({})", mode.name());
+            println!("{label}: same-seed squared difference {ratio:.4} of the independent one");
+            if ratio > 0.05 {
+                failures.push(format!("{label}: same-seed paths diverge ({ratio:.4} of independent)"));
+            }
+            failures.extend(compare_all(&label, &r));
+        }
+    }
+    assert!(failures.is_empty(), "{failures:#?}");
+}

@@ -71,14 +71,18 @@ fn pt_env_rgb(dir: vec3f) -> vec3f {
 
 // uplift.rs: `d65_normalised`, the D65 table interpolated and normalised to luminance 1.
 fn pt_d65_normalised(lambda: vec4f) -> vec4f {
-    let table = pt_env_u(7u);
+    return pt_d65_at(pt_env_u(7u), pt_env_f(8u), lambda);
+}
+
+// The D65 table at `table` (5 nm from 300 nm) interpolated, times `inv_norm`.
+fn pt_d65_at(table: u32, inv_norm: f32, lambda: vec4f) -> vec4f {
     var out = vec4f(0.0);
     for (var k = 0u; k < 4u; k++) {
         let x = (lambda[k] - PT_D65_LAMBDA_MIN) / PT_D65_LAMBDA_STEP;
         if x >= 0.0 && x <= f32(PT_D65_SAMPLES - 1u) {
             let i = min(u32(x), PT_D65_SAMPLES - 2u);
             let f = x - f32(i);
-            out[k] = (pt_tables[table + i] + f * (pt_tables[table + i + 1u] - pt_tables[table + i])) * pt_env_f(8u);
+            out[k] = (pt_tables[table + i] + f * (pt_tables[table + i + 1u] - pt_tables[table + i])) * inv_norm;
         }
     }
     return out;

@@ -21,6 +21,8 @@ fn pt_trace_sample(
         l = pt_ambient_occlusion(pt_params.eye.xyz, dir, wl, smp, rays);
     } else if PT_INTEGRATOR == PT_INTEGRATOR_WHITTED {
         l = pt_whitted(pt_params.eye.xyz, dir, &wl, smp, rays);
+    } else if PT_INTEGRATOR == PT_INTEGRATOR_ATLAS {
+        l = pt_atlas(pt_params.eye.xyz, dir, &wl, smp, rays);
     } else {
         l = pt_radiance(pt_params.eye.xyz, dir, &wl, smp, rays, truncated);
     }

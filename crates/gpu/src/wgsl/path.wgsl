@@ -21,6 +21,15 @@ fn pt_is_non_specular(f: u32) -> bool {
     return (f & (SCATTER_DIFFUSE | SCATTER_GLOSSY)) != 0u;
 }
 
+// `lobe_leaks`: whether a sampled lobe disagrees with the geometry (a reflection must stay
+// on ω_o's side of the surface, a transmission cross it — face-forwarded normals exempt —
+// and a two-sided surface never transmits).
+fn pt_lobe_leaks(ng: vec3f, wo_world: vec3f, wi_world: vec3f, flags: u32, two_sided: bool) -> bool {
+    let crosses = dot(wi_world, ng) * dot(wo_world, ng) <= 0.0;
+    let transmits = (flags & SCATTER_TRANSMISSION) != 0u;
+    return (crosses != transmits && pt_params.shading != PT_SHADING_FACE_FORWARD) || (two_sided && crosses);
+}
+
 // A surface hit: position from the vertices, geometric and shading normals, tangent
 // (`SceneView::interaction`), and the primitive's material, light pmf and area. A shape's
 // surface is its intersection with the ray (o, d) again: the same root as in the traversal.
@@ -332,14 +341,8 @@ fn pt_radiance(
             break;
         }
         let wi_world = pt_to_world(frame, s.wi);
-        // The sampled lobe must agree with the geometry: a reflection stays on ω_o's side,
-        // a transmission crosses it.
-        let crosses = dot(wi_world, it_ng) * dot(wo_world, it_ng) <= 0.0;
-        let transmits = (s.flags & SCATTER_TRANSMISSION) != 0u;
-        if crosses != transmits && pt_params.shading != PT_SHADING_FACE_FORWARD {
-            break;
-        }
-        if two_sided && crosses {
+        // The sampled lobe must agree with the geometry.
+        if pt_lobe_leaks(it_ng, wo_world, wi_world, s.flags, two_sided) {
             break;
         }
         beta *= s.f * (abs(s.wi.z) / s.pdf);

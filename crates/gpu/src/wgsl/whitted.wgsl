@@ -152,9 +152,7 @@ fn pt_whitted_child(
         return out;
     }
     let wi_world = pt_to_world(frame, s.wi);
-    let crosses = dot(wi_world, sf.ng) * dot(wo_world, sf.ng) <= 0.0;
-    let transmits = (s.flags & SCATTER_TRANSMISSION) != 0u;
-    if (crosses != transmits && pt_params.shading != PT_SHADING_FACE_FORWARD) || (two_sided && crosses) {
+    if pt_lobe_leaks(sf.ng, wo_world, wi_world, s.flags, two_sided) {
         return out;
     }
     let weight = select(s.f * (abs(s.wi.z) / s.pdf), s.f * abs(s.wi.z), split);

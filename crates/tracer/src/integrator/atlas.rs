@@ -139,6 +139,23 @@ impl Chart {
     }
 }
 
+/// Where a chart maps a point, for a backend that looks the atlas up itself (the GPU):
+/// [`Atlas::irradiance_at`] takes atlas coordinates `corner + ((p − origin)·(u, v) − min) ·
+/// density` (texel centres at i + ½).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ChartProjection {
+    /// A point of the chart's plane.
+    pub origin: Vec3,
+    /// The plane's first axis.
+    pub u: Vec3,
+    /// Its second axis.
+    pub v: Vec3,
+    /// The projected triangles' lower corner, in scene units along (u, v).
+    pub min: Vec2,
+    /// The chart's first texel inside its gutter, in atlas texels.
+    pub corner: Vec2,
+}
+
 /// What a texel of the G-buffer holds.
 #[derive(Clone, Copy, Debug)]
 struct Texel {
@@ -351,6 +368,37 @@ impl Atlas {
             }
         }
         Some(e)
+    }
+
+    /// Each chart's projection, by chart index ([`Atlas::prim_charts`]).
+    pub fn chart_projections(&self) -> Vec<ChartProjection> {
+        self.charts
+            .iter()
+            .map(|c| ChartProjection {
+                origin: c.origin,
+                u: c.u,
+                v: c.v,
+                min: c.min,
+                corner: c.offset.as_vec2() + Vec2::splat(GUTTER as f32),
+            })
+            .collect()
+    }
+
+    /// Per primitive (the renderer's ids: triangles, shapes, instanced triangles) the index
+    /// of its chart, `u32::MAX` for none (shapes).
+    pub fn prim_charts(&self) -> &[u32] {
+        &self.prim_chart
+    }
+
+    /// The gathered irradiance per texel (linear sRGB, row-major), what
+    /// [`Atlas::irradiance_at`] interpolates.
+    pub fn irradiance(&self) -> &[[f32; 3]] {
+        &self.irradiance
+    }
+
+    /// Texels per scene unit.
+    pub fn density(&self) -> f32 {
+        self.density
     }
 
     /// Width and height in texels.
@@ -726,7 +774,7 @@ impl AtlasGi {
 }
 
 /// The most specular bounces a camera path follows before it reaches a diffuse surface.
-const SPECULAR_CHAIN: u32 = 16;
+pub const SPECULAR_CHAIN: u32 = 16;
 
 impl Integrator for AtlasGi {
     fn name(&self) -> &'static str {
