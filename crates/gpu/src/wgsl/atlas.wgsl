@@ -78,12 +78,10 @@ fn pt_atlas(
     rays: ptr<function, u32>,
 ) -> vec4f {
     // Dispersive glass on the way: one wavelength per sample, as in Whitted.
-    if (pt_params.scene_flags & PT_HAS_DISPERSION) != 0u && !PT_RGB && !(*wl).collapsed {
-        pt_collapse_wavelengths(wl, min(u32(pt_next_1d(smp) * 4.0), 3u));
-    }
+    pt_collapse_if_dispersive(wl, smp);
     let lambda = (*wl).lambda;
     var l = vec4f(0.0);
-    var beta = select(vec4f(1.0), vec4f(1.0, 1.0, 1.0, 0.0), PT_RGB);
+    var beta = pt_unit_throughput();
     var o = origin;
     var d = dir;
     var inside = PT_NO_HIT;
@@ -96,23 +94,13 @@ fn pt_atlas(
             }
             return l + beta * pt_suns_seen(d, lambda, 0.0, false);
         }
-        var sf = pt_surface(hit, o, d);
-        var uv = vec2f(0.0);
-        if PT_HAS_TEXTURES {
-            uv = pt_hit_uv(hit);
-            pt_bend_normal(&sf, hit, uv);
-        }
+        var sf: PtSurface;
+        let uv = pt_hit_surface(hit, o, d, &sf);
         let m = sf.m;
         let wo_world = -d;
         let front = dot(wo_world, sf.ng) > 0.0;
         let two_sided = material_two_sided(m);
-        var medium = inside;
-        if !front && !two_sided && material_absorbing(m) {
-            medium = m;
-        }
-        if medium != PT_NO_HIT {
-            beta *= exp(-material_absorption(medium, lambda) * hit.t);
-        }
+        beta *= pt_segment_transmittance(m, front, two_sided, inside, hit.t, lambda);
         if front {
             l += beta * pt_emission_at(m, uv, lambda);
         }

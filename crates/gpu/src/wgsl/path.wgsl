@@ -81,6 +81,48 @@ fn pt_surface(hit: PtHit, o: vec3f, d: vec3f) -> PtSurface {
     return PtSurface(p, it_ng, it_ns, tangent, bitcast<u32>(q0.w), q1.w, area);
 }
 
+// The surface of `hit` on the ray (o, d) with its texture coordinates (returned) and the
+// shading normal bent by a normal or bump map (`SceneView::interaction`).
+fn pt_hit_surface(hit: PtHit, o: vec3f, d: vec3f, sf: ptr<function, PtSurface>) -> vec2f {
+    *sf = pt_surface(hit, o, d);
+    var uv = vec2f(0.0);
+    if PT_HAS_TEXTURES {
+        uv = pt_hit_uv(hit);
+        pt_bend_normal(sf, hit, uv);
+    }
+    return uv;
+}
+
+// Beer–Lambert (`segment_transmittance`): what is left after a segment of length `t` that
+// arrived at material `m` (from the `front` or not) having left its last vertex into the
+// absorbing material `inside` (PT_NO_HIT: none). The segment ran inside absorbing glass if
+// it arrived at the back of one or left into one (directions are unit length, so t is the
+// distance).
+fn pt_segment_transmittance(m: u32, front: bool, two_sided: bool, inside: u32, t: f32, lambda: vec4f) -> vec4f {
+    var medium = inside;
+    if !front && !two_sided && material_absorbing(m) {
+        medium = m;
+    }
+    if medium != PT_NO_HIT {
+        return exp(-material_absorption(medium, lambda) * t);
+    }
+    return vec4f(1.0);
+}
+
+// The throughput a camera path starts with (RGB mode: three channels; the fourth lane
+// carries nothing).
+fn pt_unit_throughput() -> vec4f {
+    return select(vec4f(1.0), vec4f(1.0, 1.0, 1.0, 0.0), PT_RGB);
+}
+
+// Integrators whose paths branch or look up light per wavelength set (Whitted, the atlas)
+// collapse to one wavelength up front in scenes with dispersive glass (as the CPU's do).
+fn pt_collapse_if_dispersive(wl: ptr<function, PtWavelengths>, smp: ptr<function, PtSampler>) {
+    if (pt_params.scene_flags & PT_HAS_DISPERSION) != 0u && !PT_RGB && !(*wl).collapsed {
+        pt_collapse_wavelengths(wl, min(u32(pt_next_1d(smp) * 4.0), 3u));
+    }
+}
+
 // Next-event estimation (`next_event`): one light sample from `u`, its shadow ray, and
 // the contribution as f, Le and the factor |cos θi| · w / pdf, with `mis` the power
 // heuristic's w against the BSDF's pdf, else w = 1.
@@ -221,8 +263,7 @@ fn pt_radiance(
     var o = origin;
     var d = dir;
     var l = vec4f(0.0);
-    // (RGB mode: three channels; the fourth lane carries nothing.)
-    var beta = select(vec4f(1.0), vec4f(1.0, 1.0, 1.0, 0.0), PT_RGB);
+    var beta = pt_unit_throughput();
     // The pdf of the previous BSDF sample, and whether it was a delta (no MIS then).
     var prev_pdf = 0.0;
     var prev_specular = true;
@@ -247,13 +288,8 @@ fn pt_radiance(
             break;
         }
 
-        var sf = pt_surface(hit, o, d);
-        // Texture coordinates, and the shading normal bent by a normal or bump map.
-        var uv = vec2f(0.0);
-        if PT_HAS_TEXTURES {
-            uv = pt_hit_uv(hit);
-            pt_bend_normal(&sf, hit, uv);
-        }
+        var sf: PtSurface;
+        let uv = pt_hit_surface(hit, o, d, &sf);
         let m = sf.m;
         let p = sf.p;
         let it_ng = sf.ng;
@@ -265,16 +301,7 @@ fn pt_radiance(
         let front = dot(wo_world, it_ng) > 0.0;
         let two_sided = material_two_sided(m);
 
-        // Beer–Lambert (`segment_transmittance`): the segment ran inside absorbing glass if
-        // it arrived at the back of one, or left its last vertex into one (directions are
-        // unit length, so t is the distance).
-        var medium = inside;
-        if !front && !two_sided && material_absorbing(m) {
-            medium = m;
-        }
-        if medium != PT_NO_HIT {
-            beta *= exp(-material_absorption(medium, (*wl).lambda) * hit.t);
-        }
+        beta *= pt_segment_transmittance(m, front, two_sided, inside, hit.t, (*wl).lambda);
 
         // Emission seen by this path (one-sided: front face only).
         if front {

@@ -16,12 +16,8 @@ fn pt_direct(origin: vec3f, dir: vec3f, wl: PtWavelengths, smp: ptr<function, Pt
         }
         return env + pt_suns_seen(dir, lambda, 0.0, false);
     }
-    var sf = pt_surface(hit, origin, dir);
-    var uv = vec2f(0.0);
-    if PT_HAS_TEXTURES {
-        uv = pt_hit_uv(hit);
-        pt_bend_normal(&sf, hit, uv);
-    }
+    var sf: PtSurface;
+    let uv = pt_hit_surface(hit, origin, dir, &sf);
     let wo_world = -dir;
     var l = vec4f(0.0);
     if dot(wo_world, sf.ng) > 0.0 {

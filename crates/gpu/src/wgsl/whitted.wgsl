@@ -26,14 +26,12 @@ fn pt_whitted(
     rays: ptr<function, u32>,
 ) -> vec4f {
     // Dispersive glass: one wavelength for the whole tree (its branches must share it).
-    if (pt_params.scene_flags & PT_HAS_DISPERSION) != 0u && !PT_RGB && !(*wl).collapsed {
-        pt_collapse_wavelengths(wl, min(u32(pt_next_1d(smp) * 4.0), 3u));
-    }
+    pt_collapse_if_dispersive(wl, smp);
     let lambda = (*wl).lambda;
     let max_depth = select(PT_WHITTED_DEFAULT_DEPTH, pt_params.max_depth, pt_params.max_depth > 0u);
     var stack: array<PtBranch, PT_WHITTED_STACK>;
     var top = 0u;
-    var br = PtBranch(origin, 0u, dir, PT_NO_HIT, select(vec4f(1.0), vec4f(1.0, 1.0, 1.0, 0.0), PT_RGB));
+    var br = PtBranch(origin, 0u, dir, PT_NO_HIT, pt_unit_throughput());
     var l = vec4f(0.0);
     loop {
         // Follow `br`; `more` says whether it split and continues into its first lobe.
@@ -47,24 +45,14 @@ fn pt_whitted(
             }
             l += br.beta * pt_suns_seen(br.d, lambda, 0.0, false);
         } else {
-            var sf = pt_surface(hit, br.o, br.d);
-            var uv = vec2f(0.0);
-            if PT_HAS_TEXTURES {
-                uv = pt_hit_uv(hit);
-                pt_bend_normal(&sf, hit, uv);
-            }
+            var sf: PtSurface;
+            let uv = pt_hit_surface(hit, br.o, br.d, &sf);
             let m = sf.m;
             let wo_world = -br.d;
             let front = dot(wo_world, sf.ng) > 0.0;
             let two_sided = material_two_sided(m);
             // Beer–Lambert (`segment_transmittance`), on everything this vertex returns.
-            var medium = br.inside;
-            if !front && !two_sided && material_absorbing(m) {
-                medium = m;
-            }
-            if medium != PT_NO_HIT {
-                br.beta *= exp(-material_absorption(medium, lambda) * hit.t);
-            }
+            br.beta *= pt_segment_transmittance(m, front, two_sided, br.inside, hit.t, lambda);
             if front {
                 l += br.beta * pt_emission_at(m, uv, lambda);
             }
