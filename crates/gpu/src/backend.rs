@@ -361,14 +361,16 @@ pub fn capabilities_for(integrator: GpuIntegrator) -> Capabilities {
 }
 
 /// The atlas of `scene` (already flattened) for the atlas integrator, built as the CPU
-/// backend builds it (`AtlasGi::for_scene`: its own BVH, lights and view; the gather runs on
-/// the CPU's threads).
+/// backend builds it (`AtlasGi::for_scene`: its own BVH with the render's triangle test,
+/// lights and view; the gather runs on the CPU's threads).
 fn build_atlas(
     scene: &Scene,
     settings: &tracer::integrator::AtlasSettings,
+    triangle_test: TriangleTest,
 ) -> Result<tracer::integrator::Atlas, GpuError> {
     let failed = |e: tracer::Error| GpuError::Unsupported(format!("an atlas of this scene ({e})"));
-    let geometry = tracer::geometry::Geometry::build(scene, &tracer::SceneOptions::default()).map_err(failed)?;
+    let options = tracer::SceneOptions { triangle_test, ..Default::default() };
+    let geometry = tracer::geometry::Geometry::build(scene, &options).map_err(failed)?;
     let lights = tracer::lights::Lights::new(scene);
     let view = tracer::integrator::SceneView::new(scene, &geometry, &lights);
     tracer::integrator::Atlas::build(&view, settings).map_err(failed)
@@ -553,7 +555,7 @@ impl SceneData {
         // The atlas integrator's atlas, built and gathered here by the CPU's code (the
         // same atlas the CPU renders with, for the same scene and settings).
         let atlas = match options.integrator {
-            GpuIntegrator::Atlas(settings) => Some(build_atlas(scene, &settings)?),
+            GpuIntegrator::Atlas(settings) => Some(build_atlas(scene, &settings, options.triangle_test)?),
             _ => None,
         };
         // The uplift table (textures, environment maps and the atlas's irradiance turn RGB
