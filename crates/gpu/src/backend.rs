@@ -514,7 +514,7 @@ impl SceneData {
         if scene.environment.is_some() {
             scene_flags |= HAS_ENVIRONMENT;
         }
-        if scene.materials.iter().any(|m| m.is_dispersive()) {
+        if kernel.features.dispersion {
             scene_flags |= HAS_DISPERSION;
         }
         // Ambient occlusion's white: the CPU's `AmbientOcclusion` value, tabulated.
@@ -567,13 +567,21 @@ impl SceneData {
             tables.extend(uplift.z_nodes());
             tables.extend(uplift.coefficients().iter().flat_map(|c| [c.c0, c.c1, c.c2]));
         }
+        // Where the next entry of the tables goes, as a record stores it (bits).
+        let at = |tables: &Vec<f32>| f32::from_bits(tables.len() as u32);
+        // The D65 table the environment map's and the atlas's RGB illuminants are uplifted
+        // with (once for both).
+        let d65_at = (env_map.is_some() || atlas.is_some()).then(|| {
+            let d65_at = at(&tables);
+            tables.extend(spectral::tables::D65);
+            d65_at
+        });
         // An environment map: its texels, its sampling distribution, the D65 table.
         let mut envmap_offset = 0;
         if let Some(map) = env_map {
             let parts = map.parts();
             let (texels, (cos, sin), conditional, marginal) =
                 (parts.texels, parts.rotation, parts.conditional, parts.marginal);
-            let at = |tables: &Vec<f32>| f32::from_bits(tables.len() as u32);
             let record = tables.len();
             tables.extend([0.0; 9]);
             let texels_at = at(&tables);
@@ -582,8 +590,6 @@ impl SceneData {
             tables.extend(conditional);
             let marginal_at = at(&tables);
             tables.extend(marginal);
-            let d65_at = at(&tables);
-            tables.extend(spectral::tables::D65);
             let bits = f32::from_bits;
             tables[record..record + 9].copy_from_slice(&[
                 bits(map.width()),
@@ -593,7 +599,7 @@ impl SceneData {
                 texels_at,
                 conditional_at,
                 marginal_at,
-                d65_at,
+                d65_at.expect("uploaded for the map"),
                 spectral::uplift::d65_inv_norm(),
             ]);
             envmap_offset = record as u32;
@@ -605,18 +611,15 @@ impl SceneData {
             atlas_offset = tables.len() as u32;
             let record = tables.len();
             tables.extend([0.0; 9]);
-            let bits = |tables: &Vec<f32>| f32::from_bits(tables.len() as u32);
-            let prim_charts_at = bits(&tables);
+            let prim_charts_at = at(&tables);
             tables.extend(atlas.prim_charts().iter().map(|&c| f32::from_bits(c)));
-            let charts_at = bits(&tables);
+            let charts_at = at(&tables);
             for c in atlas.chart_projections() {
                 tables.extend(c.origin.to_array().into_iter().chain(c.u.to_array()).chain(c.v.to_array()));
                 tables.extend(c.min.to_array().into_iter().chain(c.corner.to_array()));
             }
-            let texels_at = bits(&tables);
+            let texels_at = at(&tables);
             tables.extend(atlas.irradiance().iter().flatten());
-            let d65_at = bits(&tables);
-            tables.extend(spectral::tables::D65);
             let (width, height) = atlas.size();
             tables[record..record + 9].copy_from_slice(&[
                 f32::from_bits(width),
@@ -625,7 +628,7 @@ impl SceneData {
                 prim_charts_at,
                 charts_at,
                 texels_at,
-                d65_at,
+                d65_at.expect("uploaded for the atlas"),
                 spectral::uplift::d65_inv_norm(),
                 f32::from_bits(atlas.prim_charts().len() as u32),
             ]);
@@ -803,8 +806,7 @@ pub struct GpuScene {
     ctx: Arc<GpuContext>,
     scene: Scene,
     bounds: Aabb,
-    /// The kernels compiled so far, one per sampler (the sampler is compiled in).
-    /// The kernels compiled so far, by (sampler, spectral mode).
+    /// The kernels compiled so far, by (sampler, spectral mode) (both are compiled in).
     pipelines: Mutex<Vec<((SamplerKind, SpectralMode), wgpu::ComputePipeline)>>,
     pipeline_layout: wgpu::PipelineLayout,
     /// What another sampler's kernel is generated from.

@@ -293,7 +293,7 @@ pub fn colour_entry(colour: &Colour) -> Vec<f32> {
 }
 
 /// The line of the generated WGSL that says which mode the materials run in; a kernel for
-/// RGB mode takes the WGSL through [`for_rgb`].
+/// RGB mode takes the WGSL through [`for_mode`].
 const HERO_MODE_LINE: &str = "const MAT_RGB: bool = false;\n";
 
 /// The materials WGSL of `generate` for an RGB-mode kernel (`MAT_RGB`: colours as their

@@ -23,6 +23,7 @@
 use brdf::params::ParamValue;
 use glam::Vec3;
 use gpu::backend::SceneData;
+use gpu::kernel::KernelOptions;
 use gpu::{GpuBackend, GpuError};
 use spectral::spectrum::Colour;
 use std::path::Path;
@@ -178,11 +179,6 @@ fn compare_all(name: &str, r: &Renders) -> Vec<String> {
         .collect()
 }
 
-/// The kernel options the backend uses by default.
-fn kernel_options() -> gpu::kernel::KernelOptions {
-    gpu::kernel::KernelOptions::default()
-}
-
 /// Depth 8 without Russian roulette (see the module docs).
 fn settings(width: u32, height: u32, spp: u32) -> RenderSettings {
     RenderSettings {
@@ -315,7 +311,8 @@ fn passes_bands_and_reruns_add_up() {
     let Some(scene) = cornell() else { return };
     // Accumulators limited to the largest scene buffer (at least 8 KiB): an image of
     // twice that many rows and a bit is rendered in three bands.
-    let largest = SceneData::new(&scene, kernel_options()).unwrap().buffer_sizes().iter().map(|b| b.1).max().unwrap();
+    let largest =
+        SceneData::new(&scene, KernelOptions::default()).unwrap().buffer_sizes().iter().map(|b| b.1).max().unwrap();
     let limit = largest.max(8 << 10);
     let rows_per_band = ((limit - 16) / (32 * 32)) as u32;
     let s = settings(32, 2 * rows_per_band + 3, 16);
@@ -380,7 +377,7 @@ fn unsupported_scenes_and_modes_are_clear_errors() {
     // Implicit surfaces (the only shapes not ported): no device needed to find out, from
     // the capabilities or the data; spheres, boxes and polygons are accepted.
     let torus = tracer::scenes::glass_torus(shapes::roots::RootSolver::ClosedForm).unwrap();
-    match SceneData::new(&torus, kernel_options()) {
+    match SceneData::new(&torus, KernelOptions::default()) {
         Err(e @ GpuError::Unsupported(_)) => assert!(e.to_string().contains("f64"), "{e}"),
         Err(e) => panic!("wrong error {e}"),
         Ok(_) => panic!("a scene with an implicit surface was accepted"),
@@ -390,7 +387,7 @@ fn unsupported_scenes_and_modes_are_clear_errors() {
     assert!(err.contains("implicit surface (1 in this scene)") && err.contains("--backend cpu"), "{err}");
     let flake = tracer::scenes::sphere_flake(1).unwrap();
     caps.check_scene(&flake, &SceneOptions::default()).unwrap();
-    SceneData::new(&flake, kernel_options()).unwrap();
+    SceneData::new(&flake, KernelOptions::default()).unwrap();
     // The kernel traverses a 4-wide or a binary BVH: the CPU's 8-wide is refused, auto accepted.
     let room = tracer::scenes::material_sphere(Material::diffuse("grey", Colour::constant(0.5)).unwrap());
     let wide = SceneOptions { bvh_width: bvh::BvhWidth::Eight, ..SceneOptions::default() };
@@ -434,7 +431,7 @@ fn unsupported_scenes_and_modes_are_clear_errors() {
 #[test]
 fn buffers_beyond_the_limits_are_named() {
     let scene = model_scene(Material::diffuse("grey", Colour::constant(0.5)).unwrap());
-    let data = SceneData::new(&scene, kernel_options()).unwrap();
+    let data = SceneData::new(&scene, KernelOptions::default()).unwrap();
     assert!(data.check_limits(&wgpu::Limits::default()).is_ok());
     let tiny = wgpu::Limits { max_storage_buffer_binding_size: 4096, ..wgpu::Limits::default() };
     let err = data.check_limits(&tiny).unwrap_err();
@@ -586,6 +583,16 @@ fn mean_squared_difference(a: &Film, b: &Film) -> f64 {
     x.iter().zip(&y).map(|(p, q)| ((p - q) as f64).powi(2)).sum::<f64>() / x.len() as f64
 }
 
+/// Sharper than the z-tests: the same-seed GPU paths follow the CPU's, so the two images
+/// differ far less than independent renders do — at most `limit` of their squared
+/// difference (else, or for a ratio that is not a number, the failure).
+fn paths_follow_the_cpu(label: &str, r: &Renders, limit: f64) -> Option<String> {
+    let ratio = mean_squared_difference(&r.cpu, &r.same) / mean_squared_difference(&r.cpu, &r.other);
+    println!("{label}: same-seed squared difference {ratio:.4} of the independent one");
+    (ratio.is_nan() || ratio > limit)
+        .then(|| format!("{label}: same-seed paths diverge ({ratio:.4} of the independent squared difference)"))
+}
+
 /// The Sobol samplers on the GPU draw the CPU's values bit for bit (64-bit scrambles on
 /// word pairs, the CPU's tables): same-seed Cornell-box renders agree pixel for pixel
 /// where the paths do, and pass the z-tests with another seed.
@@ -604,12 +611,7 @@ fn sobol_samplers_match_the_cpu() {
     for sampler in [SamplerKind::Independent, SamplerKind::ZSobol, SamplerKind::Sobol] {
         let s = RenderSettings { sampler, ..settings(32, 32, 64) };
         let r = render_three_with(&cpu_scene, &gpu_scene, &s).unwrap();
-        let ratio = mean_squared_difference(&r.cpu, &r.same) / mean_squared_difference(&r.cpu, &r.other);
-        println!("{}: squared difference to the CPU, same seed / other seed: {ratio:.4}", sampler.name());
-        if ratio > 0.25 {
-            failures
-                .push(format!("{}: same-seed images differ {ratio:.3} as much as independent ones", sampler.name()));
-        }
+        failures.extend(paths_follow_the_cpu(sampler.name(), &r, 0.25));
         failures.extend(compare_all(&format!("Cornell box, {}", sampler.name()), &r));
     }
     // Beyond the layout: a pass past the power-of-two budget is refused, as on the CPU.
@@ -734,12 +736,8 @@ fn punctual_lights_match_the_cpu() {
     let r = render_three(&GpuBackend::with_context(ctx), &scene, &s).unwrap();
     failures.extend(compare_all("punctual lights, path", &r));
     // Sharper than the z-tests for the directions a sun's disk is sampled in (its
-    // penumbrae): the same-seed paths must follow the CPU's.
-    let ratio = mean_squared_difference(&r.cpu, &r.same) / mean_squared_difference(&r.cpu, &r.other);
-    println!("punctual lights: same-seed squared difference {ratio:.4} of the independent one");
-    if ratio > 0.05 {
-        failures.push(format!("punctual lights: same-seed paths diverge ({ratio:.4} of independent)"));
-    }
+    // penumbrae).
+    failures.extend(paths_follow_the_cpu("punctual lights", &r, 0.05));
     // Direct lighting sees the sun's disk unweighted.
     let options = SceneOptions::default();
     let cpu = CpuBackend::with_integrator(2, DirectLighting).unwrap().prepare(scene.clone(), &options).unwrap();
@@ -908,14 +906,8 @@ fn textures_match_the_cpu() {
         assert!(r.cpu.channel_means()[1] > 0.02, "a dark image proves little");
         failures.extend(compare_all(&format!("textures ({})", mode.name()), &r));
         // Sharper than the z-tests for what bends normals (a normal map's handedness, a bump
-        // map): the same-seed GPU paths follow the CPU's, so the two images differ far less
-        // than independent renders do — unless the GPU bends a normal otherwise, and every
-        // path that meets it goes elsewhere.
-        let ratio = mean_squared_difference(&r.cpu, &r.same) / mean_squared_difference(&r.cpu, &r.other);
-        println!("textures ({}): same-seed squared difference {ratio:.4} of the independent one", mode.name());
-        if ratio > 0.05 {
-            failures.push(format!("textures ({}): same-seed paths diverge ({ratio:.4} of independent)", mode.name()));
-        }
+        // map): a normal bent otherwise sends every path that meets it elsewhere.
+        failures.extend(paths_follow_the_cpu(&format!("textures ({})", mode.name()), &r, 0.05));
     }
     assert!(failures.is_empty(), "{failures:#?}");
 }
@@ -1021,7 +1013,7 @@ fn environment_maps_match_the_cpu() {
 #[test]
 fn sun_disks_keep_their_sampling_frame() {
     use gpu::kernel::{LIGHT_KIND, LightKind};
-    let data = SceneData::new(&punctual_scene(), kernel_options()).unwrap();
+    let data = SceneData::new(&punctual_scene(), KernelOptions::default()).unwrap();
     let v = |e: &[f32], at: usize| Vec3::new(e[at], e[at + 1], e[at + 2]);
     let mut suns = 0;
     for e in data.light_entries() {
@@ -1073,6 +1065,17 @@ fn bins40_matches_the_cpu() {
     assert!(failures.is_empty(), "{failures:#?}");
 }
 
+/// [`model_scene`] of the dispersive, absorbing glass beside a smooth mirror ball (an
+/// analytic sphere): the specular chains Whitted and the atlas follow.
+fn glass_and_mirror_scene() -> Scene {
+    let cases = model_cases();
+    let glass = cases.into_iter().find(|(n, _)| n == "dispersive absorbing glass").unwrap().1;
+    let mut scene = model_scene(glass);
+    let ball = shapes::sphere::Sphere::new(Vec3::new(1.4, 0.5, 0.4), 0.5, Default::default()).unwrap();
+    scene.add_shape(tracer::ShapeKind::Sphere(ball), Material::builtin("mirror", ModelId::Conductor, &[]).unwrap());
+    scene
+}
+
 /// Whitted ray tracing (`--integrator whitted --backend gpu`): the CPU's recursion walked
 /// depth first with a stack, every punctual light by its own shadow ray. On dispersive,
 /// absorbing glass beside a mirror ball under a point light, a sun with a disk and a delta
@@ -1084,12 +1087,7 @@ fn whitted_matches_the_cpu() {
     use tracer::punctual::PunctualLight;
     use tracer::{Backend, Whitted};
     let Some(ctx) = gpu::require_gpu() else { return };
-    let cases = model_cases();
-    let glass = cases.iter().find(|(n, _)| n == "dispersive absorbing glass").unwrap().1.clone();
-    let mut glass_scene = model_scene(glass);
-    let mirror = Material::builtin("mirror", ModelId::Conductor, &[]).unwrap();
-    let ball = shapes::sphere::Sphere::new(Vec3::new(1.4, 0.5, 0.4), 0.5, Default::default()).unwrap();
-    glass_scene.add_shape(tracer::ShapeKind::Sphere(ball), mirror);
+    let mut glass_scene = glass_and_mirror_scene();
     let rgb = |c: [f32; 3]| Colour::illuminant_rgb(c).unwrap();
     glass_scene.punctual_lights = vec![
         PunctualLight::point(Vec3::new(1.5, 2.5, 1.5), rgb([6.0, 5.0, 4.0])),
@@ -1113,12 +1111,9 @@ fn whitted_matches_the_cpu() {
         for (run, s) in runs {
             let r = render_three_with(cpu_scene.as_ref(), &gpu_scene, s).unwrap();
             assert!(r.cpu.channel_means()[1] > 0.02, "{name}: a dark image proves little");
-            let ratio = mean_squared_difference(&r.cpu, &r.same) / mean_squared_difference(&r.cpu, &r.other);
-            println!("whitted, {name}, {run}: same-seed squared difference {ratio:.4} of the independent one");
-            if ratio > 0.05 {
-                failures.push(format!("whitted, {name}, {run}: same-seed trees diverge ({ratio:.4} of independent)"));
-            }
-            failures.extend(compare_all(&format!("whitted, {name}, {run}"), &r));
+            let label = format!("whitted, {name}, {run}");
+            failures.extend(paths_follow_the_cpu(&label, &r, 0.05));
+            failures.extend(compare_all(&label, &r));
         }
     }
     // Deeper than the stack: refused up front, naming the limit.
@@ -1162,12 +1157,8 @@ fn custom_bsdf_twins_match_the_cpu() {
         for mode in [SpectralMode::Hero, SpectralMode::Rgb] {
             let r = render_three(&gpu, &scene, &RenderSettings { mode, ..settings(24, 24, 64) }).unwrap();
             let label = format!("phong {name} ({})", mode.name());
-            // The twin's sampling must be the Rust's: same-seed paths follow the CPU's.
-            let ratio = mean_squared_difference(&r.cpu, &r.same) / mean_squared_difference(&r.cpu, &r.other);
-            println!("{label}: same-seed squared difference {ratio:.4} of the independent one");
-            if ratio > 0.05 {
-                failures.push(format!("{label}: same-seed paths diverge ({ratio:.4} of independent)"));
-            }
+            // The twin's sampling must be the Rust's.
+            failures.extend(paths_follow_the_cpu(&label, &r, 0.05));
             failures.extend(compare_all(&label, &r));
         }
     }
@@ -1188,13 +1179,7 @@ fn atlas_matches_the_cpu() {
     let backend = GpuBackend::with_context(ctx).with_integrator(GpuIntegrator::Atlas(atlas));
     assert_eq!(backend.capabilities().integrator, "atlas");
     let cpu = CpuBackend::with_integrator(2, AtlasGi::new(atlas)).unwrap();
-    let cases = model_cases();
-    let glass = cases.iter().find(|(n, _)| n == "dispersive absorbing glass").unwrap().1.clone();
-    let mut glass_scene = model_scene(glass);
-    let ball = shapes::sphere::Sphere::new(Vec3::new(1.4, 0.5, 0.4), 0.5, Default::default()).unwrap();
-    glass_scene
-        .add_shape(tracer::ShapeKind::Sphere(ball), Material::builtin("mirror", ModelId::Conductor, &[]).unwrap());
-    let mut scenes = vec![("glass and mirror", glass_scene, vec![SpectralMode::Hero])];
+    let mut scenes = vec![("glass and mirror", glass_and_mirror_scene(), vec![SpectralMode::Hero])];
     scenes.extend(cornell().map(|c| ("Cornell box", c, vec![SpectralMode::Hero, SpectralMode::Rgb])));
     let options = SceneOptions::default();
     let mut failures = Vec::new();
@@ -1205,12 +1190,8 @@ fn atlas_matches_the_cpu() {
             let s = RenderSettings { mode, ..settings(24, 24, 64) };
             let r = render_three_with(cpu_scene.as_ref(), &gpu_scene, &s).unwrap();
             assert!(r.cpu.channel_means()[1] > 0.02, "{name}: a dark image proves little");
-            let ratio = mean_squared_difference(&r.cpu, &r.same) / mean_squared_difference(&r.cpu, &r.other);
             let label = format!("atlas, {name} ({})", mode.name());
-            println!("{label}: same-seed squared difference {ratio:.4} of the independent one");
-            if ratio > 0.05 {
-                failures.push(format!("{label}: same-seed paths diverge ({ratio:.4} of independent)"));
-            }
+            failures.extend(paths_follow_the_cpu(&label, &r, 0.05));
             failures.extend(compare_all(&label, &r));
         }
     }

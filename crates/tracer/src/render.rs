@@ -212,6 +212,19 @@ pub enum CustomBsdfs {
     Any,
 }
 
+impl CustomBsdfs {
+    /// Whether a backend with this support runs `material`'s BSDF (registered models
+    /// always).
+    pub fn runs(self, material: &crate::material::Material) -> bool {
+        material.params().is_some()
+            || match self {
+                Self::Any => true,
+                Self::WithWgslTwin => material.wgsl_twin().is_some(),
+                Self::None => false,
+            }
+    }
+}
+
 /// Which analytic shapes a backend intersects.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ShapeSupport {
@@ -264,12 +277,7 @@ impl Capabilities {
                 "use --backend cpu",
             ));
         }
-        let runs = |m: &crate::material::Material| match self.custom_bsdfs {
-            CustomBsdfs::Any => true,
-            CustomBsdfs::WithWgslTwin => m.params().is_some() || m.wgsl_twin().is_some(),
-            CustomBsdfs::None => m.params().is_some(),
-        };
-        if let Some(m) = scene.materials.iter().find(|m| !runs(m)) {
+        if let Some(m) = scene.materials.iter().find(|m| !self.custom_bsdfs.runs(m)) {
             return Err(match self.custom_bsdfs {
                 CustomBsdfs::WithWgslTwin => unsupported(
                     format!("custom BSDFs without a WGSL twin (material '{}')", m.name),

@@ -104,15 +104,7 @@ fn pt_env_radiance(dir: vec3f, lambda: vec4f) -> vec4f {
         return vec4f(0.0);
     }
     let scale = 2.0 * m;
-    let q = clamp(rgb / scale, vec3f(0.0), vec3f(1.0));
-    var s: vec4f;
-    if q.x == q.y && q.y == q.z {
-        s = vec4f(q.x);
-    } else {
-        let c = pt_uplift(q);
-        s = pt_sigmoid((c.x * lambda + c.y) * lambda + c.z);
-    }
-    return base * (scale * s * pt_d65_normalised(lambda));
+    return base * (scale * pt_reflectance(rgb / scale, lambda) * pt_d65_normalised(lambda));
 }
 
 // `sample_cdf`: the bin of `u` in the cumulative distribution of `n` bins at `at`, and the

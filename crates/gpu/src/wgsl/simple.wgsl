@@ -49,10 +49,8 @@ fn pt_ambient_occlusion(
     if hit.prim == PT_NO_HIT {
         return vec4f(0.0);
     }
-    var sf = pt_surface(hit, origin, dir);
-    if PT_HAS_TEXTURES {
-        pt_bend_normal(&sf, hit, pt_hit_uv(hit));
-    }
+    var sf: PtSurface;
+    _ = pt_hit_surface(hit, origin, dir, &sf);
     // The hemisphere on the viewer's side.
     let side = select(-1.0, 1.0, dot(dir, sf.ng) < 0.0);
     let ng = sf.ng * side;

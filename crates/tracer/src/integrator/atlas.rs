@@ -133,15 +133,19 @@ impl Chart {
     /// Continuous atlas coordinates (texel centres at i + ½) of a point on its plane.
     #[inline]
     fn atlas_point(&self, p: Vec3, density: f32) -> Vec2 {
-        let d = p - self.origin;
-        let local = Vec2::new(d.dot(self.u), d.dot(self.v)) - self.min;
-        self.offset.as_vec2() + Vec2::splat(GUTTER as f32) + local * density
+        self.projection().atlas_point(p, density)
+    }
+
+    /// Where it maps points.
+    #[inline]
+    fn projection(&self) -> ChartProjection {
+        let corner = self.offset.as_vec2() + Vec2::splat(GUTTER as f32);
+        ChartProjection { origin: self.origin, u: self.u, v: self.v, min: self.min, corner }
     }
 }
 
-/// Where a chart maps a point, for a backend that looks the atlas up itself (the GPU):
-/// [`Atlas::irradiance_at`] takes atlas coordinates `corner + ((p − origin)·(u, v) − min) ·
-/// density` (texel centres at i + ½).
+/// Where a chart maps a point ([`ChartProjection::atlas_point`]), also for a backend that
+/// looks the atlas up itself (the GPU).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ChartProjection {
     /// A point of the chart's plane.
@@ -154,6 +158,17 @@ pub struct ChartProjection {
     pub min: Vec2,
     /// The chart's first texel inside its gutter, in atlas texels.
     pub corner: Vec2,
+}
+
+impl ChartProjection {
+    /// Continuous atlas coordinates (texel centres at i + ½) of a point on the chart's
+    /// plane: `corner + ((p − origin)·(u, v) − min) · density`.
+    #[inline]
+    pub fn atlas_point(&self, p: Vec3, density: f32) -> Vec2 {
+        let d = p - self.origin;
+        let local = Vec2::new(d.dot(self.u), d.dot(self.v)) - self.min;
+        self.corner + local * density
+    }
 }
 
 /// What a texel of the G-buffer holds.
@@ -372,16 +387,7 @@ impl Atlas {
 
     /// Each chart's projection, by chart index ([`Atlas::prim_charts`]).
     pub fn chart_projections(&self) -> Vec<ChartProjection> {
-        self.charts
-            .iter()
-            .map(|c| ChartProjection {
-                origin: c.origin,
-                u: c.u,
-                v: c.v,
-                min: c.min,
-                corner: c.offset.as_vec2() + Vec2::splat(GUTTER as f32),
-            })
-            .collect()
+        self.charts.iter().map(Chart::projection).collect()
     }
 
     /// Per primitive (the renderer's ids: triangles, shapes, instanced triangles) the index
