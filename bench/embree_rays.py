@@ -13,7 +13,9 @@ Tracers
            `embreex` (dlopen of embreex.libs/libembree4-*.so.4), rtcIntersect1 /
            rtcOccluded1 per ray, default build quality. See bench/embree/README.md.
   ours     `spt rays trace DIR --threads T --passes P --bvh-width W` for each A in --ours
-           (bvh4 → W = 4, bvh8 → 8, auto → auto).
+           (bvh4 → W = 4, bvh8 → 8, auto → auto); A@PATH runs the spt binary at PATH
+           instead (labelled by its directory), e.g. a build of the commit before a change:
+           --ours bvh8,bvh8@/tmp/before/target/release/spt
 Both take chunks of 1024 rays from an atomic counter with T threads, trace every set P
 times and report the fastest pass.
 
@@ -159,7 +161,11 @@ def tracer_configs(args, embree_lib, spt):
     cfgs = [{"label": "embree", "kind": "embree"}]
     if spt:
         for a in args.ours:
-            cfgs.append({"label": f"ours-{a}", "kind": "ours", "accel": a})
+            # ACCEL@PATH traces with another spt binary (e.g. the commit before a change,
+            # for a before/after ratio measured in the same run).
+            accel, _, exe = a.partition("@")
+            label = f"ours-{accel}@{os.path.basename(os.path.dirname(exe)) or exe}" if exe else f"ours-{a}"
+            cfgs.append({"label": label, "kind": "ours", "accel": accel, "spt": exe or spt})
     return cfgs
 
 
@@ -168,7 +174,7 @@ def tracer_cmd(cfg, d, threads, args, embree_bin, embree_lib, spt):
         return [embree_bin, d, "--lib", embree_lib, "--threads", str(threads),
                 "--passes", str(args.passes)] + shlex.split(args.embree_args)
     width = {"bvh4": "4", "bvh8": "8"}.get(cfg["accel"], cfg["accel"])
-    return [spt, "rays", "trace", d, "--threads", str(threads), "--passes", str(args.passes),
+    return [cfg.get("spt", spt), "rays", "trace", d, "--threads", str(threads), "--passes", str(args.passes),
             "--bvh-width", width]
 
 

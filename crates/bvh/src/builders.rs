@@ -15,7 +15,7 @@ pub(crate) mod sweep;
 
 use crate::Aabb;
 use crate::build::{BuildConfig, BvhNode, SplitMethod};
-use glam::Vec3;
+use glam::Vec3A;
 
 /// Deepest tree the builders make: traversal uses a fixed 64-entry stack.
 pub(crate) const MAX_DEPTH: usize = 62;
@@ -23,10 +23,29 @@ pub(crate) const MAX_DEPTH: usize = 62;
 /// Subtrees above this many primitives are built in parallel.
 const PARALLEL_THRESHOLD: usize = 4096;
 
-/// A primitive as the builders see it.
+/// A primitive as the builders see it: its box in SIMD registers (32 bytes, aligned), so
+/// that binning unions boxes and finds centroids with one instruction per corner.
+#[derive(Clone, Copy)]
 pub(crate) struct Prim {
-    pub bounds: Aabb,
-    pub centre: Vec3,
+    pub min: Vec3A,
+    pub max: Vec3A,
+}
+
+impl Prim {
+    pub fn new(bounds: Aabb) -> Self {
+        Self { min: bounds.min.into(), max: bounds.max.into() }
+    }
+
+    #[inline(always)]
+    pub fn bounds(&self) -> Aabb {
+        Aabb { min: self.min.into(), max: self.max.into() }
+    }
+
+    /// The box's centre, bit for bit [`Aabb::centre`].
+    #[inline(always)]
+    pub fn centre(&self) -> Vec3A {
+        0.5 * (self.min + self.max)
+    }
 }
 
 /// Nodes and the leaf order of primitives, appended depth-first.
@@ -81,29 +100,46 @@ fn fold_boxes(ids: &[u32], f: impl Fn(Aabb, u32) -> Aabb + Sync) -> Aabb {
 
 /// The bounds of a set of primitives.
 pub(crate) fn bounds_of(prims: &[Prim], ids: &[u32]) -> Aabb {
-    fold_boxes(ids, |b, i| b.union(prims[i as usize].bounds))
+    fold_boxes(ids, |b, i| b.union(prims[i as usize].bounds()))
 }
 
 /// The bounds of a set of primitive centroids.
 pub(crate) fn centroid_bounds(prims: &[Prim], ids: &[u32]) -> Aabb {
-    fold_boxes(ids, |b, i| b.grow(prims[i as usize].centre))
+    fold_boxes(ids, |b, i| b.grow(prims[i as usize].centre().into()))
 }
 
-/// A node's split: `ids[..mid]` go left; the SAH cost and both children's bounds.
+/// A node's split: `ids[..mid]` go left; the SAH cost, both children's bounds and, where
+/// the split found them on the way, their centroid bounds.
 pub(crate) struct Split {
     pub mid: usize,
     pub cost: f32,
     pub left: Aabb,
     pub right: Aabb,
+    pub centroids: Option<(Aabb, Aabb)>,
 }
 
-/// SAH cost of splitting a node of area `parent_area` into the given children
-/// (MacDonald & Booth 1990): C_t + C_i·(A_l·n_l + A_r·n_r)/A.
+/// The number of primitive tests a set of `n` costs in the SAH: `n` rounded up to whole
+/// blocks of [`BuildConfig::sah_block`].
 #[inline]
-pub(crate) fn split_cost(config: &BuildConfig, parent_area: f32, left: (f32, usize), right: (f32, usize)) -> f32 {
-    config.traversal_cost
-        + config.intersection_cost * (left.0 * left.1 as f32 + right.0 * right.1 as f32)
-            / parent_area.max(f32::MIN_POSITIVE)
+fn tests(config: &BuildConfig, n: usize) -> f32 {
+    // A power of two (see `Bvh::build_topology`): round up with a mask, not a division.
+    let mask = config.sah_block - 1;
+    ((n + mask) & !mask) as f32
+}
+
+/// A split's area-weighted test count A_l·n_l + A_r·n_r for children of (area, count)
+/// `left` and `right`, the counts in whole blocks ([`BuildConfig::sah_block`]).
+#[inline]
+pub(crate) fn area_weighted(config: &BuildConfig, left: (f32, usize), right: (f32, usize)) -> f32 {
+    left.0 * tests(config, left.1) + right.0 * tests(config, right.1)
+}
+
+/// SAH cost of splitting a node of area `parent_area` into children whose
+/// [`area_weighted`] test count is `weighted` (MacDonald & Booth 1990):
+/// C_t + C_i·(A_l·n_l + A_r·n_r)/A.
+#[inline]
+pub(crate) fn split_cost(config: &BuildConfig, parent_area: f32, weighted: f32) -> f32 {
+    config.traversal_cost + config.intersection_cost * weighted / parent_area.max(f32::MIN_POSITIVE)
 }
 
 /// Whether a node of `n` primitives must, may or must not become a leaf before any split
@@ -114,7 +150,7 @@ pub(crate) fn forced_leaf(config: &BuildConfig, n: usize, depth: usize) -> bool 
 
 /// After the best split was found: leaf if it does not pay (only when allowed).
 pub(crate) fn sah_prefers_leaf(config: &BuildConfig, n: usize, split_cost: f32) -> bool {
-    config.leaf_by_sah && n <= config.max_leaf_size && split_cost >= config.intersection_cost * n as f32
+    config.leaf_by_sah && n <= config.max_leaf_size && split_cost >= config.intersection_cost * tests(config, n)
 }
 
 /// In-place partition; returns the number of ids for which `pred` holds.
@@ -129,11 +165,13 @@ pub(crate) fn partition(ids: &mut [u32], pred: impl Fn(u32) -> bool) -> usize {
     i
 }
 
-/// Builds the subtree over `ids`, whose bounds are `bounds`, with the configured method.
+/// Builds the subtree over `ids`, whose bounds are `bounds` (and whose centroids' bounds
+/// are `centroids`, where known), with the configured method.
 pub(crate) fn build(
     prims: &[Prim],
     ids: &mut [u32],
     bounds: Aabb,
+    centroids: Option<Aabb>,
     config: &BuildConfig,
     out: &mut Output,
     depth: usize,
@@ -148,22 +186,22 @@ pub(crate) fn build(
         return out.leaf(&bounds, ids.iter().copied());
     }
     let split = match config.method {
-        SplitMethod::BinnedSah => binned::split(prims, ids, &bounds, config),
+        SplitMethod::BinnedSah => binned::split(prims, ids, &bounds, centroids, config),
         _ => midpoint::split(prims, ids, &bounds, config),
     };
     // Halving by position, for the cases below.
     let halve = |ids: &[u32]| {
         let mid = n / 2;
-        (mid, bounds_of(prims, &ids[..mid]), bounds_of(prims, &ids[mid..]))
+        (mid, bounds_of(prims, &ids[..mid]), bounds_of(prims, &ids[mid..]), (None, None))
     };
-    let (mid, left_bounds, right_bounds) = match split {
+    let (mid, left_bounds, right_bounds, (left_centroids, right_centroids)) = match split {
         // A plane that leaves one side empty (centroids closer together than the float
         // spacing at the midpoint) would recurse on the same set: halve by position.
         Some(s) if !sah_prefers_leaf(config, n, s.cost) => {
             if s.mid == 0 || s.mid == n {
                 halve(ids)
             } else {
-                (s.mid, s.left, s.right)
+                (s.mid, s.left, s.right, s.centroids.unzip())
             }
         }
         Some(_) => return out.leaf(&bounds, ids.iter().copied()),
@@ -177,12 +215,12 @@ pub(crate) fn build(
         let (l, r) = rayon::join(
             || {
                 let mut o = Output::default();
-                build(prims, left, left_bounds, config, &mut o, depth + 1);
+                build(prims, left, left_bounds, left_centroids, config, &mut o, depth + 1);
                 o
             },
             || {
                 let mut o = Output::default();
-                build(prims, right, right_bounds, config, &mut o, depth + 1);
+                build(prims, right, right_bounds, right_centroids, config, &mut o, depth + 1);
                 o
             },
         );
@@ -191,8 +229,8 @@ pub(crate) fn build(
         out.append(r);
         out.nodes[index].index = right_index as u32;
     } else {
-        build(prims, left, left_bounds, config, out, depth + 1);
-        let right_index = build(prims, right, right_bounds, config, out, depth + 1);
+        build(prims, left, left_bounds, left_centroids, config, out, depth + 1);
+        let right_index = build(prims, right, right_bounds, right_centroids, config, out, depth + 1);
         out.nodes[index].index = right_index as u32;
     }
     index
@@ -201,12 +239,12 @@ pub(crate) fn build(
 /// Builds a tree over arbitrary boxes (e.g. object instances for a top-level BVH) with
 /// the configured method; the result's `order` maps leaf slots to box indices.
 pub(crate) fn build_over_boxes(boxes: &[Aabb], config: &BuildConfig) -> Output {
-    let prims: Vec<Prim> = boxes.iter().map(|b| Prim { bounds: *b, centre: b.centre() }).collect();
+    let prims: Vec<Prim> = boxes.iter().map(|b| Prim::new(*b)).collect();
     let mut ids: Vec<u32> = (0..prims.len() as u32).collect();
     let mut out = Output::default();
     if !ids.is_empty() {
         let bounds = bounds_of(&prims, &ids);
-        build(&prims, &mut ids, bounds, config, &mut out, 1);
+        build(&prims, &mut ids, bounds, None, config, &mut out, 1);
     }
     out
 }
@@ -215,6 +253,7 @@ pub(crate) fn build_over_boxes(boxes: &[Aabb], config: &BuildConfig) -> Output {
 mod tests {
     use super::*;
     use crate::SplitMethod;
+    use glam::Vec3;
 
     #[test]
     fn nearly_coincident_centroids_still_split_into_small_leaves() {
@@ -224,7 +263,7 @@ mod tests {
         let prims: Vec<Prim> = (0..4000)
             .map(|i| {
                 let c = Vec3::new(if i % 2 == 0 { base } else { f32::from_bits(base.to_bits() + 1) }, 0.0, 0.0);
-                Prim { bounds: Aabb { min: c - 1.0, max: c + 1.0 }, centre: c }
+                Prim::new(Aabb { min: c - 1.0, max: c + 1.0 })
             })
             .collect();
         let config =
@@ -232,7 +271,7 @@ mod tests {
         let mut ids: Vec<u32> = (0..prims.len() as u32).collect();
         let mut out = Output::default();
         let bounds = bounds_of(&prims, &ids);
-        build(&prims, &mut ids, bounds, &config, &mut out, 1);
+        build(&prims, &mut ids, bounds, None, &config, &mut out, 1);
         let largest = out.nodes.iter().map(|n| n.count).max().unwrap();
         assert!(largest <= 1, "a leaf of {largest} primitives");
         assert!(out.nodes.iter().all(|n| n.count > 0 || n.index as usize > 0), "no empty subtrees");

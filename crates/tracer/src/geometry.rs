@@ -179,10 +179,10 @@ impl Geometry {
         Ok(Instanced { bvh, first_prim, transforms })
     }
 
-    /// How the triangles' binary BVH is built before it is collapsed: binned SAH, leaves of
-    /// at most four triangles (one SIMD test).
+    /// How the triangles' binary BVH is built before it is collapsed: binned SAH counting
+    /// triangles in blocks of four, leaves of at most four triangles (one SIMD test).
     pub fn triangle_build_config() -> BuildConfig {
-        BuildConfig { max_leaf_size: 4, ..BuildConfig::default() }
+        BuildConfig { max_leaf_size: 4, sah_block: 4, ..BuildConfig::default() }
     }
 
     /// [`Geometry::triangle_build_config`] with another split method (`None`: the default).

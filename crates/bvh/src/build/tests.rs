@@ -27,11 +27,34 @@ fn every_config() -> Vec<BuildConfig> {
     for method in SplitMethod::ALL.into_iter().chain([SplitMethod::Hybrid { threshold: 64 }]) {
         for leaf_by_sah in [true, false] {
             for max_leaf_size in [1, 2, 3, 4, 8] {
-                v.push(BuildConfig { method, leaf_by_sah, max_leaf_size, ..Default::default() });
+                for sah_block in [1, 4] {
+                    v.push(BuildConfig { method, leaf_by_sah, max_leaf_size, sah_block, ..Default::default() });
+                }
             }
         }
     }
     v
+}
+
+/// Mean triangles per leaf.
+fn leaf_fill(bvh: &Bvh) -> f64 {
+    let leaves: Vec<u32> = bvh.nodes().iter().filter(|n| n.count > 0).map(|n| n.count).collect();
+    leaves.iter().map(|&c| c as f64).sum::<f64>() / leaves.len() as f64
+}
+
+#[test]
+fn block_sah_fills_leaves_and_rounds_its_block_to_a_power_of_two() {
+    // Counting triangles in blocks of four makes a leaf of one to four cost the same, so
+    // the builder stops splitting sooner: fuller leaves for the 4-wide leaf test.
+    let tris = soup(31, 20_000, 10.0, 1.0);
+    let config = BuildConfig { max_leaf_size: 4, ..Default::default() };
+    let plain = Bvh::build(&tris, config).unwrap();
+    let blocked = Bvh::build(&tris, BuildConfig { sah_block: 4, ..config }).unwrap();
+    let (a, b) = (leaf_fill(&plain), leaf_fill(&blocked));
+    assert!(b > a + 0.5, "mean leaf fill {b:.2} with blocks of 4 against {a:.2} without");
+    assert!(blocked.stats().nodes < plain.stats().nodes);
+    let odd = Bvh::build(&tris[..100], BuildConfig { sah_block: 3, ..config }).unwrap();
+    assert_eq!(odd.config().sah_block, 4);
 }
 
 #[test]

@@ -1,21 +1,46 @@
 //! Binned SAH split search (Wald 2007, "On fast Construction of SAH-based Bounding
 //! Volume Hierarchies"): centroids are binned along each axis and the SAH is evaluated
 //! only at the bin boundaries. All three axes are binned in one pass over the
-//! primitives, split across threads for large nodes.
+//! primitives, split across threads for large nodes; bins hold their boxes in SIMD
+//! registers, and the partition that applies a split also finds both children's centroid
+//! bounds, so that no node makes a pass over its primitives for them.
 
-use super::{Prim, Split, centroid_bounds, partition, split_cost};
+use super::{Prim, Split, area_weighted, centroid_bounds, split_cost};
 use crate::Aabb;
 use crate::build::BuildConfig;
-use glam::Vec3;
+use glam::Vec3A;
 use rayon::prelude::*;
+use std::mem::MaybeUninit;
 
+/// A bin: the box of the primitives whose centroids fall in it, and their number.
 #[derive(Clone, Copy)]
 struct Bin {
-    bounds: Aabb,
-    count: usize,
+    min: Vec3A,
+    max: Vec3A,
+    count: u32,
 }
 
-const EMPTY_BIN: Bin = Bin { bounds: Aabb::EMPTY, count: 0 };
+const EMPTY_BIN: Bin = Bin { min: Vec3A::INFINITY, max: Vec3A::NEG_INFINITY, count: 0 };
+
+impl Bin {
+    #[inline(always)]
+    fn add(&mut self, o: &Bin) {
+        self.min = self.min.min(o.min);
+        self.max = self.max.max(o.max);
+        self.count += o.count;
+    }
+
+    fn bounds(&self) -> Aabb {
+        Aabb { min: self.min.into(), max: self.max.into() }
+    }
+
+    /// Surface area, zero for an empty bin (as [`Aabb::surface_area`]).
+    #[inline(always)]
+    fn area(&self) -> f32 {
+        let e = (self.max - self.min).max(Vec3A::ZERO);
+        2.0 * (e.x * e.y + e.y * e.z + e.z * e.x)
+    }
+}
 
 /// Nodes above this many primitives bin in parallel chunks of this size.
 const PARALLEL_CHUNK: usize = 16 * 1024;
@@ -24,54 +49,98 @@ const PARALLEL_CHUNK: usize = 16 * 1024;
 /// heap allocation per node cost more than their binning.
 const STACK_BINS: usize = 16;
 
+/// Maps centroids to bin indices on each axis.
+#[derive(Clone, Copy)]
+struct Binner {
+    min: Vec3A,
+    scale: Vec3A,
+    /// The last bin's index, as a float on every axis.
+    last: Vec3A,
+}
+
+impl Binner {
+    /// The bin of `centre` on each axis: ⌊(c − min)·scale⌋ clamped to the last bin.
+    #[inline(always)]
+    fn index(&self, centre: Vec3A) -> [u32; 4] {
+        let x = ((centre - self.min) * self.scale).min(self.last);
+        #[cfg(target_arch = "x86_64")]
+        {
+            use std::arch::x86_64::{__m128i, _mm_cvttps_epi32};
+            // SAFETY: SSE2 is part of the x86_64 baseline. The lanes lie in [0, last]
+            // (centroids within their bounds, a finite scale), where truncation is the
+            // saturating `as` cast's floor.
+            unsafe { std::mem::transmute::<__m128i, [u32; 4]>(_mm_cvttps_epi32(x.into())) }
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        {
+            let i = x.as_uvec3();
+            [i.x, i.y, i.z, 0]
+        }
+    }
+}
+
 /// Bins `ids` along all three axes into `bins[axis * nb + b]` (3·nb empty bins).
-fn bin(prims: &[Prim], ids: &[u32], min: Vec3, scale: Vec3, nb: usize, bins: &mut [Bin]) {
+fn bin(prims: &[Prim], ids: &[u32], binner: &Binner, nb: usize, bins: &mut [Bin]) {
     for &i in ids {
         let p = &prims[i as usize];
-        let b = ((p.centre - min) * scale).as_uvec3().min(glam::UVec3::splat(nb as u32 - 1));
+        let b = binner.index(p.centre());
         for axis in 0..3 {
             let bin = &mut bins[axis * nb + b[axis] as usize];
-            bin.bounds = bin.bounds.union(p.bounds);
+            bin.min = bin.min.min(p.min);
+            bin.max = bin.max.max(p.max);
             bin.count += 1;
         }
     }
 }
 
 /// Partitions `ids` at the best binned-SAH plane, or returns `None` when the centroids
-/// span no extent.
-pub(crate) fn split(prims: &[Prim], ids: &mut [u32], bounds: &Aabb, config: &BuildConfig) -> Option<Split> {
-    let cb = centroid_bounds(prims, ids);
-    let extent = cb.extent();
+/// span no extent. `centroids`: the bounds of the primitives' centroids, if known.
+pub(crate) fn split(
+    prims: &[Prim],
+    ids: &mut [u32],
+    bounds: &Aabb,
+    centroids: Option<Aabb>,
+    config: &BuildConfig,
+) -> Option<Split> {
+    let cb = centroids.unwrap_or_else(|| centroid_bounds(prims, ids));
+    let extent = Vec3A::from(cb.extent());
     let parent_area = bounds.surface_area();
     // Small nodes get fewer bins (at least four, at most one per primitive): a node's
     // fixed cost is its 3·(nb − 1) candidate planes, and most nodes are small.
     let nb = config.bins.min(ids.len().max(4));
     // Axes without extent get scale 0: everything lands in bin 0 and no plane is valid.
-    let scale = Vec3::select(extent.cmpgt(Vec3::ZERO), Vec3::splat(nb as f32) / extent, Vec3::ZERO);
-    let mut stack_bins = [EMPTY_BIN; 3 * STACK_BINS];
+    let scale = Vec3A::select(extent.cmpgt(Vec3A::ZERO), Vec3A::splat(nb as f32) / extent, Vec3A::ZERO);
+    let binner = Binner { min: cb.min.into(), scale, last: Vec3A::splat((nb - 1) as f32) };
+    let mut stack_bins = [MaybeUninit::<Bin>::uninit(); 3 * STACK_BINS];
     let heap_bins: Vec<Bin>;
     let bins: &[Bin] = if ids.len() > 2 * PARALLEL_CHUNK {
         heap_bins = ids
             .par_chunks(PARALLEL_CHUNK)
             .map(|c| {
                 let mut bins = vec![EMPTY_BIN; 3 * nb];
-                bin(prims, c, cb.min, scale, nb, &mut bins);
+                bin(prims, c, &binner, nb, &mut bins);
                 bins
             })
             .reduce_with(|mut a, b| {
-                for (x, y) in a.iter_mut().zip(b) {
-                    x.bounds = x.bounds.union(y.bounds);
-                    x.count += y.count;
+                for (x, y) in a.iter_mut().zip(&b) {
+                    x.add(y);
                 }
                 a
             })?;
         &heap_bins
     } else if nb <= STACK_BINS {
-        bin(prims, ids, cb.min, scale, nb, &mut stack_bins[..3 * nb]);
-        &stack_bins[..3 * nb]
+        // Only the bins this node uses are initialised: most nodes are small.
+        let bins = &mut stack_bins[..3 * nb];
+        for b in bins.iter_mut() {
+            b.write(EMPTY_BIN);
+        }
+        // SAFETY: every element of the slice was just initialised.
+        let bins = unsafe { &mut *(bins as *mut [MaybeUninit<Bin>] as *mut [Bin]) };
+        bin(prims, ids, &binner, nb, bins);
+        bins
     } else {
         let mut bins = vec![EMPTY_BIN; 3 * nb];
-        bin(prims, ids, cb.min, scale, nb, &mut bins);
+        bin(prims, ids, &binner, nb, &mut bins);
         heap_bins = bins;
         &heap_bins
     };
@@ -90,33 +159,62 @@ pub(crate) fn split(prims: &[Prim], ids: &mut [u32], bounds: &Aabb, config: &Bui
         }
         let bins = &bins[axis * nb..(axis + 1) * nb];
         // Sweep from the right, then from the left, evaluating the nb − 1 planes.
-        let (mut acc, mut cnt) = (Aabb::EMPTY, 0);
+        let mut acc = EMPTY_BIN;
         for i in (1..nb).rev() {
-            acc = acc.union(bins[i].bounds);
-            cnt += bins[i].count;
-            right[i] = (acc.surface_area(), cnt);
+            acc.add(&bins[i]);
+            right[i] = (acc.area(), acc.count as usize);
         }
-        let (mut acc, mut cnt) = (Aabb::EMPTY, 0);
+        let mut acc = EMPTY_BIN;
         for i in 0..nb - 1 {
-            acc = acc.union(bins[i].bounds);
-            cnt += bins[i].count;
-            if cnt == 0 || right[i + 1].1 == 0 {
+            acc.add(&bins[i]);
+            if acc.count == 0 || right[i + 1].1 == 0 {
                 continue;
             }
-            let cost = split_cost(config, parent_area, (acc.surface_area(), cnt), right[i + 1]);
-            if best.is_none_or(|(_, _, c)| cost < c) {
-                best = Some((axis, i + 1, cost));
+            // The SAH's area-weighted test count; the cost is monotonic in it.
+            let weighted = area_weighted(config, (acc.area(), acc.count as usize), right[i + 1]);
+            if best.is_none_or(|(_, _, c)| weighted < c) {
+                best = Some((axis, i + 1, weighted));
             }
         }
     }
-    let (axis, boundary, cost) = best?;
-    let (min, s) = (cb.min[axis], scale[axis]);
-    // Partition with the same bin arithmetic as the binning, so the split is exact.
-    let mid = partition(ids, |i| {
-        ((((prims[i as usize].centre[axis] - min) * s) as u32).min(nb as u32 - 1) as usize) < boundary
-    });
+    let (axis, boundary, weighted) = best?;
+    let cost = split_cost(config, parent_area, weighted);
+    // Partition with the same bin arithmetic as the binning, so the split is exact, and
+    // collect each side's centroid bounds on the way.
+    let (mut left_c, mut right_c) = (Aabb::EMPTY, Aabb::EMPTY);
+    let (mut lmin, mut lmax) = (Vec3A::INFINITY, Vec3A::NEG_INFINITY);
+    let (mut rmin, mut rmax) = (Vec3A::INFINITY, Vec3A::NEG_INFINITY);
+    let mut mid = 0;
+    for j in 0..ids.len() {
+        let c = prims[ids[j] as usize].centre();
+        if (binner.index(c)[axis] as usize) < boundary {
+            ids.swap(mid, j);
+            mid += 1;
+            lmin = lmin.min(c);
+            lmax = lmax.max(c);
+        } else {
+            rmin = rmin.min(c);
+            rmax = rmax.max(c);
+        }
+    }
+    if mid > 0 {
+        left_c = Aabb { min: lmin.into(), max: lmax.into() };
+    }
+    if mid < ids.len() {
+        right_c = Aabb { min: rmin.into(), max: rmax.into() };
+    }
     // The children's bounds are their bins' (no pass over the primitives).
-    let side =
-        |range: std::ops::Range<usize>| bins[axis * nb..][range].iter().fold(Aabb::EMPTY, |b, x| b.union(x.bounds));
-    Some(Split { mid, cost, left: side(0..boundary), right: side(boundary..nb) })
+    let side = |range: std::ops::Range<usize>| {
+        bins[axis * nb..][range].iter().fold(EMPTY_BIN, |mut b, x| {
+            b.add(x);
+            b
+        })
+    };
+    Some(Split {
+        mid,
+        cost,
+        left: side(0..boundary).bounds(),
+        right: side(boundary..nb).bounds(),
+        centroids: Some((left_c, right_c)),
+    })
 }

@@ -2,7 +2,7 @@
 //! fast fallback for large objects (its chapter 8.3). Cheap (O(n) per level, no area
 //! evaluations) but blind to where the primitives are.
 
-use super::{Prim, Split, bounds_of, centroid_bounds, partition, split_cost};
+use super::{Prim, Split, area_weighted, bounds_of, centroid_bounds, partition, split_cost};
 use crate::Aabb;
 use crate::build::BuildConfig;
 
@@ -22,10 +22,13 @@ pub(crate) fn split(prims: &[Prim], ids: &mut [u32], bounds: &Aabb, config: &Bui
         return None;
     }
     let pos = cb.min[axis] + 0.5 * e[axis];
-    let mid = partition(ids, |i| prims[i as usize].centre[axis] < pos);
+    let mid = partition(ids, |i| prims[i as usize].centre()[axis] < pos);
     let (l, r) = ids.split_at(mid);
     let (left, right) = (bounds_of(prims, l), bounds_of(prims, r));
-    let cost =
-        split_cost(config, bounds.surface_area(), (left.surface_area(), l.len()), (right.surface_area(), r.len()));
-    Some(Split { mid, cost, left, right })
+    let cost = split_cost(
+        config,
+        bounds.surface_area(),
+        area_weighted(config, (left.surface_area(), l.len()), (right.surface_area(), r.len())),
+    );
+    Some(Split { mid, cost, left, right, centroids: None })
 }

@@ -4,7 +4,7 @@
 //! are partitioned stably at each split (Wald & Havran 2006), so the whole build is
 //! O(n log n).
 
-use super::{Output, Prim, forced_leaf, sah_prefers_leaf, split_cost};
+use super::{Output, Prim, area_weighted, forced_leaf, sah_prefers_leaf, split_cost};
 use crate::Aabb;
 use crate::build::BuildConfig;
 
@@ -15,7 +15,9 @@ pub(crate) fn build(prims: &[Prim], ids: &[u32], config: &BuildConfig, out: &mut
     let n = local.len();
     let mut sorted: [Vec<u32>; 3] = std::array::from_fn(|axis| {
         let mut v: Vec<u32> = (0..n as u32).collect();
-        v.sort_by(|&a, &b| local[a as usize].centre[axis].total_cmp(&local[b as usize].centre[axis]).then(a.cmp(&b)));
+        v.sort_by(|&a, &b| {
+            local[a as usize].centre()[axis].total_cmp(&local[b as usize].centre()[axis]).then(a.cmp(&b))
+        });
         v
     });
     let mut scratch = Scratch { left: vec![false; n], tmp: vec![0; n], right_area: vec![0.0; n] };
@@ -39,7 +41,7 @@ fn recurse(
     depth: usize,
 ) -> usize {
     let n = sorted[0].len();
-    let bounds = sorted[0].iter().fold(Aabb::EMPTY, |b, &i| b.union(local[i as usize].bounds));
+    let bounds = sorted[0].iter().fold(Aabb::EMPTY, |b, &i| b.union(local[i as usize].bounds()));
     let leaf = |out: &mut Output, ids: &[u32]| out.leaf(&bounds, ids.iter().map(|&i| global[i as usize]));
     if forced_leaf(config, n, depth) {
         return leaf(out, sorted[0]);
@@ -51,14 +53,18 @@ fn recurse(
         // Right-to-left sweep: area of the last k primitives' bounds.
         let mut acc = Aabb::EMPTY;
         for k in (1..n).rev() {
-            acc = acc.union(local[list[k] as usize].bounds);
+            acc = acc.union(local[list[k] as usize].bounds());
             s.right_area[k] = acc.surface_area();
         }
         // Left-to-right sweep evaluates every split between positions k−1 and k.
         let mut acc = Aabb::EMPTY;
         for k in 1..n {
-            acc = acc.union(local[list[k - 1] as usize].bounds);
-            let cost = split_cost(config, parent_area, (acc.surface_area(), k), (s.right_area[k], n - k));
+            acc = acc.union(local[list[k - 1] as usize].bounds());
+            let cost = split_cost(
+                config,
+                parent_area,
+                area_weighted(config, (acc.surface_area(), k), (s.right_area[k], n - k)),
+            );
             if best.is_none_or(|(_, _, c)| cost < c) {
                 best = Some((axis, k, cost));
             }
