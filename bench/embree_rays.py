@@ -45,7 +45,7 @@ Ray-set format (directory DIR, all little endian, no headers)
                       occluded, 0xFFFFFFFF = free; t, u, v NaN. (embree also writes NaN
                       t/u/v for misses; their values are not read for misses.)
   Each tracer prints one JSON line on stdout:
-  {"tracer": "embree"|"bvh4"|"bvh8", "threads": T, "triangles": n, "build_ms": x,
+  {"tracer": "embree"|"bvh4"|"bvh8", "threads": T, "triangles": n, "nodes": k (ours: wide nodes), "build_ms": x,
    "sets": {"primary": {"rays": n, "mrays_per_s": y, "hits": k}, "diffuse": ..., "shadow": ...}}
 
 Hit checks (hits files of the last run of each tracer, per scene)

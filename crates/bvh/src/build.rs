@@ -81,10 +81,10 @@ pub struct BuildConfig {
     pub traversal_cost: f32,
     /// SAH cost of one ray–triangle test.
     pub intersection_cost: f32,
-    /// Primitives tested together by one SIMD leaf test: the SAH counts a set of n
-    /// primitives as ⌈n / sah_block⌉ · sah_block tests (Embree's block SAH), so that splits
-    /// favour full blocks (rounded up to a power of two). 1: plain SAH. The wide trees test leaves four triangles at a
-    /// time ([`crate::Bvh4`], [`crate::Bvh8`]): 4 there.
+    /// Primitives tested together by one SIMD leaf test (rounded up to a power of two):
+    /// the SAH counts a set of n primitives as ⌈n / sah_block⌉ · sah_block tests (Embree's
+    /// block SAH), so that splits favour full blocks. 1: plain SAH. The wide trees test
+    /// leaves four triangles at a time ([`crate::Bvh4`], [`crate::Bvh8`]): 4 there.
     pub sah_block: usize,
 }
 

@@ -83,6 +83,10 @@ pub struct TraceArgs {
     /// Largest leaf of the binary tree before the collapse (default: the renderer's).
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=64))]
     pub max_leaf: Option<u32>,
+    /// Triangles the binned SAH counts as one block (`BuildConfig::sah_block`; default:
+    /// the renderer's 4, the leaf test's width; 1: the plain SAH).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=64))]
+    pub sah_block: Option<u32>,
     /// Recompute every closest hit's t in f64 (correctly rounded; slower): by default only
     /// hits close to the origin relative to its coordinates are.
     #[arg(long)]
@@ -193,15 +197,19 @@ fn trace(args: TraceArgs) -> Result<()> {
     if let Some(n) = args.max_leaf {
         config.max_leaf_size = n as usize;
     }
+    if let Some(n) = args.sah_block {
+        config.sah_block = n as usize;
+    }
     let bvh = pool.install(|| WideBvh::build(&triangles, config, args.bvh_width))?;
     let build = start.elapsed();
     let tracer = format!("bvh{}", bvh.width());
     let bvh = bvh.with_triangle_test(args.triangle_test).with_exact_t(args.exact_t);
     let sets = trace_sets(&bvh, &pool, &args, &tracer)?;
     println!(
-        r#"{{"tracer": "{tracer}", "threads": {}, "triangles": {}, "build_ms": {:.3}, "sets": {{{}}}}}"#,
+        r#"{{"tracer": "{tracer}", "threads": {}, "triangles": {}, "nodes": {}, "build_ms": {:.3}, "sets": {{{}}}}}"#,
         args.threads,
         triangles.len(),
+        bvh.stats().nodes,
         build.as_secs_f64() * 1e3,
         sets.join(", ")
     );

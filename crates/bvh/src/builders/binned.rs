@@ -66,9 +66,10 @@ impl Binner {
         #[cfg(target_arch = "x86_64")]
         {
             use std::arch::x86_64::{__m128i, _mm_cvttps_epi32};
-            // SAFETY: SSE2 is part of the x86_64 baseline. The lanes lie in [0, last]
-            // (centroids within their bounds, a finite scale), where truncation is the
-            // saturating `as` cast's floor.
+            // SAFETY: SSE2 is part of the x86_64 baseline. Lanes x, y, z lie in [0, last]
+            // (centroids within their bounds; `minps` gives `last` for a NaN from an
+            // overflowing scale), where truncation is the floor; the binning and the
+            // partition both call this function, so any lane value is used consistently.
             unsafe { std::mem::transmute::<__m128i, [u32; 4]>(_mm_cvttps_epi32(x.into())) }
         }
         #[cfg(not(target_arch = "x86_64"))]
@@ -181,7 +182,6 @@ pub(crate) fn split(
     let cost = split_cost(config, parent_area, weighted);
     // Partition with the same bin arithmetic as the binning, so the split is exact, and
     // collect each side's centroid bounds on the way.
-    let (mut left_c, mut right_c) = (Aabb::EMPTY, Aabb::EMPTY);
     let (mut lmin, mut lmax) = (Vec3A::INFINITY, Vec3A::NEG_INFINITY);
     let (mut rmin, mut rmax) = (Vec3A::INFINITY, Vec3A::NEG_INFINITY);
     let mut mid = 0;
@@ -197,12 +197,9 @@ pub(crate) fn split(
             rmax = rmax.max(c);
         }
     }
-    if mid > 0 {
-        left_c = Aabb { min: lmin.into(), max: lmax.into() };
-    }
-    if mid < ids.len() {
-        right_c = Aabb { min: rmin.into(), max: rmax.into() };
-    }
+    // A side without primitives keeps (+∞, −∞): the empty box.
+    let left_c = Aabb { min: lmin.into(), max: lmax.into() };
+    let right_c = Aabb { min: rmin.into(), max: rmax.into() };
     // The children's bounds are their bins' (no pass over the primitives).
     let side = |range: std::ops::Range<usize>| {
         bins[axis * nb..][range].iter().fold(EMPTY_BIN, |mut b, x| {

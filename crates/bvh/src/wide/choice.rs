@@ -94,6 +94,14 @@ impl WideBvh {
         }
     }
 
+    /// Node count, leaf count, depth and SAH cost ([`BvhWide::stats`](super::BvhWide::stats)).
+    pub fn stats(&self) -> super::WideStats {
+        match self {
+            Self::Four(b) => b.stats(),
+            Self::Eight(b) => b.stats(),
+        }
+    }
+
     /// Children per node: 4 or 8.
     pub fn width(&self) -> u32 {
         match self {

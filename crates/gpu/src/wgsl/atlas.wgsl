@@ -105,12 +105,10 @@ fn pt_atlas(
             l += beta * pt_emission_at(m, uv, lambda);
         }
         pt_set_texels(m, uv, lambda);
-        let sn = pt_shading_normals(sf.ng, sf.ns, wo_world, two_sided);
-        let frame = pt_frame_from_normal_tangent(sn.ns, sf.tangent);
-        let wo = pt_to_local(frame, wo_world);
+        let at = pt_shading(sf, wo_world, two_sided);
         if pt_is_non_specular(material_flags(m)) {
             // Direct light, per pixel.
-            let e = pt_next_event(sf, frame, sn.ng, wo_world, wo, two_sided, lambda, pt_next_2d(smp), false, rays);
+            let e = pt_next_event(at, lambda, pt_next_2d(smp), false, rays);
             if e.valid {
                 l += beta * e.f * e.le * e.k;
             }
@@ -121,9 +119,9 @@ fn pt_atlas(
             if front || !two_sided {
                 let e_rgb = pt_atlas_irradiance(pt_hit_cpu_prim(hit), sf.p);
                 if e_rgb.w >= 0.0 {
-                    let s = bsdf_sample(m, wo, uc, u, lambda);
+                    let s = bsdf_sample(m, at.wo, uc, u, lambda);
                     if s.pdf > 0.0 {
-                        let wi_world = pt_to_world(frame, s.wi);
+                        let wi_world = pt_to_world(at.frame, s.wi);
                         if !pt_lobe_leaks(sf.ng, wo_world, wi_world, s.flags, two_sided) {
                             let albedo = s.f * (abs(s.wi.z) / s.pdf);
                             l += beta * albedo * pt_irradiance_spectrum(e_rgb.xyz, lambda) * (1.0 / PT_PI);
@@ -135,11 +133,11 @@ fn pt_atlas(
         }
         // A mirror or glass: follow it.
         let uc = pt_next_1d(smp);
-        let s = bsdf_sample(m, wo, uc, pt_next_2d(smp), lambda);
+        let s = bsdf_sample(m, at.wo, uc, pt_next_2d(smp), lambda);
         if s.pdf <= 0.0 || all(s.f == vec4f(0.0)) {
             return l;
         }
-        let wi_world = pt_to_world(frame, s.wi);
+        let wi_world = pt_to_world(at.frame, s.wi);
         if pt_lobe_leaks(sf.ng, wo_world, wi_world, s.flags, two_sided) {
             return l;
         }

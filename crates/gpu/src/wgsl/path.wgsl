@@ -123,6 +123,26 @@ fn pt_collapse_if_dispersive(wl: ptr<function, PtWavelengths>, smp: ptr<function
     }
 }
 
+// A surface point ready for light sampling (`Shading` in integrator.rs): the surface, its
+// shading frame, the geometric normal facing the way the shading normals were reconciled,
+// ω_o in world and local coordinates, and whether the material is two-sided.
+struct PtShading {
+    sf: PtSurface,
+    frame: PtFrame,
+    ng: vec3f,
+    wo_world: vec3f,
+    wo: vec3f,
+    two_sided: bool,
+}
+
+// The shading normals, frame and local ω_o of a hit seen from `wo_world` (the integrators'
+// common set-up before light sampling and BSDF sampling).
+fn pt_shading(sf: PtSurface, wo_world: vec3f, two_sided: bool) -> PtShading {
+    let sn = pt_shading_normals(sf.ng, sf.ns, wo_world, two_sided);
+    let frame = pt_frame_from_normal_tangent(sn.ns, sf.tangent);
+    return PtShading(sf, frame, sn.ng, wo_world, pt_to_local(frame, wo_world), two_sided);
+}
+
 // Next-event estimation (`next_event`): one light sample from `u`, its shadow ray, and
 // the contribution as f, Le and the factor |cos θi| · w / pdf, with `mis` the power
 // heuristic's w against the BSDF's pdf, else w = 1.
@@ -133,40 +153,25 @@ struct PtNextEvent {
     valid: bool,
 }
 
-fn pt_next_event(
-    sf: PtSurface,
-    frame: PtFrame,
-    ng: vec3f,
-    wo_world: vec3f,
-    wo: vec3f,
-    two_sided: bool,
-    lambda: vec4f,
-    u: vec2f,
-    mis: bool,
-    rays: ptr<function, u32>,
-) -> PtNextEvent {
+fn pt_next_event(at: PtShading, lambda: vec4f, u: vec2f, mis: bool, rays: ptr<function, u32>) -> PtNextEvent {
     let ls = pt_sample_light(u);
     if !ls.valid {
         return PtNextEvent(vec4f(0.0), vec4f(0.0), 0.0, false);
     }
-    return pt_light_contribution(sf, frame, ng, wo_world, wo, two_sided, lambda, ls, mis, rays);
+    return pt_light_contribution(at, lambda, ls, mis, rays);
 }
 
 // A light sample's contribution (`light_contribution`): its shadow ray, and f, Le and
 // |cos θi| · w / pdf.
 fn pt_light_contribution(
-    sf: PtSurface,
-    frame: PtFrame,
-    ng: vec3f,
-    wo_world: vec3f,
-    wo: vec3f,
-    two_sided: bool,
+    at: PtShading,
     lambda: vec4f,
     ls: PtLightSample,
     mis: bool,
     rays: ptr<function, u32>,
 ) -> PtNextEvent {
     var out = PtNextEvent(vec4f(0.0), vec4f(0.0), 0.0, false);
+    let sf = at.sf;
     let m = sf.m;
     let p = sf.p;
     var wi_world: vec3f;
@@ -206,19 +211,19 @@ fn pt_light_contribution(
         le = inc.le;
         delta = inc.delta;
     }
-    let wi = pt_to_local(frame, wi_world);
+    let wi = pt_to_local(at.frame, wi_world);
     // Reflection must stay on the geometric side it came from (no light leaks).
-    let same_side = dot(wi_world, ng) * dot(wo_world, ng) > 0.0;
-    if !(light_pdf > 0.0 && any(le != vec4f(0.0)) && (same_side || !two_sided)) {
+    let same_side = dot(wi_world, at.ng) * dot(at.wo_world, at.ng) > 0.0;
+    if !(light_pdf > 0.0 && any(le != vec4f(0.0)) && (same_side || !at.two_sided)) {
         return out;
     }
-    let f = bsdf_eval(m, wo, wi, lambda);
+    let f = bsdf_eval(m, at.wo, wi, lambda);
     if all(f == vec4f(0.0)) {
         return out;
     }
     // A shadow ray into the back of absorbing glass runs inside it (Beer–Lambert), and
     // never reaches a light at infinity.
-    if material_absorbing(m) && !two_sided && dot(wi_world, sf.ng) < 0.0 {
+    if material_absorbing(m) && !at.two_sided && dot(wi_world, sf.ng) < 0.0 {
         if !finite_light {
             return out;
         }
@@ -237,7 +242,7 @@ fn pt_light_contribution(
     }
     var w = 1.0;
     if mis && !delta {
-        w = pt_power_heuristic(light_pdf, bsdf_pdf(m, wo, wi, lambda));
+        w = pt_power_heuristic(light_pdf, bsdf_pdf(m, at.wo, wi, lambda));
     }
     return PtNextEvent(f, le, abs(wi.z) * w / light_pdf, true);
 }
@@ -291,14 +296,8 @@ fn pt_radiance(
         var sf: PtSurface;
         let uv = pt_hit_surface(hit, o, d, &sf);
         let m = sf.m;
-        let p = sf.p;
-        let it_ng = sf.ng;
-        let it_ns = sf.ns;
-        let tangent = sf.tangent;
-        let prim_pmf = sf.prim_pmf;
-        let area = sf.area;
         let wo_world = -d;
-        let front = dot(wo_world, it_ng) > 0.0;
+        let front = dot(wo_world, sf.ng) > 0.0;
         let two_sided = material_two_sided(m);
 
         beta *= pt_segment_transmittance(m, front, two_sided, inside, hit.t, (*wl).lambda);
@@ -309,10 +308,10 @@ fn pt_radiance(
             if any(le != vec4f(0.0)) {
                 var w = 1.0;
                 if !prev_specular {
-                    let dp = p - prev_p;
+                    let dp = sf.p - prev_p;
                     let dist2 = dot(dp, dp);
-                    let cos_l = dot(wo_world, it_ng);
-                    let light_pdf = prim_pmf * dist2 / (cos_l * area);
+                    let cos_l = dot(wo_world, sf.ng);
+                    let light_pdf = sf.prim_pmf * dist2 / (cos_l * sf.area);
                     w = pt_power_heuristic(prev_pdf, light_pdf);
                 }
                 l += beta * le * w;
@@ -346,15 +345,12 @@ fn pt_radiance(
         // The texels the BSDF calls of this hit read (`Material::bsdf_at`).
         pt_set_texels(m, uv, lambda);
 
-        let sn = pt_shading_normals(it_ng, it_ns, wo_world, two_sided);
-        let ng = sn.ng;
-        let frame = pt_frame_from_normal_tangent(sn.ns, tangent);
-        let wo = pt_to_local(frame, wo_world);
+        let at = pt_shading(sf, wo_world, two_sided);
         let flags = material_flags(m);
 
         // Next-event estimation: one shadow ray to a point on a light.
         if pt_is_non_specular(flags) {
-            let e = pt_next_event(sf, frame, ng, wo_world, wo, two_sided, lambda, pt_next_2d(smp), true, rays);
+            let e = pt_next_event(at, lambda, pt_next_2d(smp), true, rays);
             if e.valid {
                 l += beta * e.f * e.le * e.k;
             }
@@ -363,21 +359,21 @@ fn pt_radiance(
         // Continue the path by sampling the BSDF.
         let uc = pt_next_1d(smp);
         let u = pt_next_2d(smp);
-        let s = bsdf_sample(m, wo, uc, u, lambda);
+        let s = bsdf_sample(m, at.wo, uc, u, lambda);
         if s.pdf <= 0.0 || all(s.f == vec4f(0.0)) {
             break;
         }
-        let wi_world = pt_to_world(frame, s.wi);
+        let wi_world = pt_to_world(at.frame, s.wi);
         // The sampled lobe must agree with the geometry.
-        if pt_lobe_leaks(it_ng, wo_world, wi_world, s.flags, two_sided) {
+        if pt_lobe_leaks(sf.ng, wo_world, wi_world, s.flags, two_sided) {
             break;
         }
         beta *= s.f * (abs(s.wi.z) / s.pdf);
         prev_pdf = s.pdf;
         prev_specular = pt_is_specular(s.flags);
-        prev_p = p;
-        inside = select(PT_NO_HIT, m, dot(wi_world, it_ng) < 0.0 && !two_sided && material_absorbing(m));
-        o = pt_offset_ray_origin(p, select(-it_ng, it_ng, dot(wi_world, it_ng) > 0.0));
+        prev_p = sf.p;
+        inside = select(PT_NO_HIT, m, dot(wi_world, sf.ng) < 0.0 && !two_sided && material_absorbing(m));
+        o = pt_offset_ray_origin(sf.p, select(-sf.ng, sf.ng, dot(wi_world, sf.ng) > 0.0));
         d = wi_world;
         bounce += 1u;
 

@@ -25,11 +25,8 @@ fn pt_direct(origin: vec3f, dir: vec3f, wl: PtWavelengths, smp: ptr<function, Pt
     }
     pt_set_texels(sf.m, uv, lambda);
     let two_sided = material_two_sided(sf.m);
-    let sn = pt_shading_normals(sf.ng, sf.ns, wo_world, two_sided);
-    let frame = pt_frame_from_normal_tangent(sn.ns, sf.tangent);
     if pt_is_non_specular(material_flags(sf.m)) {
-        let wo = pt_to_local(frame, wo_world);
-        let e = pt_next_event(sf, frame, sn.ng, wo_world, wo, two_sided, lambda, pt_next_2d(smp), false, rays);
+        let e = pt_next_event(pt_shading(sf, wo_world, two_sided), lambda, pt_next_2d(smp), false, rays);
         if e.valid {
             l += e.f * e.le * e.k;
         }

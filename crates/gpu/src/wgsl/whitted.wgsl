@@ -58,9 +58,7 @@ fn pt_whitted(
             }
             if br.depth < max_depth {
                 pt_set_texels(m, uv, lambda);
-                let sn = pt_shading_normals(sf.ng, sf.ns, wo_world, two_sided);
-                let frame = pt_frame_from_normal_tangent(sn.ns, sf.tangent);
-                let wo = pt_to_local(frame, wo_world);
+                let at = pt_shading(sf, wo_world, two_sided);
                 if pt_is_non_specular(material_flags(m)) {
                     // Every punctual light deterministically (probability 1 each; a sun disk
                     // by one direction drawn within it)…
@@ -71,7 +69,7 @@ fn pt_whitted(
                                 u = pt_next_2d(smp);
                             }
                             let ls = pt_sample_punctual(k, u, 1.0);
-                            let e = pt_light_contribution(sf, frame, sn.ng, wo_world, wo, two_sided, lambda, ls, false, rays);
+                            let e = pt_light_contribution(at, lambda, ls, false, rays);
                             if e.valid {
                                 l += br.beta * e.f * e.le * e.k;
                             }
@@ -82,7 +80,7 @@ fn pt_whitted(
                         let ls = pt_sample_light(pt_next_2d(smp));
                         if ls.valid && (ls.kind == PT_LIGHT_TRIANGLE || ls.kind == PT_LIGHT_SHAPE
                             || ls.kind == PT_LIGHT_ENVIRONMENT) {
-                            let e = pt_light_contribution(sf, frame, sn.ng, wo_world, wo, two_sided, lambda, ls, false, rays);
+                            let e = pt_light_contribution(at, lambda, ls, false, rays);
                             if e.valid {
                                 l += br.beta * e.f * e.le * e.k;
                             }
@@ -91,13 +89,13 @@ fn pt_whitted(
                 } else {
                     // Purely specular: uc at either end of [0, 1) picks each lobe
                     // (reflection below the Fresnel reflectance, transmission above).
-                    let a = bsdf_sample(m, wo, 0.0, vec2f(0.0), lambda);
-                    let b = bsdf_sample(m, wo, PT_ONE_MINUS_EPSILON, vec2f(0.0), lambda);
+                    let a = bsdf_sample(m, at.wo, 0.0, vec2f(0.0), lambda);
+                    let b = bsdf_sample(m, at.wo, PT_ONE_MINUS_EPSILON, vec2f(0.0), lambda);
                     let one_lobe = a.pdf > 0.0 && b.pdf > 0.0 && a.flags == b.flags;
                     let split = b.pdf > 0.0 && !one_lobe;
-                    let first = pt_whitted_child(br, sf, m, wo_world, frame, two_sided, a, split);
+                    let first = pt_whitted_child(br, at, a, split);
                     if split {
-                        let second = pt_whitted_child(br, sf, m, wo_world, frame, two_sided, b, true);
+                        let second = pt_whitted_child(br, at, b, true);
                         if second.depth != PT_NO_HIT {
                             stack[top] = second;
                             top += 1u;
@@ -124,23 +122,16 @@ fn pt_whitted(
 // The branch a specular lobe sample `s` starts at `sf` (depth PT_NO_HIT: none — no sample,
 // black, or a lobe the geometry disagrees with, `lobe_leaks`). A split lobe's weight is
 // f·|cos θ| (both are followed), a single one's f·|cos θ|/pdf.
-fn pt_whitted_child(
-    br: PtBranch,
-    sf: PtSurface,
-    m: u32,
-    wo_world: vec3f,
-    frame: PtFrame,
-    two_sided: bool,
-    s: BsdfSample,
-    split: bool,
-) -> PtBranch {
+fn pt_whitted_child(br: PtBranch, at: PtShading, s: BsdfSample, split: bool) -> PtBranch {
+    let sf = at.sf;
+    let m = sf.m;
     var out = br;
     out.depth = PT_NO_HIT;
     if s.pdf <= 0.0 || all(s.f == vec4f(0.0)) {
         return out;
     }
-    let wi_world = pt_to_world(frame, s.wi);
-    if pt_lobe_leaks(sf.ng, wo_world, wi_world, s.flags, two_sided) {
+    let wi_world = pt_to_world(at.frame, s.wi);
+    if pt_lobe_leaks(sf.ng, at.wo_world, wi_world, s.flags, at.two_sided) {
         return out;
     }
     let weight = select(s.f * (abs(s.wi.z) / s.pdf), s.f * abs(s.wi.z), split);
@@ -148,6 +139,6 @@ fn pt_whitted_child(
     out.d = wi_world;
     out.beta = br.beta * weight;
     out.depth = br.depth + 1u;
-    out.inside = select(PT_NO_HIT, m, dot(wi_world, sf.ng) < 0.0 && !two_sided && material_absorbing(m));
+    out.inside = select(PT_NO_HIT, m, dot(wi_world, sf.ng) < 0.0 && !at.two_sided && material_absorbing(m));
     return out;
 }
