@@ -80,17 +80,64 @@ impl Binner {
     }
 }
 
-/// Bins `ids` along all three axes into `bins[axis * nb + b]` (3·nb empty bins).
-fn bin(prims: &[Prim], ids: &[u32], binner: &Binner, nb: usize, bins: &mut [Bin]) {
-    for &i in ids {
+/// How many primitives ahead the binning and the partition prefetch: their reads of
+/// `prims[ids[j]]` are random once the ids no longer follow the input order.
+const PREFETCH_AHEAD: usize = 16;
+
+/// Starts loading the primitive `ahead` places after position `j` of `ids`, if any.
+#[inline(always)]
+fn prefetch(prims: &[Prim], ids: &[u32], j: usize) {
+    #[cfg(target_arch = "x86_64")]
+    if let Some(&i) = ids.get(j + PREFETCH_AHEAD) {
+        use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
+        // SAFETY: SSE is baseline on x86_64, and a prefetch never faults.
+        unsafe { _mm_prefetch::<_MM_HINT_T0>(prims.as_ptr().wrapping_add(i as usize).cast::<i8>()) };
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = (prims, ids, j);
+}
+
+/// Adds primitive `p`, whose bin on each axis is `b`, to `bins` (3·nb bins, axis-major).
+#[inline(always)]
+fn add_to_bins(bins: &mut [Bin], nb: usize, b: [u32; 4], p: &Prim) {
+    for axis in 0..3 {
+        let bin = &mut bins[axis * nb + b[axis] as usize];
+        bin.min = bin.min.min(p.min);
+        bin.max = bin.max.max(p.max);
+        bin.count += 1;
+    }
+}
+
+/// Bins `ids` along all three axes into `bins[axis * nb + b]` (3·nb empty bins), one
+/// primitive after the other.
+fn bin_serial(prims: &[Prim], ids: &[u32], binner: &Binner, nb: usize, bins: &mut [Bin]) {
+    for (j, &i) in ids.iter().enumerate() {
+        prefetch(prims, ids, j);
         let p = &prims[i as usize];
-        let b = binner.index(p.centre());
-        for axis in 0..3 {
-            let bin = &mut bins[axis * nb + b[axis] as usize];
-            bin.min = bin.min.min(p.min);
-            bin.max = bin.max.max(p.max);
-            bin.count += 1;
-        }
+        add_to_bins(bins, nb, binner.index(p.centre()), p);
+    }
+}
+
+/// [`bin_serial`]'s result, computed with the even and the odd primitives in two sets of
+/// bins merged at the end: neighbouring primitives mostly fall in the same bins, and
+/// with one set each update waits for the previous one's store (7 % of a large build).
+fn bin(prims: &[Prim], ids: &[u32], binner: &Binner, nb: usize, bins: &mut [Bin]) {
+    if ids.len() < 64 || nb > STACK_BINS {
+        return bin_serial(prims, ids, binner, nb, bins);
+    }
+    let mut odd = [EMPTY_BIN; 3 * STACK_BINS];
+    let pairs = ids.chunks_exact(2);
+    let rest = pairs.remainder();
+    for (k, pair) in pairs.enumerate() {
+        prefetch(prims, ids, 2 * k);
+        prefetch(prims, ids, 2 * k + 1);
+        let (p, q) = (&prims[pair[0] as usize], &prims[pair[1] as usize]);
+        add_to_bins(bins, nb, binner.index(p.centre()), p);
+        add_to_bins(&mut odd, nb, binner.index(q.centre()), q);
+    }
+    bin_serial(prims, rest, binner, nb, bins);
+    for (a, b) in bins.iter_mut().zip(&odd[..3 * nb]) {
+        a.add(b);
     }
 }
 
@@ -186,6 +233,7 @@ pub(crate) fn split(
     let (mut rmin, mut rmax) = (Vec3A::INFINITY, Vec3A::NEG_INFINITY);
     let mut mid = 0;
     for j in 0..ids.len() {
+        prefetch(prims, ids, j);
         let c = prims[ids[j] as usize].centre();
         if (binner.index(c)[axis] as usize) < boundary {
             ids.swap(mid, j);
@@ -214,4 +262,43 @@ pub(crate) fn split(
         right: side(boundary..nb).bounds(),
         centroids: Some((left_c, right_c)),
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::Vec3;
+
+    #[test]
+    fn two_sets_of_bins_bin_as_one() {
+        // Random boxes, the ids shuffled, an odd count: both passes give the same bins,
+        // bit for bit (min, max and counts are exact whatever the order).
+        let mut state = 7u32;
+        let mut rnd = || {
+            state ^= state << 13;
+            state ^= state >> 17;
+            state ^= state << 5;
+            (state >> 8) as f32 / (1u32 << 24) as f32
+        };
+        let prims: Vec<Prim> = (0..999)
+            .map(|_| {
+                let c = Vec3::new(rnd(), rnd(), rnd()) * 10.0;
+                Prim::new(Aabb { min: c, max: c + Vec3::new(rnd(), rnd(), rnd()) })
+            })
+            .collect();
+        let mut ids: Vec<u32> = (0..prims.len() as u32).collect();
+        ids.sort_by_key(|&i| (i * 7919) % 999);
+        let cb = centroid_bounds(&prims, &ids);
+        let nb = STACK_BINS;
+        let extent = Vec3A::from(cb.extent());
+        let binner =
+            Binner { min: cb.min.into(), scale: Vec3A::splat(nb as f32) / extent, last: Vec3A::splat((nb - 1) as f32) };
+        let (mut one, mut two) = (vec![EMPTY_BIN; 3 * nb], vec![EMPTY_BIN; 3 * nb]);
+        bin_serial(&prims, &ids, &binner, nb, &mut one);
+        bin(&prims, &ids, &binner, nb, &mut two);
+        assert_eq!(one.iter().map(|b| b.count).sum::<u32>(), 3 * 999);
+        for (a, b) in one.iter().zip(&two) {
+            assert_eq!((a.min, a.max, a.count), (b.min, b.max, b.count));
+        }
+    }
 }

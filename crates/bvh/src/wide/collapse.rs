@@ -35,9 +35,9 @@ impl<const W: usize> BvhWide<W> {
     pub(super) fn collapse(bvh: &Bvh, vertices: impl Fn(usize) -> [Vec3; 3] + Sync) -> Self {
         let mut collapse = Collapse::new(bvh.nodes());
         if !bvh.nodes().is_empty() {
-            collapse.node(0);
+            collapse.node(0, 1);
         }
-        let nodes = collapse.out;
+        let (nodes, depth) = (collapse.out, collapse.depth);
         let config = bvh.config();
         let mut soa = vec![0.0; 9 * bvh.prim_ids().len() + 3];
         // Leaves cover the triangles in contiguous ranges: cut the array into one slice per
@@ -80,7 +80,7 @@ impl<const W: usize> BvhWide<W> {
             test: TriangleTest::default(),
             exact_t: false,
         };
-        let depth = wide.stats().depth;
+        debug_assert_eq!(depth, wide.stats().depth);
         assert!(
             W <= super::MAX_WIDTH && depth.saturating_sub(1) * (W - 1) <= STACK_DEPTH,
             "{W}-wide BVH of depth {depth} overflows the traversal stack"
@@ -107,7 +107,11 @@ struct Collapse<'a, const W: usize> {
     range: Vec<(u32, u32)>,
     /// Per binary node: true if its subtree becomes one leaf of the wide tree.
     leaf: Vec<bool>,
+    /// Per binary node: its box's surface area (which child to open next).
+    area: Vec<f32>,
     out: Vec<WideNode<W>>,
+    /// Levels of the wide tree so far, its leaves counted (as [`super::WideStats::depth`]).
+    depth: usize,
 }
 
 impl<'a, const W: usize> Collapse<'a, W> {
@@ -115,10 +119,12 @@ impl<'a, const W: usize> Collapse<'a, W> {
         // Children follow their parents, so one backward pass sees them first.
         let mut range = vec![(0u32, 0u32); src.len()];
         let mut leaf = vec![false; src.len()];
+        let mut areas = vec![0.0f32; src.len()];
         // SAH cost (times the root's area) of each subtree with leaves tested 4 at a time.
         let mut cost = vec![0.0f32; src.len()];
         for (i, n) in src.iter().enumerate().rev() {
             let area = binary_bounds(n).surface_area();
+            areas[i] = area;
             if n.count > 0 {
                 range[i] = (n.index, n.count);
                 leaf[i] = true;
@@ -132,7 +138,7 @@ impl<'a, const W: usize> Collapse<'a, W> {
                 cost[i] = if leaf[i] { area } else { split };
             }
         }
-        Self { src, range, leaf, out: Vec::with_capacity(src.len() / 2 + 1) }
+        Self { src, range, leaf, area: areas, out: Vec::with_capacity(src.len() / 2 + 1), depth: 0 }
     }
 
     /// True if binary node `i` becomes a leaf of the wide tree.
@@ -141,12 +147,14 @@ impl<'a, const W: usize> Collapse<'a, W> {
     }
 
     /// Collapses the binary subtree at `root` (an interior node, or a root that is a leaf)
-    /// into wide node(s) appended depth-first; returns the wide node's index.
-    fn node(&mut self, root: usize) -> u32 {
+    /// into wide node(s) appended depth-first, the node on level `depth`; returns the wide
+    /// node's index.
+    fn node(&mut self, root: usize, depth: usize) -> u32 {
         let src = self.src;
         let index = self.out.len();
         self.out.push(WideNode::EMPTY);
-        let area = |i: usize| binary_bounds(&src[i]).surface_area();
+        self.depth = self.depth.max(depth);
+        let area = |i: usize| self.area[i];
         let mut slots = [0usize; W];
         let mut n = if self.is_leaf(root) {
             slots[0] = root;
@@ -170,7 +178,12 @@ impl<'a, const W: usize> Collapse<'a, W> {
         }
         let mut node = WideNode::EMPTY;
         for (i, &s) in slots[..n].iter().enumerate() {
-            let (child, count) = if self.is_leaf(s) { self.range[s] } else { (self.node(s), 0) };
+            let (child, count) = if self.is_leaf(s) {
+                self.depth = self.depth.max(depth + 1);
+                self.range[s]
+            } else {
+                (self.node(s, depth + 1), 0)
+            };
             node.set_child(i, &binary_bounds(&src[s]), child, count);
         }
         self.out[index] = node;

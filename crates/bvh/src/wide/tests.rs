@@ -480,6 +480,19 @@ fn rejects_non_finite_coordinates() {
     let mut tris = soup(7, 10, 1.0, 1.0);
     tris[3][1].y = f32::NAN;
     assert!(matches!(Bvh4::build(&tris, BuildConfig::default()), Err(BuildError::NonFinite { index: 3, .. })));
+    // Above 64K triangles the check runs in parallel chunks: the first bad triangle is
+    // still the one reported, and an infinity counts as much as a NaN.
+    let mut big: Vec<[Vec3; 3]> = (0..70_000).map(|i| tris[i % tris.len()]).collect();
+    big.iter_mut().filter(|t| !t[1].y.is_finite()).for_each(|t| t[1].y = 0.5);
+    big[69_999][0].x = f32::NAN;
+    big[50_001][2].z = f32::NEG_INFINITY;
+    match Bvh8::build(&big, BuildConfig::default()) {
+        Err(BuildError::NonFinite { index, vertex }) => assert_eq!((index, vertex[2]), (50_001, f32::NEG_INFINITY)),
+        other => panic!("expected NonFinite at 50001, got {:?}", other.map(|b| b.nodes().len())),
+    }
+    big[50_001][2].z = 0.25;
+    big[69_999][0].x = 0.25;
+    assert!(Bvh8::build(&big, BuildConfig::default()).is_ok());
 }
 
 proptest! {
