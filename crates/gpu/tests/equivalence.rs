@@ -416,6 +416,19 @@ fn unsupported_scenes_and_modes_are_clear_errors() {
     }
     let unbounded = RenderSettings { path: PathSettings { max_depth: 0, ..s.path }, ..s.clone() };
     assert!(caps.check_settings(&unbounded).is_ok(), "an unbounded depth is traced, truncations counted");
+    // The path tracer's cap counts --extension; Whitted's stack counts only its depth,
+    // as its recursion ignores the extension.
+    let with_extension = |max_depth, specular_extension| RenderSettings {
+        path: PathSettings { max_depth, specular_extension, ..s.path },
+        ..s.clone()
+    };
+    let err = caps.check_settings(&with_extension(250, 10)).unwrap_err().to_string();
+    assert!(err.contains("260 bounces") && err.contains("--extension"), "{err}");
+    let whitted = gpu::backend::capabilities_for(gpu::kernel::GpuIntegrator::Whitted);
+    let max = gpu::kernel::WHITTED_MAX_DEPTH;
+    whitted.check_settings(&with_extension(max, 10)).unwrap();
+    let err = whitted.check_settings(&with_extension(max + 1, 0)).unwrap_err().to_string();
+    assert!(err.contains(&format!("--max-depth {max} or less")) && !err.contains("--extension"), "{err}");
     // The same refusals through a device: before any upload or compilation.
     let Some(ctx) = gpu::require_gpu() else { return };
     let gpu = GpuBackend::with_context(ctx);

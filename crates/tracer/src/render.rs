@@ -189,6 +189,9 @@ pub struct Capabilities {
     /// that reach it with an unbounded `max_depth` are counted as truncated); `None` if
     /// paths end only by the depth limit and Russian roulette.
     pub max_bounces: Option<u32>,
+    /// Whether its integrator lengthens paths by `PathSettings::specular_extension`, so
+    /// that it counts against `max_bounces` (Whitted's recursion ignores it).
+    pub extension: bool,
     /// Whether its integrator limits non-specular bounces
     /// (`PathSettings::max_diffuse_depth`; the CPU's path tracer does).
     pub diffuse_depth: bool,
@@ -354,11 +357,20 @@ impl Capabilities {
             ));
         }
         if let Some(cap) = self.max_bounces {
-            let depth = settings.path.max_depth.saturating_add(settings.path.specular_extension);
+            let extension = if self.extension { settings.path.specular_extension } else { 0 };
+            let depth = settings.path.max_depth.saturating_add(extension);
             if settings.path.max_depth > 0 && depth > cap {
                 return Err(unsupported(
-                    format!("paths of {depth} bounces (--max-depth plus --extension; it traces at most {cap})"),
-                    format!("use --max-depth and --extension summing to at most {cap}, or --backend cpu"),
+                    if self.extension {
+                        format!("paths of {depth} bounces (--max-depth plus --extension; it traces at most {cap})")
+                    } else {
+                        format!("a recursion {depth} deep (--max-depth; it traces at most {cap})")
+                    },
+                    if self.extension {
+                        format!("use --max-depth and --extension summing to at most {cap}, or --backend cpu")
+                    } else {
+                        format!("use --max-depth {cap} or less, or --backend cpu")
+                    },
                 ));
             }
         }
