@@ -41,6 +41,8 @@ Ray-set format (directory DIR, all little endian, no headers)
   diffuse.rays        same                                               closest hit
   shadow.rays         same; segments (d not normalised, tmax ~ 1-1e-4)   occlusion
   <set>.<tracer>.hits 16 bytes per ray: u32 prim (0xFFFFFFFF = miss), f32 t, f32 u, f32 v
+                      (ours renamed <set>.<tracer>.<label>.hits after each run, so that
+                      two spt binaries with the same accelerator keep their own)
                       with hit = (1-u-v) v0 + u v1 + v v2 at o + t d. Shadow set: prim 0 =
                       occluded, 0xFFFFFFFF = free; t, u, v NaN. (embree also writes NaN
                       t/u/v for misses; their values are not read for misses.)
@@ -61,7 +63,7 @@ Hit checks (hits files of the last run of each tracer, per scene)
   shadow: agreement on occluded/free and the two kinds of disagreement (not adjudicated:
   that would need a brute-force search).
 """
-import argparse, glob, importlib.util, json, os, platform, shlex, statistics, subprocess, sys, time
+import argparse, glob, importlib.util, json, os, platform, re, shlex, statistics, subprocess, sys, time
 
 import numpy as np
 
@@ -612,7 +614,15 @@ def main():
                         res = run_json(cmd, args.timeout)
                         rec["result"] = res
                         if cfg["kind"] == "ours":
-                            ours_names[cfg["label"]] = str(res.get("tracer", cfg["accel"]))
+                            # Each of our configurations keeps its own hits files (two
+                            # binaries with the same accelerator write the same names).
+                            tracer = str(res.get("tracer", cfg["accel"]))
+                            slug = re.sub(r"[^A-Za-z0-9]+", "-", cfg["label"]).strip("-")
+                            for s in SETS:
+                                src = os.path.join(d, f"{s}.{tracer}.hits")
+                                if os.path.exists(src):
+                                    os.replace(src, os.path.join(d, f"{s}.{tracer}.{slug}.hits"))
+                            ours_names[cfg["label"]] = f"{tracer}.{slug}"
                         msg = "  ".join(f"{s} {num(res['sets'][s].get('mrays_per_s'), '.2f')}"
                                         for s in SETS if isinstance(res["sets"].get(s), dict))
                         log(f"[{name}] round {rnd + 1}/{args.rounds} T={T} {cfg['label']}: "

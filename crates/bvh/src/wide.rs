@@ -76,6 +76,9 @@ pub struct BvhWide<const W: usize> {
     /// not edges, so that the watertight test sees each shared vertex bit for bit.
     soa: Vec<f32>,
     prim_ids: Vec<u32>,
+    /// Per triangle in leaf order, for a leaf's first: whether the leaf holds a sliver, on
+    /// which closest hits' t is refined in f64 (`traverse::refine`); empty if no leaf does.
+    slivers: Vec<bool>,
     costs: (f32, f32),
     test: TriangleTest,
     /// Recompute every closest hit's t in f64 ([`BvhWide::with_exact_t`]).

@@ -58,22 +58,25 @@ fn sort_by_entry<const W: usize>(e: &mut [Entry; W], k: usize) {
 }
 
 /// A closest hit nearer than this fraction of the ray origin's largest coordinate gets its
-/// t recomputed in f64 ([`refine_t`]). The f32 tests' t carries an absolute error of a few
-/// ulps of the coordinates, amplified on slivers (a long thin triangle's plane is
-/// ill-conditioned in f32, not in f64 from its exact float vertices): a large relative
-/// error when t is small — up to 1.2·10⁻² on Sponza's diffuse rays (its mouldings: 11 long,
-/// 0.015 wide; t ≈ 0.016 from an origin at |x| ≈ 5.7). Refining those costs nothing
-/// measurable; refining every closest hit ([`BvhWide::with_exact_t`]) brings every t within
-/// 6·10⁻⁸, also at grazing incidence where the watertight test's t can be off by 10⁻⁴,
-/// for 14 % of the bunny's primary rays/s (`spt rays trace --exact-t`).
+/// t recomputed in f64 ([`refine_t`]), as does one on a sliver (`collapse::SLIVER`). The
+/// f32 tests' t carries an absolute error of a few ulps of the coordinates, amplified on
+/// slivers (a long thin triangle's plane is ill-conditioned in f32, not in f64 from its
+/// exact float vertices): a large relative error when t is small — up to 1.2·10⁻² on
+/// Sponza's diffuse rays (its mouldings: 11 long, 0.015 wide; t ≈ 0.016 from an origin at
+/// |x| ≈ 5.7) — and up to 2.6·10⁻⁴ at any distance on slivers (Sponza's primary rays).
+/// Checking both rules costs nothing measurable, and what they leave is at grazing
+/// incidence (docs/figures.md); refining every closest hit ([`BvhWide::with_exact_t`])
+/// brings every t within 6·10⁻⁸ for 14 % of the bunny's primary rays/s (`spt rays trace
+/// --exact-t`).
 const REFINE_BELOW: f32 = 0.125;
 
-/// `best` with its t recomputed by [`refine_t`] if `always` or it is nearer than
-/// [`REFINE_BELOW`] times the origin's largest coordinate (`leaf`: the leaf that holds it).
+/// `best` with its t recomputed by [`refine_t`] if `always`, if it is nearer than
+/// [`REFINE_BELOW`] times the origin's largest coordinate, or if it lies in a leaf that
+/// holds a sliver (`leaf`: the leaf that holds it, `sliver`: whether that leaf does).
 #[inline(always)]
-fn refine(ray: &Ray, mut best: Option<Hit>, leaf: Leaf, always: bool) -> Option<Hit> {
+fn refine(ray: &Ray, mut best: Option<Hit>, leaf: Leaf, sliver: bool, always: bool) -> Option<Hit> {
     if let Some(hit) = &mut best
-        && (always || hit.t < REFINE_BELOW * ray.origin.abs().max_element())
+        && (always || sliver || hit.t < REFINE_BELOW * ray.origin.abs().max_element())
         && let Some(i) = leaf.ids.iter().position(|&p| p == hit.prim)
     {
         hit.t = refine_t(ray, leaf.vertices(i), hit.t);
@@ -111,6 +114,7 @@ impl<const W: usize> BvhWide<W> {
         let kernel = K::new(ray);
         // The leaf of the closest hit so far, for `refine`.
         let mut best_leaf = Leaf { soa: &[], ids: &[] };
+        let mut best_first = 0;
         let watertight = (self.test == TriangleTest::Watertight).then(|| WatertightRay::new(ray));
         let mut t_max = ray.t_max;
         let mut best: Option<Hit> = None;
@@ -178,12 +182,19 @@ impl<const W: usize> BvhWide<W> {
                 }
                 if t_max < before {
                     best_leaf = leaf;
+                    best_first = first;
                 }
             }
             // Pop until a child that may still hold a closer hit.
             loop {
                 if sp == 0 {
-                    return if ANY_HIT { best } else { refine(ray, best, best_leaf, self.exact_t) };
+                    return if ANY_HIT {
+                        best
+                    } else {
+                        // Trees without slivers keep no flags (`slivers` empty).
+                        let sliver = self.slivers.get(best_first).is_some_and(|&s| s);
+                        refine(ray, best, best_leaf, sliver, self.exact_t)
+                    };
                 }
                 sp -= 1;
                 // SAFETY: entries below `sp` were all written by the pushes above.
