@@ -42,7 +42,9 @@ Ray-set format (directory DIR, all little endian, no headers)
   shadow.rays         same; segments (d not normalised, tmax ~ 1-1e-4)   occlusion
   <set>.<tracer>.hits 16 bytes per ray: u32 prim (0xFFFFFFFF = miss), f32 t, f32 u, f32 v
                       (ours renamed <set>.<tracer>.<label>.hits after each run, so that
-                      two spt binaries with the same accelerator keep their own)
+                      two spt binaries with the same accelerator keep their own; files of
+                      earlier runs stay until removed, and files older than the run are
+                      never read)
                       with hit = (1-u-v) v0 + u v1 + v v2 at o + t d. Shadow set: prim 0 =
                       occluded, 0xFFFFFFFF = free; t, u, v NaN. (embree also writes NaN
                       t/u/v for misses; their values are not read for misses.)
@@ -168,6 +170,12 @@ def tracer_configs(args, embree_lib, spt):
             accel, _, exe = a.partition("@")
             label = f"ours-{accel}@{os.path.basename(os.path.dirname(exe)) or exe}" if exe else f"ours-{a}"
             cfgs.append({"label": label, "kind": "ours", "accel": accel, "spt": exe or spt})
+    # Labels name the tables' columns and the hits files: two binaries in folders of the
+    # same name would share them.
+    slugs = [re.sub(r"[^A-Za-z0-9]+", "-", c["label"]).strip("-") for c in cfgs]
+    if len(set(slugs)) != len(slugs):
+        sys.exit("embree_rays.py: two --ours entries get the same label " +
+                 f"({', '.join(c['label'] for c in cfgs)}): put the binaries in folders of different names")
     return cfgs
 
 

@@ -111,7 +111,7 @@ impl<const W: usize> BvhWide<W> {
             // loading a triangle a few ahead (30 ms less of a 540 ms build of 1.1M triangles
             // on one thread).
             #[cfg(target_arch = "x86_64")]
-            if let Some(&ahead) = ids.get(i + 16) {
+            if let Some(&ahead) = ids.get(i + crate::builders::binned::PREFETCH_AHEAD) {
                 use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
                 let p = triangles.as_ptr().wrapping_add(ahead as usize).cast::<i8>();
                 // SAFETY: SSE is baseline on x86_64, and a prefetch never faults.
@@ -138,8 +138,8 @@ impl<const W: usize> BvhWide<W> {
     /// With `true`, every closest hit's t is recomputed in f64 from the hit triangle's
     /// plane: correctly rounded (within 6·10⁻⁸ relative) except where the ray is parallel
     /// to the plane, for about 14 % of the rays/s of coherent rays. By default only hits
-    /// near the ray origin relative to its coordinates are, where the f32 tests' t loses
-    /// most (see `traverse.rs`).
+    /// near the ray origin relative to its coordinates and hits in leaves that hold a
+    /// sliver are, where the f32 tests' t loses most (see `traverse.rs`).
     pub fn with_exact_t(mut self, exact: bool) -> Self {
         self.exact_t = exact;
         self

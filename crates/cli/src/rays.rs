@@ -88,7 +88,8 @@ pub struct TraceArgs {
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=64))]
     pub sah_block: Option<u32>,
     /// Recompute every closest hit's t in f64 (correctly rounded; slower): by default only
-    /// hits close to the origin relative to its coordinates are.
+    /// hits close to the origin relative to its coordinates and hits in leaves holding a
+    /// sliver (a long thin triangle) are.
     #[arg(long)]
     pub exact_t: bool,
     /// Do not write the hits files.

@@ -354,7 +354,7 @@ pub fn capabilities_for(integrator: GpuIntegrator) -> Capabilities {
             GpuIntegrator::Whitted => crate::kernel::WHITTED_MAX_DEPTH,
             _ => MAX_BOUNCES,
         }),
-        extension: integrator != GpuIntegrator::Whitted,
+        extension: integrator == GpuIntegrator::Path,
         diffuse_depth: false,
         bvh_builders: false,
         sample_block: SAMPLES_PER_READBACK,

@@ -429,6 +429,9 @@ fn unsupported_scenes_and_modes_are_clear_errors() {
     whitted.check_settings(&with_extension(max, 10)).unwrap();
     let err = whitted.check_settings(&with_extension(max + 1, 0)).unwrap_err().to_string();
     assert!(err.contains(&format!("--max-depth {max} or less")) && !err.contains("--extension"), "{err}");
+    // Direct lighting reads neither: its cap is the path tracer's, without the extension.
+    let direct = gpu::backend::capabilities_for(gpu::kernel::GpuIntegrator::Direct);
+    direct.check_settings(&with_extension(250, 10)).unwrap();
     // The same refusals through a device: before any upload or compilation.
     let Some(ctx) = gpu::require_gpu() else { return };
     let gpu = GpuBackend::with_context(ctx);

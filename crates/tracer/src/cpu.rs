@@ -117,7 +117,7 @@ fn cpu_capabilities(integrator: &'static str) -> Capabilities {
         bvh_widths: BvhWidth::CPU.to_vec(),
         integrator,
         max_bounces: None,
-        extension: integrator != "whitted",
+        extension: integrator == "path",
         // Only the path tracer limits diffuse bounces; the others would ignore it.
         diffuse_depth: integrator == "path",
         bvh_builders: true,

@@ -190,7 +190,8 @@ pub struct Capabilities {
     /// paths end only by the depth limit and Russian roulette.
     pub max_bounces: Option<u32>,
     /// Whether its integrator lengthens paths by `PathSettings::specular_extension`, so
-    /// that it counts against `max_bounces` (Whitted's recursion ignores it).
+    /// that it counts against `max_bounces` (only the path tracer does: Whitted, bdpt,
+    /// direct lighting, ambient occlusion and the atlas ignore it).
     pub extension: bool,
     /// Whether its integrator limits non-specular bounces
     /// (`PathSettings::max_diffuse_depth`; the CPU's path tracer does).

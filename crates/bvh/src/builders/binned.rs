@@ -80,21 +80,39 @@ impl Binner {
     }
 }
 
-/// How many primitives ahead the binning and the partition prefetch: their reads of
-/// `prims[ids[j]]` are random once the ids no longer follow the input order.
-const PREFETCH_AHEAD: usize = 16;
+/// How many primitives (or triangles) ahead the binning, the partition and the wide tree's
+/// leaf fill prefetch: their reads are random once the ids no longer follow the input
+/// order.
+pub(crate) const PREFETCH_AHEAD: usize = 16;
 
-/// Starts loading the primitive `ahead` places after position `j` of `ids`, if any.
+/// Starts loading the primitive [`PREFETCH_AHEAD`] places after position `j` of `ids`, if
+/// any (both ends: a 32-byte primitive may straddle two cache lines).
 #[inline(always)]
 fn prefetch(prims: &[Prim], ids: &[u32], j: usize) {
     #[cfg(target_arch = "x86_64")]
     if let Some(&i) = ids.get(j + PREFETCH_AHEAD) {
         use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
         // SAFETY: SSE is baseline on x86_64, and a prefetch never faults.
-        unsafe { _mm_prefetch::<_MM_HINT_T0>(prims.as_ptr().wrapping_add(i as usize).cast::<i8>()) };
+        unsafe {
+            let p = prims.as_ptr().wrapping_add(i as usize).cast::<i8>();
+            _mm_prefetch::<_MM_HINT_T0>(p);
+            _mm_prefetch::<_MM_HINT_T0>(p.wrapping_add(size_of::<Prim>() - 1));
+        }
     }
     #[cfg(not(target_arch = "x86_64"))]
     let _ = (prims, ids, j);
+}
+
+/// The first `n` bins of `storage`, emptied: only the bins a node uses are initialised, as
+/// most nodes are small.
+#[inline(always)]
+fn empty_bins(storage: &mut [MaybeUninit<Bin>; 3 * STACK_BINS], n: usize) -> &mut [Bin] {
+    let bins = &mut storage[..n];
+    for b in bins.iter_mut() {
+        b.write(EMPTY_BIN);
+    }
+    // SAFETY: every element of the slice was just initialised.
+    unsafe { &mut *(bins as *mut [MaybeUninit<Bin>] as *mut [Bin]) }
 }
 
 /// Adds primitive `p`, whose bin on each axis is `b`, to `bins` (3·nb bins, axis-major).
@@ -125,7 +143,8 @@ fn bin(prims: &[Prim], ids: &[u32], binner: &Binner, nb: usize, bins: &mut [Bin]
     if ids.len() < 64 || nb > STACK_BINS {
         return bin_serial(prims, ids, binner, nb, bins);
     }
-    let mut odd = [EMPTY_BIN; 3 * STACK_BINS];
+    let mut odd_bins = [MaybeUninit::<Bin>::uninit(); 3 * STACK_BINS];
+    let odd = empty_bins(&mut odd_bins, 3 * nb);
     let pairs = ids.chunks_exact(2);
     let rest = pairs.remainder();
     for (k, pair) in pairs.enumerate() {
@@ -133,10 +152,10 @@ fn bin(prims: &[Prim], ids: &[u32], binner: &Binner, nb: usize, bins: &mut [Bin]
         prefetch(prims, ids, 2 * k + 1);
         let (p, q) = (&prims[pair[0] as usize], &prims[pair[1] as usize]);
         add_to_bins(bins, nb, binner.index(p.centre()), p);
-        add_to_bins(&mut odd, nb, binner.index(q.centre()), q);
+        add_to_bins(odd, nb, binner.index(q.centre()), q);
     }
     bin_serial(prims, rest, binner, nb, bins);
-    for (a, b) in bins.iter_mut().zip(&odd[..3 * nb]) {
+    for (a, b) in bins.iter_mut().zip(odd.iter()) {
         a.add(b);
     }
 }
@@ -177,13 +196,7 @@ pub(crate) fn split(
             })?;
         &heap_bins
     } else if nb <= STACK_BINS {
-        // Only the bins this node uses are initialised: most nodes are small.
-        let bins = &mut stack_bins[..3 * nb];
-        for b in bins.iter_mut() {
-            b.write(EMPTY_BIN);
-        }
-        // SAFETY: every element of the slice was just initialised.
-        let bins = unsafe { &mut *(bins as *mut [MaybeUninit<Bin>] as *mut [Bin]) };
+        let bins = empty_bins(&mut stack_bins, 3 * nb);
         bin(prims, ids, &binner, nb, bins);
         bins
     } else {
@@ -289,16 +302,17 @@ mod tests {
         let mut ids: Vec<u32> = (0..prims.len() as u32).collect();
         ids.sort_by_key(|&i| (i * 7919) % 999);
         let cb = centroid_bounds(&prims, &ids);
-        let nb = STACK_BINS;
         let extent = Vec3A::from(cb.extent());
-        let binner =
-            Binner { min: cb.min.into(), scale: Vec3A::splat(nb as f32) / extent, last: Vec3A::splat((nb - 1) as f32) };
-        let (mut one, mut two) = (vec![EMPTY_BIN; 3 * nb], vec![EMPTY_BIN; 3 * nb]);
-        bin_serial(&prims, &ids, &binner, nb, &mut one);
-        bin(&prims, &ids, &binner, nb, &mut two);
-        assert_eq!(one.iter().map(|b| b.count).sum::<u32>(), 3 * 999);
-        for (a, b) in one.iter().zip(&two) {
-            assert_eq!((a.min, a.max, a.count), (b.min, b.max, b.count));
+        for nb in [5, 8, STACK_BINS] {
+            let last = Vec3A::splat((nb - 1) as f32);
+            let binner = Binner { min: cb.min.into(), scale: Vec3A::splat(nb as f32) / extent, last };
+            let (mut one, mut two) = (vec![EMPTY_BIN; 3 * nb], vec![EMPTY_BIN; 3 * nb]);
+            bin_serial(&prims, &ids, &binner, nb, &mut one);
+            bin(&prims, &ids, &binner, nb, &mut two);
+            assert_eq!(one.iter().map(|b| b.count).sum::<u32>(), 3 * 999);
+            for (a, b) in one.iter().zip(&two) {
+                assert_eq!((a.min, a.max, a.count), (b.min, b.max, b.count), "{nb} bins");
+            }
         }
     }
 }

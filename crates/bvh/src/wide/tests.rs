@@ -587,7 +587,7 @@ fn near_hits_far_from_the_origin_have_a_precise_t() {
 #[allow(clippy::excessive_precision, reason = "the rays' directions as Sponza's ray set has them")]
 fn hits_on_slivers_have_a_precise_t_at_any_distance() {
     // Sponza's worst primary and diffuse rays beyond the rule for hits near the origin
-    // (t ≈ 7.5–9.4 from origins whose largest coordinate is 5.5–13), verbatim: slivers 10.8
+    // (t ≈ 7.5–9.4 from origins whose largest coordinate is 5.5–12), verbatim: slivers 10.8
     // long and 0.01 wide, where the f32 test's t was off by 2.6·10⁻⁴, 2.2·10⁻⁴, 1.9·10⁻⁴,
     // 2.7·10⁻⁵ and 2.1·10⁻⁵ relative. Leaves holding a sliver have their closest hits' t
     // refined in f64.
