@@ -361,18 +361,18 @@ impl Capabilities {
             let extension = if self.extension { settings.path.specular_extension } else { 0 };
             let depth = settings.path.max_depth.saturating_add(extension);
             if settings.path.max_depth > 0 && depth > cap {
-                return Err(unsupported(
-                    if self.extension {
-                        format!("paths of {depth} bounces (--max-depth plus --extension; it traces at most {cap})")
-                    } else {
-                        format!("a recursion {depth} deep (--max-depth; it traces at most {cap})")
-                    },
-                    if self.extension {
-                        format!("use --max-depth and --extension summing to at most {cap}, or --backend cpu")
-                    } else {
-                        format!("use --max-depth {cap} or less, or --backend cpu")
-                    },
-                ));
+                let (what, hint) = if self.extension {
+                    (
+                        format!("paths of {depth} bounces (--max-depth plus --extension; it traces at most {cap})"),
+                        format!("use --max-depth and --extension summing to at most {cap}, or --backend cpu"),
+                    )
+                } else {
+                    (
+                        format!("a recursion {depth} deep (--max-depth; it traces at most {cap})"),
+                        format!("use --max-depth {cap} or less, or --backend cpu"),
+                    )
+                };
+                return Err(unsupported(what, hint));
             }
         }
         Ok(())

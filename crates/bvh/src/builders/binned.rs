@@ -5,7 +5,7 @@
 //! registers, and the partition that applies a split also finds both children's centroid
 //! bounds, so that no node makes a pass over its primitives for them.
 
-use super::{Prim, Split, area_weighted, centroid_bounds, split_cost};
+use super::{Prim, Split, area_weighted, centroid_bounds, prefetch, split_cost};
 use crate::Aabb;
 use crate::build::BuildConfig;
 use glam::Vec3A;
@@ -80,29 +80,6 @@ impl Binner {
     }
 }
 
-/// How many primitives (or triangles) ahead the binning, the partition and the wide tree's
-/// leaf fill prefetch: their reads are random once the ids no longer follow the input
-/// order.
-pub(crate) const PREFETCH_AHEAD: usize = 16;
-
-/// Starts loading the primitive [`PREFETCH_AHEAD`] places after position `j` of `ids`, if
-/// any (both ends: a 32-byte primitive may straddle two cache lines).
-#[inline(always)]
-fn prefetch(prims: &[Prim], ids: &[u32], j: usize) {
-    #[cfg(target_arch = "x86_64")]
-    if let Some(&i) = ids.get(j + PREFETCH_AHEAD) {
-        use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
-        // SAFETY: SSE is baseline on x86_64, and a prefetch never faults.
-        unsafe {
-            let p = prims.as_ptr().wrapping_add(i as usize).cast::<i8>();
-            _mm_prefetch::<_MM_HINT_T0>(p);
-            _mm_prefetch::<_MM_HINT_T0>(p.wrapping_add(size_of::<Prim>() - 1));
-        }
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    let _ = (prims, ids, j);
-}
-
 /// The first `n` bins of `storage`, emptied: only the bins a node uses are initialised, as
 /// most nodes are small.
 #[inline(always)]
@@ -118,11 +95,9 @@ fn empty_bins(storage: &mut [MaybeUninit<Bin>; 3 * STACK_BINS], n: usize) -> &mu
 /// Adds primitive `p`, whose bin on each axis is `b`, to `bins` (3·nb bins, axis-major).
 #[inline(always)]
 fn add_to_bins(bins: &mut [Bin], nb: usize, b: [u32; 4], p: &Prim) {
+    let one = Bin { min: p.min, max: p.max, count: 1 };
     for axis in 0..3 {
-        let bin = &mut bins[axis * nb + b[axis] as usize];
-        bin.min = bin.min.min(p.min);
-        bin.max = bin.max.max(p.max);
-        bin.count += 1;
+        bins[axis * nb + b[axis] as usize].add(&one);
     }
 }
 
@@ -138,7 +113,8 @@ fn bin_serial(prims: &[Prim], ids: &[u32], binner: &Binner, nb: usize, bins: &mu
 
 /// [`bin_serial`]'s result, computed with the even and the odd primitives in two sets of
 /// bins merged at the end: neighbouring primitives mostly fall in the same bins, and
-/// with one set each update waits for the previous one's store (7 % of a large build).
+/// with one set each update waits for the previous one's store (docs/figures.md, "Builds,
+/// sixth session").
 fn bin(prims: &[Prim], ids: &[u32], binner: &Binner, nb: usize, bins: &mut [Bin]) {
     if ids.len() < 64 || nb > STACK_BINS {
         return bin_serial(prims, ids, binner, nb, bins);

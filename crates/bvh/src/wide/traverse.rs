@@ -59,17 +59,15 @@ fn sort_by_entry<const W: usize>(e: &mut [Entry; W], k: usize) {
 
 /// A closest hit nearer than this fraction of the ray origin's largest coordinate gets its
 /// t recomputed in f64 ([`refine_t`]), as does one in a leaf that holds a sliver
-/// (`collapse::SLIVER`). The
-/// f32 tests' t carries an absolute error of a few ulps of the coordinates, amplified on
-/// slivers (a long thin triangle's plane is ill-conditioned in f32, not in f64 from its
-/// exact float vertices): a large relative error when t is small — up to 1.2·10⁻² on
-/// Sponza's diffuse rays (its mouldings: 11 long, 0.015 wide; t ≈ 0.016 from an origin at
-/// |x| ≈ 5.7) — and up to 2.6·10⁻⁴ at any distance on slivers (Sponza's primary rays).
-/// Checking both rules costs no more than this machine's run-to-run noise (docs/figures.md:
-/// alternating runs within ±6 %), and what they leave is at grazing
-/// incidence (docs/figures.md); refining every closest hit ([`BvhWide::with_exact_t`])
-/// brings every t within 6·10⁻⁸ for 14 % of the bunny's primary rays/s (`spt rays trace
-/// --exact-t`).
+/// (`collapse::SLIVER`). The f32 tests' t carries an absolute error of a few ulps of the
+/// coordinates, amplified on slivers (a long thin triangle's plane is ill-conditioned in
+/// f32, not in f64 from its exact float vertices): a large relative error when t is small —
+/// up to 1.2·10⁻² on Sponza's diffuse rays (its mouldings: 11 long, 0.015 wide; t ≈ 0.016
+/// from an origin at |x| ≈ 5.7) — and up to 2.6·10⁻⁴ at any distance on slivers (Sponza's
+/// primary rays). Checking both rules costs no more than the run-to-run noise; what they
+/// leave is at grazing incidence or just beyond this rule (`bench/t_error_slivers.py`,
+/// docs/figures.md). Refining every closest hit ([`BvhWide::with_exact_t`]) brings every
+/// t within 6·10⁻⁸ for 14 % of the bunny's primary rays/s (`spt rays trace --exact-t`).
 const REFINE_BELOW: f32 = 0.125;
 
 /// `best` with its t recomputed by [`refine_t`] if `always`, if it is nearer than
