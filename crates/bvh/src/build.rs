@@ -1,7 +1,7 @@
 //! The BVH: build settings, the flattened node array, statistics and ordered stack
 //! traversal. The builders themselves live in [`crate::builders`].
 
-use crate::builders::{self, Output, Prim};
+use crate::builders::{self, Prim};
 use crate::{Aabb, Accelerator, BuildError, Hit, Ray, RayStats, Triangle, intersect_triangle, validate};
 use glam::{Vec3, Vec3A};
 
@@ -154,11 +154,7 @@ impl Bvh {
             triangles.iter().map(prim).collect()
         };
         let mut ids: Vec<u32> = (0..prims.len() as u32).collect();
-        let mut out = Output::default();
-        if !ids.is_empty() {
-            let bounds = builders::bounds_of(&prims, &ids);
-            builders::build(&prims, &mut ids, bounds, None, &config, &mut out, 1);
-        }
+        let out = builders::build_tree(&prims, &mut ids, &config);
         Ok(Self { nodes: out.nodes, triangles: Vec::new(), prim_ids: out.order, config })
     }
 

@@ -37,45 +37,53 @@ impl<const W: usize> BvhWide<W> {
         if !bvh.nodes().is_empty() {
             collapse.node(0, 1);
         }
-        let (nodes, depth) = (collapse.out, collapse.depth);
+        let (nodes, depth, count_at) = (collapse.out, collapse.depth, collapse.count_at);
         let config = bvh.config();
-        let mut soa = vec![0.0; 9 * bvh.prim_ids().len() + 3];
-        // Leaves cover the triangles in contiguous ranges: cut the array into one slice per
-        // leaf and fill them in parallel (a gather from the input order, cache-missing).
-        let mut leaves: Vec<(usize, usize)> = nodes
-            .iter()
-            .flat_map(|n| {
-                n.child.iter().zip(&n.count).filter(|(_, c)| **c > 0).map(|(&f, &c)| (f as usize, c as usize))
-            })
-            .collect();
-        leaves.sort_unstable();
-        let mut slivers = vec![false; bvh.prim_ids().len()];
-        let mut slices = Vec::with_capacity(leaves.len());
-        let (mut rest, mut rest_slivers) = (&mut soa[..], &mut slivers[..]);
+        let triangles = bvh.prim_ids().len();
+        let mut soa = vec![0.0; 9 * triangles + 3];
+        let mut slivers = vec![false; triangles];
+        // The leaves cover the triangles in contiguous ranges (`count_at`, made by the
+        // collapse: a sort or a list of the leaves cost more, mostly in page faults;
+        // docs/figures.md). Cut the arrays at leaf boundaries into segments of about
+        // `SEGMENT` triangles and fill them in parallel (a gather from the input order,
+        // cache-missing).
+        const SEGMENT: usize = 16 * 1024;
+        let mut segments = Vec::with_capacity(triangles / SEGMENT + 1);
+        let (mut soa_rest, mut slivers_rest, mut counts_rest) = (&mut soa[..], &mut slivers[..], &count_at[..]);
         let mut at = 0;
-        for &(first, count) in &leaves {
-            let (_, tail) = rest.split_at_mut(9 * (first - at));
-            let (leaf, tail) = tail.split_at_mut(9 * count);
-            let (_, flags) = rest_slivers.split_at_mut(first - at);
-            let (leaf_slivers, flags) = flags.split_at_mut(count);
-            slices.push((first, count, leaf, leaf_slivers));
-            (rest, rest_slivers) = (tail, flags);
-            at = first + count;
+        while at < triangles {
+            let mut end = (at + SEGMENT).min(triangles);
+            while end < triangles && count_at[end] == 0 {
+                end += 1;
+            }
+            let (s, rest) = soa_rest.split_at_mut(9 * (end - at));
+            let (f, flags) = slivers_rest.split_at_mut(end - at);
+            let (c, counts) = counts_rest.split_at(end - at);
+            segments.push((at, s, f, c));
+            (soa_rest, slivers_rest, counts_rest) = (rest, flags, counts);
+            at = end;
         }
-        let fill = |(first, count, leaf, slivers): (usize, usize, &mut [f32], &mut [bool])| {
-            for i in 0..count {
-                let v = vertices(first + i);
-                for (k, x) in v.iter().flat_map(|v| v.to_array()).enumerate() {
-                    leaf[k * count + i] = x;
+        let fill = |(start, soa, slivers, counts): (usize, &mut [f32], &mut [bool], &[u32])| {
+            let mut first = 0;
+            while first < counts.len() {
+                let count = counts[first] as usize;
+                assert!(count > 0, "the wide leaves tile the triangles");
+                let leaf = &mut soa[9 * first..9 * (first + count)];
+                for i in 0..count {
+                    let v = vertices(start + first + i);
+                    for (k, x) in v.iter().flat_map(|v| v.to_array()).enumerate() {
+                        leaf[k * count + i] = x;
+                    }
+                    slivers[first] |= is_sliver(&v);
                 }
-                slivers[0] |= is_sliver(&v);
+                first += count;
             }
         };
-        if leaves.len() > 4096 {
+        if segments.len() > 1 {
             use rayon::prelude::*;
-            slices.into_par_iter().for_each(fill);
+            segments.into_par_iter().for_each(fill);
         } else {
-            slices.into_iter().for_each(fill);
+            segments.into_iter().for_each(fill);
         }
         // A tree without slivers keeps no flags: its traversal skips the check.
         if !slivers.contains(&true) {
@@ -136,6 +144,9 @@ struct Collapse<'a, const W: usize> {
     out: Vec<WideNode<W>>,
     /// Levels of the wide tree so far, its leaves counted (as [`super::WideStats::depth`]).
     depth: usize,
+    /// Per triangle in leaf order: the number of triangles of the wide leaf that starts
+    /// at it, 0 inside a leaf.
+    count_at: Vec<u32>,
 }
 
 impl<'a, const W: usize> Collapse<'a, W> {
@@ -162,7 +173,9 @@ impl<'a, const W: usize> Collapse<'a, W> {
                 cost[i] = if leaf[i] { area } else { split };
             }
         }
-        Self { src, range, leaf, area: areas, out: Vec::with_capacity(src.len() / 2 + 1), depth: 0 }
+        let triangles = if src.is_empty() { 0 } else { range[0].1 as usize };
+        let count_at = vec![0; triangles];
+        Self { src, range, leaf, area: areas, out: Vec::with_capacity(src.len() / 2 + 1), depth: 0, count_at }
     }
 
     /// True if binary node `i` becomes a leaf of the wide tree.
@@ -204,7 +217,9 @@ impl<'a, const W: usize> Collapse<'a, W> {
         for (i, &s) in slots[..n].iter().enumerate() {
             let (child, count) = if self.is_leaf(s) {
                 self.depth = self.depth.max(depth + 1);
-                self.range[s]
+                let (first, count) = self.range[s];
+                self.count_at[first as usize] = count;
+                (first, count)
             } else {
                 (self.node(s, depth + 1), 0)
             };
