@@ -1,5 +1,6 @@
 #!/usr/bin/env python3
-"""Time to error: our path tracer against Mitsuba 3 on the shared Cornell box, in one run.
+"""Time to error: our path tracer against Mitsuba 3 on the shared Cornell box (or two scenes
+built from it), in one run.
 
 Each configuration renders the reference's view (256 x 256 by default) at S samples per
 pixel; its error is the relMSE against the converged 4096-spp reference in
@@ -28,6 +29,17 @@ multijitter and ldsampler samplers and ours in hero mode with the independent an
 samplers. Prints one JSON line per configuration and a table, with each efficiency as a
 ratio to Mitsuba's best (to the first configuration when no Mitsuba one runs).
 
+--scene chooses the scene: `cornell` (the default; errors against the shared references),
+`bunny-box` (the shared 69K-triangle bunny, flat-shaded white, standing in the box) or
+`spheres-box` (a smooth-shaded glass sphere, index 1.5, and a silver mirror sphere in the
+box: UV spheres of 16,128 triangles with vertex normals, written by this script). Issue 11
+asks for the equal-error speed on these two as well. There are no shared references for
+them: each renderer's error is measured against its own converged render (--ref-spp,
+default 4096 spp, rendered once and kept in --workdir; ours with zsobol, Mitsuba's with its
+independent sampler in passes of 64 spp), and the script prints how far the two
+references differ (their means per channel and their relMSE), which says whether the two
+renderers draw the same image.
+
 Measuring one change against the commit before it, e.g.:
 
     git worktree add /tmp/before HEAD~1 && cargo build --release -p cli --manifest-path /tmp/before/Cargo.toml
@@ -50,16 +62,103 @@ DEFAULT_CONFIGS = [
 ]
 
 
+CAMERA = ["--eye", "0,1,3.9", "--center", "0,1,0", "--fov", "39.3077"]
+BOX = os.path.join(SHARED, "scenes", "cornell-box")
+BOX_OBJ = os.path.join(BOX, "CornellBox-Original-fixed.obj")
+BOX_MTL = os.path.join(BOX, "CornellBox-Original.mtl")
+BUNNY_OBJ = os.path.join(SHARED, "scenes", "bunny", "bunny.obj")
+# The bunny: scaled by 5, its feet on the floor, left of the short box.
+BUNNY_SCALE, BUNNY_TRANSLATE = 5.0, (-0.45, -0.165, 0.45)
+# The spheres: (name, centre, radius); the glass one on the floor in front of the tall box,
+# the mirror on top of the short box.
+SPHERES = [("glass", (-0.45, 0.3, 0.55), 0.3), ("mirror", (0.33, 0.85, 0.37), 0.25)]
+
+
+def write_uv_sphere(path, centre, radius, rings=64, segments=128):
+    """A UV sphere as an OBJ with a normal per vertex (smooth shading): 2·segments·(rings−1)
+    triangles."""
+    with open(path, "w") as f:
+        import math
+        for i in range(rings + 1):
+            theta = math.pi * i / rings
+            for j in range(segments):
+                phi = 2 * math.pi * j / segments
+                n = (math.sin(theta) * math.cos(phi), math.cos(theta), math.sin(theta) * math.sin(phi))
+                f.write("v %.7f %.7f %.7f\n" % tuple(c + radius * x for c, x in zip(centre, n)))
+                f.write("vn %.7f %.7f %.7f\n" % n)
+        vid = lambda i, j: i * segments + (j % segments) + 1
+        for i in range(rings):
+            for j in range(segments):
+                a, b, c, d = vid(i, j), vid(i, j + 1), vid(i + 1, j), vid(i + 1, j + 1)
+                if i > 0:  # the top ring's quads are triangles
+                    f.write(f"f {a}//{a} {b}//{b} {c}//{c}\n")
+                if i < rings - 1:
+                    f.write(f"f {b}//{b} {d}//{d} {c}//{c}\n")
+
+
+class Scene:
+    """A scene as both renderers load it: our `spt render` arguments, Mitsuba's scene
+    dict, and the shared references if there are any."""
+
+    def __init__(self, name, workdir):
+        self.name = name
+        self.dir = os.path.join(workdir, name)
+        os.makedirs(self.dir, exist_ok=True)
+        if name == "cornell":
+            self.ours = [BOX_OBJ]
+        elif name == "bunny-box":
+            toml = os.path.join(self.dir, "scene.toml")
+            with open(toml, "w") as f:
+                f.write("[materials.bunny]\nmodel = \"lambert\"\nreflectance = 0.75\n\n")
+                f.write(f"[[mesh]]\nfile = {json.dumps(BOX_OBJ)}\n\n")
+                f.write(f"[[mesh]]\nfile = {json.dumps(BUNNY_OBJ)}\nmaterial = \"bunny\"\n"
+                        f"scale = {BUNNY_SCALE}\ntranslate = {list(BUNNY_TRANSLATE)}\n")
+            self.ours = [toml]
+        elif name == "spheres-box":
+            toml = os.path.join(self.dir, "scene.toml")
+            with open(toml, "w") as f:
+                f.write("[materials.glass]\nmodel = \"dielectric\"\nior = 1.5\n\n")
+                f.write("[materials.mirror]\nmodel = \"conductor\"\nmetal = \"silver\"\n\n")
+                f.write(f"[[mesh]]\nfile = {json.dumps(BOX_OBJ)}\n\n")
+                for m, centre, radius in SPHERES:
+                    obj = os.path.join(self.dir, f"{m}.obj")
+                    write_uv_sphere(obj, centre, radius)
+                    f.write(f"[[mesh]]\nfile = {json.dumps(obj)}\nmaterial = \"{m}\"\n\n")
+            self.ours = [toml]
+        else:
+            sys.exit(f"unknown scene {name} (cornell, bunny-box, spheres-box)")
+
+    def shared_ref(self, kind):
+        """The shared 4096-spp reference of `kind` (spectral, rgb), or None."""
+        if self.name != "cornell":
+            return None
+        return os.path.join(SHARED, "refs", "cornell-box-original", f"cornell-box-original_{kind}_256_4096spp.exr")
+
+    def mitsuba_dict(self, mi, res, tools):
+        sys.path.insert(0, os.path.join(HERE, "mitsuba"))
+        import bench_cornell
+        d = bench_cornell.build_scene_dict(mi, BOX_OBJ, BOX_MTL, res, res, tools)
+        if self.name == "bunny-box":
+            t = mi.ScalarTransform4f().translate(list(BUNNY_TRANSLATE)).scale(BUNNY_SCALE)
+            d["bunny"] = {"type": "obj", "filename": BUNNY_OBJ, "face_normals": True, "to_world": t,
+                          "bsdf": {"type": "twosided", "bsdf": {
+                              "type": "diffuse", "reflectance": {"type": "rgb", "value": [0.75] * 3}}}}
+        elif self.name == "spheres-box":
+            for m, _, _ in SPHERES:
+                bsdf = ({"type": "dielectric", "int_ior": 1.5, "ext_ior": 1.0} if m == "glass"
+                        else {"type": "conductor", "material": "Ag"})
+                d[m] = {"type": "obj", "filename": os.path.join(self.dir, f"{m}.obj"), "bsdf": bsdf}
+        return d
+
+
 class Mitsuba:
     """One Mitsuba configuration: the scene loaded once, kernels warmed up."""
 
-    def __init__(self, variant, sampler, a):
+    def __init__(self, variant, sampler, a, scene, spp=None):
         if not os.environ.get("DRJIT_LIBLLVM_PATH") and os.path.exists(DEFAULT_LLVM):
             os.environ["DRJIT_LIBLLVM_PATH"] = DEFAULT_LLVM
-        sys.path.insert(0, os.path.join(HERE, "mitsuba"))
         sys.path.insert(0, os.path.join(SHARED, "tools"))
         sys.dont_write_bytecode = True
-        import bench_cornell
         import mitsuba_obj_reference as tools
         import drjit as dr
         import mitsuba as mi
@@ -68,10 +167,9 @@ class Mitsuba:
             dr.set_thread_count(a.threads)
         self.mi, self.dr, self.variant = mi, dr, variant
         mi.set_variant(variant)
-        box = os.path.join(SHARED, "scenes", "cornell-box")
-        d = bench_cornell.build_scene_dict(mi, os.path.join(box, "CornellBox-Original-fixed.obj"),
-                                           os.path.join(box, "CornellBox-Original.mtl"), a.res, a.res, tools)
-        d["sensor"]["sampler"] = {"type": sampler, "sample_count": a.spp}
+        self.tools = tools
+        d = scene.mitsuba_dict(mi, a.res, tools)
+        d["sensor"]["sampler"] = {"type": sampler, "sample_count": spp or a.spp}
         self.scene = mi.load_dict(d)
         self.render(1, 1_000_003)  # JIT tracing and compilation, first-touch allocation
 
@@ -93,11 +191,10 @@ class Mitsuba:
 class Ours:
     """One configuration of our `spt render`."""
 
-    def __init__(self, spt, mode, sampler, extra, a):
-        self.cmd = [spt, "render", os.path.join(SHARED, "scenes", "cornell-box", "CornellBox-Original-fixed.obj"),
-                    "--width", str(a.res), "--height", str(a.res), "--eye", "0,1,3.9", "--center", "0,1,0",
-                    "--fov", "39.3077", "--rr-depth", "5", "--spectral", mode, "--sampler", sampler,
-                    "--threads", str(a.threads)] + extra
+    def __init__(self, spt, mode, sampler, extra, a, scene):
+        self.cmd = [spt, "render"] + scene.ours + CAMERA + [
+                    "--width", str(a.res), "--height", str(a.res), "--rr-depth", "5", "--spectral", mode,
+                    "--sampler", sampler, "--threads", str(a.threads)] + extra
 
     def run(self, spp, seed, out):
         p = subprocess.run(self.cmd + ["--spp", str(spp), "--seed", str(seed), "-o", out],
@@ -106,6 +203,31 @@ class Ours:
             sys.exit(f"{' '.join(self.cmd)}: {p.stderr}")
         m = re.search(r"wrote .*?: ([0-9.]+) s,", p.stderr)
         return float(m.group(1)), read_exr(out)
+
+
+def reference(scene, family, kind, a):
+    """The converged image the errors of `family`'s (ours, mitsuba) configurations of
+    `kind` (spectral, rgb) are measured against: the shared reference where there is one,
+    else that renderer's own render at --ref-spp, rendered once into the scene's folder."""
+    shared = scene.shared_ref(kind)
+    if shared:
+        return read_exr(shared)
+    path = os.path.join(scene.dir, f"reference_{family}_{kind}_{a.res}_{a.ref_spp}spp.exr")
+    if not os.path.exists(path):
+        print(f"rendering {path} ...", flush=True)
+        t0 = time.perf_counter()
+        if family == "ours":
+            mode = "rgb" if kind == "rgb" else "hero"
+            Ours(a.spt, mode, "zsobol", [], a, scene).run(a.ref_spp, 4242, path)
+        else:
+            import numpy as np
+            variant = "llvm_ad_rgb" if kind == "rgb" else "llvm_ad_spectral"
+            passes = max(1, a.ref_spp // 64)
+            m = Mitsuba(variant, "independent", a, scene, spp=64)
+            acc = sum(m.run(64, 4242 + k, None)[1] for k in range(passes)) / passes
+            m.tools.write_exr(path, acc.astype(np.float32))
+        print(f"  {time.perf_counter() - t0:.0f} s", flush=True)
+    return read_exr(path)
 
 
 def main():
@@ -117,27 +239,37 @@ def main():
     ap.add_argument("--threads", type=int, default=2)
     ap.add_argument("--rounds", type=int, default=3)
     ap.add_argument("--spt", default=os.path.join(REPO, "target", "release", "spt"))
+    ap.add_argument("--scene", default="cornell", help="cornell, bunny-box or spheres-box")
+    ap.add_argument("--ref-spp", type=int, default=4096,
+                    help="samples per pixel of each renderer's own reference (scenes without shared ones)")
+    ap.add_argument("--workdir", default=os.path.join(HERE, "build", "time_to_error"),
+                    help="where the generated scenes and references are kept (delete to re-render)")
     a = ap.parse_args()
-    refs = {}
-    for kind in ("spectral", "rgb"):
-        stem = f"cornell-box-original_{kind}_256_4096spp.exr"
-        refs[kind] = read_exr(os.path.join(SHARED, "refs", "cornell-box-original", stem))
-    if a.res != 256:
+    scene = Scene(a.scene, a.workdir)
+    if scene.shared_ref("spectral") and a.res != 256:
         sys.exit("the references are 256 x 256: use --res 256")
 
     runners = []
     for c in a.configs:
         parts = c.split(":")
         if parts[0] == "mitsuba":
-            ref = "rgb" if parts[1].endswith("rgb") else "spectral"
-            runners.append((c, Mitsuba(parts[1], parts[2], a), ref))
+            kind = "rgb" if parts[1].endswith("rgb") else "spectral"
+            runners.append((c, Mitsuba(parts[1], parts[2], a, scene), ("mitsuba", kind)))
         elif parts[0] == "ours" or parts[0].startswith("ours@"):
             spt = parts[0][len("ours@"):] or a.spt
             extra = parts[3].split() if len(parts) > 3 else []
-            ref = "rgb" if parts[1] == "rgb" else "spectral"
-            runners.append((c, Ours(spt, parts[1], parts[2], extra, a), ref))
+            kind = "rgb" if parts[1] == "rgb" else "spectral"
+            runners.append((c, Ours(spt, parts[1], parts[2], extra, a, scene), ("ours", kind)))
         else:
             sys.exit(f"unknown configuration {c}")
+    refs = {key: reference(scene, *key, a) for key in sorted({key for _, _, key in runners})}
+    kinds = {kind for _, kind in refs}
+    for kind in sorted(kinds):
+        if ("ours", kind) in refs and ("mitsuba", kind) in refs and not scene.shared_ref(kind):
+            o, m = refs[("ours", kind)], refs[("mitsuba", kind)]
+            print(f"{kind} references, ours / Mitsuba's: means {o.reshape(-1, 3).mean(0).round(4).tolist()} / "
+                  f"{m.reshape(-1, 3).mean(0).round(4).tolist()}, relMSE between them {rel_mse(o, m):.5f}",
+                  flush=True)
 
     results = {c: {"walls": [], "errors": []} for c, _, _ in runners}
     tmp = tempfile.mkdtemp(prefix="time_to_error_")
@@ -152,7 +284,7 @@ def main():
         walls, errors = sorted(results[c]["walls"]), results[c]["errors"]
         wall = walls[len(walls) // 2]
         err = sum(errors) / len(errors)
-        row = {"config": c, "res": a.res, "spp": a.spp, "threads": a.threads, "rounds": a.rounds,
+        row = {"config": c, "scene": a.scene, "res": a.res, "spp": a.spp, "threads": a.threads, "rounds": a.rounds,
                "wall_s": round(wall, 4), "msamples_per_s": round(a.res * a.res * a.spp / wall / 1e6, 3),
                "rel_mse": round(err, 6), "efficiency": round(1.0 / (err * wall), 2)}
         rows.append(row)
@@ -160,6 +292,8 @@ def main():
     best = max((r for r in rows if r["config"].startswith("mitsuba")), key=lambda r: r["efficiency"], default=None)
     anchor = "Mitsuba's best" if best else "the first"
     best = best or rows[0]
+    print(f"\nscene {a.scene}; errors against "
+          + ("the shared references" if scene.shared_ref("spectral") else f"each renderer's own {a.ref_spp}-spp render"))
     print(f"\n| configuration | M samples/s | relMSE at {a.spp} spp | efficiency | ÷ {anchor} |")
     print("|---|---:|---:|---:|---:|")
     for r in rows:

@@ -816,6 +816,9 @@ fn path_radiance<const N: usize, S: Sampler>(
     let mut prev_specular = true;
     let mut prev_p = ray.origin;
     let mut bounce = 0u32;
+    // The product of η'² over the transmissions so far: `beta` carries radiance compressed
+    // by 1/η'² inside a denser medium, which Russian roulette must not take for a dim path.
+    let mut eta_scale = 1.0f32;
     let mut extension_left = settings.specular_extension;
     let mut diffuse_bounces = 0u32;
     // The absorbing material the last segment left its vertex into, if any.
@@ -906,6 +909,12 @@ fn path_radiance<const N: usize, S: Sampler>(
             break;
         }
         beta *= s.f * (s.wi.z.abs() / s.pdf);
+        if s.flags.contains(ScatterFlags::TRANSMISSION) {
+            let eta = bsdf.eta();
+            // η' = the index on ωi's side over ωo's (+z is the outside, index 1).
+            let etap = if wo.z > 0.0 { eta } else { 1.0 / eta };
+            eta_scale *= etap * etap;
+        }
         prev_pdf = s.pdf;
         prev_specular = s.flags.is_specular();
         prev_p = it.p;
@@ -915,9 +924,13 @@ fn path_radiance<const N: usize, S: Sampler>(
         ray = Ray::new(it.spawn_origin(wi_world), wi_world);
         bounce += 1;
 
-        // Russian roulette (Arvo & Kirk 1990): unbiased termination of dim paths.
+        // Russian roulette (Arvo & Kirk 1990): unbiased termination of dim paths, judged by
+        // the throughput without transmission's radiance compression (pbrt-v4's
+        // `etaScale`, Mitsuba 3's η²): inside glass of index 1.5 the compressed throughput
+        // is 0.44 of the light the path carries out again, and judged by it, paths through
+        // glass ended at least 56 % of the time at each bounce.
         if bounce >= settings.rr_depth {
-            let q = (1.0 - beta.max_component()).max(RR_MIN_TERMINATION);
+            let q = (1.0 - beta.max_component() * eta_scale).max(RR_MIN_TERMINATION);
             if sampler.next_1d() < q {
                 break;
             }
