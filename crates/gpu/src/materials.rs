@@ -50,6 +50,7 @@
 //! fn material_emission(m: u32, lambda: vec4f) -> vec4f;
 //! fn material_absorption(m: u32, lambda: vec4f) -> vec4f;
 //! fn material_absorbing(m: u32) -> bool;
+//! fn material_eta(m: u32) -> f32;
 //! fn mat_set_texels(m: u32, base: vec4f, spec: vec4f, roughness: f32, metallic: f32);
 //! fn mat_clear_texels();
 //! fn bsdf_eval(m: u32, wo: vec3f, wi: vec3f, lambda: vec4f) -> vec4f;
@@ -77,6 +78,7 @@
 //! | 5 | `PARAMS` | word index of the material's parameters (one word per declared parameter) |
 //! | 6 | `BASE_SLOT` | offset in `spectra` of the parameter a base-colour texture multiplies, or [`NO_SPECTRUM`] |
 //! | 7 | `SPECULAR_SLOT` | the same for a specular texture |
+//! | 8 | `ETA` | f32: `bsdf.eta()` at 587.56 nm (1 for a BSDF that does not refract), which Russian roulette undoes transmission's radiance compression with |
 //!
 //! `spectra` (f32): every distinct colour the materials use (parameters, emission,
 //! absorption), each tabulated at 1 nm from [`SPECTRUM_LAMBDA_MIN`] ([`SPECTRUM_SAMPLES`]
@@ -100,7 +102,7 @@ pub const SPECTRUM_LAMBDA_MIN: f32 = spectral::sampled::LAMBDA_MIN;
 /// Entries per table: one per nm from 360 to 830 nm inclusive.
 pub const SPECTRUM_SAMPLES: usize = (spectral::sampled::LAMBDA_MAX - spectral::sampled::LAMBDA_MIN) as usize + 1;
 /// Words per material header in `material_data`.
-pub const HEADER_WORDS: u32 = 8;
+pub const HEADER_WORDS: u32 = 9;
 /// The offset that stands for "no spectrum" (no emission, no absorption).
 pub const NO_SPECTRUM: u32 = u32::MAX;
 /// Header property bit: the BSDF acts on both faces alike ([`Material::is_two_sided`]).
@@ -128,6 +130,8 @@ pub mod header {
     pub const BASE_SLOT: u32 = 6;
     /// The same for a specular texture.
     pub const SPECULAR_SLOT: u32 = 7;
+    /// The relative index of refraction (f32 bits).
+    pub const ETA: u32 = 8;
 }
 
 /// The optional code paths a kernel contains besides its models.
@@ -382,6 +386,14 @@ fn material_flags(material: &Material) -> u32 {
     bits as u32
 }
 
+/// The relative index of refraction Russian roulette uses for `material`: its BSDF's at the
+/// d line, 587.56 nm (where dispersive presets are anchored). An approximation for a
+/// dispersive one is enough: any survival probability keeps the estimate unbiased.
+fn material_eta(material: &Material) -> f32 {
+    let eta = material.bsdf(&SampledWavelengths::<4>::fixed_bins(587.56, 1.0)).eta();
+    if eta.is_finite() && eta > 0.0 { eta } else { 1.0 }
+}
+
 /// Builds the WGSL and buffers for `materials` (in scene order: material index `m` in the
 /// WGSL is `materials[m]`). `specialise`: compile in only the models and features the
 /// materials use (else all). A custom BSDF runs through the WGSL twin its builder ships
@@ -444,6 +456,7 @@ pub fn generate(materials: &[Material], specialise: bool) -> Result<MaterialKern
         data[h + header::EMISSION as usize] = emission;
         data[h + header::ABSORPTION as usize] = absorption;
         data[h + header::PARAMS as usize] = base;
+        data[h + header::ETA as usize] = material_eta(material).to_bits();
     }
     let entries: Vec<ModelEntry> = models.iter().map(|&m| ModelEntry::of(m)).chain(twins).collect();
     let mut metal_tables = Vec::new();
@@ -573,6 +586,10 @@ pub fn wgsl_for(
     out.push_str(COMMON);
 
     let mut pieces: Vec<WgslPiece> = models.iter().flat_map(|m| m.wgsl.needs.iter().copied()).collect();
+    // The kernel's ambient-occlusion integrator draws cosine-weighted directions itself:
+    // without this, a scene of glass and mirrors alone (no model that samples the
+    // hemisphere) did not compile.
+    pieces.push(WgslPiece::Sampling);
     pieces.sort();
     pieces.dedup();
     for piece in pieces {
@@ -641,6 +658,11 @@ pub fn wgsl_for(
     }
     // `Material::absorption().is_some()`: the medium test of Beer–Lambert (a constant false
     // when no material absorbs, so that the kernel's absorption code compiles away).
+    let _ = writeln!(
+        out,
+        "fn material_eta(m: u32) -> f32 {{\n    return bitcast<f32>(mat_header(m, {}u));\n}}\n",
+        header::ETA
+    );
     out.push_str("fn material_absorbing(m: u32) -> bool {\n");
     if features.absorption {
         let _ = writeln!(out, "    return mat_header(m, {}u) != MAT_NO_SPECTRUM;", header::ABSORPTION);

@@ -523,6 +523,19 @@ impl<'a> SceneView<'a> {
     }
 }
 
+/// η'² (η' the index on ωi's side over ωo's, +z the outside of index 1) if `transmits`,
+/// else 1: the factor by which a transmission sampled from `wo` (local) compressed radiance
+/// (Veach 1997 §5.2), which Russian roulette and light subpaths undo.
+#[inline]
+pub(crate) fn compression<const N: usize>(bsdf: &impl Bsdf<N>, wo: Vec3, transmits: bool) -> f32 {
+    if !transmits {
+        return 1.0;
+    }
+    let eta = bsdf.eta();
+    let etap = if wo.z > 0.0 { eta } else { 1.0 / eta };
+    etap * etap
+}
+
 /// The smallest probability with which Russian roulette ends a path (so that paths of
 /// bright throughput end too).
 pub const RR_MIN_TERMINATION: f32 = 0.05;
@@ -909,12 +922,7 @@ fn path_radiance<const N: usize, S: Sampler>(
             break;
         }
         beta *= s.f * (s.wi.z.abs() / s.pdf);
-        if s.flags.contains(ScatterFlags::TRANSMISSION) {
-            let eta = bsdf.eta();
-            // η' = the index on ωi's side over ωo's (+z is the outside, index 1).
-            let etap = if wo.z > 0.0 { eta } else { 1.0 / eta };
-            eta_scale *= etap * etap;
-        }
+        eta_scale *= compression(&bsdf, wo, s.flags.contains(ScatterFlags::TRANSMISSION));
         prev_pdf = s.pdf;
         prev_specular = s.flags.is_specular();
         prev_p = it.p;

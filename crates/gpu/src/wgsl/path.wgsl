@@ -269,6 +269,9 @@ fn pt_radiance(
     var d = dir;
     var l = vec4f(0.0);
     var beta = pt_unit_throughput();
+    // η'² over the transmissions so far, which Russian roulette undoes (the CPU's
+    // `eta_scale`).
+    var eta_scale = 1.0;
     // The pdf of the previous BSDF sample, and whether it was a delta (no MIS then).
     var prev_pdf = 0.0;
     var prev_specular = true;
@@ -369,6 +372,11 @@ fn pt_radiance(
             break;
         }
         beta *= s.f * (abs(s.wi.z) / s.pdf);
+        if (s.flags & SCATTER_TRANSMISSION) != 0u {
+            let eta = material_eta(m);
+            let etap = select(1.0 / eta, eta, at.wo.z > 0.0);
+            eta_scale *= etap * etap;
+        }
         prev_pdf = s.pdf;
         prev_specular = pt_is_specular(s.flags);
         prev_p = sf.p;
@@ -377,9 +385,9 @@ fn pt_radiance(
         d = wi_world;
         bounce += 1u;
 
-        // Russian roulette (Arvo & Kirk 1990).
+        // Russian roulette (Arvo & Kirk 1990), judged by the throughput times η'² (the CPU's).
         if bounce >= pt_params.rr_depth {
-            let q = max(1.0 - max(max(beta.x, beta.y), max(beta.z, beta.w)), PT_RR_MIN_TERMINATION);
+            let q = max(1.0 - max(max(beta.x, beta.y), max(beta.z, beta.w)) * eta_scale, PT_RR_MIN_TERMINATION);
             if pt_next_1d(smp) < q {
                 break;
             }

@@ -5,7 +5,8 @@
 
 use super::{
     Interaction, Mis, PathCounters, PathSettings, RR_MIN_TERMINATION, SHADOW_T_MAX, SceneView, Shading, beer_lambert,
-    entered_medium, light_contribution, lobe_leaks, power_heuristic, segment_transmittance, shading_normals,
+    compression, entered_medium, light_contribution, lobe_leaks, power_heuristic, segment_transmittance,
+    shading_normals,
 };
 use crate::integrator::{CameraSample, Integrator, Splat};
 use crate::lights::{LightSample, LightSource};
@@ -13,7 +14,7 @@ use crate::material::{Material, MaterialBsdf};
 use crate::punctual::PunctualLight;
 use crate::sampler::Sampler;
 use brdf::sampling::{UNIFORM_SPHERE_PDF, cosine_hemisphere, uniform_sphere};
-use brdf::{Bsdf, Frame};
+use brdf::{Bsdf, Frame, ScatterFlags};
 use bvh::Ray;
 use glam::Vec3;
 use shapes::offset::offset_ray_origin;
@@ -222,12 +223,7 @@ fn surface_f<const N: usize>(s: &SurfaceData<'_, N>, wo: Vec3, wi: Vec3, mode: T
 /// BSDF divided radiance by it) times Veach's shading-normal correction
 /// |ωo·n_s| |ωi·n_g| / (|ωo·n_g| |ωi·n_s|) (1997, eq. 5.17).
 fn importance_factor<const N: usize>(s: &SurfaceData<'_, N>, wo: Vec3, wi: Vec3, wo_l: Vec3, wi_l: Vec3) -> f32 {
-    let mut k = 1.0;
-    if wo_l.z * wi_l.z < 0.0 {
-        let eta = s.bsdf.eta();
-        let etap = if wo_l.z > 0.0 { eta } else { 1.0 / eta };
-        k *= etap * etap;
-    }
+    let k = compression(&s.bsdf, wo_l, wo_l.z * wi_l.z < 0.0);
     let (ng, ns) = (s.it.ng, s.frame.n);
     let den = wo.dot(ng).abs() * wi.dot(ns).abs();
     if den == 0.0 {
@@ -632,6 +628,9 @@ fn walk<'v, const N: usize, S: Sampler>(
     let mut specular = true;
     // The absorbing material the last segment left its vertex into, if any.
     let mut inside: Option<&spectral::spectrum::Colour> = None;
+    // A camera subpath's radiance compression so far, which Russian roulette undoes (see
+    // the path tracer's `eta_scale`).
+    let mut eta_scale = 1.0f32;
     loop {
         counters.rays += 1;
         let Some(hit) = view.intersect(&ray) else {
@@ -697,6 +696,8 @@ fn walk<'v, const N: usize, S: Sampler>(
         let mut factor = bs.f * (bs.wi.z.abs() / bs.pdf);
         if mode == Transport::Importance {
             factor *= importance_factor(s, wo_world, wi_world, wo, bs.wi);
+        } else {
+            eta_scale *= compression(&s.bsdf, wo, bs.flags.contains(ScatterFlags::TRANSMISSION));
         }
         let (fwd, rev) = if specular { (0.0, 0.0) } else { (bs.pdf, s.bsdf.pdf(bs.wi, wo)) };
         let origin = s.it.spawn_origin(wi_world);
@@ -711,7 +712,7 @@ fn walk<'v, const N: usize, S: Sampler>(
         pdf_dir = fwd;
         // Russian roulette (Arvo & Kirk 1990), counted in bounces as the path tracer does.
         if k as u32 >= settings.rr_depth {
-            let q = (1.0 - beta.max_component()).max(RR_MIN_TERMINATION);
+            let q = (1.0 - beta.max_component() * eta_scale).max(RR_MIN_TERMINATION);
             if sampler.next_1d() < q {
                 return None;
             }
