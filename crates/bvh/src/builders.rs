@@ -401,19 +401,7 @@ mod tests {
         // 30K random boxes: the parallel build's pieces (subtrees above 4096 primitives
         // split, each below built alone) copied together must give the sequential build's
         // nodes and leaf order exactly, every right-child link and leaf offset moved.
-        let mut state = 11u32;
-        let mut rnd = || {
-            state ^= state << 13;
-            state ^= state >> 17;
-            state ^= state << 5;
-            (state >> 8) as f32 / (1u32 << 24) as f32
-        };
-        let prims: Vec<Prim> = (0..30_000)
-            .map(|_| {
-                let c = Vec3::new(rnd(), rnd(), rnd()) * 100.0;
-                Prim::new(Aabb { min: c, max: c + Vec3::new(rnd(), rnd(), rnd()) })
-            })
-            .collect();
+        let prims = crate::test_util::prims(11, 30_000, 100.0);
         for method in [SplitMethod::BinnedSah, SplitMethod::Midpoint] {
             let config = BuildConfig { method, ..Default::default() };
             let all: Vec<u32> = (0..prims.len() as u32).collect();

@@ -256,25 +256,12 @@ pub(crate) fn split(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use glam::Vec3;
 
     #[test]
     fn two_sets_of_bins_bin_as_one() {
         // Random boxes, the ids shuffled, an odd count: both passes give the same bins,
         // bit for bit (min, max and counts are exact whatever the order).
-        let mut state = 7u32;
-        let mut rnd = || {
-            state ^= state << 13;
-            state ^= state >> 17;
-            state ^= state << 5;
-            (state >> 8) as f32 / (1u32 << 24) as f32
-        };
-        let prims: Vec<Prim> = (0..999)
-            .map(|_| {
-                let c = Vec3::new(rnd(), rnd(), rnd()) * 10.0;
-                Prim::new(Aabb { min: c, max: c + Vec3::new(rnd(), rnd(), rnd()) })
-            })
-            .collect();
+        let prims = crate::test_util::prims(7, 999, 10.0);
         let mut ids: Vec<u32> = (0..prims.len() as u32).collect();
         ids.sort_by_key(|&i| (i * 7919) % 999);
         let cb = centroid_bounds(&prims, &ids);
