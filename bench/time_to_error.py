@@ -3,9 +3,9 @@
 built from it), in one run.
 
 Each configuration renders the reference's view (256 x 256 by default) at S samples per
-pixel; its error is the relMSE against the converged 4096-spp reference in
-../shared/refs/cornell-box-original/ (spectral reference for spectral modes, RGB for
-RGB); its time is the wall time of the sampling alone (Mitsuba: the timed `mi.render`
+pixel; its error is the relMSE against a converged render: for the Cornell box the 4096-spp
+reference in ../shared/refs/cornell-box-original/ (spectral reference for spectral modes,
+RGB for RGB), for the other scenes each renderer's own (see --scene below); its time is the wall time of the sampling alone (Mitsuba: the timed `mi.render`
 after a warm-up render that JIT-compiles the kernels; ours: the sampling time `spt
 render` prints, after loading and BVH build). Configurations run alternately, R rounds
 with a different seed each, so that machine noise hits them all alike.
@@ -35,9 +35,10 @@ ratio to Mitsuba's best (to the first configuration when no Mitsuba one runs).
 box: UV spheres of 16,128 triangles with vertex normals, written by this script). Issue 11
 asks for the equal-error speed on these two as well. There are no shared references for
 them: each renderer's error is measured against its own converged render (--ref-spp,
-default 4096 spp, rendered once and kept in --workdir; ours with zsobol, Mitsuba's with its
-independent sampler in passes of 64 spp), and the script prints how far the two
-references differ (their means per channel and their relMSE), which says whether the two
+default 4096 spp, a multiple of 64, rendered once and kept in --workdir under a name
+that hashes the scene's description; ours with zsobol, Mitsuba's with its independent
+sampler in passes of 64 spp; delete them after a change that alters a renderer's image),
+and the script prints how far the two references differ (their means per channel and their relMSE), which says whether the two
 renderers draw the same image.
 
 Measuring one change against the commit before it, e.g.:
@@ -127,6 +128,14 @@ class Scene:
             self.ours = [toml]
         else:
             sys.exit(f"unknown scene {name} (cornell, bunny-box, spheres-box)")
+        # Names the references: the scene's description (our files; Mitsuba's dict is built
+        # from the same constants).
+        import hashlib
+        h = hashlib.sha256(repr((BOX_OBJ, BUNNY_OBJ, BUNNY_SCALE, BUNNY_TRANSLATE, SPHERES)).encode())
+        for f in self.ours:
+            if f.endswith(".toml"):
+                h.update(open(f, "rb").read())
+        self.key = h.hexdigest()[:10]
 
     def shared_ref(self, kind):
         """The shared 4096-spp reference of `kind` (spectral, rgb), or None."""
@@ -212,7 +221,9 @@ def reference(scene, family, kind, a):
     shared = scene.shared_ref(kind)
     if shared:
         return read_exr(shared)
-    path = os.path.join(scene.dir, f"reference_{family}_{kind}_{a.res}_{a.ref_spp}spp.exr")
+    if a.ref_spp % 64:
+        sys.exit(f"--ref-spp {a.ref_spp}: use a multiple of 64 (Mitsuba's reference renders in passes of 64)")
+    path = os.path.join(scene.dir, f"reference_{family}_{kind}_{a.res}_{a.ref_spp}spp_{scene.key}.exr")
     if not os.path.exists(path):
         print(f"rendering {path} ...", flush=True)
         t0 = time.perf_counter()
@@ -222,7 +233,7 @@ def reference(scene, family, kind, a):
         else:
             import numpy as np
             variant = "llvm_ad_rgb" if kind == "rgb" else "llvm_ad_spectral"
-            passes = max(1, a.ref_spp // 64)
+            passes = a.ref_spp // 64
             m = Mitsuba(variant, "independent", a, scene, spp=64)
             acc = sum(m.run(64, 4242 + k, None)[1] for k in range(passes)) / passes
             m.tools.write_exr(path, acc.astype(np.float32))

@@ -373,7 +373,7 @@ fn build_parallel(
 }
 
 /// Builds the tree over `ids` (all of `prims`' primitives, or some) with the configured
-/// method, subtrees in parallel; `ids` ends in leaf order.
+/// method, subtrees in parallel (the output's `order` is the leaf order).
 pub(crate) fn build_tree(prims: &[Prim], ids: &mut [u32], config: &BuildConfig) -> Output {
     if ids.is_empty() {
         return Output::default();

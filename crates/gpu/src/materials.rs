@@ -656,13 +656,13 @@ pub fn wgsl_for(
         }
         out.push_str("    return vec4f(0.0);\n}\n\n");
     }
-    // `Material::absorption().is_some()`: the medium test of Beer–Lambert (a constant false
-    // when no material absorbs, so that the kernel's absorption code compiles away).
     let _ = writeln!(
         out,
         "fn material_eta(m: u32) -> f32 {{\n    return bitcast<f32>(mat_header(m, {}u));\n}}\n",
         header::ETA
     );
+    // `Material::absorption().is_some()`: the medium test of Beer–Lambert (a constant false
+    // when no material absorbs, so that the kernel's absorption code compiles away).
     out.push_str("fn material_absorbing(m: u32) -> bool {\n");
     if features.absorption {
         let _ = writeln!(out, "    return mat_header(m, {}u) != MAT_NO_SPECTRUM;", header::ABSORPTION);

@@ -33,7 +33,7 @@ impl<const W: usize> BvhWide<W> {
     /// Collapses `bvh`, taking the vertices of its `i`-th leaf-ordered triangle from
     /// `vertices(i)`.
     pub(super) fn collapse(bvh: &Bvh, vertices: impl Fn(usize) -> [Vec3; 3] + Sync) -> Self {
-        let mut collapse = Collapse::new(bvh.nodes());
+        let mut collapse = Collapse::new(bvh.nodes(), bvh.prim_ids().len());
         if !bvh.nodes().is_empty() {
             collapse.node(0, 1);
         }
@@ -150,7 +150,8 @@ struct Collapse<'a, const W: usize> {
 }
 
 impl<'a, const W: usize> Collapse<'a, W> {
-    fn new(src: &'a [BvhNode]) -> Self {
+    /// The collapse of `src`, a tree over `triangles` triangles.
+    fn new(src: &'a [BvhNode], triangles: usize) -> Self {
         // Children follow their parents, so one backward pass sees them first.
         let mut range = vec![(0u32, 0u32); src.len()];
         let mut leaf = vec![false; src.len()];
@@ -173,7 +174,6 @@ impl<'a, const W: usize> Collapse<'a, W> {
                 cost[i] = if leaf[i] { area } else { split };
             }
         }
-        let triangles = if src.is_empty() { 0 } else { range[0].1 as usize };
         let count_at = vec![0; triangles];
         Self { src, range, leaf, area: areas, out: Vec::with_capacity(src.len() / 2 + 1), depth: 0, count_at }
     }
