@@ -540,6 +540,22 @@ pub(crate) fn compression<const N: usize>(bsdf: &impl Bsdf<N>, wo: Vec3, transmi
 /// bright throughput end too).
 pub const RR_MIN_TERMINATION: f32 = 0.05;
 
+/// Russian roulette (Arvo & Kirk 1990) with uniform sample `u`: false if the path ends, else
+/// true with `beta` divided by its survival probability. The path is judged by the light it
+/// carries, `beta` times `eta_scale` (the product of η'² over its transmissions, see
+/// [`compression`]), as pbrt-v4's `etaScale` and Mitsuba 3's η² do: inside glass of index
+/// 1.5 `beta` alone is 0.44 of that light, and judged by it, paths through glass ended at
+/// least 56 % of the time per bounce.
+#[inline]
+pub(crate) fn survives_roulette<const N: usize>(beta: &mut SampledSpectrum<N>, eta_scale: f32, u: f32) -> bool {
+    let q = (1.0 - beta.max_component() * eta_scale).max(RR_MIN_TERMINATION);
+    if u < q {
+        return false;
+    }
+    *beta /= 1.0 - q;
+    true
+}
+
 /// The end of a shadow segment towards a point on a light, as a fraction of the
 /// distance: short of the light, so that it does not hit the light itself.
 pub const SHADOW_T_MAX: f32 = 1.0 - 1e-4;
@@ -829,8 +845,8 @@ fn path_radiance<const N: usize, S: Sampler>(
     let mut prev_specular = true;
     let mut prev_p = ray.origin;
     let mut bounce = 0u32;
-    // The product of η'² over the transmissions so far: `beta` carries radiance compressed
-    // by 1/η'² inside a denser medium, which Russian roulette must not take for a dim path.
+    // The product of η'² over the transmissions so far, which Russian roulette undoes
+    // (`survives_roulette`).
     let mut eta_scale = 1.0f32;
     let mut extension_left = settings.specular_extension;
     let mut diffuse_bounces = 0u32;
@@ -932,17 +948,8 @@ fn path_radiance<const N: usize, S: Sampler>(
         ray = Ray::new(it.spawn_origin(wi_world), wi_world);
         bounce += 1;
 
-        // Russian roulette (Arvo & Kirk 1990): unbiased termination of dim paths, judged by
-        // the throughput without transmission's radiance compression (pbrt-v4's
-        // `etaScale`, Mitsuba 3's η²): inside glass of index 1.5 the compressed throughput
-        // is 0.44 of the light the path carries out again, and judged by it, paths through
-        // glass ended at least 56 % of the time at each bounce.
-        if bounce >= settings.rr_depth {
-            let q = (1.0 - beta.max_component() * eta_scale).max(RR_MIN_TERMINATION);
-            if sampler.next_1d() < q {
-                break;
-            }
-            beta /= 1.0 - q;
+        if bounce >= settings.rr_depth && !survives_roulette(&mut beta, eta_scale, sampler.next_1d()) {
+            break;
         }
         if beta.is_black() {
             break;

@@ -4,9 +4,9 @@
 //! by the power heuristic over all the ways the same path could have been sampled.
 
 use super::{
-    Interaction, Mis, PathCounters, PathSettings, RR_MIN_TERMINATION, SHADOW_T_MAX, SceneView, Shading, beer_lambert,
-    compression, entered_medium, light_contribution, lobe_leaks, power_heuristic, segment_transmittance,
-    shading_normals,
+    Interaction, Mis, PathCounters, PathSettings, SHADOW_T_MAX, SceneView, Shading, beer_lambert, compression,
+    entered_medium, light_contribution, lobe_leaks, power_heuristic, segment_transmittance, shading_normals,
+    survives_roulette,
 };
 use crate::integrator::{CameraSample, Integrator, Splat};
 use crate::lights::{LightSample, LightSource};
@@ -628,8 +628,8 @@ fn walk<'v, const N: usize, S: Sampler>(
     let mut specular = true;
     // The absorbing material the last segment left its vertex into, if any.
     let mut inside: Option<&spectral::spectrum::Colour> = None;
-    // A camera subpath's radiance compression so far, which Russian roulette undoes (see
-    // the path tracer's `eta_scale`).
+    // A camera subpath's radiance compression so far, which Russian roulette undoes
+    // (`survives_roulette`).
     let mut eta_scale = 1.0f32;
     loop {
         counters.rays += 1;
@@ -710,13 +710,9 @@ fn walk<'v, const N: usize, S: Sampler>(
         path[k - 1].pdf_rev = to_area(rev, p, prev_p, prev_n);
         beta *= factor;
         pdf_dir = fwd;
-        // Russian roulette (Arvo & Kirk 1990), counted in bounces as the path tracer does.
-        if k as u32 >= settings.rr_depth {
-            let q = (1.0 - beta.max_component() * eta_scale).max(RR_MIN_TERMINATION);
-            if sampler.next_1d() < q {
-                return None;
-            }
-            beta /= 1.0 - q;
+        // Russian roulette, counted in bounces as the path tracer does.
+        if k as u32 >= settings.rr_depth && !survives_roulette(&mut beta, eta_scale, sampler.next_1d()) {
+            return None;
         }
         if beta.is_black() {
             return None;
