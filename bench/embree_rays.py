@@ -22,6 +22,8 @@ times and report the fastest pass.
 Usage (from the repository root, on an otherwise idle machine)
   python3 bench/embree_rays.py [--scenes bunny,sponza,bunny-sub2] [--threads 1,2]
         [--rounds 3] [--passes 5] [--spt target/release/spt] [--ours auto | bvh4,bvh8]
+        (an --ours entry may be ACCEL:ARGS@SPT, e.g. "bvh8:--presplit 0.3", or
+        "embree:--quality high" for Embree's spatial-split build as one more column)
         [--width 1024 --height 1024] [--seed 1] [--json out.json]
         [--raysets NAME=DIR ...] [--reuse-rays] [--no-compare] [--eps 1e-6]
         [--embree-args '--build-threads 0']
@@ -163,14 +165,24 @@ def run_json(cmd, timeout):
 
 
 def tracer_configs(args, embree_lib, spt):
-    cfgs = [{"label": "embree", "kind": "embree"}]
-    if spt:
-        for a in args.ours:
-            # ACCEL@PATH traces with another spt binary (e.g. the commit before a change,
-            # for a before/after ratio measured in the same run).
-            accel, _, exe = a.partition("@")
-            label = f"ours-{accel}@{os.path.basename(os.path.dirname(exe)) or exe}" if exe else f"ours-{a}"
-            cfgs.append({"label": label, "kind": "ours", "accel": accel, "spt": exe or spt})
+    cfgs = [{"label": "embree", "kind": "embree", "extra": []}]
+    for a in args.ours:
+        # ACCEL[:ARGS][@PATH]: ARGS are more `spt rays trace` arguments (e.g.
+        # "bvh8:--presplit 0.3"); @PATH traces with another spt binary (e.g. the commit
+        # before a change, for a before/after ratio measured in the same run).
+        # "embree:ARGS" is Embree again with more embree_trace arguments (e.g.
+        # "embree:--quality high"), a column against its default build; it writes no hits.
+        spec, _, exe = a.partition("@")
+        accel, _, extra = spec.partition(":")
+        if accel == "embree":
+            cfgs.append({"label": f"embree {extra}".strip(), "kind": "embree",
+                         "extra": shlex.split(extra) + ["--no-write"]})
+            continue
+        if not spt:
+            continue
+        label = f"ours-{spec}@{os.path.basename(os.path.dirname(exe)) or exe}" if exe else f"ours-{spec}"
+        cfgs.append({"label": label, "kind": "ours", "accel": accel, "extra": shlex.split(extra),
+                     "spt": exe or spt})
     # Labels name the tables' columns and the hits files: two binaries in folders of the
     # same name would share them.
     slugs = [re.sub(r"[^A-Za-z0-9]+", "-", c["label"]).strip("-") for c in cfgs]
@@ -183,10 +195,10 @@ def tracer_configs(args, embree_lib, spt):
 def tracer_cmd(cfg, d, threads, args, embree_bin, embree_lib, spt):
     if cfg["kind"] == "embree":
         return [embree_bin, d, "--lib", embree_lib, "--threads", str(threads),
-                "--passes", str(args.passes)] + shlex.split(args.embree_args)
+                "--passes", str(args.passes)] + shlex.split(args.embree_args) + cfg["extra"]
     width = {"bvh4": "4", "bvh8": "8"}.get(cfg["accel"], cfg["accel"])
     return [cfg.get("spt", spt), "rays", "trace", d, "--threads", str(threads), "--passes", str(args.passes),
-            "--bvh-width", width]
+            "--bvh-width", width] + cfg["extra"]
 
 
 # --------------------------------------------------------------------------------------

@@ -108,7 +108,13 @@ static struct {
                                   size_t byteStride, size_t itemCount);
     void (*Intersect1)(RTCScene, RTCRayHit *, void *args);
     void (*Occluded1)(RTCScene, RTCRay *, void *args);
+    /* enum RTCBuildQuality: 0 low, 1 medium (the default), 2 high (spatial splits) */
+    void (*SetSceneBuildQuality)(RTCScene, int quality);
+    void (*SetGeometryBuildQuality)(RTCGeometry, int quality);
 } rtc;
+
+/* The build quality asked for by --quality (1: Embree's default, medium). */
+static int g_quality = 1;
 
 /* ------------------------------------------------------------------------------------- */
 
@@ -184,10 +190,12 @@ static void check_device(RTCDevice dev, const char *what) {
 static RTCScene build_scene(RTCDevice dev, const float *tris, size_t ntri, double *commit_ms) {
     RTCScene scene = rtc.NewScene(dev);
     if (!scene) check_device(dev, "rtcNewScene"), die("rtcNewScene returned NULL");
+    if (g_quality != 1) rtc.SetSceneBuildQuality(scene, g_quality);
     if (ntri > 0) {
         if (ntri > 0x55555555u) die("too many triangles for 32-bit indices: %zu", ntri);
         RTCGeometry geom = rtc.NewGeometry(dev, RTC_GEOMETRY_TYPE_TRIANGLE);
         if (!geom) check_device(dev, "rtcNewGeometry"), die("rtcNewGeometry returned NULL");
+        if (g_quality != 1) rtc.SetGeometryBuildQuality(geom, g_quality);
         float *vb = rtc.SetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
                                              3 * sizeof(float), 3 * ntri);
         unsigned *ib = rtc.SetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
@@ -304,11 +312,13 @@ static double run_pass(void) {
 static void usage(FILE *f) {
     fputs("usage: embree_trace DIR --lib PATH [--threads T] [--passes P] [--no-write]\n"
           "                    [--sets primary,diffuse,shadow] [--build-threads N]\n"
-          "                    [--name embree] [--device-config STR]\n"
+          "                    [--name embree] [--device-config STR] [--quality Q]\n"
           "  --threads T        tracing threads (default 1)\n"
           "  --passes P         passes per set, the fastest counts (default 5)\n"
           "  --build-threads N  Embree device threads used by rtcCommitScene\n"
           "                     (default: T; 0 = Embree's default, all cores)\n"
+          "  --quality Q        build quality: low, medium (Embree's default) or high\n"
+          "                     (spatial splits)\n"
           "  --no-write         do not write DIR/<set>.<name>.hits\n",
           f);
 }
@@ -337,6 +347,13 @@ int main(int argc, char **argv) {
         else if (!strcmp(a, "--name")) name = NEXT();
         else if (!strcmp(a, "--device-config")) extra_cfg = NEXT();
         else if (!strcmp(a, "--no-write")) write = 0;
+        else if (!strcmp(a, "--quality")) {
+            const char *q = NEXT();
+            if (!strcmp(q, "low")) g_quality = 0;
+            else if (!strcmp(q, "medium")) g_quality = 1;
+            else if (!strcmp(q, "high")) g_quality = 2;
+            else die("bad value for --quality: '%s' (low, medium or high)", q);
+        }
         else if (!strcmp(a, "-h") || !strcmp(a, "--help")) { usage(stdout); return 0; }
         else if (a[0] == '-' && a[1] == '-') { usage(stderr); die("unknown option %s", a); }
         else if (!dir) dir = a;
@@ -391,6 +408,8 @@ int main(int argc, char **argv) {
     rtc.SetNewGeometryBuffer = load_sym(h, "rtcSetNewGeometryBuffer", 1);
     rtc.Intersect1 = load_sym(h, "rtcIntersect1", 1);
     rtc.Occluded1 = load_sym(h, "rtcOccluded1", 1);
+    rtc.SetSceneBuildQuality = load_sym(h, "rtcSetSceneBuildQuality", 1);
+    rtc.SetGeometryBuildQuality = load_sym(h, "rtcSetGeometryBuildQuality", 1);
 
     char cfg[512];
     if (build_threads > 0)

@@ -86,6 +86,10 @@ pub struct BuildConfig {
     /// block SAH), so that splits favour full blocks. 1: plain SAH. The wide trees test
     /// leaves four triangles at a time ([`crate::Bvh4`], [`crate::Bvh8`]): 4 there.
     pub sah_block: usize,
+    /// Extra references triangle pre-splitting may add, as a fraction of the triangles
+    /// (Karras & Aila 2013; see `builders::presplit`): long diagonal triangles are cut into
+    /// pieces with tighter boxes before the build. 0: none (each triangle in one leaf).
+    pub presplit: f32,
 }
 
 impl Default for BuildConfig {
@@ -98,6 +102,7 @@ impl Default for BuildConfig {
             traversal_cost: 1.0,
             intersection_cost: 1.0,
             sah_block: 1,
+            presplit: 0.0,
         }
     }
 }
@@ -153,8 +158,14 @@ impl Bvh {
         } else {
             triangles.iter().map(prim).collect()
         };
+        let (prims, refs) = builders::presplit::presplit(triangles, prims, config.presplit);
         let mut ids: Vec<u32> = (0..prims.len() as u32).collect();
-        let out = builders::build_tree(&prims, &mut ids, &config);
+        let mut out = builders::build_tree(&prims, &mut ids, &config);
+        if let Some(refs) = refs {
+            for r in &mut out.order {
+                *r = refs[*r as usize];
+            }
+        }
         Ok(Self { nodes: out.nodes, triangles: Vec::new(), prim_ids: out.order, config })
     }
 

@@ -11,6 +11,7 @@
 
 pub(crate) mod binned;
 pub(crate) mod midpoint;
+pub(crate) mod presplit;
 pub(crate) mod sweep;
 
 use crate::Aabb;

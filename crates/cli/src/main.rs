@@ -820,6 +820,14 @@ fn parse_distance(s: &str) -> Result<f32, String> {
     }
 }
 
+/// A share of extra BVH references (`--presplit`): 0 to 4.
+pub(crate) fn parse_fraction(s: &str) -> Result<f32, String> {
+    match s.trim().parse::<f32>() {
+        Ok(f) if (0.0..=4.0).contains(&f) => Ok(f),
+        _ => Err(format!("'{s}' is not a fraction between 0 and 4 (extra references per triangle)")),
+    }
+}
+
 /// Loads the scene, makes the backend `args` asks for, checks the render settings
 /// against its capabilities (before building anything), and prepares the scene. Without
 /// `--sampler`, `default_sampler` picks one from the backend's capabilities.

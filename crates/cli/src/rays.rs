@@ -87,6 +87,10 @@ pub struct TraceArgs {
     /// the renderer's 4, the leaf test's width; 1: the plain SAH).
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=64))]
     pub sah_block: Option<u32>,
+    /// Extra references triangle pre-splitting may add, as a fraction of the triangles
+    /// (`BuildConfig::presplit`; default: the renderer's).
+    #[arg(long, value_parser = crate::parse_fraction)]
+    pub presplit: Option<f32>,
     /// Recompute every closest hit's t in f64 (correctly rounded; slower): by default only
     /// hits close to the origin relative to its coordinates and hits in leaves holding a
     /// sliver (a long thin triangle) are.
@@ -201,15 +205,19 @@ fn trace(args: TraceArgs) -> Result<()> {
     if let Some(n) = args.sah_block {
         config.sah_block = n as usize;
     }
+    if let Some(f) = args.presplit {
+        config.presplit = f;
+    }
     let bvh = pool.install(|| WideBvh::build(&triangles, config, args.bvh_width))?;
     let build = start.elapsed();
     let tracer = format!("bvh{}", bvh.width());
     let bvh = bvh.with_triangle_test(args.triangle_test).with_exact_t(args.exact_t);
     let sets = trace_sets(&bvh, &pool, &args, &tracer)?;
     println!(
-        r#"{{"tracer": "{tracer}", "threads": {}, "triangles": {}, "nodes": {}, "build_ms": {:.3}, "sets": {{{}}}}}"#,
+        r#"{{"tracer": "{tracer}", "threads": {}, "triangles": {}, "references": {}, "nodes": {}, "build_ms": {:.3}, "sets": {{{}}}}}"#,
         args.threads,
         triangles.len(),
+        bvh.references(),
         bvh.stats().nodes,
         build.as_secs_f64() * 1e3,
         sets.join(", ")

@@ -272,6 +272,20 @@ fn ray_sets_export_and_trace_with_both_widths_alike() {
         hits.push((primary, diffuse, shadow));
     }
     assert!(hits[0] == hits[1], "4- and 8-wide trees find the same hits");
+    // Pre-split references: the same triangles hit at the same t.
+    let o = spt(&["rays", "trace", sets.to_str().unwrap(), "--bvh-width", "8", "--passes", "1", "--presplit", "0.5"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let nodes = |o: &std::process::Output| {
+        String::from_utf8_lossy(&o.stdout)
+            .split(r#""nodes": "#)
+            .nth(1)
+            .map(|s| s.split(',').next().unwrap_or("").to_string())
+    };
+    assert!(nodes(&o).is_some(), "{}", String::from_utf8_lossy(&o.stdout));
+    let split = read_hits(&sets.join("primary.bvh8.hits"));
+    assert!(split == hits[1].0, "pre-splitting changed the primary hits");
+    let o = spt(&["rays", "trace", sets.to_str().unwrap(), "--presplit", "5"]);
+    assert!(!o.status.success() && stderr(&o).contains("between 0 and 4"), "{}", stderr(&o));
     // A truncated ray file is refused with its name.
     let rays = std::fs::read(sets.join("diffuse.rays")).unwrap();
     std::fs::write(sets.join("diffuse.rays"), &rays[..rays.len() - 3]).unwrap();

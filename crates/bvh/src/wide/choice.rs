@@ -102,6 +102,15 @@ impl WideBvh {
         }
     }
 
+    /// Triangle references in the leaves: the triangle count, more where triangles were
+    /// pre-split ([`crate::BuildConfig::presplit`]).
+    pub fn references(&self) -> usize {
+        match self {
+            Self::Four(b) => b.prim_ids().len(),
+            Self::Eight(b) => b.prim_ids().len(),
+        }
+    }
+
     /// Children per node: 4 or 8.
     pub fn width(&self) -> u32 {
         match self {

@@ -635,3 +635,70 @@ fn hits_on_slivers_have_a_precise_t_at_any_distance() {
     }
     assert!(worst < 1e-6, "worst relative t error {worst:e}");
 }
+
+/// Long diagonal triangles (not slivers, whose t the tree refines in f64 and the oracle
+/// does not) spanning a cube of side `spread` (what pre-splitting cuts),
+/// and rays aimed at points of theirs on the planes x = spread·j/8, where their pieces' boxes
+/// meet.
+fn long_triangles_and_rays_at_their_cuts(seed: u64, n: usize, spread: f32) -> (Vec<[Vec3; 3]>, Vec<Ray>) {
+    let mut rng = rng::Pcg32::seed_from_u64(seed);
+    let mut point = move || Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32());
+    let tris: Vec<[Vec3; 3]> = (0..n)
+        .map(|_| {
+            let (a, b) = (point() * spread, point() * spread);
+            [a, b, b + (point() - 0.5) * 0.3 * spread]
+        })
+        .collect();
+    let mut rays = Vec::new();
+    for t in &tris {
+        for j in 1..8 {
+            let c = spread * j as f32 / 8.0;
+            let crossings: Vec<Vec3> = (0..3)
+                .filter_map(|i| {
+                    let (a, b) = (t[i], t[(i + 1) % 3]);
+                    ((a.x - c) * (b.x - c) < 0.0).then(|| a + (b - a) * ((c - a.x) / (b.x - a.x)))
+                })
+                .collect();
+            // Targets well inside the triangle: at a sliver's tip, the watertight test and
+            // the oracle's Möller–Trumbore may each be right about an edge.
+            if let [p, q, ..] = crossings[..]
+                && p.distance(q) > 0.01 * spread
+            {
+                let target = 0.5 * (p + q);
+                let origin = target + (point() - 0.5).normalize_or(Vec3::Y) * 2.0 * spread;
+                rays.push(Ray::new(origin, (target - origin).normalize()));
+            }
+        }
+    }
+    (tris, rays)
+}
+
+#[test]
+fn presplit_trees_cut_long_triangles_and_find_every_hit() {
+    let spread = 20.0;
+    let (mut tris, mut rs) = long_triangles_and_rays_at_their_cuts(41, 150, spread);
+    tris.extend(soup(43, 3000, spread, 0.5));
+    rs.extend(rays(44, 1000, spread));
+    // The oracle's test (Möller–Trumbore, bit for bit the leaves'), so that rays crossing
+    // an edge at the cuts are judged alike; the watertight test is checked elsewhere.
+    let oracle = BruteForce::new(&tris).unwrap();
+    let mt = TriangleTest::MollerTrumbore;
+    let config = BuildConfig { presplit: 0.5, max_leaf_size: 4, sah_block: 4, ..Default::default() };
+    let plain = Bvh8::build(&tris, BuildConfig { presplit: 0.0, ..config }).unwrap().with_triangle_test(mt);
+    agree_with(&plain, &oracle, &tris, &rs);
+    {
+        let bvh = Bvh8::build(&tris, config).unwrap().with_triangle_test(mt);
+        let refs = bvh.prim_ids().len();
+        assert!(refs > tris.len() + 500, "{refs} references for {} triangles", tris.len());
+        assert!(refs <= tris.len() * 3 / 2, "{refs} references: over the budget");
+        let mut seen = vec![false; tris.len()];
+        bvh.prim_ids().iter().for_each(|&p| seen[p as usize] = true);
+        assert!(seen.iter().all(|&s| s), "every triangle in some leaf");
+        let (a, b) = (bvh.stats().sah_cost, plain.stats().sah_cost);
+        assert!(a < 0.8 * b, "SAH cost {a} with pre-splitting against {b} without");
+        agree_with(&bvh, &oracle, &tris, &rs);
+    }
+    let bvh4 = Bvh4::build(&tris, config).unwrap().with_triangle_test(mt);
+    assert!(bvh4.prim_ids().len() > tris.len());
+    agree_with(&bvh4, &oracle, &tris, &rs);
+}
