@@ -99,6 +99,11 @@ pub struct TraceArgs {
     /// Do not write the hits files.
     #[arg(long)]
     pub no_write: bool,
+    /// After the timed passes, one more that counts per ray the wide nodes whose children
+    /// are box-tested and the triangles tested (closest-hit traversal, also for the shadow
+    /// set), added to each set's JSON.
+    #[arg(long)]
+    pub count: bool,
 }
 
 /// The three sets, in the order they are written and traced, with their query.
@@ -251,7 +256,24 @@ fn trace_sets<A: Accelerator + Sync>(
             write_hits(&args.dir.join(format!("{name}.{tracer}.hits")), &hits)?;
         }
         let mrays = rays.len() as f64 / best.as_secs_f64().max(1e-9) / 1e6;
-        sets.push(format!(r#""{name}": {{"rays": {}, "mrays_per_s": {mrays:.4}, "hits": {count}}}"#, rays.len()));
+        let counted = if args.count {
+            let mut stats = bvh::RayStats::default();
+            for r in &rays {
+                accel.intersect_counted(r, &mut stats);
+            }
+            let per_ray = |x: u64| x as f64 / rays.len().max(1) as f64;
+            format!(
+                r#", "nodes_per_ray": {:.3}, "triangles_per_ray": {:.3}"#,
+                per_ray(stats.nodes_visited),
+                per_ray(stats.triangles_tested)
+            )
+        } else {
+            String::new()
+        };
+        sets.push(format!(
+            r#""{name}": {{"rays": {}, "mrays_per_s": {mrays:.4}, "hits": {count}{counted}}}"#,
+            rays.len()
+        ));
     }
     Ok(sets)
 }

@@ -284,6 +284,10 @@ fn ray_sets_export_and_trace_with_both_widths_alike() {
     assert!(nodes(&o).is_some(), "{}", String::from_utf8_lossy(&o.stdout));
     let split = read_hits(&sets.join("primary.bvh8.hits"));
     assert!(split == hits[1].0, "pre-splitting changed the primary hits");
+    // Counted: work per ray in each set's JSON.
+    let o = spt(&["rays", "trace", sets.to_str().unwrap(), "--passes", "1", "--no-write", "--count"]);
+    let json = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success() && json.matches(r#""nodes_per_ray": "#).count() == 3, "{json}");
     let o = spt(&["rays", "trace", sets.to_str().unwrap(), "--presplit", "5"]);
     assert!(!o.status.success() && stderr(&o).contains("between 0 and 4"), "{}", stderr(&o));
     // A truncated ray file is refused with its name.
