@@ -355,8 +355,8 @@ pub fn capabilities_for(integrator: GpuIntegrator) -> Capabilities {
             _ => MAX_BOUNCES,
         }),
         extension: integrator == GpuIntegrator::Path,
-        diffuse_depth: false,
-        bvh_builders: false,
+        diffuse_depth: integrator == GpuIntegrator::Path,
+        bvh_builders: true,
         sample_block: SAMPLES_PER_READBACK,
     }
 }
@@ -437,7 +437,8 @@ impl SceneData {
         }
         let kernel = crate::materials::generate(&scene.materials, true)?;
         let start = Instant::now();
-        let bvh = Bvh::build(&scene.triangle_soup(), triangle_build_config())
+        let config = BuildConfig { method: options.bvh_builder, ..triangle_build_config() };
+        let bvh = Bvh::build(&scene.triangle_soup(), config)
             .map_err(|e| GpuError::Unsupported(format!("this geometry ({e})")))?;
         let (nodes, node_bytes, node_count, layout) = match options.nodes {
             NodeLayout::Binary => {
@@ -734,6 +735,11 @@ impl SceneData {
         self.tables[first..end].chunks_exact(LIGHT_FLOATS)
     }
 
+    /// The BVH nodes as uploaded (binary or 4-wide, [`KernelOptions::nodes`]).
+    pub fn node_bytes(&self) -> &[u8] {
+        &self.nodes
+    }
+
     /// What each storage buffer holds and how many bytes it needs, in binding order
     /// (the per-pixel accumulators are not included: their size follows the image and
     /// is split into bands to fit).
@@ -915,6 +921,7 @@ impl GpuBackend {
                 integrator: self.integrator,
                 // The kernel a render with the default sampler uses; others compile on demand.
                 sampler: capabilities_for(self.integrator).samplers[0],
+                bvh_builder: options.bvh_builder.unwrap_or(triangle_build_config().method),
                 ..KernelOptions::default()
             },
         )?;
@@ -1087,6 +1094,7 @@ impl GpuScene {
             },
             zseed_lo: zseed as u32,
             zseed_hi: (zseed >> 32) as u32,
+            max_diffuse_depth: settings.path.max_diffuse_depth,
             ..Params::default()
         }
     }

@@ -182,6 +182,14 @@ wgsl_struct! {
         decode_offset: u32,
         /// Offset in `pt_tables` of the environment map's record (`wgsl/envmap.wgsl`).
         envmap_offset: u32,
+        /// `PathSettings::max_diffuse_depth` (0 = no limit; the path tracer).
+        max_diffuse_depth: u32,
+        /// Padding: the block is a multiple of 16 bytes.
+        pad0: u32,
+        /// Padding.
+        pad1: u32,
+        /// Padding.
+        pad2: u32,
     }
 }
 
@@ -421,6 +429,9 @@ pub struct KernelOptions {
     pub cutouts: bool,
     /// Whether the environment is a map (`PT_HAS_ENV_MAP`).
     pub env_map: bool,
+    /// How the triangle BVH's nodes are split (`SceneOptions::bvh_builder`; the scene
+    /// data's, not the kernel source's).
+    pub bvh_builder: bvh::SplitMethod,
 }
 
 /// The backend's default kernel: the watertight test, the binary tree, the path tracer,
@@ -440,6 +451,7 @@ impl Default for KernelOptions {
             textures: false,
             cutouts: false,
             env_map: false,
+            bvh_builder: bvh::SplitMethod::BinnedSah,
         }
     }
 }

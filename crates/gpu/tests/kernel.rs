@@ -21,6 +21,7 @@ fn options(triangle_test: bvh::TriangleTest) -> KernelOptions {
         textures: true,
         cutouts: true,
         env_map: true,
+        bvh_builder: bvh::SplitMethod::BinnedSah,
     }
 }
 

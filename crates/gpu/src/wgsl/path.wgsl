@@ -278,6 +278,8 @@ fn pt_radiance(
     var prev_p = origin;
     var bounce = 0u;
     var extension_left = pt_params.specular_extension;
+    // Non-specular hits so far, against `max_diffuse_depth` (the CPU's `diffuse_bounces`).
+    var diffuse_bounces = 0u;
     // The absorbing material the last segment left its vertex into (PT_NO_HIT: none).
     var inside = PT_NO_HIT;
     loop {
@@ -329,6 +331,14 @@ fn pt_radiance(
                 break;
             }
             extension_left -= 1u;
+        }
+        // A non-specular hit one more than `max_diffuse_depth` allows ends the path (its
+        // emission counted), as the CPU's `diffuse_limit_reached` does.
+        if pt_params.max_diffuse_depth > 0u && pt_is_non_specular(material_flags(m)) {
+            diffuse_bounces += 1u;
+            if diffuse_bounces > pt_params.max_diffuse_depth {
+                break;
+            }
         }
 
         // Dispersion: from here on the path follows one wavelength (a random lane, moved
