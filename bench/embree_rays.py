@@ -53,6 +53,8 @@ Ray-set format (directory DIR, all little endian, no headers)
   Each tracer prints one JSON line on stdout:
   {"tracer": "embree"|"bvh4"|"bvh8", "threads": T, "triangles": n, "nodes": k (ours: wide nodes), "build_ms": x,
    "sets": {"primary": {"rays": n, "mrays_per_s": y, "hits": k}, "diffuse": ..., "shadow": ...}}
+  (ours also "references": leaf entries, more than n with --presplit; with --count each set
+  also has "nodes_per_ray" and "triangles_per_ray")
 
 Hit checks (hits files of the last run of each tracer, per scene)
   primary/diffuse: agreement on hit/miss and prim. Each claimed hit is recomputed in float64
@@ -175,6 +177,9 @@ def tracer_configs(args, embree_lib, spt):
         spec, _, exe = a.partition("@")
         accel, _, extra = spec.partition(":")
         if accel == "embree":
+            if not extra:
+                sys.exit("embree_rays.py: Embree's default build always runs; 'embree:ARGS' adds "
+                         "another Embree column (e.g. 'embree:--quality high')")
             cfgs.append({"label": f"embree {extra}".strip(), "kind": "embree",
                          "extra": shlex.split(extra) + ["--no-write"]})
             continue

@@ -132,6 +132,26 @@ pub struct Bvh {
 
 const STACK_DEPTH: usize = 64;
 
+/// The leaf order of triangle ids for a tree built over pre-split references (`order`
+/// holds references, `refs` maps them to triangles), each leaf holding a triangle once:
+/// pieces of one triangle often land in the same leaf, which would test it twice. The
+/// leaves' ranges in `nodes` are rewritten to the new order.
+fn leaves_without_repeats(nodes: &mut [BvhNode], order: &[u32], refs: &[u32]) -> Vec<u32> {
+    let mut ids = Vec::with_capacity(order.len());
+    for node in nodes.iter_mut().filter(|n| n.count > 0) {
+        let start = ids.len();
+        for &r in &order[node.index as usize..(node.index + node.count) as usize] {
+            let id = refs[r as usize];
+            if !ids[start..].contains(&id) {
+                ids.push(id);
+            }
+        }
+        node.index = start as u32;
+        node.count = (ids.len() - start) as u32;
+    }
+    ids
+}
+
 impl Bvh {
     /// Builds a tree; rejects non-finite coordinates. Degenerate (zero-area) triangles
     /// are kept (they are never hit). An empty input gives a tree that nothing hits.
@@ -162,9 +182,7 @@ impl Bvh {
         let mut ids: Vec<u32> = (0..prims.len() as u32).collect();
         let mut out = builders::build_tree(&prims, &mut ids, &config);
         if let Some(refs) = refs {
-            for r in &mut out.order {
-                *r = refs[*r as usize];
-            }
+            out.order = leaves_without_repeats(&mut out.nodes, &out.order, &refs);
         }
         Ok(Self { nodes: out.nodes, triangles: Vec::new(), prim_ids: out.order, config })
     }

@@ -384,7 +384,7 @@ struct SceneArgs {
     max_depth: u32,
     /// Maximum number of diffuse or glossy bounces (mirrors and glass do not count); 0 =
     /// no limit. 2 is direct light plus one diffuse bounce, what --integrator atlas
-    /// approximates (CPU path tracer).
+    /// approximates (the path tracer, CPU or GPU).
     #[arg(long, default_value_t = 0)]
     max_diffuse_depth: u32,
     /// Bounces before Russian roulette starts.
@@ -420,7 +420,7 @@ struct SceneArgs {
     bvh_width: BvhWidth,
     /// How the triangle BVH's nodes are split: binned_sah (the default), sweep_sah (full
     /// sweep, the thesis's Algorithm 8.2), midpoint, or hybrid (midpoint above 1000
-    /// triangles, sweep below); CPU only.
+    /// triangles, sweep below); on the GPU it builds the binary tree the kernel traverses.
     #[arg(long, value_parser = parse_bvh_builder)]
     bvh_builder: Option<bvh::SplitMethod>,
     /// Where to trace: cpu (rayon, every feature) or gpu (wgpu compute; hero mode, triangle

@@ -272,24 +272,10 @@ fn ray_sets_export_and_trace_with_both_widths_alike() {
         hits.push((primary, diffuse, shadow));
     }
     assert!(hits[0] == hits[1], "4- and 8-wide trees find the same hits");
-    // Pre-split references: the same triangles hit at the same t.
-    let o = spt(&["rays", "trace", sets.to_str().unwrap(), "--bvh-width", "8", "--passes", "1", "--presplit", "0.5"]);
-    assert!(o.status.success(), "{}", stderr(&o));
-    let nodes = |o: &std::process::Output| {
-        String::from_utf8_lossy(&o.stdout)
-            .split(r#""nodes": "#)
-            .nth(1)
-            .map(|s| s.split(',').next().unwrap_or("").to_string())
-    };
-    assert!(nodes(&o).is_some(), "{}", String::from_utf8_lossy(&o.stdout));
-    let split = read_hits(&sets.join("primary.bvh8.hits"));
-    assert!(split == hits[1].0, "pre-splitting changed the primary hits");
     // Counted: work per ray in each set's JSON.
     let o = spt(&["rays", "trace", sets.to_str().unwrap(), "--passes", "1", "--no-write", "--count"]);
     let json = String::from_utf8_lossy(&o.stdout);
     assert!(o.status.success() && json.matches(r#""nodes_per_ray": "#).count() == 3, "{json}");
-    let o = spt(&["rays", "trace", sets.to_str().unwrap(), "--presplit", "5"]);
-    assert!(!o.status.success() && stderr(&o).contains("between 0 and 4"), "{}", stderr(&o));
     // A truncated ray file is refused with its name.
     let rays = std::fs::read(sets.join("diffuse.rays")).unwrap();
     std::fs::write(sets.join("diffuse.rays"), &rays[..rays.len() - 3]).unwrap();
@@ -297,6 +283,54 @@ fn ray_sets_export_and_trace_with_both_widths_alike() {
     assert!(!o.status.success() && stderr(&o).contains("diffuse.rays"), "{}", stderr(&o));
     let o = spt(&["rays", "trace", dir.join("nowhere").to_str().unwrap()]);
     assert!(!o.status.success() && stderr(&o).contains("triangles.f32"), "{}", stderr(&o));
+}
+
+#[test]
+fn ray_sets_trace_with_pre_split_long_triangles() {
+    // 64 small triangles on a floor and one long diagonal triangle across the scene, which
+    // `--presplit` cuts into references: more leaf entries, the same hits.
+    let dir = temp_dir("presplit");
+    let mut obj = String::new();
+    for i in 0..8 {
+        for j in 0..8 {
+            let (x, y) = (i as f32, j as f32);
+            obj += &format!("v {x} {y} 0\nv {} {y} 0\nv {x} {} 0\n", x + 0.5, y + 0.5);
+        }
+    }
+    obj += "v 0 0 0.5\nv 8 8 4\nv 8 8 4.5\n";
+    for k in 0..65 {
+        obj += &format!("f {} {} {}\n", 3 * k + 1, 3 * k + 2, 3 * k + 3);
+    }
+    let scene = dir.join("long.obj");
+    std::fs::write(&scene, obj).unwrap();
+    let sets = dir.join("sets");
+    let o = spt(&[
+        "rays",
+        "export",
+        scene.to_str().unwrap(),
+        "--out",
+        sets.to_str().unwrap(),
+        "--width",
+        "48",
+        "--height",
+        "48",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let references = |extra: &[&str]| {
+        let o =
+            spt(&[&["rays", "trace", sets.to_str().unwrap(), "--bvh-width", "8", "--passes", "1"][..], extra].concat());
+        assert!(o.status.success(), "{}", stderr(&o));
+        let json = String::from_utf8_lossy(&o.stdout).to_string();
+        let n: usize = json.split(r#""references": "#).nth(1).and_then(|s| s.split(',').next()?.parse().ok()).unwrap();
+        (n, read_hits(&sets.join("primary.bvh8.hits")), json)
+    };
+    let (whole, hits, json) = references(&[]);
+    assert_eq!(whole, 65, "{json}");
+    let (split, split_hits, json) = references(&["--presplit", "0.5"]);
+    assert!(split > 65, "{split} references with pre-splitting: {json}");
+    assert!(split_hits == hits, "pre-splitting changed the primary hits");
+    let o = spt(&["rays", "trace", sets.to_str().unwrap(), "--presplit", "5"]);
+    assert!(!o.status.success() && stderr(&o).contains("between 0 and 4"), "{}", stderr(&o));
 }
 
 #[test]

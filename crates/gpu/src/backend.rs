@@ -62,9 +62,15 @@
 //!   occasionally takes another branch (a Russian-roulette or Fresnel decision on the
 //!   threshold, a ray grazing an edge) and decorrelates from the CPU's from there on;
 //!   images are close to the CPU's, not bit-identical.
-//! * Triangles are traced in a binary BVH (binned SAH, leaves ≤ 4) instead of the CPU's
-//!   4-wide BVH; with hits at exactly equal distances the two may report different
-//!   triangles.
+//! * Triangles are traced in a binary BVH (binned SAH unless `--bvh-builder` says
+//!   otherwise, leaves ≤ 4) instead of the CPU's wide BVH; with hits at exactly equal
+//!   distances the two may report different triangles.
+//! * The specular extension past `max_depth` and the `max_diffuse_depth` count judge a hit
+//!   by its material's flags: the union over 360–830 nm of its untextured BSDF's
+//!   (`material_flags`); the CPU asks the BSDF at the hit's texel and wavelengths. They
+//!   differ only for a material whose lobes depend on either (a texture that makes a
+//!   surface purely specular in places, say), where the GPU may count or extend
+//!   differently.
 //! * The watertight triangle test has no double-precision fallback (WGSL has no f64):
 //!   an edge function that rounds to exactly zero counts as "on the edge", which can
 //!   add a hit but never lose one; with FMA contraction the two triangles of a shared
@@ -897,6 +903,23 @@ impl GpuBackend {
         &self.ctx
     }
 
+    /// The kernel options a scene prepared with `options` is uploaded and compiled with
+    /// (the scene's own features are filled in by [`SceneData::new`]).
+    pub fn kernel_options(&self, options: &SceneOptions) -> KernelOptions {
+        KernelOptions {
+            triangle_test: options.triangle_test,
+            nodes: match options.bvh_width {
+                BvhWidth::Four => NodeLayout::Wide4 { stack: 0 },
+                _ => NodeLayout::Binary,
+            },
+            integrator: self.integrator,
+            // The kernel a render with the default sampler uses; others compile on demand.
+            sampler: capabilities_for(self.integrator).samplers[0],
+            bvh_builder: options.bvh_builder.unwrap_or(triangle_build_config().method),
+            ..KernelOptions::default()
+        }
+    }
+
     /// Checks `scene` against the capabilities, uploads it and compiles its kernel.
     pub fn prepare_gpu(&self, mut scene: Scene, options: &SceneOptions) -> Result<GpuScene, tracer::Error> {
         capabilities_for(self.integrator).check_scene(&scene, options)?;
@@ -909,22 +932,7 @@ impl GpuBackend {
 
     fn upload(&self, scene: Scene, options: &SceneOptions) -> Result<GpuScene, GpuError> {
         let start = Instant::now();
-        let nodes = match options.bvh_width {
-            BvhWidth::Four => NodeLayout::Wide4 { stack: 0 },
-            _ => NodeLayout::Binary,
-        };
-        let data = SceneData::new(
-            &scene,
-            KernelOptions {
-                triangle_test: options.triangle_test,
-                nodes,
-                integrator: self.integrator,
-                // The kernel a render with the default sampler uses; others compile on demand.
-                sampler: capabilities_for(self.integrator).samplers[0],
-                bvh_builder: options.bvh_builder.unwrap_or(triangle_build_config().method),
-                ..KernelOptions::default()
-            },
-        )?;
+        let data = SceneData::new(&scene, self.kernel_options(options))?;
         data.check_limits(&self.ctx.limits)?;
         let device = &self.ctx.device;
         let validation = device.push_error_scope(wgpu::ErrorFilter::Validation);

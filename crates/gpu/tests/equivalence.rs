@@ -334,11 +334,11 @@ fn every_bvh_builder_renders_the_cpus_image() {
     let gpu = GpuBackend::with_context(ctx);
     let s = settings(32, 32, 16);
     let mut failures = Vec::new();
-    // The trees differ (the option reaches the build): the midpoint split's nodes are not
-    // the SAH's.
+    // The trees differ (the option reaches the build through the options `prepare_gpu`
+    // uploads with): the midpoint split's nodes are not the SAH's.
     let nodes = |method| {
-        let options = KernelOptions { bvh_builder: method, ..KernelOptions::default() };
-        SceneData::new(&scene, options).unwrap().node_bytes().to_vec()
+        let options = SceneOptions { bvh_builder: Some(method), ..SceneOptions::default() };
+        SceneData::new(&scene, gpu.kernel_options(&options)).unwrap().node_bytes().to_vec()
     };
     assert_ne!(nodes(bvh::SplitMethod::Midpoint), nodes(bvh::SplitMethod::BinnedSah));
     // (Binned SAH, the default, is in every other test; the hybrid mixes these two.)

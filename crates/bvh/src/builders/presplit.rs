@@ -141,8 +141,8 @@ impl Grid {
 }
 
 /// Appends `splits + 1` references (fewer where no grid plane is left to cut at) covering
-/// the part of triangle `t` inside `b` (a box bounding that part exactly, unpadded: the
-/// planes are chosen and the triangle clipped against it).
+/// the part of triangle `t` inside `b` (that part's bounding box, unpadded: the planes are
+/// chosen and the triangle clipped against it).
 fn split(grid: &Grid, t: &[Vec3; 3], b: Aabb, splits: usize, out: &mut Vec<Prim>) {
     let plane = if splits == 0 { None } else { grid.cut(&b) };
     let Some((axis, c)) = plane else {
@@ -175,52 +175,66 @@ fn padded(b: Aabb) -> Aabb {
     Aabb { min: b.min - pad, max: b.max + pad }
 }
 
-/// The boxes of the parts of triangle `t` below and above the plane x_axis = c, each
-/// within `b` (`None`: no part on that side), rounded outward from f64.
+/// The boxes of the parts of triangle `t` inside `b` below and above the plane
+/// x_axis = c (`None`: no part strictly on that side), rounded outward from f64 and kept
+/// within `b`. The triangle is clipped to `b` first (Sutherland–Hodgman), so that each
+/// side's box bounds only the piece this reference stands for.
 fn clip(t: &[Vec3; 3], b: &Aabb, axis: usize, c: f32) -> (Option<Aabb>, Option<Aabb>) {
-    let v = t.map(|p| p.as_dvec3());
-    let cd = c as f64;
-    let mut lo = (DVec3::INFINITY, DVec3::NEG_INFINITY);
-    let mut hi = lo;
-    let grow = |s: &mut (DVec3, DVec3), p: DVec3| {
-        s.0 = s.0.min(p);
-        s.1 = s.1.max(p);
-    };
-    for i in 0..3 {
-        let (a, e) = (v[i], v[(i + 1) % 3]);
-        if a[axis] <= cd {
-            grow(&mut lo, a);
-        }
-        if a[axis] >= cd {
-            grow(&mut hi, a);
-        }
-        if (a[axis] < cd && e[axis] > cd) || (a[axis] > cd && e[axis] < cd) {
-            let mut p = a + (e - a) * ((cd - a[axis]) / (e[axis] - a[axis]));
-            p[axis] = cd;
-            grow(&mut lo, p);
-            grow(&mut hi, p);
-        }
+    let mut piece: Vec<DVec3> = t.iter().map(|p| p.as_dvec3()).collect();
+    for k in 0..3 {
+        piece = clip_polygon(&piece, k, b.min[k] as f64, true);
+        piece = clip_polygon(&piece, k, b.max[k] as f64, false);
     }
-    let finish = |(mn, mx): (DVec3, DVec3)| -> Option<Aabb> {
-        if mn.x > mx.x {
+    let cd = c as f64;
+    let side = |below: bool| {
+        let part = clip_polygon(&piece, axis, cd, !below);
+        // A part with no vertex strictly on its side is the cut itself (or nothing).
+        let strictly = |p: &DVec3| if below { p[axis] < cd } else { p[axis] > cd };
+        if !part.iter().any(strictly) {
             return None;
         }
-        // Rounded outward to f32, then kept within `b`.
-        let down = |x: f64| {
-            let f = x as f32;
-            if f as f64 > x { f.next_down() } else { f }
-        };
-        let up = |x: f64| {
-            let f = x as f32;
-            if (f as f64) < x { f.next_up() } else { f }
-        };
-        let boxed = Aabb {
-            min: Vec3::new(down(mn.x), down(mn.y), down(mn.z)).max(b.min),
-            max: Vec3::new(up(mx.x), up(mx.y), up(mx.z)).min(b.max),
-        };
-        (boxed.min.cmple(boxed.max).all()).then_some(boxed)
+        let (mn, mx) = part.iter().fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(a, z), p| (a.min(*p), z.max(*p)));
+        let boxed = Aabb { min: round_down(mn).max(b.min), max: round_up(mx).min(b.max) };
+        boxed.min.cmple(boxed.max).all().then_some(boxed)
     };
-    (finish(lo), finish(hi))
+    (side(true), side(false))
+}
+
+/// The part of convex polygon `poly` with x_axis ≥ c (`keep_above`) or ≤ c (one pass of
+/// Sutherland–Hodgman); crossing points lie exactly on the plane.
+fn clip_polygon(poly: &[DVec3], axis: usize, c: f64, keep_above: bool) -> Vec<DVec3> {
+    let inside = |p: &DVec3| if keep_above { p[axis] >= c } else { p[axis] <= c };
+    let mut out = Vec::with_capacity(poly.len() + 1);
+    for (i, a) in poly.iter().enumerate() {
+        let e = &poly[(i + 1) % poly.len()];
+        if inside(a) {
+            out.push(*a);
+        }
+        if (a[axis] < c && e[axis] > c) || (a[axis] > c && e[axis] < c) {
+            let mut p = *a + (*e - *a) * ((c - a[axis]) / (e[axis] - a[axis]));
+            p[axis] = c;
+            out.push(p);
+        }
+    }
+    out
+}
+
+/// The largest f32 point at or below `p` in every coordinate.
+fn round_down(p: DVec3) -> Vec3 {
+    let down = |x: f64| {
+        let f = x as f32;
+        if f as f64 > x { f.next_down() } else { f }
+    };
+    Vec3::new(down(p.x), down(p.y), down(p.z))
+}
+
+/// The smallest f32 point at or above `p` in every coordinate.
+fn round_up(p: DVec3) -> Vec3 {
+    let up = |x: f64| {
+        let f = x as f32;
+        if (f as f64) < x { f.next_up() } else { f }
+    };
+    Vec3::new(up(p.x), up(p.y), up(p.z))
 }
 
 #[cfg(test)]
