@@ -230,24 +230,20 @@ fn read_hits(path: &Path) -> Vec<(u32, u32)> {
         .collect()
 }
 
+/// `spt rays export SCENE --out SETS` at `width`×`height`, with `extra` options.
+fn export_rays(scene: &Path, sets: &Path, (width, height): (u32, u32), extra: &[&str]) -> std::process::Output {
+    let (w, h) = (width.to_string(), height.to_string());
+    let args =
+        ["rays", "export", scene.to_str().unwrap(), "--out", sets.to_str().unwrap(), "--width", &w, "--height", &h];
+    spt(&[&args[..], extra].concat())
+}
+
 #[test]
 fn ray_sets_export_and_trace_with_both_widths_alike() {
     let dir = temp_dir("rays");
     let scene = write_scene(&dir, OBJ);
     let sets = dir.join("sets");
-    let o = spt(&[
-        "rays",
-        "export",
-        scene.to_str().unwrap(),
-        "--out",
-        sets.to_str().unwrap(),
-        "--width",
-        "32",
-        "--height",
-        "24",
-        "--subdivide",
-        "1",
-    ]);
+    let o = export_rays(&scene, &sets, (32, 24), &["--subdivide", "1"]);
     assert!(o.status.success(), "{}", stderr(&o));
     // Two quads = four triangles, subdivided once: 16.
     assert_eq!(std::fs::metadata(sets.join("triangles.f32")).unwrap().len(), 16 * 36);
@@ -304,17 +300,7 @@ fn ray_sets_trace_with_pre_split_long_triangles() {
     let scene = dir.join("long.obj");
     std::fs::write(&scene, obj).unwrap();
     let sets = dir.join("sets");
-    let o = spt(&[
-        "rays",
-        "export",
-        scene.to_str().unwrap(),
-        "--out",
-        sets.to_str().unwrap(),
-        "--width",
-        "48",
-        "--height",
-        "48",
-    ]);
+    let o = export_rays(&scene, &sets, (48, 48), &[]);
     assert!(o.status.success(), "{}", stderr(&o));
     let references = |extra: &[&str]| {
         let o =

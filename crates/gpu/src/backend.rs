@@ -915,7 +915,7 @@ impl GpuBackend {
             integrator: self.integrator,
             // The kernel a render with the default sampler uses; others compile on demand.
             sampler: capabilities_for(self.integrator).samplers[0],
-            bvh_builder: options.bvh_builder.unwrap_or(triangle_build_config().method),
+            bvh_builder: options.bvh_builder.unwrap_or(KernelOptions::default().bvh_builder),
             ..KernelOptions::default()
         }
     }

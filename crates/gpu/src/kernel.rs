@@ -451,7 +451,7 @@ impl Default for KernelOptions {
             textures: false,
             cutouts: false,
             env_map: false,
-            bvh_builder: bvh::SplitMethod::BinnedSah,
+            bvh_builder: crate::backend::triangle_build_config().method,
         }
     }
 }
