@@ -17,7 +17,7 @@ W=${W:-1920} H=${H:-1080}
 REPEATS=${REPEATS:-5}
 FRAMES=${FRAMES:-100}
 CPU_THREADS=${CPU_THREADS:-0}
-# GPU BVH layouts to time: auto (4-wide), 2 (binary).
+# GPU BVH layouts to time: auto (the binary tree), 2 (binary), 4 and 8 (wide: GPU_WIDTHS="auto 4 8").
 GPU_WIDTHS=${GPU_WIDTHS:-auto 2}
 mkdir -p "$OUT"
 here=$(dirname "$0")

@@ -415,7 +415,7 @@ struct SceneArgs {
     triangle_test: TriangleTest,
     /// Children per node of the triangle BVH: auto (the backend's choice: on the CPU 8
     /// where it has AVX2, else 4; on the GPU 2), 2 (binary, GPU only), 4 (SSE on the CPU,
-    /// 4-wide nodes on the GPU) or 8 (AVX2, CPU only).
+    /// 4-wide nodes on the GPU) or 8 (AVX2 on the CPU, 8-wide nodes on the GPU).
     #[arg(long, default_value = "auto", value_parser = parse_bvh_width)]
     bvh_width: BvhWidth,
     /// How the triangle BVH's nodes are split: binned_sah (the default), sweep_sah (full

@@ -513,9 +513,10 @@ fn integrators_are_chosen_by_name() {
         assert!(!o.status.success() && stderr(&o).contains("at most 16"), "{}", stderr(&o));
         let o = render_small(&scene, (8, 8, 4), &out, &["--integrator", "bdpt", "--backend", "gpu"]);
         assert!(!o.status.success() && stderr(&o).contains("use --backend cpu"), "{}", stderr(&o));
-        // The GPU's path tracer builds its tree by any split method and limits diffuse
-        // bounces as the CPU's does; other integrators refuse the limit on both backends.
-        for extra in [["--bvh-builder", "midpoint"], ["--max-diffuse-depth", "2"]] {
+        // The GPU's path tracer builds its tree by any split method and at any width, and
+        // limits diffuse bounces as the CPU's does; other integrators refuse the limit on
+        // both backends.
+        for extra in [["--bvh-builder", "midpoint"], ["--bvh-width", "8"], ["--max-diffuse-depth", "2"]] {
             let o = render_small(&scene, (8, 8, 4), &out, &[&["--backend", "gpu"][..], &extra].concat());
             assert!(o.status.success(), "{extra:?}: {}", stderr(&o));
         }

@@ -63,7 +63,8 @@
 //!   threshold, a ray grazing an edge) and decorrelates from the CPU's from there on;
 //!   images are close to the CPU's, not bit-identical.
 //! * Triangles are traced in a binary BVH (binned SAH unless `--bvh-builder` says
-//!   otherwise, leaves ≤ 4) instead of the CPU's wide BVH; with hits at exactly equal
+//!   otherwise, leaves ≤ 4; or the 4- or 8-wide trees [`crate::wide`] collapses from it,
+//!   with `--bvh-width`) instead of the CPU's wide BVH; with hits at exactly equal
 //!   distances the two may report different triangles.
 //! * The specular extension past `max_depth` and the `max_diffuse_depth` count judge a hit
 //!   by its material's flags: the union over 360–830 nm of its untextured BSDF's
@@ -354,7 +355,7 @@ pub fn capabilities_for(integrator: GpuIntegrator) -> Capabilities {
         triangle_tests: vec![TriangleTest::Watertight, TriangleTest::MollerTrumbore],
         // Auto is the binary tree: on an H100 the 4-wide one (`crate::wide`) renders 1.2–1.8×
         // slower in this megakernel; it stays selectable for comparisons.
-        bvh_widths: vec![BvhWidth::Auto, BvhWidth::Two, BvhWidth::Four],
+        bvh_widths: vec![BvhWidth::Auto, BvhWidth::Two, BvhWidth::Four, BvhWidth::Eight],
         integrator: integrator.name(),
         max_bounces: Some(match integrator {
             GpuIntegrator::Whitted => crate::kernel::WHITTED_MAX_DEPTH,
@@ -451,11 +452,14 @@ impl SceneData {
                 let nodes: &[u8] = bytemuck::cast_slice(bvh.nodes());
                 (nodes.to_vec(), std::mem::size_of::<BvhNode>(), bvh.nodes().len(), NodeLayout::Binary)
             }
-            NodeLayout::Wide4 { .. } => {
-                let wide = WideBvh::collapse(&bvh);
-                let layout = NodeLayout::Wide4 { stack: wide.stack_bound };
+            NodeLayout::Wide4 { .. } | NodeLayout::Wide8 { .. } => {
+                let width = if matches!(options.nodes, NodeLayout::Wide4 { .. }) { 4 } else { 8 };
+                let wide = WideBvh::collapse(&bvh, width);
+                let stack = wide.stack_bound;
+                let layout = if width == 4 { NodeLayout::Wide4 { stack } } else { NodeLayout::Wide8 { stack } };
                 let bytes: &[u8] = bytemuck::cast_slice(&wide.nodes);
-                (bytes.to_vec(), std::mem::size_of::<WideNode>(), wide.nodes.len(), layout)
+                let node_bytes = std::mem::size_of::<WideNode>() * (width / crate::wide::WIDTH);
+                (bytes.to_vec(), node_bytes, wide.nodes.len() * crate::wide::WIDTH / width, layout)
             }
         };
         let textured = scene.materials.iter().any(|m| m.textures.is_some());
@@ -910,6 +914,7 @@ impl GpuBackend {
             triangle_test: options.triangle_test,
             nodes: match options.bvh_width {
                 BvhWidth::Four => NodeLayout::Wide4 { stack: 0 },
+                BvhWidth::Eight => NodeLayout::Wide8 { stack: 0 },
                 _ => NodeLayout::Binary,
             },
             integrator: self.integrator,
@@ -1004,6 +1009,7 @@ impl GpuBackend {
             accelerator: match data.options.nodes {
                 NodeLayout::Binary => "binary BVH",
                 NodeLayout::Wide4 { .. } => "4-wide BVH",
+                NodeLayout::Wide8 { .. } => "8-wide BVH",
             },
         };
         Ok(GpuScene {

@@ -332,6 +332,11 @@ pub enum NodeLayout {
         /// Stack entries.
         stack: u32,
     },
+    /// The 8-wide BVH (two [`WideNode`]s per node) with a stack of `stack` entries.
+    Wide8 {
+        /// Stack entries.
+        stack: u32,
+    },
 }
 
 /// Bytes of the film buffer before the accumulators: the 64-bit ray counter (two words),
@@ -489,7 +494,7 @@ pub fn header(options: &KernelOptions) -> String {
             out.push_str(&BvhNode::declaration());
             ("PtNode", STACK_ENTRIES)
         }
-        NodeLayout::Wide4 { stack } => {
+        NodeLayout::Wide4 { stack } | NodeLayout::Wide8 { stack } => {
             out.push_str(&WideNode::declaration());
             ("PtWideNode", stack.max(1))
         }
@@ -675,6 +680,7 @@ pub fn source(material_wgsl: &str, options: &KernelOptions) -> String {
     let (traversal_name, traversal) = match options.nodes {
         NodeLayout::Binary => ("traversal.wgsl", include_str!("wgsl/traversal.wgsl")),
         NodeLayout::Wide4 { .. } => ("traversal_wide.wgsl", include_str!("wgsl/traversal_wide.wgsl")),
+        NodeLayout::Wide8 { .. } => ("traversal_wide8.wgsl", include_str!("wgsl/traversal_wide8.wgsl")),
     };
     let _ = write!(out, "\n// ---- {traversal_name}\n{traversal}");
     let _ = write!(out, "\n// ---- triangle test\n{triangle}\n// ---- main.wgsl\n{MAIN}");

@@ -77,6 +77,12 @@ fn generated_structs_have_the_host_layout() {
     };
     let (_, binary_module) = kernel_module(&binary);
     problems.extend(mismatches::<bvh::BvhNode>(&binary_module));
+    // The 8-wide traversal parses and validates too, over the same node struct.
+    let eight =
+        KernelOptions { nodes: gpu::kernel::NodeLayout::Wide8 { stack: 40 }, ..options(bvh::TriangleTest::Watertight) };
+    let (eight_src, eight_module) = kernel_module(&eight);
+    assert!(eight_src.contains("traversal_wide8.wgsl") && !eight_src.contains("// ---- traversal_wide.wgsl"));
+    problems.extend(mismatches::<gpu::kernel::WideNode>(&eight_module));
     assert!(problems.is_empty(), "{problems:#?}");
     // The film: header words, then the accumulators at the stride the host reads.
     let (members, _) = wgsl_layout(&module, "PtFilm");
