@@ -6,8 +6,8 @@
 //!
 //! * the structs the host and the kernel exchange — the uniform block [`Params`]
 //!   (`PtParams`), the BVH node ([`bvh::BvhNode`], `PtNode`) and the per-pixel accumulator
-//!   [`PixelAccum`] (`PtPixel`) — declared once with [`wgsl_struct!`] or
-//!   [`wgsl_layout!`], whose field offsets a test checks against naga's layout of the
+//!   [`PixelAccum`] (`PtPixel`) — declared once with `wgsl_struct!` or
+//!   `wgsl_layout!` (macros private to this module), whose field offsets a test checks against naga's layout of the
 //!   generated WGSL;
 //! * the constants the kernel shares with the CPU code: shading-normal codes
 //!   ([`ShadingNormals::code`]), scene flags, the visible-wavelength pdf, the CIE tables'
