@@ -1,5 +1,5 @@
 //! Models by name: the [`Model`] trait a model's typed parameters implement, and the
-//! [`registry!`](crate::registry) macro that turns a list of models into the types every
+//! [`registry!`](macro@crate::registry) macro that turns a list of models into the types every
 //! consumer dispatches on.
 //!
 //! A model is three things, all in its own file: its parameters declared with

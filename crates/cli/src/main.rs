@@ -1,4 +1,7 @@
 //! `spt`: the spectral path tracer's command-line tool.
+// The arguments' doc comments are clap's help text, where `[:LEVEL]` means an optional
+// part, not a link.
+#![allow(rustdoc::broken_intra_doc_links)]
 
 mod atlas_table;
 mod bvh_table;

@@ -15,7 +15,7 @@
 //!   [`partial`]; files are written to a temporary name and renamed, so a reader never
 //!   sees half a file, and carry a SHA-256 of their bytes, so a truncated or corrupted
 //!   file is refused with its name.
-//! * [`merge`] checks that the partials belong to one render and cover every pixel's
+//! * [`merge()`] checks that the partials belong to one render and cover every pixel's
 //!   samples exactly once (naming duplicates, overlaps and what is missing) and adds
 //!   them. The film's sums are integers, so the merged film — and the image written
 //!   from it — equals the single-machine render's byte for byte.

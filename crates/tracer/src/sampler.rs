@@ -215,10 +215,10 @@ pub const DIMENSION_MUL: u64 = 0x9E37_79B9_7F4A_7C15;
 /// Mixed into the value seeds of [`ZSobol`]'s dimensions.
 pub const VALUE_SEED_KEY: u64 = 0xA511_E9B3_0000_0000;
 
-/// The multipliers of [`laine_karras`] (even: each bit depends only on the bits below).
+/// The multipliers of `laine_karras` (even: each bit depends only on the bits below).
 pub const LAINE_KARRAS_MULS: [u32; 3] = [0x3d20_adea, 0x0552_6c56, 0x53a2_2864];
 
-/// The multipliers of [`laine_karras_64`].
+/// The multipliers of `laine_karras_64`.
 pub const LAINE_KARRAS_64_MULS: [u64; 3] = [0x3d20_adea_6c5f_e1b2, 0x0552_6c56_a7d4_b3f8, 0x53a2_2864_91e3_c5a4];
 
 /// (the index scramble's seed, the values' scramble seeds) of a dimension.
@@ -306,7 +306,7 @@ fn sobol_1(index: u64) -> u32 {
 #[cfg(test)]
 static SOBOL_1_TABLES: [[u32; 256]; 4] = sobol_1_tables(false);
 
-/// The tables of [`sobol_1`] bit-reversed, for [`scrambled_sobol_1`] (the GPU uploads
+/// The tables of `sobol_1` bit-reversed, for `scrambled_sobol_1` (the GPU uploads
 /// them).
 pub static SOBOL_1_REVERSED: [[u32; 256]; 4] = sobol_1_tables(true);
 
