@@ -144,9 +144,10 @@ impl Source<'_> {
     }
 }
 
-/// Each binary node's triangles as one range of the leaf-ordered triangles (a subtree's
-/// leaves are contiguous in that order): children follow their parent in `binary`, so one
-/// pass from the back finds every range.
+/// Each binary node's triangles as one range (first, count) of the leaf-ordered triangles:
+/// children follow their parent in `binary`, so one pass from the back finds every range.
+/// Our builders lay a subtree's leaves out contiguously; where a tree does not (its two
+/// children's ranges do not meet), the node gets count `u32::MAX` and is never merged.
 fn subtree_ranges(binary: &[BvhNode]) -> Vec<(u32, u32)> {
     let mut ranges = vec![(0, 0); binary.len()];
     for b in (0..binary.len()).rev() {
@@ -155,8 +156,10 @@ fn subtree_ranges(binary: &[BvhNode]) -> Vec<(u32, u32)> {
             (n.index, n.count)
         } else {
             let (left, right) = (ranges[b + 1], ranges[n.index as usize]);
-            debug_assert_eq!(left.0 + left.1, right.0, "a subtree's leaves are contiguous");
-            (left.0, left.1 + right.1)
+            match left.1.checked_add(right.1) {
+                Some(count) if left.0.checked_add(left.1) == Some(right.0) => (left.0, count),
+                _ => (0, u32::MAX),
+            }
         };
     }
     ranges
@@ -184,12 +187,11 @@ mod tests {
     }
 
     fn binary(n: usize) -> Bvh {
-        let config = BuildConfig {
-            method: SplitMethod::BinnedSah,
-            max_leaf_size: 4,
-            leaf_by_sah: true,
-            ..BuildConfig::default()
-        };
+        built_by(n, SplitMethod::BinnedSah)
+    }
+
+    fn built_by(n: usize, method: SplitMethod) -> Bvh {
+        let config = BuildConfig { method, max_leaf_size: 4, leaf_by_sah: true, ..BuildConfig::default() };
         Bvh::build(&soup(n), config).unwrap()
     }
 
@@ -264,6 +266,39 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// Every builder's tree lays a subtree's leaves out contiguously, so that the 8-wide
+    /// collapse merges small subtrees into single leaves; a tree whose ranges do not meet
+    /// is collapsed without merging, every triangle still in one leaf.
+    #[test]
+    fn small_subtrees_merge_into_leaves_with_every_builder() {
+        for method in SplitMethod::ALL {
+            let b = built_by(5000, method);
+            let ranges = subtree_ranges(b.nodes());
+            assert_eq!(ranges[0], (0, 5000), "{method:?}: the root covers every triangle");
+            let w = WideBvh::collapse(&b, 8);
+            let leaves: Vec<u32> = (0..w.nodes.len())
+                .step_by(2)
+                .flat_map(|i| (0..8).map(move |k| (i, k)))
+                .map(|(i, k)| slot(&w, i, k).3)
+                .filter(|&c| c != 0 && c != WIDE_EMPTY)
+                .collect();
+            assert_eq!(leaves.iter().sum::<u32>(), 5000, "{method:?}");
+            let binary_leaves = b.nodes().iter().filter(|n| n.count > 0).count();
+            assert!(
+                leaves.len() < binary_leaves,
+                "{method:?}: {} leaf slots, {binary_leaves} binary leaves",
+                leaves.len()
+            );
+            assert!(leaves.iter().all(|&c| c <= MERGED_LEAF.max(4)), "{method:?}: a leaf above four triangles");
+        }
+        // Ranges that do not meet (the right child's leaf starts past the left's end).
+        let mut nodes = built_by(40, SplitMethod::BinnedSah).nodes().to_vec();
+        let last_leaf = nodes.iter().rposition(|n| n.count > 0).unwrap();
+        nodes[last_leaf].index += 1;
+        assert!(subtree_ranges(&nodes).iter().any(|r| r.1 == u32::MAX));
+        assert_eq!(subtree_ranges(&nodes)[0].1, u32::MAX, "the root's range is broken too");
     }
 
     /// The stack bound is what a traversal pushing every child node but one can hold.
