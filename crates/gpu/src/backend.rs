@@ -222,7 +222,7 @@ fn punctual_entry(light: &PunctualLight, spectrum: f32, entry: &mut [f32; LIGHT_
 }
 
 /// How the kernel's triangle BVH is built (binned SAH, leaves of at most four triangles
-/// chosen by SAH); the 4-wide tree is collapsed from it.
+/// chosen by SAH); the 4- and 8-wide trees are collapsed from it.
 pub fn triangle_build_config() -> BuildConfig {
     BuildConfig { method: SplitMethod::BinnedSah, max_leaf_size: 4, leaf_by_sah: true, ..BuildConfig::default() }
 }
@@ -745,7 +745,7 @@ impl SceneData {
         self.tables[first..end].chunks_exact(LIGHT_FLOATS)
     }
 
-    /// The BVH nodes as uploaded (binary or 4-wide, [`KernelOptions::nodes`]).
+    /// The BVH nodes as uploaded (binary, 4- or 8-wide, [`KernelOptions::nodes`]).
     pub fn node_bytes(&self) -> &[u8] {
         &self.nodes
     }
@@ -944,7 +944,8 @@ impl GpuBackend {
         let memory = device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
 
         // Bindings may not be empty: pad every array to at least one element (16 bytes;
-        // 32 for the nodes), which the kernel never reads (its counts say so).
+        // one node for the nodes: 32, 128 or 256 bytes), which the kernel never reads (its
+        // counts say so).
         let storage = |label: &str, bytes: &[u8], min: usize| {
             let mut contents = bytes.to_vec();
             if contents.len() < min {

@@ -127,7 +127,7 @@ wgsl_struct! {
         shading: u32,
         /// [`HAS_NORMALS`] | [`HAS_TANGENTS`] | [`HAS_ENVIRONMENT`].
         scene_flags: u32,
-        /// BVH nodes.
+        /// BVH nodes (an 8-wide node counts once, though it is two [`WideNode`] entries).
         node_count: u32,
         /// Entries of the light table (emissive triangles and shapes, then punctual lights).
         light_count: u32,
@@ -677,12 +677,15 @@ pub fn source(material_wgsl: &str, options: &KernelOptions) -> String {
     for (name, text) in FILES {
         let _ = write!(out, "\n// ---- {name}\n{text}");
     }
-    let (traversal_name, traversal) = match options.nodes {
-        NodeLayout::Binary => ("traversal.wgsl", include_str!("wgsl/traversal.wgsl")),
-        NodeLayout::Wide4 { .. } => ("traversal_wide.wgsl", include_str!("wgsl/traversal_wide.wgsl")),
-        NodeLayout::Wide8 { .. } => ("traversal_wide8.wgsl", include_str!("wgsl/traversal_wide8.wgsl")),
+    let wide_nodes = ("traversal_wide_nodes.wgsl", include_str!("wgsl/traversal_wide_nodes.wgsl"));
+    let traversal: &[(&str, &str)] = match options.nodes {
+        NodeLayout::Binary => &[("traversal.wgsl", include_str!("wgsl/traversal.wgsl"))],
+        NodeLayout::Wide4 { .. } => &[wide_nodes, ("traversal_wide.wgsl", include_str!("wgsl/traversal_wide.wgsl"))],
+        NodeLayout::Wide8 { .. } => &[wide_nodes, ("traversal_wide8.wgsl", include_str!("wgsl/traversal_wide8.wgsl"))],
     };
-    let _ = write!(out, "\n// ---- {traversal_name}\n{traversal}");
+    for (name, text) in traversal {
+        let _ = write!(out, "\n// ---- {name}\n{text}");
+    }
     let _ = write!(out, "\n// ---- triangle test\n{triangle}\n// ---- main.wgsl\n{MAIN}");
     out
 }

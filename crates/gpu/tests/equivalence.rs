@@ -23,7 +23,7 @@
 use brdf::params::ParamValue;
 use glam::Vec3;
 use gpu::backend::SceneData;
-use gpu::kernel::KernelOptions;
+use gpu::kernel::{KernelOptions, NodeLayout};
 use gpu::{GpuBackend, GpuError};
 use spectral::spectrum::Colour;
 use std::path::Path;
@@ -438,6 +438,11 @@ fn unsupported_scenes_and_modes_are_clear_errors() {
     let flake = tracer::scenes::sphere_flake(1).unwrap();
     caps.check_scene(&flake, &SceneOptions::default()).unwrap();
     SceneData::new(&flake, KernelOptions::default()).unwrap();
+    // A scene of shapes alone has an empty triangle tree at every width.
+    for nodes in [NodeLayout::Wide4 { stack: 0 }, NodeLayout::Wide8 { stack: 0 }] {
+        let data = SceneData::new(&flake, KernelOptions { nodes, ..KernelOptions::default() }).unwrap();
+        assert!(data.node_bytes().is_empty(), "{nodes:?}");
+    }
     // The kernel traverses a binary, 4-wide or 8-wide BVH: every width is accepted.
     let room = tracer::scenes::material_sphere(Material::diffuse("grey", Colour::constant(0.5)).unwrap());
     for width in [bvh::BvhWidth::Auto, bvh::BvhWidth::Two, bvh::BvhWidth::Four, bvh::BvhWidth::Eight] {

@@ -150,8 +150,8 @@ impl RenderSettings {
 pub struct SceneOptions {
     /// The ray–triangle test compiled into the traversal.
     pub triangle_test: TriangleTest,
-    /// Children per node of the CPU's triangle BVH ([`BvhWidth::Auto`]: 8 where the CPU
-    /// has AVX2, else 4).
+    /// Children per node of the triangle BVH ([`BvhWidth::Auto`]: the backend's choice —
+    /// on the CPU 8 where it has AVX2, else 4; on the GPU the binary tree).
     pub bvh_width: BvhWidth,
     /// How the triangle BVH's nodes are split (`None`: binned SAH, the default).
     pub bvh_builder: Option<bvh::SplitMethod>,

@@ -4,27 +4,7 @@
 // once (shrinking t_max before anything is pushed); the child nodes hit are visited
 // nearest first, the others pushed farthest first with their entry distances, and nodes
 // beyond the closest hit are culled on the way back. PT_STACK is the tree's own bound.
-
-struct PtWideState {
-    t_max: f32,
-    best: PtHit,
-    found: bool,
-}
-
-// Tests a leaf child's triangles (`count` from `first`) against the closest hit so far.
-fn pt_wide_leaf(first: u32, count: u32, r: PtRay, s: ptr<function, PtWideState>, any_hit: bool) {
-    for (var k = first; k < first + count; k++) {
-        let h = pt_intersect_triangle(k, r, (*s).t_max);
-        if h.x > 0.0 {
-            (*s).t_max = h.x;
-            (*s).best = PtHit(h.x, h.y, h.z, k);
-            (*s).found = true;
-            if any_hit {
-                return;
-            }
-        }
-    }
-}
+// The state, leaf test, slab test and child order are traversal_wide_nodes.wgsl's.
 
 // The closest triangle hit in (t_min, t_max), or with `any_hit` the first found (shapes.wgsl
 // adds the analytic shapes).
@@ -38,16 +18,8 @@ fn pt_trace_triangles(o: vec3f, d: vec3f, t_min: f32, t_max_in: f32, any_hit: bo
     var node = 0u;
     loop {
         let n = pt_nodes[node];
-        let t0x = (n.lo_x - r.o.x) * r.inv.x;
-        let t1x = (n.hi_x - r.o.x) * r.inv.x;
-        let t0y = (n.lo_y - r.o.y) * r.inv.y;
-        let t1y = (n.hi_y - r.o.y) * r.inv.y;
-        let t0z = (n.lo_z - r.o.z) * r.inv.z;
-        let t1z = (n.hi_z - r.o.z) * r.inv.z;
-        let near = max(max(min(t0x, t1x), min(t0y, t1y)), max(min(t0z, t1z), vec4f(r.t_min)));
-        let far = min(min(max(t0x, t1x), max(t0y, t1y)), min(max(t0z, t1z), vec4f(s.t_max)));
-        let entered = (near <= far) & (n.count != vec4u(PT_WIDE_EMPTY));
-        let leaf = entered & (n.count > vec4u(0u));
+        let boxes = pt_wide_boxes(n, r, s.t_max);
+        let leaf = boxes.entered & (n.count > vec4u(0u));
         if leaf.x {
             pt_wide_leaf(n.index.x, n.count.x, r, &s, any_hit);
         }
@@ -63,16 +35,9 @@ fn pt_trace_triangles(o: vec3f, d: vec3f, t_min: f32, t_max_in: f32, any_hit: bo
         if any_hit && s.found {
             return s.best;
         }
-        // Child nodes still in reach; unreached ones sort last with t = PT_MISS.
-        let inner = entered & (n.count == vec4u(0u)) & (near <= vec4f(s.t_max));
-        var t = select(vec4f(PT_MISS), near, inner);
-        var c = n.index;
-        // A sorting network on (t, c), nearest first.
-        if t.y < t.x { t = t.yxzw; c = c.yxzw; }
-        if t.w < t.z { t = t.xywz; c = c.xywz; }
-        if t.z < t.x { t = t.zyxw; c = c.zyxw; }
-        if t.w < t.y { t = t.xwzy; c = c.xwzy; }
-        if t.z < t.y { t = t.xzyw; c = c.xzyw; }
+        let order = pt_wide_order(n, boxes, s.t_max);
+        let t = order.t;
+        let c = order.c;
         if t.x < PT_MISS {
             // Push the farther ones farthest first; visit the nearest.
             if t.w < PT_MISS {

@@ -5,66 +5,8 @@
 // odd–even merge of the two sorted halves), the nearest visited and the others pushed
 // farthest first with their entry distances; nodes beyond the closest hit are culled on
 // the way back. Everything is unrolled: no loop over the slots (see wide.rs for why).
-// Shares PtWideState and pt_wide_leaf's contract with traversal_wide.wgsl (repeated here,
-// since a kernel includes one traversal). PT_STACK is the tree's own bound.
-
-struct PtWideState {
-    t_max: f32,
-    best: PtHit,
-    found: bool,
-}
-
-// Tests a leaf child's triangles (`count` from `first`) against the closest hit so far.
-fn pt_wide_leaf(first: u32, count: u32, r: PtRay, s: ptr<function, PtWideState>, any_hit: bool) {
-    for (var k = first; k < first + count; k++) {
-        let h = pt_intersect_triangle(k, r, (*s).t_max);
-        if h.x > 0.0 {
-            (*s).t_max = h.x;
-            (*s).best = PtHit(h.x, h.y, h.z, k);
-            (*s).found = true;
-            if any_hit {
-                return;
-            }
-        }
-    }
-}
-
-// The slab test of one half's four children: (near, entered) with near ≤ far.
-struct PtHalf {
-    near: vec4f,
-    entered: vec4<bool>,
-}
-
-fn pt_half(n: PtWideNode, r: PtRay, t_max: f32) -> PtHalf {
-    let t0x = (n.lo_x - r.o.x) * r.inv.x;
-    let t1x = (n.hi_x - r.o.x) * r.inv.x;
-    let t0y = (n.lo_y - r.o.y) * r.inv.y;
-    let t1y = (n.hi_y - r.o.y) * r.inv.y;
-    let t0z = (n.lo_z - r.o.z) * r.inv.z;
-    let t1z = (n.hi_z - r.o.z) * r.inv.z;
-    let near = max(max(min(t0x, t1x), min(t0y, t1y)), max(min(t0z, t1z), vec4f(r.t_min)));
-    let far = min(min(max(t0x, t1x), max(t0y, t1y)), min(max(t0z, t1z), vec4f(t_max)));
-    return PtHalf(near, (near <= far) & (n.count != vec4u(PT_WIDE_EMPTY)));
-}
-
-// One half's child nodes still in reach, sorted nearest first; unreached ones last with
-// t = PT_MISS. Returns (t, child) as a vec4f and a vec4u.
-struct PtSorted {
-    t: vec4f,
-    c: vec4u,
-}
-
-fn pt_sorted_half(n: PtWideNode, h: PtHalf, t_max: f32) -> PtSorted {
-    let inner = h.entered & (n.count == vec4u(0u)) & (h.near <= vec4f(t_max));
-    var t = select(vec4f(PT_MISS), h.near, inner);
-    var c = n.index;
-    if t.y < t.x { t = t.yxzw; c = c.yxzw; }
-    if t.w < t.z { t = t.xywz; c = c.xywz; }
-    if t.z < t.x { t = t.zyxw; c = c.zyxw; }
-    if t.w < t.y { t = t.xwzy; c = c.xwzy; }
-    if t.z < t.y { t = t.xzyw; c = c.xzyw; }
-    return PtSorted(t, c);
-}
+// The state, leaf test, slab test and each half's order are traversal_wide_nodes.wgsl's.
+// PT_STACK is the tree's own bound.
 
 // The closest triangle hit in (t_min, t_max), or with `any_hit` the first found (shapes.wgsl
 // adds the analytic shapes).
@@ -79,8 +21,8 @@ fn pt_trace_triangles(o: vec3f, d: vec3f, t_min: f32, t_max_in: f32, any_hit: bo
     loop {
         let a = pt_nodes[node];
         let b = pt_nodes[node + 1u];
-        let ha = pt_half(a, r, s.t_max);
-        let hb = pt_half(b, r, s.t_max);
+        let ha = pt_wide_boxes(a, r, s.t_max);
+        let hb = pt_wide_boxes(b, r, s.t_max);
         let la = ha.entered & (a.count > vec4u(0u));
         let lb = hb.entered & (b.count > vec4u(0u));
         if la.x {
@@ -110,8 +52,8 @@ fn pt_trace_triangles(o: vec3f, d: vec3f, t_min: f32, t_max_in: f32, any_hit: bo
         if any_hit && s.found {
             return s.best;
         }
-        let sa = pt_sorted_half(a, ha, s.t_max);
-        let sb = pt_sorted_half(b, hb, s.t_max);
+        let sa = pt_wide_order(a, ha, s.t_max);
+        let sb = pt_wide_order(b, hb, s.t_max);
         // Batcher's odd–even merge of the sorted halves (t0..t3, t4..t7): compare–exchange
         // (0,4) (1,5) (2,6) (3,7), then (2,4) (3,5), then (1,2) (3,4) (5,6).
         let swap1 = sb.t < sa.t;
