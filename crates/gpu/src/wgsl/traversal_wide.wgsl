@@ -19,19 +19,7 @@ fn pt_trace_triangles(o: vec3f, d: vec3f, t_min: f32, t_max_in: f32, any_hit: bo
     loop {
         let n = pt_nodes[node];
         let boxes = pt_wide_boxes(n, r, s.t_max);
-        let leaf = boxes.entered & (n.count > vec4u(0u));
-        if leaf.x {
-            pt_wide_leaf(n.index.x, n.count.x, r, &s, any_hit);
-        }
-        if leaf.y && !(any_hit && s.found) {
-            pt_wide_leaf(n.index.y, n.count.y, r, &s, any_hit);
-        }
-        if leaf.z && !(any_hit && s.found) {
-            pt_wide_leaf(n.index.z, n.count.z, r, &s, any_hit);
-        }
-        if leaf.w && !(any_hit && s.found) {
-            pt_wide_leaf(n.index.w, n.count.w, r, &s, any_hit);
-        }
+        pt_wide_leaves(n, boxes.entered & (n.count > vec4u(0u)), r, &s, any_hit);
         if any_hit && s.found {
             return s.best;
         }

@@ -23,31 +23,9 @@ fn pt_trace_triangles(o: vec3f, d: vec3f, t_min: f32, t_max_in: f32, any_hit: bo
         let b = pt_nodes[node + 1u];
         let ha = pt_wide_boxes(a, r, s.t_max);
         let hb = pt_wide_boxes(b, r, s.t_max);
-        let la = ha.entered & (a.count > vec4u(0u));
-        let lb = hb.entered & (b.count > vec4u(0u));
-        if la.x {
-            pt_wide_leaf(a.index.x, a.count.x, r, &s, any_hit);
-        }
-        if la.y && !(any_hit && s.found) {
-            pt_wide_leaf(a.index.y, a.count.y, r, &s, any_hit);
-        }
-        if la.z && !(any_hit && s.found) {
-            pt_wide_leaf(a.index.z, a.count.z, r, &s, any_hit);
-        }
-        if la.w && !(any_hit && s.found) {
-            pt_wide_leaf(a.index.w, a.count.w, r, &s, any_hit);
-        }
-        if lb.x && !(any_hit && s.found) {
-            pt_wide_leaf(b.index.x, b.count.x, r, &s, any_hit);
-        }
-        if lb.y && !(any_hit && s.found) {
-            pt_wide_leaf(b.index.y, b.count.y, r, &s, any_hit);
-        }
-        if lb.z && !(any_hit && s.found) {
-            pt_wide_leaf(b.index.z, b.count.z, r, &s, any_hit);
-        }
-        if lb.w && !(any_hit && s.found) {
-            pt_wide_leaf(b.index.w, b.count.w, r, &s, any_hit);
+        pt_wide_leaves(a, ha.entered & (a.count > vec4u(0u)), r, &s, any_hit);
+        if !(any_hit && s.found) {
+            pt_wide_leaves(b, hb.entered & (b.count > vec4u(0u)), r, &s, any_hit);
         }
         if any_hit && s.found {
             return s.best;

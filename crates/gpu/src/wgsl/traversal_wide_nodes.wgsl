@@ -24,6 +24,23 @@ fn pt_wide_leaf(first: u32, count: u32, r: PtRay, s: ptr<function, PtWideState>,
     }
 }
 
+// Tests the leaf children `leaf` of node `n` in slot order (stopping at the first hit with
+// `any_hit`).
+fn pt_wide_leaves(n: PtWideNode, leaf: vec4<bool>, r: PtRay, s: ptr<function, PtWideState>, any_hit: bool) {
+    if leaf.x {
+        pt_wide_leaf(n.index.x, n.count.x, r, s, any_hit);
+    }
+    if leaf.y && !(any_hit && (*s).found) {
+        pt_wide_leaf(n.index.y, n.count.y, r, s, any_hit);
+    }
+    if leaf.z && !(any_hit && (*s).found) {
+        pt_wide_leaf(n.index.z, n.count.z, r, s, any_hit);
+    }
+    if leaf.w && !(any_hit && (*s).found) {
+        pt_wide_leaf(n.index.w, n.count.w, r, s, any_hit);
+    }
+}
+
 // The slab test of a node's four children: their entry distances, and which are entered
 // within (t_min, t_max] (used slots only).
 struct PtBoxes {
