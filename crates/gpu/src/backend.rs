@@ -354,7 +354,8 @@ pub fn capabilities_for(integrator: GpuIntegrator) -> Capabilities {
         environment_maps: true,
         triangle_tests: vec![TriangleTest::Watertight, TriangleTest::MollerTrumbore],
         // Auto is the binary tree: on an H100 the 4-wide one (`crate::wide`) renders 1.2–1.8×
-        // slower in this megakernel; it stays selectable for comparisons.
+        // slower in this megakernel (the 8-wide one is untimed there); both stay selectable
+        // for comparisons.
         bvh_widths: vec![BvhWidth::Auto, BvhWidth::Two, BvhWidth::Four, BvhWidth::Eight],
         integrator: integrator.name(),
         max_bounces: Some(match integrator {
