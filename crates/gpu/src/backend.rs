@@ -33,7 +33,8 @@
 //! of `DirectLighting` and `AmbientOcclusion`, `wgsl/whitted.wgsl` of `Whitted` (its
 //! recursion as a depth-first walk with a stack of [`crate::kernel::WHITTED_MAX_DEPTH`]
 //! entries, in the CPU's order), `wgsl/atlas.wgsl` of `AtlasGi`'s per-pixel part (its atlas
-//! built and gathered by the CPU's code when the scene is prepared); all share the path
+//! built by the CPU's code when the scene is prepared, its gather run on the device by
+//! `wgsl/atlas_gather.wgsl`); all share the path
 //! tracer's interaction and light sampling code, as the CPU's do. The path kernel is the one described here. It draws
 //! the CPU's own sample values (`wgsl/sampler.wgsl`: `Pcg32::for_sample`, `PaddedSobol`
 //! and `ZSobol`, with the 64-bit arithmetic emulated on word pairs) in the CPU's order, so
@@ -371,7 +372,7 @@ pub fn capabilities_for(integrator: GpuIntegrator) -> Capabilities {
 
 /// The atlas of `scene` (already flattened) for the atlas integrator, built as the CPU
 /// backend builds it (`AtlasGi::for_scene`: its own BVH with the render's triangle test,
-/// lights and view; the gather runs on the CPU's threads).
+/// lights and view), all but its gather, which the device runs.
 fn build_atlas(
     scene: &Scene,
     settings: &tracer::integrator::AtlasSettings,
@@ -382,7 +383,7 @@ fn build_atlas(
     let geometry = tracer::geometry::Geometry::build(scene, &options).map_err(failed)?;
     let lights = tracer::lights::Lights::new(scene);
     let view = tracer::integrator::SceneView::new(scene, &geometry, &lights);
-    tracer::integrator::Atlas::build(&view, settings).map_err(failed)
+    tracer::integrator::Atlas::build_ungathered(&view, settings).map_err(failed)
 }
 
 /// What the kernel's uniforms and the camera need of a scene besides its buffers, kept
@@ -428,6 +429,18 @@ pub struct SceneData {
     constants: SceneConstants,
     options: KernelOptions,
     build_time: Duration,
+    /// The atlas integrator's atlas, waiting for its gather on the device.
+    atlas: Option<PendingGather>,
+}
+
+/// An atlas whose gather the device runs once the scene is uploaded
+/// ([`GpuScene::gather_atlas`]), and where its irradiance goes in the tables.
+struct PendingGather {
+    atlas: tracer::integrator::Atlas,
+    problem: tracer::integrator::GatherProblem,
+    seams: tracer::integrator::SeamFix,
+    /// The float index of the irradiance in the tables.
+    irradiance_at: usize,
 }
 
 impl SceneData {
@@ -565,10 +578,11 @@ impl SceneData {
             (nodes_offset, shape_bvh.node_count() as u32, slots_offset)
         };
 
-        // The atlas integrator's atlas, built and gathered here by the CPU's code (the
-        // same atlas the CPU renders with, for the same scene and settings).
+        // The atlas integrator's atlas, built here by the CPU's code (the same atlas the
+        // CPU renders with, for the same scene and settings); its gather runs on the device
+        // after the upload (`GpuScene::gather_atlas`).
         let atlas = match options.integrator {
-            GpuIntegrator::Atlas(settings) => Some(build_atlas(scene, &settings, options.triangle_test)?),
+            GpuIntegrator::Atlas(settings) => Some((build_atlas(scene, &settings, options.triangle_test)?, settings)),
             _ => None,
         };
         // The uplift table (textures, environment maps and the atlas's irradiance turn RGB
@@ -620,7 +634,8 @@ impl SceneData {
         // The atlas: its record, each primitive's chart, the charts' projections, the
         // gathered irradiance, the D65 table its lookups are uplifted with.
         let mut atlas_offset = 0;
-        if let Some(atlas) = &atlas {
+        let mut pending_gather = None;
+        if let Some((atlas, settings)) = atlas {
             atlas_offset = tables.len() as u32;
             let record = tables.len();
             tables.extend([0.0; 9]);
@@ -632,6 +647,7 @@ impl SceneData {
                 tables.extend(c.min.to_array().into_iter().chain(c.corner.to_array()));
             }
             let texels_at = at(&tables);
+            let irradiance_at = tables.len();
             tables.extend(atlas.irradiance().iter().flatten());
             let (width, height) = atlas.size();
             tables[record..record + 9].copy_from_slice(&[
@@ -645,6 +661,8 @@ impl SceneData {
                 spectral::uplift::d65_inv_norm(),
                 f32::from_bits(atlas.prim_charts().len() as u32),
             ]);
+            let problem = atlas.gather_problem(&settings);
+            pending_gather = Some(PendingGather { atlas, problem, seams: settings.seams, irradiance_at });
         }
         // Textures: the texel decode tables, each material's maps.
         let (mut decode_offset, mut material_textures_offset) = (0, 0);
@@ -735,6 +753,7 @@ impl SceneData {
             spectra: kernel.spectra,
             options,
             build_time,
+            atlas: pending_gather,
         })
     }
 
@@ -837,6 +856,8 @@ pub struct GpuScene {
     film: Mutex<Option<FilmBuffers>>,
     constants: SceneConstants,
     stats: PrepareStats,
+    /// The atlas integrator's atlas, gathered on the device.
+    atlas: Option<tracer::integrator::Atlas>,
 }
 
 /// The tracer's [`Backend`] on a wgpu device.
@@ -938,8 +959,9 @@ impl GpuBackend {
 
     fn upload(&self, scene: Scene, options: &SceneOptions) -> Result<GpuScene, GpuError> {
         let start = Instant::now();
-        let data = SceneData::new(&scene, self.kernel_options(options))?;
+        let mut data = SceneData::new(&scene, self.kernel_options(options))?;
         data.check_limits(&self.ctx.limits)?;
+        let pending_gather = data.atlas.take();
         let device = &self.ctx.device;
         let validation = device.push_error_scope(wgpu::ErrorFilter::Validation);
         let memory = device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
@@ -955,7 +977,8 @@ impl GpuBackend {
             device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some(label),
                 contents: &contents,
-                usage: wgpu::BufferUsages::STORAGE,
+                // (COPY_DST: the atlas's gathered irradiance is written into the tables.)
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
             })
         };
         let buffers = vec![
@@ -1014,7 +1037,7 @@ impl GpuBackend {
                 NodeLayout::Wide8 { .. } => "8-wide BVH",
             },
         };
-        Ok(GpuScene {
+        let mut prepared = GpuScene {
             ctx: Arc::clone(&self.ctx),
             bounds: scene.bounds(),
             scene,
@@ -1028,11 +1051,199 @@ impl GpuBackend {
             film: Mutex::new(None),
             constants: data.constants,
             stats,
-        })
+            atlas: None,
+        };
+        if let Some(pending) = pending_gather {
+            let atlas = prepared.gather_atlas(pending)?;
+            let s = atlas.stats;
+            prepared.stats.integrator = Some(s.unwrap + s.direct + s.gather);
+            prepared.stats.total = start.elapsed();
+            prepared.atlas = Some(atlas);
+        }
+        Ok(prepared)
+    }
+}
+
+/// The most shadow rays (texels × points) one dispatch of the atlas's gather traces.
+const GATHER_DISPATCH_RAYS: u64 = 1 << 22;
+
+/// The most points per texel one dispatch of the gather traces on a software rasteriser
+/// (whose loop limiter would cut longer invocations short: "Found: lavapipe's loop
+/// limiter" in docs/gpu.md).
+const SOFTWARE_GATHER_POINTS: u32 = 4;
+
+impl GpuScene {
+    /// Runs the atlas's gather on the device (`wgsl/atlas_gather.wgsl`, the CPU's
+    /// `GatherProblem::gather` per texel), dilates the result as the CPU does and writes it
+    /// into the tables, where the kernel's lookups read it; returns the gathered atlas.
+    fn gather_atlas(&self, pending: PendingGather) -> Result<tracer::integrator::Atlas, GpuError> {
+        let PendingGather { mut atlas, problem, seams, irradiance_at } = pending;
+        let start = Instant::now();
+        let count = problem.texels.len();
+        let mut sums = vec![[0.0f32; 3]; count];
+        if count > 0 && problem.samples > 0 {
+            let raw = self.run_gather(&problem)?;
+            for (sum, r) in sums.iter_mut().zip(raw.chunks_exact(4)) {
+                *sum = [r[0], r[1], r[2]].map(|v| v * problem.estimator_scale);
+            }
+        }
+        atlas.set_gathered(&problem, &sums, seams, start.elapsed());
+        let irradiance: Vec<f32> = atlas.irradiance().iter().flatten().copied().collect();
+        self.ctx.queue.write_buffer(&self.buffers[4], 4 * irradiance_at as u64, bytemuck::cast_slice(&irradiance));
+        Ok(atlas)
+    }
+
+    /// The gather's raw sums (four floats per texel, unscaled).
+    fn run_gather(&self, problem: &tracer::integrator::GatherProblem) -> Result<Vec<f32>, GpuError> {
+        let device = &self.ctx.device;
+        let queue = &self.ctx.queue;
+        let count = problem.texels.len();
+        let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("spt atlas gather"),
+            source: wgpu::ShaderSource::Wgsl(crate::kernel::source(&self.material_wgsl, &self.kernel_options).into()),
+        });
+        let uniform = wgpu::BufferBindingType::Uniform;
+        let read = wgpu::BufferBindingType::Storage { read_only: true };
+        let write = wgpu::BufferBindingType::Storage { read_only: false };
+        let gather_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("spt atlas gather"),
+            entries: &[buffer_entry(0, uniform), buffer_entry(1, read), buffer_entry(2, write)],
+        });
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("spt atlas gather"),
+            bind_group_layouts: &[Some(&self.layout), Some(&gather_layout)],
+            immediate_size: 0,
+        });
+        let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some("spt atlas gather"),
+            layout: Some(&pipeline_layout),
+            module: &module,
+            entry_point: Some("pt_atlas_gather"),
+            compilation_options: Default::default(),
+            cache: None,
+        });
+        pop_scope(scope, "the atlas's gather kernel does not compile")?;
+
+        let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
+        // The scene's bindings as the path kernel has them: parameters for a 1×1 image (the
+        // gather reads only the scene's), accumulators it never touches.
+        let settings = RenderSettings { width: 1, height: 1, spp: 1, ..RenderSettings::default() };
+        queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&self.kernel_params(&settings)));
+        let accum = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("unused accumulators"),
+            size: FILM_HEADER_BYTES + PIXEL_BYTES,
+            usage: wgpu::BufferUsages::STORAGE,
+            mapped_at_creation: false,
+        });
+        let scene_group = self.bind_group(&self.params, &accum);
+        let texels: Vec<[f32; 4]> = problem
+            .texels
+            .iter()
+            .flat_map(|t| {
+                let (p, n, u, v, b) = (t.position, t.normal, t.chart_u, t.chart_v, t.direct);
+                [
+                    [p.x, p.y, p.z, b[0]],
+                    [n.x, n.y, n.z, b[1]],
+                    [u.x, u.y, u.z, b[2]],
+                    [v.x, v.y, v.z, 0.0],
+                    [t.shift.x, t.shift.y, 0.0, 0.0],
+                ]
+            })
+            .collect();
+        check_size("the atlas gather's texels", 16 * texels.len() as u64, &self.ctx.limits)?;
+        let texel_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("atlas gather texels"),
+            contents: bytemuck::cast_slice(&texels),
+            usage: wgpu::BufferUsages::STORAGE,
+        });
+        let sums_bytes = 16 * count as u64;
+        let sums = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("atlas gather sums"),
+            size: sums_bytes,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let readback = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("atlas gather read-back"),
+            size: sums_bytes,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let uniforms = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("atlas gather parameters"),
+            size: 32,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let gather_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("spt atlas gather"),
+            layout: &gather_layout,
+            entries: &[
+                wgpu::BindGroupEntry { binding: 0, resource: uniforms.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 1, resource: texel_buffer.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 2, resource: sums.as_entire_binding() },
+            ],
+        });
+        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
+        encoder.clear_buffer(&sums, 0, None);
+        queue.submit([encoder.finish()]);
+        // Points per dispatch: a budget of rays, fewer on a software rasteriser.
+        let budget = (GATHER_DISPATCH_RAYS / count as u64).clamp(1, problem.samples as u64) as u32;
+        let per_dispatch = if self.ctx.info.device_type == wgpu::DeviceType::Cpu {
+            budget.min(SOFTWARE_GATHER_POINTS)
+        } else {
+            budget
+        };
+        let groups = (count as u32).div_ceil(64);
+        let mut first = 0;
+        while first < problem.samples {
+            let end = (first + per_dispatch).min(problem.samples);
+            let words: [u32; 8] = [
+                count as u32,
+                problem.samples,
+                first,
+                end,
+                problem.density.to_bits(),
+                problem.min_r2.to_bits(),
+                u32::from(problem.visibility),
+                0,
+            ];
+            queue.write_buffer(&uniforms, 0, bytemuck::cast_slice(&words));
+            let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
+            {
+                let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor::default());
+                pass.set_pipeline(&pipeline);
+                pass.set_bind_group(0, &scene_group, &[]);
+                pass.set_bind_group(1, &gather_group, &[]);
+                pass.dispatch_workgroups(groups, 1, 1);
+            }
+            let index = queue.submit([encoder.finish()]);
+            device
+                .poll(wgpu::PollType::Wait { submission_index: Some(index), timeout: None })
+                .map_err(|e| GpuError::Shader(format!("waiting for the GPU: {e}")))?;
+            first = end;
+        }
+        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
+        encoder.copy_buffer_to_buffer(&sums, 0, &readback, 0, sums_bytes);
+        queue.submit([encoder.finish()]);
+        let values = {
+            let view = map_read(&self.ctx, &readback, sums_bytes, "reading the atlas's gather back")?;
+            bytemuck::cast_slice::<u8, f32>(&view).to_vec()
+        };
+        readback.unmap();
+        pop_scope(scope, "the atlas's gather")?;
+        Ok(values)
     }
 }
 
 impl GpuScene {
+    /// The atlas integrator's atlas (charts and direct light from the CPU's code, the
+    /// gather from the device), `None` for the other integrators.
+    pub fn atlas(&self) -> Option<&tracer::integrator::Atlas> {
+        self.atlas.as_ref()
+    }
+
     /// The device the scene lives on.
     pub fn context(&self) -> &GpuContext {
         &self.ctx

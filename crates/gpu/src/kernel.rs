@@ -217,9 +217,9 @@ pub enum GpuIntegrator {
     /// `tracer::Whitted` (`wgsl/whitted.wgsl`), its recursion at most [`WHITTED_MAX_DEPTH`]
     /// deep.
     Whitted,
-    /// `tracer::AtlasGi` with these settings (`wgsl/atlas.wgsl`): the atlas is built and
-    /// gathered on the CPU when the scene is prepared, each pixel's specular chain, direct
-    /// light and atlas lookup on the GPU.
+    /// `tracer::AtlasGi` with these settings (`wgsl/atlas.wgsl`): the atlas is built on the
+    /// CPU when the scene is prepared and gathered on the GPU (`wgsl/atlas_gather.wgsl`),
+    /// each pixel's specular chain, direct light and atlas lookup on the GPU.
     Atlas(tracer::integrator::AtlasSettings),
 }
 
@@ -687,5 +687,8 @@ pub fn source(material_wgsl: &str, options: &KernelOptions) -> String {
         let _ = write!(out, "\n// ---- {name}\n{text}");
     }
     let _ = write!(out, "\n// ---- triangle test\n{triangle}\n// ---- main.wgsl\n{MAIN}");
+    if matches!(options.integrator, GpuIntegrator::Atlas(_)) {
+        let _ = write!(out, "\n// ---- atlas_gather.wgsl\n{}", include_str!("wgsl/atlas_gather.wgsl"));
+    }
     out
 }

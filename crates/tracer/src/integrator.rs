@@ -24,7 +24,8 @@ use spectral::{SampledSpectrum, SampledWavelengths};
 pub use crate::film::Splat;
 pub use crate::shading::{ShadingNormals, adapt_shading_normal, shading_normals};
 pub use atlas::{
-    Atlas, AtlasGi, AtlasSettings, AtlasStats, ChartProjection, SPECULAR_CHAIN as ATLAS_SPECULAR_CHAIN, SeamFix,
+    Atlas, AtlasGi, AtlasSettings, AtlasStats, ChartProjection, GatherProblem, GatherTexel,
+    SPECULAR_CHAIN as ATLAS_SPECULAR_CHAIN, SeamFix,
 };
 pub use bdpt::{BDPT_MAX_VERTICES, Bdpt};
 pub use simple::{AmbientOcclusion, DirectLighting};

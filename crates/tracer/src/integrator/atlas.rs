@@ -235,10 +235,108 @@ fn rotation(seed: u64, index: u64) -> Vec2 {
     Vec2::new(r.next_f32(), r.next_f32())
 }
 
+/// A texel of [`GatherProblem`]: where it is, the chart axes its square spans, the light
+/// it reflects and the shift of its point set.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GatherTexel {
+    /// Its centre on its triangle.
+    pub position: Vec3,
+    /// Unit front-face normal.
+    pub normal: Vec3,
+    /// Its chart's first axis (the texel is a square along both, 1/density wide).
+    pub chart_u: Vec3,
+    /// Its chart's second axis.
+    pub chart_v: Vec3,
+    /// The light it reflects after one bounce of direct light (linear sRGB radiance).
+    pub direct: [f32; 3],
+    /// The Cranley–Patterson rotation of its Hammersley points.
+    pub shift: Vec2,
+}
+
+/// The atlas's gather (one diffuse bounce per texel) as data: what
+/// [`Atlas::gather`] computes on the CPU's threads and a GPU computes in a kernel of
+/// its own, [`GatherProblem::gather`] per texel either way.
+#[derive(Clone, Debug)]
+pub struct GatherProblem {
+    /// The texels that lie on a triangle, in row order.
+    pub texels: Vec<GatherTexel>,
+    /// Each one's index in the atlas.
+    pub index: Vec<u32>,
+    /// Points per texel.
+    pub samples: u32,
+    /// Texels per scene unit.
+    pub density: f32,
+    /// The least squared distance the form factor uses (two texels).
+    pub min_r2: f32,
+    /// (texels · texel area) / samples.
+    pub estimator_scale: f32,
+    /// Whether each point's visibility is traced.
+    pub visibility: bool,
+}
+
+impl GatherProblem {
+    /// The irradiance gathered at texel `k` (linear sRGB): `samples` points drawn over
+    /// all texels (a Hammersley set shifted by the texel's rotation; the first
+    /// coordinate picks the texel, its remainder and the second the point within it),
+    /// each adding B cos θₓ cos θ_y / r² where `occluded` (the shadow ray from `k` to the
+    /// point) is false.
+    pub fn gather(&self, k: usize, occluded: impl Fn(&Ray) -> bool) -> [f32; 3] {
+        let used = self.texels.len();
+        let x = &self.texels[k];
+        let mut sum = [0.0f32; 3];
+        let from = offset_ray_origin(x.position, x.normal);
+        for s in 0..self.samples {
+            let mut a = hammersley(s, self.samples) + x.shift;
+            a -= a.floor();
+            let pick = a.x * used as f32;
+            let slot = (pick as usize).min(used - 1);
+            if slot == k {
+                continue;
+            }
+            let y = &self.texels[slot];
+            let b = y.direct;
+            if b == [0.0; 3] {
+                continue;
+            }
+            // The drawn point: the texel's position moved within the texel along its
+            // chart's axes (by the first coordinate's remainder and the second).
+            let within = (Vec2::new(pick - slot as f32, a.y) - 0.5) / self.density;
+            let py = y.position + within.x * y.chart_u + within.y * y.chart_v;
+            let d = py - x.position;
+            let r2 = d.length_squared().max(self.min_r2);
+            let r = r2.sqrt();
+            let (cos_x, cos_y) = (x.normal.dot(d) / r, -y.normal.dot(d) / r);
+            if cos_x <= 0.0 || cos_y <= 0.0 {
+                continue;
+            }
+            if self.visibility {
+                let to = offset_ray_origin(py, y.normal);
+                if occluded(&Ray::segment(from, to - from, 0.0, super::SHADOW_T_MAX)) {
+                    continue;
+                }
+            }
+            let g = cos_x * cos_y / r2;
+            for c in 0..3 {
+                sum[c] += b[c] * g;
+            }
+        }
+        sum.map(|s| s * self.estimator_scale)
+    }
+}
+
 impl Atlas {
     /// Builds the atlas of `view`'s triangles: charts, packing, G-buffer, direct light
     /// and the gather (in parallel on the current rayon pool).
     pub fn build(view: &SceneView, settings: &AtlasSettings) -> Result<Self> {
+        let mut atlas = Self::build_ungathered(view, settings)?;
+        atlas.gather(view, settings);
+        Ok(atlas)
+    }
+
+    /// [`Atlas::build`] without the gather: its irradiance is zero until
+    /// [`Atlas::gather`] or [`Atlas::set_gathered`] (for a backend that gathers itself,
+    /// from [`Atlas::gather_problem`]).
+    pub fn build_ungathered(view: &SceneView, settings: &AtlasSettings) -> Result<Self> {
         settings.validate()?;
         let start = Instant::now();
         let triangles = world_triangles(view);
@@ -252,7 +350,7 @@ impl Atlas {
         let direct = direct_light(view, &texels, settings);
         let direct_time = start.elapsed();
 
-        let mut atlas = Atlas {
+        Ok(Atlas {
             width,
             height,
             density,
@@ -268,13 +366,11 @@ impl Atlas {
             },
             charts,
             prim_chart,
+            irradiance: vec![[0.0; 3]; texels.len()],
             texels,
             direct,
-            irradiance: Vec::new(),
             seams: settings.seams,
-        };
-        atlas.gather(view, settings);
-        Ok(atlas)
+        })
     }
 
     /// (Re)computes the gathered irradiance with `settings`' samples, visibility and
@@ -282,80 +378,70 @@ impl Atlas {
     /// only this).
     pub fn gather(&mut self, view: &SceneView, settings: &AtlasSettings) {
         let start = Instant::now();
+        let problem = self.gather_problem(settings);
+        let sums: Vec<[f32; 3]> =
+            (0..problem.texels.len()).into_par_iter().map(|k| problem.gather(k, |ray| view.occluded(ray))).collect();
+        self.set_gathered(&problem, &sums, settings.seams, start.elapsed());
+    }
+
+    /// The gather with `settings`, as a backend that runs it itself needs it (the GPU's
+    /// `atlas_gather`): the texels that lie on a triangle with what each contributes.
+    pub fn gather_problem(&self, settings: &AtlasSettings) -> GatherProblem {
         let n = settings.samples;
         // The points are drawn over the texels that lie on a triangle (in row order, so
         // that the first coordinate's strata stay local), each a square of the same world
         // area: the estimate is Σ B cos θₓ cos θ_y / r² · (texels · area) / N. (The thesis
         // draws over the whole atlas and wastes the share that falls into gaps.)
         let texel_area = 1.0 / (self.density * self.density);
-        let used: Vec<u32> = (0..self.texels.len() as u32).filter(|&i| self.texels[i as usize].prim != EMPTY).collect();
-        let estimator_scale = used.len() as f32 * texel_area / n as f32;
-        if used.is_empty() {
-            self.irradiance = vec![[0.0; 3]; self.texels.len()];
-            self.stats.gather = start.elapsed();
-            return;
-        }
-        let this = &*self;
-        let mut irradiance: Vec<[f32; 3]> = (0..this.texels.len())
-            .into_par_iter()
-            .map(|i| {
-                let x = &this.texels[i];
-                if x.prim == EMPTY {
-                    return [0.0; 3];
+        let index: Vec<u32> =
+            (0..self.texels.len() as u32).filter(|&i| self.texels[i as usize].prim != EMPTY).collect();
+        let texels = index
+            .iter()
+            .map(|&i| {
+                let x = &self.texels[i as usize];
+                let chart = &self.charts[self.prim_chart[x.prim as usize] as usize];
+                GatherTexel {
+                    position: x.position,
+                    normal: x.normal,
+                    chart_u: chart.u,
+                    chart_v: chart.v,
+                    direct: self.direct[i as usize],
+                    shift: rotation(settings.seed ^ 0x61746c6173, i as u64),
                 }
-                let shift = rotation(settings.seed ^ 0x61746c6173, i as u64);
-                let mut sum = [0.0f32; 3];
-                let from = offset_ray_origin(x.position, x.normal);
-                for k in 0..n {
-                    let mut a = hammersley(k, n) + shift;
-                    a -= a.floor();
-                    let pick = a.x * used.len() as f32;
-                    let slot = (pick as usize).min(used.len() - 1);
-                    let j = used[slot] as usize;
-                    if j == i {
-                        continue;
-                    }
-                    let y = &this.texels[j];
-                    let b = this.direct[j];
-                    if b == [0.0; 3] {
-                        continue;
-                    }
-                    // The drawn point: the texel's position moved within the texel along
-                    // its chart's axes (by the first coordinate's remainder and the second).
-                    let chart = &this.charts[this.prim_chart[y.prim as usize] as usize];
-                    let within = (Vec2::new(pick - slot as f32, a.y) - 0.5) / this.density;
-                    let py = y.position + within.x * chart.u + within.y * chart.v;
-                    let d = py - x.position;
-                    // Points closer than two texels are taken as two texels away: the
-                    // 1/r² of the form factor is not resolved below the atlas's size, and
-                    // unclamped it turns corners into fireflies (a bias within two texels
-                    // of where surfaces meet).
-                    let r2 = d.length_squared().max(MIN_DISTANCE_TEXELS * MIN_DISTANCE_TEXELS * texel_area);
-                    let r = r2.sqrt();
-                    let (cos_x, cos_y) = (x.normal.dot(d) / r, -y.normal.dot(d) / r);
-                    if cos_x <= 0.0 || cos_y <= 0.0 {
-                        continue;
-                    }
-                    if settings.visibility {
-                        let to = offset_ray_origin(py, y.normal);
-                        if view.occluded(&Ray::segment(from, to - from, 0.0, super::SHADOW_T_MAX)) {
-                            continue;
-                        }
-                    }
-                    let g = cos_x * cos_y / r2;
-                    for c in 0..3 {
-                        sum[c] += b[c] * g;
-                    }
-                }
-                sum.map(|s| s * estimator_scale)
             })
             .collect();
-        if settings.seams == SeamFix::Dilate {
+        GatherProblem {
+            estimator_scale: index.len() as f32 * texel_area / n as f32,
+            texels,
+            index,
+            samples: n,
+            density: self.density,
+            // Points closer than two texels are taken as two texels away: the 1/r² of the
+            // form factor is not resolved below the atlas's size, and unclamped it turns
+            // corners into fireflies (a bias within two texels of where surfaces meet).
+            min_r2: MIN_DISTANCE_TEXELS * MIN_DISTANCE_TEXELS * texel_area,
+            visibility: settings.visibility,
+        }
+    }
+
+    /// Takes the gather's results, one per texel of `problem` ([`GatherProblem::gather`]),
+    /// as the atlas's irradiance, dilated into the gutter with `seams`' treatment; `time`
+    /// is what the gather took.
+    ///
+    /// # Panics
+    /// If `sums` has not one entry per texel of `problem`.
+    pub fn set_gathered(&mut self, problem: &GatherProblem, sums: &[[f32; 3]], seams: SeamFix, time: Duration) {
+        assert_eq!(sums.len(), problem.index.len(), "one gathered value per texel of the problem");
+        let mut irradiance = vec![[0.0f32; 3]; self.texels.len()];
+        for (&i, sum) in problem.index.iter().zip(sums) {
+            irradiance[i as usize] = *sum;
+        }
+        if seams == SeamFix::Dilate {
             dilate(&mut irradiance, &self.texels, self.width, self.height, GUTTER + 1);
         }
         self.irradiance = irradiance;
-        self.seams = settings.seams;
-        self.stats.gather = start.elapsed();
+        self.seams = seams;
+        self.stats.gather = time;
     }
 
     /// The gathered irradiance (linear sRGB) at point `p` on triangle primitive `prim`,
