@@ -438,7 +438,7 @@ pub struct SceneData {
 struct PendingGather {
     atlas: tracer::integrator::Atlas,
     problem: tracer::integrator::GatherProblem,
-    seams: tracer::integrator::SeamFix,
+    settings: tracer::integrator::AtlasSettings,
     /// The float index of the irradiance in the tables.
     irradiance_at: usize,
 }
@@ -662,7 +662,7 @@ impl SceneData {
                 f32::from_bits(atlas.prim_charts().len() as u32),
             ]);
             let problem = atlas.gather_problem(&settings);
-            pending_gather = Some(PendingGather { atlas, problem, seams: settings.seams, irradiance_at });
+            pending_gather = Some(PendingGather { atlas, problem, settings, irradiance_at });
         }
         // Textures: the texel decode tables, each material's maps.
         let (mut decode_offset, mut material_textures_offset) = (0, 0);
@@ -856,11 +856,13 @@ pub struct GpuScene {
     film: Mutex<Option<FilmBuffers>>,
     constants: SceneConstants,
     stats: PrepareStats,
-    /// The atlas integrator's atlas, gathered on the device.
-    atlas: Option<tracer::integrator::Atlas>,
+    /// Where the atlas integrator's gathered irradiance lies in the tables: (float
+    /// index, texels), and whether the device gathered it (else the CPU did).
+    atlas_irradiance: Option<(usize, usize, bool)>,
 }
 
-/// The tracer's [`Backend`] on a wgpu device.
+/// The tracer's [`Backend`] on a wgpu device (cloning shares the device).
+#[derive(Clone)]
 pub struct GpuBackend {
     ctx: Arc<GpuContext>,
     integrator: GpuIntegrator,
@@ -882,6 +884,15 @@ pub(crate) fn buffer_entry(binding: u32, ty: wgpu::BufferBindingType) -> wgpu::B
 
 /// Compiles the path kernel `source` into a pipeline with `layout`.
 fn compile(ctx: &GpuContext, layout: &wgpu::PipelineLayout, source: &str) -> Result<wgpu::ComputePipeline, GpuError> {
+    Ok(compile_with_module(ctx, layout, source)?.0)
+}
+
+/// [`compile`], also returning the shader module (for the kernel's other entry points).
+fn compile_with_module(
+    ctx: &GpuContext,
+    layout: &wgpu::PipelineLayout,
+    source: &str,
+) -> Result<(wgpu::ComputePipeline, wgpu::ShaderModule), GpuError> {
     let device = &ctx.device;
     let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
     let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
@@ -897,7 +908,7 @@ fn compile(ctx: &GpuContext, layout: &wgpu::PipelineLayout, source: &str) -> Res
         cache: None,
     });
     pop_scope(scope, "the path-tracing kernel does not compile")?;
-    Ok(pipeline)
+    Ok((pipeline, module))
 }
 
 /// Waits for an error scope and turns what it caught into a [`GpuError::Shader`].
@@ -978,7 +989,8 @@ impl GpuBackend {
                 label: Some(label),
                 contents: &contents,
                 // (COPY_DST: the atlas's gathered irradiance is written into the tables.)
-                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+                // (COPY_SRC: `GpuScene::atlas_irradiance` reads it back.)
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC,
             })
         };
         let buffers = vec![
@@ -1017,11 +1029,11 @@ impl GpuBackend {
         });
 
         let compile_start = Instant::now();
-        let shader_result = compile(&self.ctx, &pipeline_layout, &data.shader_source());
+        let shader_result = compile_with_module(&self.ctx, &pipeline_layout, &data.shader_source());
         let compile_time = compile_start.elapsed();
         let memory_result = pop_scope(memory, "out of GPU memory uploading the scene");
         let validation_result = pop_scope(validation, "uploading the scene");
-        let pipeline = shader_result?;
+        let (pipeline, module) = shader_result?;
         memory_result?;
         validation_result?;
 
@@ -1051,20 +1063,25 @@ impl GpuBackend {
             film: Mutex::new(None),
             constants: data.constants,
             stats,
-            atlas: None,
+            atlas_irradiance: None,
         };
         if let Some(pending) = pending_gather {
-            let atlas = prepared.gather_atlas(pending)?;
-            let s = atlas.stats;
+            let at = pending.irradiance_at;
+            let (s, on_device) = prepared.gather_atlas(pending, &module)?;
             prepared.stats.integrator = Some(s.unwrap + s.direct + s.gather);
             prepared.stats.total = start.elapsed();
-            prepared.atlas = Some(atlas);
+            let (width, height) = (s.width as usize, s.height as usize);
+            prepared.atlas_irradiance = Some((at, width * height, on_device));
         }
         Ok(prepared)
     }
 }
 
-/// The most shadow rays (texels × points) one dispatch of the atlas's gather traces.
+/// Bytes per texel of the atlas gather's input (five vec4s).
+const GATHER_TEXEL_BYTES: u64 = 80;
+
+/// About the most shadow rays (texels × points) one dispatch of the atlas's gather traces
+/// (at least one point per texel).
 const GATHER_DISPATCH_RAYS: u64 = 1 << 22;
 
 /// The most points per texel one dispatch of the gather traces on a software rasteriser
@@ -1074,35 +1091,52 @@ const SOFTWARE_GATHER_POINTS: u32 = 4;
 
 impl GpuScene {
     /// Runs the atlas's gather on the device (`wgsl/atlas_gather.wgsl`, the CPU's
-    /// `GatherProblem::gather` per texel), dilates the result as the CPU does and writes it
-    /// into the tables, where the kernel's lookups read it; returns the gathered atlas.
-    fn gather_atlas(&self, pending: PendingGather) -> Result<tracer::integrator::Atlas, GpuError> {
-        let PendingGather { mut atlas, problem, seams, irradiance_at } = pending;
+    /// `GatherProblem::gather` per texel; on the CPU's threads where the device cannot
+    /// hold the gather's texels), dilates the result as the CPU does and writes it into
+    /// the tables, where the kernel's lookups read it; returns the atlas's statistics and
+    /// whether the device gathered.
+    fn gather_atlas(
+        &self,
+        pending: PendingGather,
+        module: &wgpu::ShaderModule,
+    ) -> Result<(tracer::integrator::AtlasStats, bool), GpuError> {
+        let PendingGather { mut atlas, problem, settings, irradiance_at } = pending;
         let start = Instant::now();
         let count = problem.texels.len();
-        let mut sums = vec![[0.0f32; 3]; count];
-        if count > 0 && problem.samples > 0 {
-            let raw = self.run_gather(&problem)?;
-            for (sum, r) in sums.iter_mut().zip(raw.chunks_exact(4)) {
-                *sum = [r[0], r[1], r[2]].map(|v| v * problem.estimator_scale);
+        let fits = check_size("the atlas gather's texels", GATHER_TEXEL_BYTES * count as u64, &self.ctx.limits);
+        if fits.is_err() {
+            // Too many texels for one binding: the CPU gathers, as the CPU backend does.
+            let failed = |e: tracer::Error| GpuError::Unsupported(format!("an atlas of this scene ({e})"));
+            let options =
+                tracer::SceneOptions { triangle_test: self.kernel_options.triangle_test, ..Default::default() };
+            let geometry = tracer::geometry::Geometry::build(&self.scene, &options).map_err(failed)?;
+            let lights = tracer::lights::Lights::new(&self.scene);
+            atlas.gather(&tracer::integrator::SceneView::new(&self.scene, &geometry, &lights), &settings);
+        } else {
+            let mut sums = vec![[0.0f32; 3]; count];
+            if count > 0 {
+                let raw = self.run_gather(&problem, module)?;
+                for (sum, r) in sums.iter_mut().zip(raw.chunks_exact(4)) {
+                    *sum = [r[0], r[1], r[2]].map(|v| v * problem.estimator_scale);
+                }
             }
+            atlas.set_gathered(&problem, &sums, settings.seams, start.elapsed());
         }
-        atlas.set_gathered(&problem, &sums, seams, start.elapsed());
         let irradiance: Vec<f32> = atlas.irradiance().iter().flatten().copied().collect();
         self.ctx.queue.write_buffer(&self.buffers[4], 4 * irradiance_at as u64, bytemuck::cast_slice(&irradiance));
-        Ok(atlas)
+        Ok((atlas.stats, fits.is_ok()))
     }
 
     /// The gather's raw sums (four floats per texel, unscaled).
-    fn run_gather(&self, problem: &tracer::integrator::GatherProblem) -> Result<Vec<f32>, GpuError> {
+    fn run_gather(
+        &self,
+        problem: &tracer::integrator::GatherProblem,
+        module: &wgpu::ShaderModule,
+    ) -> Result<Vec<f32>, GpuError> {
         let device = &self.ctx.device;
         let queue = &self.ctx.queue;
         let count = problem.texels.len();
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
-        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("spt atlas gather"),
-            source: wgpu::ShaderSource::Wgsl(crate::kernel::source(&self.material_wgsl, &self.kernel_options).into()),
-        });
         let uniform = wgpu::BufferBindingType::Uniform;
         let read = wgpu::BufferBindingType::Storage { read_only: true };
         let write = wgpu::BufferBindingType::Storage { read_only: false };
@@ -1118,7 +1152,7 @@ impl GpuScene {
         let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
             label: Some("spt atlas gather"),
             layout: Some(&pipeline_layout),
-            module: &module,
+            module,
             entry_point: Some("pt_atlas_gather"),
             compilation_options: Default::default(),
             cache: None,
@@ -1126,6 +1160,7 @@ impl GpuScene {
         pop_scope(scope, "the atlas's gather kernel does not compile")?;
 
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let memory = device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
         // The scene's bindings as the path kernel has them: parameters for a 1×1 image (the
         // gather reads only the scene's), accumulators it never touches.
         let settings = RenderSettings { width: 1, height: 1, spp: 1, ..RenderSettings::default() };
@@ -1151,7 +1186,6 @@ impl GpuScene {
                 ]
             })
             .collect();
-        check_size("the atlas gather's texels", 16 * texels.len() as u64, &self.ctx.limits)?;
         let texel_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("atlas gather texels"),
             contents: bytemuck::cast_slice(&texels),
@@ -1195,7 +1229,10 @@ impl GpuScene {
         } else {
             budget
         };
+        // Workgroups of 64 texels, in rows within the device's per-dimension limit.
         let groups = (count as u32).div_ceil(64);
+        let groups_x = groups.min(self.ctx.limits.max_compute_workgroups_per_dimension.max(1));
+        let groups_y = groups.div_ceil(groups_x);
         let mut first = 0;
         while first < problem.samples {
             let end = (first + per_dispatch).min(problem.samples);
@@ -1207,7 +1244,7 @@ impl GpuScene {
                 problem.density.to_bits(),
                 problem.min_r2.to_bits(),
                 u32::from(problem.visibility),
-                0,
+                64 * groups_x,
             ];
             queue.write_buffer(&uniforms, 0, bytemuck::cast_slice(&words));
             let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
@@ -1216,7 +1253,7 @@ impl GpuScene {
                 pass.set_pipeline(&pipeline);
                 pass.set_bind_group(0, &scene_group, &[]);
                 pass.set_bind_group(1, &gather_group, &[]);
-                pass.dispatch_workgroups(groups, 1, 1);
+                pass.dispatch_workgroups(groups_x, groups_y, 1);
             }
             let index = queue.submit([encoder.finish()]);
             device
@@ -1232,16 +1269,40 @@ impl GpuScene {
             bytemuck::cast_slice::<u8, f32>(&view).to_vec()
         };
         readback.unmap();
+        pop_scope(memory, "out of GPU memory gathering the atlas")?;
         pop_scope(scope, "the atlas's gather")?;
         Ok(values)
     }
 }
 
 impl GpuScene {
-    /// The atlas integrator's atlas (charts and direct light from the CPU's code, the
-    /// gather from the device), `None` for the other integrators.
-    pub fn atlas(&self) -> Option<&tracer::integrator::Atlas> {
-        self.atlas.as_ref()
+    /// Whether the device gathered the atlas integrator's atlas (`false`: its texels did
+    /// not fit the device's buffers and the CPU gathered); `None` for other integrators.
+    pub fn atlas_gathered_on_device(&self) -> Option<bool> {
+        self.atlas_irradiance.map(|(_, _, on_device)| on_device)
+    }
+
+    /// The atlas integrator's gathered irradiance per texel (linear sRGB, row-major, as
+    /// `Atlas::irradiance`), read back from the device; `None` for the other integrators.
+    pub fn atlas_irradiance(&self) -> Result<Option<Vec<[f32; 3]>>, GpuError> {
+        let Some((at, texels, _)) = self.atlas_irradiance else { return Ok(None) };
+        let bytes = 12 * texels as u64;
+        let device = &self.ctx.device;
+        let readback = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("atlas irradiance read-back"),
+            size: bytes.max(4),
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
+        encoder.copy_buffer_to_buffer(&self.buffers[4], 4 * at as u64, &readback, 0, bytes);
+        self.ctx.queue.submit([encoder.finish()]);
+        let values: Vec<f32> = {
+            let view = map_read(&self.ctx, &readback, bytes, "reading the atlas back")?;
+            bytemuck::cast_slice(&view).to_vec()
+        };
+        readback.unmap();
+        Ok(Some(values.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect()))
     }
 
     /// The device the scene lives on.

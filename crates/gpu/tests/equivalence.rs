@@ -1300,32 +1300,66 @@ fn the_atlas_gather_on_the_device_gives_the_cpus_irradiance() {
     use tracer::integrator::{Atlas, AtlasSettings, SceneView};
     let Some(ctx) = gpu::require_gpu() else { return };
     let Some(scene) = cornell() else { return };
-    let settings = AtlasSettings { resolution: 64, samples: 24, direct_samples: 4, ..AtlasSettings::default() };
-    let backend = GpuBackend::with_context(ctx).with_integrator(GpuIntegrator::Atlas(settings));
-    let gpu_scene = backend.prepare_gpu(scene.clone(), &SceneOptions::default()).unwrap();
-    let gpu_atlas = gpu_scene.atlas().expect("the atlas integrator's scene has an atlas");
-    assert!(gpu_scene.stats().integrator.is_some());
+    let backend = GpuBackend::with_context(ctx);
+    let geometry = tracer::geometry::Geometry::build(&scene, &SceneOptions::default()).unwrap();
+    let lights = tracer::lights::Lights::new(&scene);
+    for visibility in [true, false] {
+        let base = AtlasSettings { resolution: 64, samples: 24, direct_samples: 4, ..AtlasSettings::default() };
+        let settings = AtlasSettings { visibility, ..base };
+        let gpu_scene = backend
+            .clone()
+            .with_integrator(GpuIntegrator::Atlas(settings))
+            .prepare_gpu(scene.clone(), &SceneOptions::default())
+            .unwrap();
+        assert!(gpu_scene.stats().integrator.is_some());
+        assert_eq!(gpu_scene.atlas_gathered_on_device(), Some(true));
+        // What the kernel's lookups read: the tables on the device.
+        let gpu = gpu_scene.atlas_irradiance().unwrap().expect("the atlas integrator's scene has an atlas");
+        let cpu_atlas = Atlas::build(&SceneView::new(&scene, &geometry, &lights), &settings).unwrap();
+        let cpu = cpu_atlas.irradiance();
+        assert_eq!(cpu.len(), gpu.len());
+        let total = |v: &[[f32; 3]]| v.iter().flatten().map(|&x| x as f64).sum::<f64>();
+        let (cpu_total, gpu_total) = (total(cpu), total(&gpu));
+        assert!(cpu_total > 0.0, "no indirect light gathered");
+        let lit = cpu.iter().filter(|t| t.iter().any(|&x| x > 0.0)).count();
+        let close = cpu
+            .iter()
+            .zip(&gpu)
+            .filter(|(c, _)| c.iter().any(|&x| x > 0.0))
+            .filter(|(c, g)| c.iter().zip(g.iter()).all(|(&a, &b)| (a - b).abs() <= 1e-4 * a.abs().max(1e-6)))
+            .count();
+        println!(
+            "atlas gather, visibility {visibility}: {lit} lit texels, {close} within 1e-4 of the CPU's; totals \
+             {cpu_total:.6} (CPU) {gpu_total:.6} (GPU)"
+        );
+        assert!((gpu_total - cpu_total).abs() <= 1e-4 * cpu_total, "totals {cpu_total} and {gpu_total}");
+        assert!(close as f64 >= 0.99 * lit as f64, "{close} of {lit} lit texels within 1e-4");
+    }
+}
 
+/// A device whose buffers cannot hold the gather's texels (80 bytes each) but can hold
+/// the scene gets its atlas gathered on the CPU: the CPU's irradiance, exactly.
+#[test]
+fn an_atlas_too_large_for_the_device_is_gathered_on_the_cpu() {
+    use gpu::kernel::GpuIntegrator;
+    use tracer::integrator::{Atlas, AtlasSettings, SceneView};
+    let Some(mut ctx) = gpu::require_gpu() else { return };
+    let Some(scene) = cornell() else { return };
+    let settings = AtlasSettings { resolution: 256, samples: 4, direct_samples: 2, ..AtlasSettings::default() };
+    let options = KernelOptions { integrator: GpuIntegrator::Atlas(settings), ..KernelOptions::default() };
+    let largest = SceneData::new(&scene, options).unwrap().buffer_sizes().iter().map(|&(_, b)| b).max().unwrap();
     let geometry = tracer::geometry::Geometry::build(&scene, &SceneOptions::default()).unwrap();
     let lights = tracer::lights::Lights::new(&scene);
     let cpu_atlas = Atlas::build(&SceneView::new(&scene, &geometry, &lights), &settings).unwrap();
-    let (cpu, gpu) = (cpu_atlas.irradiance(), gpu_atlas.irradiance());
-    assert_eq!(cpu.len(), gpu.len());
-    let total = |v: &[[f32; 3]]| v.iter().flatten().map(|&x| x as f64).sum::<f64>();
-    let (cpu_total, gpu_total) = (total(cpu), total(gpu));
-    assert!(cpu_total > 0.0, "no indirect light gathered");
-    let lit = cpu.iter().filter(|t| t.iter().any(|&x| x > 0.0)).count();
-    let close = cpu
-        .iter()
-        .zip(gpu)
-        .filter(|(c, _)| c.iter().any(|&x| x > 0.0))
-        .filter(|(c, g)| c.iter().zip(g.iter()).all(|(&a, &b)| (a - b).abs() <= 1e-4 * a.abs().max(1e-6)))
-        .count();
-    println!(
-        "atlas gather: {lit} lit texels, {close} within 1e-4 of the CPU's; totals {cpu_total:.6} (CPU) {gpu_total:.6} (GPU)"
-    );
-    assert!((gpu_total - cpu_total).abs() <= 1e-4 * cpu_total, "totals {cpu_total} and {gpu_total}");
-    assert!(close as f64 >= 0.99 * lit as f64, "{close} of {lit} lit texels within 1e-4");
+    let used = cpu_atlas.stats.texels_used as u64;
+    assert!(80 * used > largest, "the gather's texels ({used}) must outgrow the scene's largest buffer ({largest} B)");
+    // Room for the scene's buffers, not for the gather's texels.
+    ctx.limits.max_storage_buffer_binding_size = largest.max(80 * used - 1);
+    let backend = GpuBackend::with_context(ctx).with_integrator(GpuIntegrator::Atlas(settings));
+    let gpu_scene = backend.prepare_gpu(scene, &SceneOptions::default()).unwrap();
+    assert_eq!(gpu_scene.atlas_gathered_on_device(), Some(false));
+    let gpu = gpu_scene.atlas_irradiance().unwrap().unwrap();
+    assert!(gpu == cpu_atlas.irradiance(), "the CPU's gather, bit for bit");
 }
 
 /// Atlas GI (`--integrator atlas --backend gpu`): the atlas built by the CPU's code and

@@ -13,7 +13,8 @@ struct PtGather {
     density: f32,
     min_r2: f32,
     visibility: u32,
-    pad: u32,
+    // Invocations per row of workgroups (the dispatch is 2-D past the device's limit).
+    row: u32,
 }
 
 @group(1) @binding(0) var<uniform> pt_gather: PtGather;
@@ -29,7 +30,7 @@ fn pt_hammersley(i: u32, n: u32) -> vec2f {
 
 @compute @workgroup_size(64, 1, 1)
 fn pt_atlas_gather(@builtin(global_invocation_id) gid: vec3u) {
-    let k = gid.x;
+    let k = gid.x + gid.y * pt_gather.row;
     let used = pt_gather.count;
     if k >= used {
         return;

@@ -426,11 +426,12 @@ impl Atlas {
 
     /// Takes the gather's results, one per texel of `problem` ([`GatherProblem::gather`]),
     /// as the atlas's irradiance, dilated into the gutter with `seams`' treatment; `time`
-    /// is what the gather took.
+    /// is what the gather took (the dilation's time is added).
     ///
     /// # Panics
     /// If `sums` has not one entry per texel of `problem`.
     pub fn set_gathered(&mut self, problem: &GatherProblem, sums: &[[f32; 3]], seams: SeamFix, time: Duration) {
+        let start = Instant::now();
         assert_eq!(sums.len(), problem.index.len(), "one gathered value per texel of the problem");
         let mut irradiance = vec![[0.0f32; 3]; self.texels.len()];
         for (&i, sum) in problem.index.iter().zip(sums) {
@@ -441,7 +442,7 @@ impl Atlas {
         }
         self.irradiance = irradiance;
         self.seams = seams;
-        self.stats.gather = time;
+        self.stats.gather = time + start.elapsed();
     }
 
     /// The gathered irradiance (linear sRGB) at point `p` on triangle primitive `prim`,
