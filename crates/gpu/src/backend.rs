@@ -378,12 +378,26 @@ fn build_atlas(
     settings: &tracer::integrator::AtlasSettings,
     triangle_test: TriangleTest,
 ) -> Result<tracer::integrator::Atlas, GpuError> {
-    let failed = |e: tracer::Error| GpuError::Unsupported(format!("an atlas of this scene ({e})"));
+    with_atlas_view(scene, triangle_test, |view| tracer::integrator::Atlas::build_ungathered(view, settings))?
+        .map_err(atlas_failed)
+}
+
+/// Runs `f` on the view the CPU's atlas code sees `scene` through: its own BVH with the
+/// render's triangle test, its lights.
+fn with_atlas_view<R>(
+    scene: &Scene,
+    triangle_test: TriangleTest,
+    f: impl FnOnce(&tracer::integrator::SceneView) -> R,
+) -> Result<R, GpuError> {
     let options = tracer::SceneOptions { triangle_test, ..Default::default() };
-    let geometry = tracer::geometry::Geometry::build(scene, &options).map_err(failed)?;
+    let geometry = tracer::geometry::Geometry::build(scene, &options).map_err(atlas_failed)?;
     let lights = tracer::lights::Lights::new(scene);
-    let view = tracer::integrator::SceneView::new(scene, &geometry, &lights);
-    tracer::integrator::Atlas::build_ungathered(&view, settings).map_err(failed)
+    Ok(f(&tracer::integrator::SceneView::new(scene, &geometry, &lights)))
+}
+
+/// The error of an atlas the CPU's code could not build.
+fn atlas_failed(e: tracer::Error) -> GpuError {
+    GpuError::Unsupported(format!("an atlas of this scene ({e})"))
 }
 
 /// What the kernel's uniforms and the camera need of a scene besides its buffers, kept
@@ -856,9 +870,19 @@ pub struct GpuScene {
     film: Mutex<Option<FilmBuffers>>,
     constants: SceneConstants,
     stats: PrepareStats,
-    /// Where the atlas integrator's gathered irradiance lies in the tables: (float
-    /// index, texels), and whether the device gathered it (else the CPU did).
-    atlas_irradiance: Option<(usize, usize, bool)>,
+    /// Where the atlas integrator's gathered irradiance lies in the tables.
+    atlas_irradiance: Option<AtlasIrradiance>,
+}
+
+/// Where a [`GpuScene`]'s atlas irradiance lies in its tables, and who gathered it.
+#[derive(Clone, Copy, Debug)]
+struct AtlasIrradiance {
+    /// The float index of the first texel.
+    at: usize,
+    /// Texels (three floats each).
+    texels: usize,
+    /// Whether the device gathered it (else the CPU did).
+    on_device: bool,
 }
 
 /// The tracer's [`Backend`] on a wgpu device (cloning shares the device).
@@ -1070,15 +1094,30 @@ impl GpuBackend {
             let (s, on_device) = prepared.gather_atlas(pending, &module)?;
             prepared.stats.integrator = Some(s.unwrap + s.direct + s.gather);
             prepared.stats.total = start.elapsed();
-            let (width, height) = (s.width as usize, s.height as usize);
-            prepared.atlas_irradiance = Some((at, width * height, on_device));
+            let texels = s.width as usize * s.height as usize;
+            prepared.atlas_irradiance = Some(AtlasIrradiance { at, texels, on_device });
         }
         Ok(prepared)
     }
 }
 
 /// Bytes per texel of the atlas gather's input (five vec4s).
-const GATHER_TEXEL_BYTES: u64 = 80;
+const GATHER_TEXEL_BYTES: u64 = std::mem::size_of::<GatherRecord>() as u64;
+
+/// A texel of the gather as `wgsl/atlas_gather.wgsl` reads it: (position, direct r),
+/// (normal, direct g), (chart u, direct b), (chart v, 0), (shift, 0, 0).
+type GatherRecord = [[f32; 4]; 5];
+
+fn gather_record(t: &tracer::integrator::GatherTexel) -> GatherRecord {
+    let (p, n, u, v, b) = (t.position, t.normal, t.chart_u, t.chart_v, t.direct);
+    [
+        [p.x, p.y, p.z, b[0]],
+        [n.x, n.y, n.z, b[1]],
+        [u.x, u.y, u.z, b[2]],
+        [v.x, v.y, v.z, 0.0],
+        [t.shift.x, t.shift.y, 0.0, 0.0],
+    ]
+}
 
 /// About the most shadow rays (texels × points) one dispatch of the atlas's gather traces
 /// (at least one point per texel).
@@ -1106,12 +1145,7 @@ impl GpuScene {
         let fits = check_size("the atlas gather's texels", GATHER_TEXEL_BYTES * count as u64, &self.ctx.limits);
         if fits.is_err() {
             // Too many texels for one binding: the CPU gathers, as the CPU backend does.
-            let failed = |e: tracer::Error| GpuError::Unsupported(format!("an atlas of this scene ({e})"));
-            let options =
-                tracer::SceneOptions { triangle_test: self.kernel_options.triangle_test, ..Default::default() };
-            let geometry = tracer::geometry::Geometry::build(&self.scene, &options).map_err(failed)?;
-            let lights = tracer::lights::Lights::new(&self.scene);
-            atlas.gather(&tracer::integrator::SceneView::new(&self.scene, &geometry, &lights), &settings);
+            with_atlas_view(&self.scene, self.kernel_options.triangle_test, |view| atlas.gather(view, &settings))?;
         } else {
             let mut sums = vec![[0.0f32; 3]; count];
             if count > 0 {
@@ -1172,20 +1206,7 @@ impl GpuScene {
             mapped_at_creation: false,
         });
         let scene_group = self.bind_group(&self.params, &accum);
-        let texels: Vec<[f32; 4]> = problem
-            .texels
-            .iter()
-            .flat_map(|t| {
-                let (p, n, u, v, b) = (t.position, t.normal, t.chart_u, t.chart_v, t.direct);
-                [
-                    [p.x, p.y, p.z, b[0]],
-                    [n.x, n.y, n.z, b[1]],
-                    [u.x, u.y, u.z, b[2]],
-                    [v.x, v.y, v.z, 0.0],
-                    [t.shift.x, t.shift.y, 0.0, 0.0],
-                ]
-            })
-            .collect();
+        let texels: Vec<GatherRecord> = problem.texels.iter().map(gather_record).collect();
         let texel_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("atlas gather texels"),
             contents: bytemuck::cast_slice(&texels),
@@ -1279,13 +1300,13 @@ impl GpuScene {
     /// Whether the device gathered the atlas integrator's atlas (`false`: its texels did
     /// not fit the device's buffers and the CPU gathered); `None` for other integrators.
     pub fn atlas_gathered_on_device(&self) -> Option<bool> {
-        self.atlas_irradiance.map(|(_, _, on_device)| on_device)
+        self.atlas_irradiance.map(|a| a.on_device)
     }
 
     /// The atlas integrator's gathered irradiance per texel (linear sRGB, row-major, as
     /// `Atlas::irradiance`), read back from the device; `None` for the other integrators.
     pub fn atlas_irradiance(&self) -> Result<Option<Vec<[f32; 3]>>, GpuError> {
-        let Some((at, texels, _)) = self.atlas_irradiance else { return Ok(None) };
+        let Some(AtlasIrradiance { at, texels, .. }) = self.atlas_irradiance else { return Ok(None) };
         let bytes = 12 * texels as u64;
         let device = &self.ctx.device;
         let readback = device.create_buffer(&wgpu::BufferDescriptor {

@@ -243,8 +243,8 @@ mod tests {
                     }
                 }
                 assert!(seen.iter().all(|&s| s == 1), "{n} triangles: some in no leaf or in two");
-                let firsts = reached.iter().step_by(entries);
-                assert!(firsts.into_iter().all(|&r| r == 1), "{n} triangles: a node reached twice or never");
+                let mut firsts = reached.iter().step_by(entries);
+                assert!(firsts.all(|&r| r == 1), "{n} triangles: a node reached twice or never");
                 // Wide nodes: fewer than half of the binary count; 8-wide ones (with small
                 // subtrees merged into leaves) fewer than an eighth.
                 let nodes = w.nodes.len() / entries;

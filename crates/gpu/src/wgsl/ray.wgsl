@@ -72,6 +72,13 @@ fn pt_push(s: ptr<function, PtStack>, node: u32, t: f32) {
     (*s).sp += 1u;
 }
 
+// Pushes a child node entered at `t`, unless `t` is PT_MISS (a slot not to visit).
+fn pt_push_reached(s: ptr<function, PtStack>, node: u32, t: f32) {
+    if t < PT_MISS {
+        pt_push(s, node, t);
+    }
+}
+
 // Pops until a node whose entry distance is within `t_max` (it may hold a closer hit);
 // PT_NO_HIT once the stack is empty.
 fn pt_pop(s: ptr<function, PtStack>, t_max: f32) -> u32 {

@@ -28,15 +28,9 @@ fn pt_trace_triangles(o: vec3f, d: vec3f, t_min: f32, t_max_in: f32, any_hit: bo
         let c = order.c;
         if t.x < PT_MISS {
             // Push the farther ones farthest first; visit the nearest.
-            if t.w < PT_MISS {
-                pt_push(&stack, c.w, t.w);
-            }
-            if t.z < PT_MISS {
-                pt_push(&stack, c.z, t.z);
-            }
-            if t.y < PT_MISS {
-                pt_push(&stack, c.y, t.y);
-            }
+            pt_push_reached(&stack, c.w, t.w);
+            pt_push_reached(&stack, c.z, t.z);
+            pt_push_reached(&stack, c.y, t.y);
             node = c.x;
             continue;
         }

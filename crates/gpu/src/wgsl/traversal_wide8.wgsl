@@ -52,27 +52,13 @@ fn pt_trace_triangles(o: vec3f, d: vec3f, t_min: f32, t_max_in: f32, any_hit: bo
         if t6 < t5 { tt = t5; t5 = t6; t6 = tt; cc = c5; c5 = c6; c6 = cc; }
         if t0 < PT_MISS {
             // Push the farther ones farthest first; visit the nearest.
-            if t7 < PT_MISS {
-                pt_push(&stack, c7, t7);
-            }
-            if t6 < PT_MISS {
-                pt_push(&stack, c6, t6);
-            }
-            if t5 < PT_MISS {
-                pt_push(&stack, c5, t5);
-            }
-            if t4 < PT_MISS {
-                pt_push(&stack, c4, t4);
-            }
-            if t3 < PT_MISS {
-                pt_push(&stack, c3, t3);
-            }
-            if t2 < PT_MISS {
-                pt_push(&stack, c2, t2);
-            }
-            if t1 < PT_MISS {
-                pt_push(&stack, c1, t1);
-            }
+            pt_push_reached(&stack, c7, t7);
+            pt_push_reached(&stack, c6, t6);
+            pt_push_reached(&stack, c5, t5);
+            pt_push_reached(&stack, c4, t4);
+            pt_push_reached(&stack, c3, t3);
+            pt_push_reached(&stack, c2, t2);
+            pt_push_reached(&stack, c1, t1);
             node = c0;
             continue;
         }
