@@ -898,9 +898,7 @@ fn make_backend(args: &SceneArgs) -> Result<Box<dyn Backend>> {
                 "ao" => gpu::kernel::GpuIntegrator::AmbientOcclusion { max_distance: args.ao_distance },
                 "whitted" => gpu::kernel::GpuIntegrator::Whitted,
                 "atlas" => gpu::kernel::GpuIntegrator::Atlas(atlas_settings(args)?),
-                "bdpt" => {
-                    bail!("the gpu backend has no {} integrator yet: use --backend cpu", args.integrator)
-                }
+                "bdpt" => gpu::kernel::GpuIntegrator::Bdpt,
                 other => bail!("unknown integrator '{other}' (known: {})", INTEGRATORS.join(", ")),
             };
             let gpu = gpu::GpuBackend::new()?.with_integrator(integrator);

@@ -496,8 +496,8 @@ fn integrators_are_chosen_by_name() {
         render_small(&scene, (4, 4, 1), &partial, &["--integrator", "bdpt", "--shard", "1/2", "--shard-by", "tiles"]);
     let msg = stderr(&o);
     assert!(!o.status.success() && msg.contains("shard it by samples"), "{msg}");
-    // The GPU runs direct, ao, whitted and atlas too (its equivalence tests compare them with
-    // the CPU's).
+    // The GPU runs direct, ao, whitted, atlas and bdpt too (its equivalence tests compare
+    // them with the CPU's).
     if gpu::require_gpu().is_some() {
         for integrator in ["direct", "ao", "whitted", "atlas"] {
             let o = render_small(&scene, (8, 8, 4), &out, &["--integrator", integrator, "--backend", "gpu"]);
@@ -511,8 +511,17 @@ fn integrators_are_chosen_by_name() {
             &["--integrator", "whitted", "--backend", "gpu", "--max-depth", "17"],
         );
         assert!(!o.status.success() && stderr(&o).contains("at most 16"), "{}", stderr(&o));
-        let o = render_small(&scene, (8, 8, 4), &out, &["--integrator", "bdpt", "--backend", "gpu"]);
-        assert!(!o.status.success() && stderr(&o).contains("use --backend cpu"), "{}", stderr(&o));
+        // Bidirectional path tracing, light tracing's splats included, on the device.
+        let gpu_bdpt = dir.join("gpu-bdpt.exr");
+        let o = render_small(
+            &scene,
+            (16, 16, 32),
+            &gpu_bdpt,
+            &["--integrator", "bdpt", "--spectral", "rgb", "--backend", "gpu"],
+        );
+        assert!(o.status.success(), "gpu bdpt: {}", stderr(&o));
+        let m = exr_means(&gpu_bdpt)[1];
+        assert!((m / path - 1.0).abs() < 0.1, "gpu bdpt {m} vs path {path}");
         // The GPU's path tracer builds its tree by any split method and at any width, and
         // limits diffuse bounces as the CPU's does; other integrators refuse the limit on
         // both backends.

@@ -166,7 +166,7 @@ impl DeviceAccumulation {
             mapped_at_creation: false,
         });
         ctx.queue.write_buffer(&display_params, 0, bytemuck::cast_slice(&[width, height, 0, 0]));
-        let path_bind = scene.bind_group(&params, &accum);
+        let path_bind = scene.bind_group(&params, &accum, None);
         let display_bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("spt display"),
             layout: &display.layout,

@@ -54,6 +54,13 @@
 //!   differ for points within rounding of an edge. Point, spot and directional lights
 //!   (with a sun's disk) are entries of the light table; their spectra are tabulated at
 //!   1 nm, as the environment's.
+//! * Bidirectional path tracing (`wgsl/bdpt.wgsl`) keeps the light subpath and the camera
+//!   subpath's densities in a scratch buffer of [`BDPT_SLOT_BYTES`] per invocation (bands
+//!   of rows as many as 1 GiB of scratch holds) and sums light tracing's splats in an
+//!   image of 96-bit fixed-point words with atomics (exact, in any order), read back into
+//!   the film's splat sums after each pass; its paths are capped as the CPU's
+//!   (`BDPT_MAX_VERTICES`). Device accumulations (a viewer) of bdpt read the film back
+//!   each frame ([`tracer::FilmAccumulation`]).
 //! * A path has at most [`MAX_BOUNCES`] scattering events. A `max_depth` beyond it is
 //!   refused; with `max_depth` 0 (unbounded on the CPU) paths that reach it are counted
 //!   ([`PathCounters::truncated`], printed by the CLI): with Russian roulette
@@ -90,9 +97,9 @@
 
 use crate::accumulation::DeviceAccumulation;
 use crate::kernel::{
-    FILM_HEADER_BYTES, GpuIntegrator, HAS_DISPERSION, HAS_ENVIRONMENT, HAS_NORMALS, HAS_TANGENTS, HAS_UVS,
-    KernelOptions, LIGHT_CDF, LIGHT_FLOATS, LIGHT_KIND, LIGHT_MATERIAL, LIGHT_PMF, LightKind, NodeLayout, Params,
-    PixelAccum, SEEDS_OFFSET, ShapeCode, UNIFORM_BYTES, WideNode,
+    BDPT_SLOT_BYTES, FILM_HEADER_BYTES, GpuIntegrator, HAS_DISPERSION, HAS_ENVIRONMENT, HAS_NORMALS, HAS_TANGENTS,
+    HAS_UVS, KernelOptions, LIGHT_CDF, LIGHT_FLOATS, LIGHT_KIND, LIGHT_MATERIAL, LIGHT_PMF, LightKind, NodeLayout,
+    Params, PixelAccum, SEEDS_OFFSET, SPLAT_HEADER_WORDS, ShapeCode, UNIFORM_BYTES, WideNode,
 };
 use crate::materials::colour_entry;
 use crate::wide::WideBvh;
@@ -359,10 +366,12 @@ pub fn capabilities_for(integrator: GpuIntegrator) -> Capabilities {
         // for comparisons.
         bvh_widths: vec![BvhWidth::Auto, BvhWidth::Two, BvhWidth::Four, BvhWidth::Eight],
         integrator: integrator.name(),
-        max_bounces: Some(match integrator {
-            GpuIntegrator::Whitted => crate::kernel::WHITTED_MAX_DEPTH,
-            _ => MAX_BOUNCES,
-        }),
+        // bdpt has no backend cap: its subpaths' own (`BDPT_MAX_VERTICES`), as on the CPU.
+        max_bounces: match integrator {
+            GpuIntegrator::Whitted => Some(crate::kernel::WHITTED_MAX_DEPTH),
+            GpuIntegrator::Bdpt => None,
+            _ => Some(MAX_BOUNCES),
+        },
         extension: integrator == GpuIntegrator::Path,
         diffuse_depth: integrator == GpuIntegrator::Path,
         bvh_builders: true,
@@ -806,14 +815,17 @@ impl SceneData {
     /// `max_storage_buffers_per_shader_stage`; the error names the buffer, the limit and
     /// both sizes.
     pub fn check_limits(&self, limits: &wgpu::Limits) -> Result<(), GpuError> {
-        // One more for the texels where a material reads textures.
-        let storage_buffers = STORAGE_BUFFERS + u32::from(self.options.textures);
+        // One more for the texels where a material reads textures, two for bdpt's splats
+        // and scratch.
+        let splats = self.options.integrator == GpuIntegrator::Bdpt;
+        let storage_buffers = STORAGE_BUFFERS + u32::from(self.options.textures) + 2 * u32::from(splats);
         if limits.max_storage_buffers_per_shader_stage < storage_buffers {
             return Err(GpuError::Unsupported(format!(
                 "a device with {} storage buffers per shader stage (max_storage_buffers_per_shader_stage; the kernel \
-                 binds {storage_buffers}{})",
+                 binds {storage_buffers}{}{})",
                 limits.max_storage_buffers_per_shader_stage,
-                if self.options.textures { ", one of them for the textures" } else { "" }
+                if self.options.textures { ", one of them for the textures" } else { "" },
+                if splats { ", two for bdpt's splat image and scratch" } else { "" }
             )));
         }
         for (what, needed) in self.buffer_sizes() {
@@ -848,7 +860,35 @@ struct FilmBuffers {
     pixels: u64,
     accum: wgpu::Buffer,
     readback: wgpu::Buffer,
-    bind_group: wgpu::BindGroup,
+    /// `None` for bdpt (see [`GpuScene::render_gpu`]).
+    bind_group: Option<wgpu::BindGroup>,
+}
+
+/// bdpt's buffers: its splat image (`wgsl/bdpt.wgsl`: [`SPLAT_HEADER_WORDS`], then nine
+/// words per pixel of the whole image), the image's read-back copy, and the subpaths'
+/// scratch for `slots` invocations ([`BDPT_SLOT_BYTES`] each).
+pub(crate) struct BdptBuffers {
+    pixels: u64,
+    slots: u64,
+    sums: wgpu::Buffer,
+    readback: wgpu::Buffer,
+    scratch: wgpu::Buffer,
+}
+
+/// The most bytes of scratch bdpt's bands use (less where the device's limits say so).
+const BDPT_SCRATCH_CAP: u64 = 1 << 30;
+
+/// Bytes of a splat image of `pixels` pixels.
+fn splat_bytes(pixels: u64) -> u64 {
+    4 * (SPLAT_HEADER_WORDS as u64 + 9 * pixels)
+}
+
+/// A splat image's channel sum as the film keeps it: the kernel's 96-bit two's complement
+/// in 2⁻³² units (low word first) in 2⁻⁶⁴ units.
+fn splat_sum(words: &[u32]) -> i128 {
+    let v = words[0] as u128 | (words[1] as u128) << 32 | (words[2] as u128) << 64;
+    // Sign-extend the 96 bits, then scale by 2³² (exact: |v| < 2⁹⁵).
+    (((v << 32) as i128) >> 32) << 32
 }
 
 /// A scene on the device, made by [`GpuBackend::prepare`]: its buffers, the compiled
@@ -868,6 +908,8 @@ pub struct GpuScene {
     /// Scene buffers in binding order 1–5, then the material buffers (10, 11).
     buffers: Vec<wgpu::Buffer>,
     film: Mutex<Option<FilmBuffers>>,
+    /// bdpt's splat image and scratch, kept across passes of the same size.
+    splats: Mutex<Option<BdptBuffers>>,
     constants: SceneConstants,
     stats: PrepareStats,
     /// Where the atlas integrator's gathered irradiance lies in the tables.
@@ -1037,11 +1079,18 @@ impl GpuBackend {
         });
 
         let read = wgpu::BufferBindingType::Storage { read_only: true };
+        let write = wgpu::BufferBindingType::Storage { read_only: false };
         let entries: Vec<_> = [(0, wgpu::BufferBindingType::Uniform), (7, wgpu::BufferBindingType::Uniform)]
             .into_iter()
             .chain([1, 2, 3, 4, 5, 10, 11].map(|b| (b, read)))
             .chain(data.options.textures.then_some((12, read)))
-            .chain([(6, wgpu::BufferBindingType::Storage { read_only: false })])
+            .chain(
+                (data.options.integrator == GpuIntegrator::Bdpt)
+                    .then_some([(13, write), (14, write)])
+                    .into_iter()
+                    .flatten(),
+            )
+            .chain([(6, write)])
             .map(|(b, ty)| buffer_entry(b, ty))
             .collect();
         let layout =
@@ -1085,6 +1134,7 @@ impl GpuBackend {
             params,
             buffers,
             film: Mutex::new(None),
+            splats: Mutex::new(None),
             constants: data.constants,
             stats,
             atlas_irradiance: None,
@@ -1205,7 +1255,7 @@ impl GpuScene {
             usage: wgpu::BufferUsages::STORAGE,
             mapped_at_creation: false,
         });
-        let scene_group = self.bind_group(&self.params, &accum);
+        let scene_group = self.bind_group(&self.params, &accum, None);
         let texels: Vec<GatherRecord> = problem.texels.iter().map(gather_record).collect();
         let texel_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("atlas gather texels"),
@@ -1404,6 +1454,10 @@ impl GpuScene {
             zseed_lo: zseed as u32,
             zseed_hi: (zseed >> 32) as u32,
             max_diffuse_depth: settings.path.max_diffuse_depth,
+            region: {
+                let r = settings.region();
+                [r.x, r.y, r.width, r.height]
+            },
             ..Params::default()
         }
     }
@@ -1430,7 +1484,14 @@ impl GpuScene {
         let row_bytes = PIXEL_BYTES * width as u64;
         let cap = limits.max_storage_buffer_binding_size.min(limits.max_buffer_size).min(FILM_BAND_CAP);
         check_size("one image row of per-pixel accumulators", FILM_HEADER_BYTES + row_bytes, limits)?;
-        let band_rows_max = ((cap.saturating_sub(FILM_HEADER_BYTES) / row_bytes).max(1) as u32).min(height);
+        let mut band_rows_max = ((cap.saturating_sub(FILM_HEADER_BYTES) / row_bytes).max(1) as u32).min(height);
+        if self.splatting() {
+            // bdpt's bands are as many rows as its scratch holds.
+            let scratch_row = BDPT_SLOT_BYTES * width as u64;
+            check_size("one image row of bdpt's scratch", scratch_row, limits)?;
+            let scratch_cap = limits.max_storage_buffer_binding_size.min(limits.max_buffer_size).min(BDPT_SCRATCH_CAP);
+            band_rows_max = band_rows_max.min((scratch_cap / scratch_row).max(1) as u32);
+        }
         let band_pixels_max = band_rows_max as u64 * width as u64;
 
         let mut film_slot = lock(&self.film);
@@ -1442,6 +1503,25 @@ impl GpuScene {
         let mut params = self.kernel_params(settings);
         let pipeline = self.pipeline(settings)?;
         self.write_seeds(&self.params, settings);
+
+        // bdpt: the whole image's splat image, cleared, in a bind group of its own.
+        let mut splat_slot = lock(&self.splats);
+        let splat_bind = if self.splatting() {
+            let pixels = width as u64 * height as u64;
+            let slots = band_pixels_max;
+            check_size("bdpt's splat image (36 bytes per pixel)", splat_bytes(pixels), limits)?;
+            if splat_slot.as_ref().is_none_or(|b| b.pixels != pixels || b.slots < slots) {
+                *splat_slot = Some(self.bdpt_buffers(pixels, slots)?);
+            }
+            let sb = splat_slot.as_ref().expect("just made");
+            let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
+            encoder.clear_buffer(&sb.sums, 0, None);
+            queue.submit([encoder.finish()]);
+            Some(self.bind_group(&self.params, &fb.accum, Some(sb)))
+        } else {
+            None
+        };
+        let bind_group = splat_bind.as_ref().or(fb.bind_group.as_ref()).expect("a bind group for every integrator");
 
         // A crop window renders its rows whole; only its columns reach the film.
         let region = settings.region();
@@ -1470,7 +1550,7 @@ impl GpuScene {
                 if done == 0 || absolute(done) == 0 {
                     encoder.clear_buffer(&fb.accum, 0, Some(band_bytes));
                 }
-                self.encode_dispatch(&mut encoder, &pipeline, &fb.bind_group, width, rows);
+                self.encode_dispatch(&mut encoder, &pipeline, bind_group, width, rows);
                 let index = queue.submit([encoder.finish()]);
                 device
                     .poll(wgpu::PollType::Wait { submission_index: Some(index), timeout: None })
@@ -1483,14 +1563,77 @@ impl GpuScene {
             }
             y0 += rows;
         }
+        if let Some(sb) = splat_slot.as_ref().filter(|_| self.splatting()) {
+            self.read_splats(sb, film)?;
+            // One light path per sample of every pixel of the region: the splats' divisor.
+            film.count_light_paths(spp as u64);
+        }
         pop_scope(scope, "rendering")?;
         Ok(counters)
     }
 
+    /// Whether the kernel splats (bdpt's light tracing).
+    fn splatting(&self) -> bool {
+        self.constants.integrator == GpuIntegrator::Bdpt
+    }
+
+    /// A splat image of `pixels` pixels, its read-back copy, and scratch for `slots`
+    /// invocations.
+    fn bdpt_buffers(&self, pixels: u64, slots: u64) -> Result<BdptBuffers, GpuError> {
+        let device = &self.ctx.device;
+        let scope = device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
+        let size = splat_bytes(pixels);
+        let sums = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("splat image"),
+            size,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let readback = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("splat image read-back"),
+            size,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let scratch = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("bdpt scratch"),
+            size: slots * BDPT_SLOT_BYTES,
+            usage: wgpu::BufferUsages::STORAGE,
+            mapped_at_creation: false,
+        });
+        pop_scope(scope, "out of GPU memory for bdpt's splat image and scratch")?;
+        Ok(BdptBuffers { pixels, slots, sums, readback, scratch })
+    }
+
+    /// Reads the splat image back and adds its sums (and the splats it dropped) to `film`.
+    fn read_splats(&self, sb: &BdptBuffers, film: &mut Film) -> Result<(), GpuError> {
+        let bytes = splat_bytes(sb.pixels);
+        let mut encoder = self.ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
+        encoder.copy_buffer_to_buffer(&sb.sums, 0, &sb.readback, 0, Some(bytes));
+        self.ctx.queue.submit([encoder.finish()]);
+        {
+            let view = map_read(&self.ctx, &sb.readback, bytes, "reading the splat image back")?;
+            let words: &[u32] = bytemuck::cast_slice(&view);
+            let (header, pixels) = words.split_at(SPLAT_HEADER_WORDS as usize);
+            film.non_finite += header[0] as u64;
+            for (i, px) in pixels.chunks_exact(9).enumerate() {
+                let sum = [splat_sum(&px[0..3]), splat_sum(&px[3..6]), splat_sum(&px[6..9])];
+                film.add_splat_sum(i, sum);
+            }
+        }
+        sb.readback.unmap();
+        Ok(())
+    }
+
     /// The path kernel's bind group: the scene's buffers with the uniforms `params`
-    /// ([`UNIFORM_BYTES`]: the parameters, then the ZSobol seeds) and the accumulators
-    /// `accum`.
-    pub(crate) fn bind_group(&self, params: &wgpu::Buffer, accum: &wgpu::Buffer) -> wgpu::BindGroup {
+    /// ([`UNIFORM_BYTES`]: the parameters, then the ZSobol seeds), the accumulators
+    /// `accum` and, for bdpt (whose layout has it), the splat image.
+    pub(crate) fn bind_group(
+        &self,
+        params: &wgpu::Buffer,
+        accum: &wgpu::Buffer,
+        bdpt: Option<&BdptBuffers>,
+    ) -> wgpu::BindGroup {
         let b = &self.buffers;
         let range = |offset: u64, size: u64| {
             wgpu::BindingResource::Buffer(wgpu::BufferBinding {
@@ -1507,6 +1650,10 @@ impl GpuScene {
             vec![(1, &b[0]), (2, &b[1]), (3, &b[2]), (4, &b[3]), (5, &b[4]), (6, accum), (10, &b[5]), (11, &b[6])];
         if let Some(texels) = b.get(7) {
             bindings.push((12, texels));
+        }
+        if let Some(bdpt) = bdpt {
+            bindings.push((13, &bdpt.sums));
+            bindings.push((14, &bdpt.scratch));
         }
         let entries: Vec<_> = uniforms
             .into_iter()
@@ -1539,7 +1686,8 @@ impl GpuScene {
             usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        let bind_group = self.bind_group(&self.params, &accum);
+        // bdpt's bind group also holds the splat image: made per pass (`render_gpu`).
+        let bind_group = (!self.splatting()).then(|| self.bind_group(&self.params, &accum, None));
         FilmBuffers { pixels, accum, readback, bind_group }
     }
 
@@ -1716,7 +1864,8 @@ impl PreparedScene for GpuScene {
     /// Statistics on the device ([`DeviceAccumulation`]) where the whole image's
     /// accumulators fit one buffer, else passes into a film on the CPU.
     fn accumulate(self: Arc<Self>, settings: &RenderSettings) -> tracer::Result<Box<dyn Accumulation>> {
-        if DeviceAccumulation::fits(&self.ctx.limits, settings.width, settings.height) {
+        // bdpt's splats land anywhere: its frames go through the film (read back each).
+        if !self.splatting() && DeviceAccumulation::fits(&self.ctx.limits, settings.width, settings.height) {
             Ok(Box::new(DeviceAccumulation::new(self, settings)?))
         } else {
             Ok(Box::new(FilmAccumulation::new(self, settings)?))

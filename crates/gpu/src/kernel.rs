@@ -190,6 +190,9 @@ wgsl_struct! {
         pad1: u32,
         /// Padding.
         pad2: u32,
+        /// The region rendered (x, y, width, height; the whole image but for a crop
+        /// window): bdpt's splats land only there and its camera density counts its pixels.
+        region: [u32; 4],
     }
 }
 
@@ -217,6 +220,10 @@ pub enum GpuIntegrator {
     /// `tracer::Whitted` (`wgsl/whitted.wgsl`), its recursion at most [`WHITTED_MAX_DEPTH`]
     /// deep.
     Whitted,
+    /// `tracer::Bdpt` (`wgsl/bdpt.wgsl`): light tracing's splats are added to an image of
+    /// exact fixed-point sums on the device ([`SPLAT_HEADER_WORDS`], nine words per pixel);
+    /// the subpaths are kept in a scratch buffer ([`BDPT_SLOT_BYTES`] per invocation).
+    Bdpt,
     /// `tracer::AtlasGi` with these settings (`wgsl/atlas.wgsl`): the atlas is built on the
     /// CPU when the scene is prepared and gathered on the GPU (`wgsl/atlas_gather.wgsl`),
     /// each pixel's specular chain, direct light and atlas lookup on the GPU.
@@ -236,6 +243,7 @@ impl GpuIntegrator {
             Self::Direct => "direct",
             Self::AmbientOcclusion { .. } => "ao",
             Self::Whitted => "whitted",
+            Self::Bdpt => "bdpt",
             Self::Atlas(_) => "atlas",
         }
     }
@@ -248,6 +256,7 @@ impl GpuIntegrator {
             Self::AmbientOcclusion { .. } => 2,
             Self::Whitted => 3,
             Self::Atlas(_) => 4,
+            Self::Bdpt => 5,
         }
     }
 }
@@ -342,6 +351,17 @@ pub enum NodeLayout {
 /// Bytes of the film buffer before the accumulators: the 64-bit ray counter (two words),
 /// the truncated-path counter and a pad word (`PtFilm`'s header).
 pub const FILM_HEADER_BYTES: u64 = 16;
+
+/// Words of bdpt's splat image before its pixels: the count of splats dropped (not
+/// finite, or beyond [`tracer::film::MAX_SAMPLE_MAGNITUDE`]) and three pad words. Each
+/// pixel then has three channels of three words: round(x · 2³²) summed in 96-bit two's
+/// complement, low word first.
+pub const SPLAT_HEADER_WORDS: u32 = 4;
+
+/// Bytes of bdpt's scratch per invocation (`wgsl/bdpt.wgsl`): eight vec4s per light-subpath
+/// vertex and one per camera-subpath vertex.
+pub const BDPT_SLOT_BYTES: u64 =
+    16 * (8 * (tracer::integrator::BDPT_MAX_VERTICES as u64 - 1) + tracer::integrator::BDPT_MAX_VERTICES as u64);
 
 /// Scene flag: vertices have shading normals.
 pub const HAS_NORMALS: u32 = 1;
@@ -516,6 +536,13 @@ pub fn header(options: &KernelOptions) -> String {
          @group(0) @binding(7) var<uniform> pt_dims: array<vec4u, PT_SEED_DIMENSIONS>;\n\n"
             .replace("NODE_STRUCT", node_struct),
     );
+    // bdpt's splat image and its subpaths' scratch (nothing else binds them).
+    if options.integrator == GpuIntegrator::Bdpt {
+        out.push_str(
+            "@group(0) @binding(13) var<storage, read_write> pt_splats: array<atomic<u32>>;\n\
+             @group(0) @binding(14) var<storage, read_write> pt_bdpt_scratch: array<vec4f>;\n\n",
+        );
+    }
     // The texels only where a material reads them (a binding more than the device may have).
     out.push_str(if options.textures {
         "@group(0) @binding(12) var<storage, read> pt_texels: array<u32>;\n\n"
@@ -570,6 +597,9 @@ pub fn header(options: &KernelOptions) -> String {
     u("PT_INTEGRATOR_AO", GpuIntegrator::AmbientOcclusion { max_distance: 0.0 }.code());
     u("PT_INTEGRATOR_WHITTED", GpuIntegrator::Whitted.code());
     u("PT_INTEGRATOR_ATLAS", GpuIntegrator::Atlas(Default::default()).code());
+    u("PT_INTEGRATOR_BDPT", GpuIntegrator::Bdpt.code());
+    u("PT_BDPT_MAX_VERTICES", tracer::integrator::BDPT_MAX_VERTICES as u32);
+    u("PT_SPLAT_HEADER_WORDS", SPLAT_HEADER_WORDS);
     u("PT_ATLAS_SPECULAR_CHAIN", tracer::integrator::ATLAS_SPECULAR_CHAIN);
     u("PT_WHITTED_DEFAULT_DEPTH", tracer::integrator::WHITTED_DEFAULT_DEPTH);
     // (The stack only where it is used: private arrays cost registers or local memory.)
@@ -598,6 +628,7 @@ pub fn header(options: &KernelOptions) -> String {
         ("PT_MIN_SHADING_COSINE", MIN_SHADING_COSINE),
         ("PT_RR_MIN_TERMINATION", RR_MIN_TERMINATION),
         ("PT_SHADOW_T_MAX", SHADOW_T_MAX),
+        ("PT_MAX_SAMPLE_MAGNITUDE", tracer::film::MAX_SAMPLE_MAGNITUDE),
         ("PT_ONE_MINUS_EPSILON", tracer::lights::ONE_MINUS_EPSILON),
         ("PT_OFFSET_ORIGIN", shapes::offset::OFFSET_ORIGIN),
         ("PT_OFFSET_FLOAT_SCALE", shapes::offset::OFFSET_FLOAT_SCALE),
@@ -685,6 +716,15 @@ pub fn source(material_wgsl: &str, options: &KernelOptions) -> String {
     };
     for (name, text) in traversal {
         let _ = write!(out, "\n// ---- {name}\n{text}");
+    }
+    if options.integrator == GpuIntegrator::Bdpt {
+        let _ = write!(out, "\n// ---- bdpt.wgsl\n{}", include_str!("wgsl/bdpt.wgsl"));
+    } else {
+        // (Its arrays and splat image exist only in its own kernel.)
+        out.push_str(
+            "\nfn pt_bdpt(o: vec3f, d: vec3f, wl: ptr<function, PtWavelengths>, smp: ptr<function, PtSampler>, \
+             rays: ptr<function, u32>, truncated: ptr<function, u32>) -> vec4f {\n    return vec4f(0.0);\n}\n",
+        );
     }
     let _ = write!(out, "\n// ---- triangle test\n{triangle}\n// ---- main.wgsl\n{MAIN}");
     if matches!(options.integrator, GpuIntegrator::Atlas(_)) {

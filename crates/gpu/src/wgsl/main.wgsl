@@ -23,11 +23,16 @@ fn pt_trace_sample(
         l = pt_whitted(pt_params.eye.xyz, dir, &wl, smp, rays);
     } else if PT_INTEGRATOR == PT_INTEGRATOR_ATLAS {
         l = pt_atlas(pt_params.eye.xyz, dir, &wl, smp, rays);
+    } else if PT_INTEGRATOR == PT_INTEGRATOR_BDPT {
+        l = pt_bdpt(pt_params.eye.xyz, dir, &wl, smp, rays, truncated);
     } else {
         l = pt_radiance(pt_params.eye.xyz, dir, &wl, smp, rays, truncated);
     }
     return pt_to_linear_srgb(l, wl);
 }
+
+// The pixel being rendered (bdpt reads it: a crop window's other columns must not splat).
+var<private> pt_pixel: vec2u;
 
 @compute @workgroup_size(8, 8, 1)
 fn pt_main(@builtin(global_invocation_id) gid: vec3u) {
@@ -38,6 +43,7 @@ fn pt_main(@builtin(global_invocation_id) gid: vec3u) {
     let y = pt_params.band_y0 + gid.y;
     let pixel = y * pt_params.width + x;
     let slot = gid.y * pt_params.width + x;
+    pt_pixel = vec2u(x, y);
     var acc = pt_film.pixels[slot];
     var rays = 0u;
     var truncated = 0u;
