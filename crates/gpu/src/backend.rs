@@ -61,7 +61,7 @@
 //!   the film's splat sums after each pass; its paths are capped as the CPU's
 //!   (`BDPT_MAX_VERTICES`). Device accumulations (a viewer) of bdpt read the film back
 //!   each frame ([`tracer::FilmAccumulation`]).
-//! * A path has at most [`MAX_BOUNCES`] scattering events. A `max_depth` beyond it is
+//! * A path has at most [`MAX_BOUNCES`] scattering events (bdpt: its own cap, as above). A `max_depth` beyond it is
 //!   refused; with `max_depth` 0 (unbounded on the CPU) paths that reach it are counted
 //!   ([`PathCounters::truncated`], printed by the CLI): with Russian roulette
 //!   (q ≥ 0.05) the probability of reaching it is below 0.95²⁵⁶ ≈ 2·10⁻⁶ per path.

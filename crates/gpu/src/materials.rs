@@ -51,6 +51,7 @@
 //! fn material_absorption(m: u32, lambda: vec4f) -> vec4f;
 //! fn material_absorbing(m: u32) -> bool;
 //! fn material_eta(m: u32) -> f32;
+//! fn material_eta_at(m: u32, lambda: vec4f) -> f32;
 //! fn mat_set_texels(m: u32, base: vec4f, spec: vec4f, roughness: f32, metallic: f32);
 //! fn mat_clear_texels();
 //! fn bsdf_eval(m: u32, wo: vec3f, wi: vec3f, lambda: vec4f) -> vec4f;
@@ -661,6 +662,19 @@ pub fn wgsl_for(
         "fn material_eta(m: u32) -> f32 {{\n    return bitcast<f32>(mat_header(m, {}u));\n}}\n",
         header::ETA
     );
+    // `bsdf.eta()` at the path's wavelengths, as the BSDF samples with it (a dispersive
+    // index at lambda.x): bdpt's adjoint scales light subpaths by it exactly.
+    out.push_str("fn material_eta_at(m: u32, lambda: vec4f) -> f32 {\n");
+    if models.iter().any(|m| m.def.name == "dielectric") {
+        let _ = writeln!(
+            out,
+            "    if mat_header(m, {}u) == MAT_MODEL_DIELECTRIC {{\n        return dielectric_eta(load_dielectric(mat_header(m, \
+             {}u)), lambda);\n    }}",
+            header::MODEL,
+            header::PARAMS
+        );
+    }
+    out.push_str("    return material_eta(m);\n}\n\n");
     // `Material::absorption().is_some()`: the medium test of Beer–Lambert (a constant false
     // when no material absorbs, so that the kernel's absorption code compiles away).
     out.push_str("fn material_absorbing(m: u32) -> bool {\n");

@@ -1505,3 +1505,28 @@ fn bdpt_matches_the_cpu() {
     }
     assert!(failures.is_empty(), "{failures:#?}");
 }
+
+/// bdpt in bands of rows (as many as its scratch holds under a lowered binding limit: 3
+/// rows of 32 pixels here) gives the one-band film bit for bit, splats included: a pixel's
+/// samples do not depend on the band, and the splat sums are exact integers.
+#[test]
+fn bdpt_bands_give_the_same_film() {
+    use gpu::kernel::{BDPT_SLOT_BYTES, GpuIntegrator};
+    let Some(ctx) = gpu::require_gpu() else { return };
+    let Some(scene) = cornell() else { return };
+    let options = KernelOptions { integrator: GpuIntegrator::Bdpt, ..KernelOptions::default() };
+    let largest = SceneData::new(&scene, options).unwrap().buffer_sizes().iter().map(|b| b.1).max().unwrap();
+    let s = settings(32, 20, 16);
+    let limit = largest.max(3 * 32 * BDPT_SLOT_BYTES);
+    let limits = wgpu::Limits { max_storage_buffer_binding_size: limit, ..ctx.limits.clone() };
+    let whole_backend = GpuBackend::with_context(ctx).with_integrator(GpuIntegrator::Bdpt);
+    let (whole, _) =
+        tracer::render(&whole_backend.prepare_gpu(scene.clone(), &SceneOptions::default()).unwrap(), &s, &|_| {})
+            .unwrap();
+    let ctx = gpu::require_gpu().unwrap();
+    let banded = GpuBackend::with_context(gpu::GpuContext { limits, ..ctx }).with_integrator(GpuIntegrator::Bdpt);
+    let (bands, _) =
+        tracer::render(&banded.prepare_gpu(scene, &SceneOptions::default()).unwrap(), &s, &|_| {}).unwrap();
+    assert!(whole.has_splats());
+    assert!(bands == whole, "bands of rows must not change bdpt's film");
+}

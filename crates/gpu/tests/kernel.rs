@@ -64,7 +64,7 @@ fn mismatches<T: WgslStruct>(module: &naga::Module) -> Vec<String> {
 
 #[test]
 fn generated_structs_have_the_host_layout() {
-    let (_, module) = kernel_module(&options(bvh::TriangleTest::Watertight));
+    let (path_src, module) = kernel_module(&options(bvh::TriangleTest::Watertight));
     let mut problems = mismatches::<Params>(&module);
     problems.extend(mismatches::<gpu::kernel::WideNode>(&module));
     problems.extend(mismatches::<PixelAccum>(&module));
@@ -84,6 +84,11 @@ fn generated_structs_have_the_host_layout() {
     assert!(eight_src.contains("traversal_wide8.wgsl") && !eight_src.contains("// ---- traversal_wide.wgsl"));
     problems.extend(mismatches::<gpu::kernel::WideNode>(&eight_module));
     assert!(problems.is_empty(), "{problems:#?}");
+    // bdpt's kernel (its file, splat image and scratch only there) parses and validates.
+    let bdpt = KernelOptions { integrator: gpu::kernel::GpuIntegrator::Bdpt, ..options(bvh::TriangleTest::Watertight) };
+    let (bdpt_src, _) = kernel_module(&bdpt);
+    assert!(bdpt_src.contains("// ---- bdpt.wgsl") && bdpt_src.contains("pt_bdpt_scratch"));
+    assert!(!path_src.contains("// ---- bdpt.wgsl") && !path_src.contains("pt_bdpt_scratch"));
     // The film: header words, then the accumulators at the stride the host reads.
     let (members, _) = wgsl_layout(&module, "PtFilm");
     assert_eq!(members.last().unwrap(), &("pixels".to_string(), FILM_HEADER_BYTES as u32));

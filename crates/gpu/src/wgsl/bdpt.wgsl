@@ -288,20 +288,21 @@ fn bd_pdf_to(v: BdVertex, prev: vec3f, has_prev: bool, next_p: vec3f, next_n: ve
     return bd_to_area(pdf_dir, v.p, next_p, next_n);
 }
 
-// `compression`: η'² for a transmission (the BSDF divided radiance by it).
-fn bd_compression(m: u32, wo: vec3f, transmits: bool) -> f32 {
+// `compression`: η'² for a transmission (the BSDF divided radiance by it), with the BSDF's
+// own η (a dispersive glass's at the path's wavelength).
+fn bd_compression(m: u32, wo: vec3f, transmits: bool, lambda: vec4f) -> f32 {
     if !transmits {
         return 1.0;
     }
-    let eta = material_eta(m);
+    let eta = material_eta_at(m, lambda);
     let etap = select(1.0 / eta, eta, wo.z > 0.0);
     return etap * etap;
 }
 
 // `importance_factor`: η'² for a transmission times Veach's shading-normal correction
 // |ωo·n_s| |ωi·n_g| / (|ωo·n_g| |ωi·n_s|) (1997, eq. 5.17).
-fn bd_importance_factor(v: BdVertex, wo: vec3f, wi: vec3f, wo_l: vec3f, wi_l: vec3f) -> f32 {
-    let k = bd_compression(v.m, wo_l, wo_l.z * wi_l.z < 0.0);
+fn bd_importance_factor(v: BdVertex, wo: vec3f, wi: vec3f, wo_l: vec3f, wi_l: vec3f, lambda: vec4f) -> f32 {
+    let k = bd_compression(v.m, wo_l, wo_l.z * wi_l.z < 0.0, lambda);
     let den = abs(dot(wo, v.n)) * abs(dot(wi, v.fz));
     if den == 0.0 {
         return 0.0;
@@ -321,7 +322,7 @@ fn bd_surface_f(v: BdVertex, wi: vec3f, importance: bool, lambda: vec4f) -> vec4
     if !importance || bd_is_black(f) {
         return f;
     }
-    return f * bd_importance_factor(v, v.wo, wi, wo_l, wi_l);
+    return f * bd_importance_factor(v, v.wo, wi, wo_l, wi_l, lambda);
 }
 
 // `Vertex::connectible`: not on a purely specular surface.
@@ -548,9 +549,9 @@ fn bd_scatter(
     let specular = pt_is_specular(bs.flags);
     var factor = bs.f * (abs(bs.wi.z) / bs.pdf);
     if importance {
-        factor *= bd_importance_factor(vv, vv.wo, wi_world, wo, bs.wi);
+        factor *= bd_importance_factor(vv, vv.wo, wi_world, wo, bs.wi, lambda);
     } else {
-        (*w).eta_scale *= bd_compression(m, wo, (bs.flags & SCATTER_TRANSMISSION) != 0u);
+        (*w).eta_scale *= bd_compression(m, wo, (bs.flags & SCATTER_TRANSMISSION) != 0u, lambda);
     }
     var fwd = 0.0;
     var rev = 0.0;
@@ -892,8 +893,8 @@ fn bd_too_deep(s: u32, t: u32) -> bool {
 }
 
 // One camera sample's estimate (`sample_radiance`); light tracing's splats go to
-// `pt_splats`. `splat` false: the pixel lies outside the region (a crop window's rows
-// are rendered whole), whose light paths must not splat.
+// `pt_splats`. Pixels outside the region (a crop window's rows are rendered whole) trace
+// nothing: their light paths must not splat.
 fn pt_bdpt(
     origin: vec3f,
     dir: vec3f,
