@@ -817,7 +817,7 @@ impl SceneData {
     pub fn check_limits(&self, limits: &wgpu::Limits) -> Result<(), GpuError> {
         // One more for the texels where a material reads textures, two for bdpt's splats
         // and scratch.
-        let splats = self.options.integrator == GpuIntegrator::Bdpt;
+        let splats = self.options.integrator.splats();
         let storage_buffers = STORAGE_BUFFERS + u32::from(self.options.textures) + 2 * u32::from(splats);
         if limits.max_storage_buffers_per_shader_stage < storage_buffers {
             return Err(GpuError::Unsupported(format!(
@@ -1084,12 +1084,7 @@ impl GpuBackend {
             .into_iter()
             .chain([1, 2, 3, 4, 5, 10, 11].map(|b| (b, read)))
             .chain(data.options.textures.then_some((12, read)))
-            .chain(
-                (data.options.integrator == GpuIntegrator::Bdpt)
-                    .then_some([(13, write), (14, write)])
-                    .into_iter()
-                    .flatten(),
-            )
+            .chain(data.options.integrator.splats().then_some([(13, write), (14, write)]).into_iter().flatten())
             .chain([(6, write)])
             .map(|(b, ty)| buffer_entry(b, ty))
             .collect();
@@ -1405,7 +1400,9 @@ impl GpuScene {
     pub(crate) fn kernel_params(&self, settings: &RenderSettings) -> Params {
         let (width, height) = (settings.width, settings.height);
         let zseed = tracer::sampler::mix64(settings.seed);
-        let (eye, forward, right, up) = PreparedScene::camera(self, settings).rays(width, height).basis();
+        let rays = PreparedScene::camera(self, settings).rays(width, height);
+        let (eye, forward, right, up) = rays.basis();
+        let region = settings.region();
         let v4 = |v: glam::Vec3| [v.x, v.y, v.z, 0.0];
         let shading = settings.path.shading_normals.code();
         Params {
@@ -1454,10 +1451,8 @@ impl GpuScene {
             zseed_lo: zseed as u32,
             zseed_hi: (zseed >> 32) as u32,
             max_diffuse_depth: settings.path.max_diffuse_depth,
-            region: {
-                let r = settings.region();
-                [r.x, r.y, r.width, r.height]
-            },
+            region: [region.x, region.y, region.width, region.height],
+            film_density: rays.pixels_per_steradian(forward) / region.pixel_count() as f32,
             ..Params::default()
         }
     }
@@ -1572,9 +1567,9 @@ impl GpuScene {
         Ok(counters)
     }
 
-    /// Whether the kernel splats (bdpt's light tracing).
+    /// Whether the kernel splats ([`GpuIntegrator::splats`]).
     fn splatting(&self) -> bool {
-        self.constants.integrator == GpuIntegrator::Bdpt
+        self.constants.integrator.splats()
     }
 
     /// A splat image of `pixels` pixels, its read-back copy, and scratch for `slots`
@@ -1582,19 +1577,7 @@ impl GpuScene {
     fn bdpt_buffers(&self, pixels: u64, slots: u64) -> Result<BdptBuffers, GpuError> {
         let device = &self.ctx.device;
         let scope = device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
-        let size = splat_bytes(pixels);
-        let sums = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("splat image"),
-            size,
-            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        let readback = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("splat image read-back"),
-            size,
-            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
+        let (sums, readback) = read_back_pair(device, "splat image", splat_bytes(pixels));
         let scratch = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("bdpt scratch"),
             size: slots * BDPT_SLOT_BYTES,
@@ -1673,19 +1656,7 @@ impl GpuScene {
     /// Accumulator and read-back buffers for `pixels` pixels, with their bind group.
     fn film_buffers(&self, pixels: u64) -> FilmBuffers {
         let device = &self.ctx.device;
-        let size = FILM_HEADER_BYTES + pixels * PIXEL_BYTES;
-        let accum = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("accumulators"),
-            size,
-            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        let readback = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("accumulator read-back"),
-            size,
-            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
+        let (accum, readback) = read_back_pair(device, "accumulators", FILM_HEADER_BYTES + pixels * PIXEL_BYTES);
         // bdpt's bind group also holds the splat image: made per pass (`render_gpu`).
         let bind_group = (!self.splatting()).then(|| self.bind_group(&self.params, &accum, None));
         FilmBuffers { pixels, accum, readback, bind_group }
@@ -1786,6 +1757,19 @@ impl GpuScene {
         readback.unmap();
         Ok(counters)
     }
+}
+
+/// A storage buffer the kernel writes (and the host clears and copies out of) and its
+/// read-back copy, both of `size` bytes.
+fn read_back_pair(device: &wgpu::Device, label: &str, size: u64) -> (wgpu::Buffer, wgpu::Buffer) {
+    let buffer = |label: &str, usage| {
+        device.create_buffer(&wgpu::BufferDescriptor { label: Some(label), size, usage, mapped_at_creation: false })
+    };
+    use wgpu::BufferUsages as U;
+    (
+        buffer(label, U::STORAGE | U::COPY_SRC | U::COPY_DST),
+        buffer(&format!("{label} read-back"), U::MAP_READ | U::COPY_DST),
+    )
 }
 
 /// Maps the first `bytes` of `buffer` (MAP_READ, its copy already submitted) and waits

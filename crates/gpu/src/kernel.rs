@@ -184,8 +184,10 @@ wgsl_struct! {
         envmap_offset: u32,
         /// `PathSettings::max_diffuse_depth` (0 = no limit; the path tracer).
         max_diffuse_depth: u32,
-        /// Padding: the block is a multiple of 16 bytes.
-        pad0: u32,
+        /// The camera's importance along its axis over the region's pixel count
+        /// (`CameraRays::pixels_per_steradian` there / `PixelRect::pixel_count`): bdpt's
+        /// W(ω) is this over cos³ θ.
+        film_density: f32,
         /// Padding.
         pad1: u32,
         /// Padding.
@@ -246,6 +248,12 @@ impl GpuIntegrator {
             Self::Bdpt => "bdpt",
             Self::Atlas(_) => "atlas",
         }
+    }
+
+    /// Whether its light paths splat onto the image (bdpt): its kernel binds a splat image
+    /// and the subpaths' scratch (bindings 13 and 14) and its film takes splat sums.
+    pub fn splats(self) -> bool {
+        self == Self::Bdpt
     }
 
     /// The code `PT_INTEGRATOR` holds.
@@ -537,7 +545,7 @@ pub fn header(options: &KernelOptions) -> String {
             .replace("NODE_STRUCT", node_struct),
     );
     // bdpt's splat image and its subpaths' scratch (nothing else binds them).
-    if options.integrator == GpuIntegrator::Bdpt {
+    if options.integrator.splats() {
         out.push_str(
             "@group(0) @binding(13) var<storage, read_write> pt_splats: array<atomic<u32>>;\n\
              @group(0) @binding(14) var<storage, read_write> pt_bdpt_scratch: array<vec4f>;\n\n",
@@ -717,7 +725,7 @@ pub fn source(material_wgsl: &str, options: &KernelOptions) -> String {
     for (name, text) in traversal {
         let _ = write!(out, "\n// ---- {name}\n{text}");
     }
-    if options.integrator == GpuIntegrator::Bdpt {
+    if options.integrator.splats() {
         let _ = write!(out, "\n// ---- bdpt.wgsl\n{}", include_str!("wgsl/bdpt.wgsl"));
     } else {
         // (Its arrays and splat image exist only in its own kernel.)

@@ -1517,6 +1517,8 @@ fn bdpt_bands_give_the_same_film() {
     let options = KernelOptions { integrator: GpuIntegrator::Bdpt, ..KernelOptions::default() };
     let largest = SceneData::new(&scene, options).unwrap().buffer_sizes().iter().map(|b| b.1).max().unwrap();
     let s = settings(32, 20, 16);
+    // (The scene's buffers are smaller: three rows per band, seven bands.)
+    assert!(largest < 4 * 32 * BDPT_SLOT_BYTES, "the largest buffer ({largest} B) would allow wider bands");
     let limit = largest.max(3 * 32 * BDPT_SLOT_BYTES);
     let limits = wgpu::Limits { max_storage_buffer_binding_size: limit, ..ctx.limits.clone() };
     let whole_backend = GpuBackend::with_context(ctx).with_integrator(GpuIntegrator::Bdpt);

@@ -52,7 +52,6 @@ struct BdVertex {
     uv: vec2f,
     // The light table's entry (punctual lights).
     entry: u32,
-    pad: u32,
 }
 
 // The light subpath's vertices and the camera subpath's densities live in `pt_bdpt_scratch`
@@ -90,7 +89,7 @@ fn bd_load_light(k: u32) -> BdVertex {
         f.xyz, f.w,
         g.xyz, bitcast<u32>(g.w),
         h,
-        i.xy, bitcast<u32>(i.z), 0u,
+        i.xy, bitcast<u32>(i.z),
     );
 }
 
@@ -106,13 +105,14 @@ fn bd_store_light(k: u32, v: BdVertex) {
     pt_bdpt_scratch[bd_scratch(e + 7u)] = vec4f(v.uv, bitcast<f32>(v.entry), 0.0);
 }
 
-// Light vertex k's flags and reverse density (the walk updates them one vertex later).
-fn bd_light_flags(k: u32) -> u32 {
-    return bitcast<u32>(pt_bdpt_scratch[bd_scratch(8u * k + 5u)].w);
+// Light vertex k's densities (fwd, rev) and flags, as the weights read them; its reverse
+// density is set one vertex later, when the walk scatters from the next.
+fn bd_light_densities(k: u32) -> vec2f {
+    return vec2f(pt_bdpt_scratch[bd_scratch(8u * k + 2u)].w, pt_bdpt_scratch[bd_scratch(8u * k + 3u)].w);
 }
 
-fn bd_set_light_flags(k: u32, flags: u32) {
-    pt_bdpt_scratch[bd_scratch(8u * k + 5u)].w = bitcast<f32>(flags);
+fn bd_light_flags(k: u32) -> u32 {
+    return bitcast<u32>(pt_bdpt_scratch[bd_scratch(8u * k + 5u)].w);
 }
 
 fn bd_set_light_rev(k: u32, rev: f32) {
@@ -134,12 +134,11 @@ fn bd_no_vertex() -> BdVertex {
     return v;
 }
 
+// The eye: a point without area (its densities are the camera's, `bd_camera_pdf`).
 fn bd_eye(origin: vec3f) -> BdVertex {
     var v: BdVertex;
     v.p = origin;
     v.kind = BD_CAMERA;
-    v.pdf_fwd = 1.0;
-    v.beta = pt_unit_throughput();
     return v;
 }
 
@@ -222,10 +221,7 @@ fn bd_camera_density(dir: vec3f) -> f32 {
     if !(cos > 0.0) {
         return 0.0;
     }
-    let plane = 4.0 * length(pt_params.right.xyz) * length(pt_params.up.xyz) * pt_params.inv_size.x
-        * pt_params.inv_size.y;
-    let pixels = f32(pt_params.region.z) * f32(pt_params.region.w);
-    return 1.0 / (plane * cos * cos * cos) / pixels;
+    return pt_params.film_density / (cos * cos * cos);
 }
 
 // `camera_pdf`: the density of a camera ray towards `dir`, 0 outside the region.
@@ -238,14 +234,24 @@ fn bd_camera_pdf(dir: vec3f) -> f32 {
 
 // ---- Densities and BSDFs at vertices
 
+// A spot light's outer cone (`spot_cone`) and the density of a direction drawn uniformly
+// in it.
+fn bd_spot_cos_outer(k: u32) -> f32 {
+    return max(pt_light_f(k, 7u), -1.0);
+}
+
+fn bd_spot_pdf(cos_outer: f32) -> f32 {
+    return 1.0 / (2.0 * PT_PI * (1.0 - cos_outer));
+}
+
 // `emission_pdf`: the solid-angle density of a light (or an emitter's surface point)
 // emitting towards `dir`.
 fn bd_emission_pdf(v: BdVertex, dir: vec3f) -> f32 {
     if v.kind == BD_PUNCTUAL {
         if pt_light_u(v.entry, PT_LIGHT_KIND) == PT_LIGHT_SPOT {
-            let cos_outer = max(pt_light_f(v.entry, 7u), -1.0);
+            let cos_outer = bd_spot_cos_outer(v.entry);
             if dot(dir, pt_light_v3(v.entry, 3u)) >= cos_outer {
-                return 1.0 / (2.0 * PT_PI * (1.0 - cos_outer));
+                return bd_spot_pdf(cos_outer);
             }
             return 0.0;
         }
@@ -399,10 +405,9 @@ fn bd_weight(s: u32, t: u32, qs: BdVertex, pt: BdVertex, pm: BdVertex, lambda: v
     var sum = 0.0;
     var ratio = 1.0;
     // The camera side, from the connection towards the eye.
-    var here = vec3f(0.0);
-    if t > 1u {
-        here = bd_cam(t - 1u);
-    }
+    // (Vertex t−1's forward density is its own; its stored entry is written only once
+    // the walk scatters from it.)
+    var here = vec3f(pt.pdf_fwd, 0.0, 0.0);
     for (var i = t - 1u; i >= 1u; i--) {
         let before = bd_cam(i - 1u);
         var rev = here.y;
@@ -434,10 +439,9 @@ fn bd_weight(s: u32, t: u32, qs: BdVertex, pt: BdVertex, pm: BdVertex, lambda: v
         var rev = qs_rev;
         var delta = false;
         if i + 1u < s {
-            let e = 8u * i;
-            let fwd_at = pt_bdpt_scratch[bd_scratch(e + 2u)].w;
-            fwd = fwd_at;
-            rev = select(pt_bdpt_scratch[bd_scratch(e + 3u)].w, qs_minus_rev, i + 2u == s);
+            let stored = bd_light_densities(i);
+            fwd = stored.x;
+            rev = select(stored.y, qs_minus_rev, i + 2u == s);
             delta = (bd_light_flags(i) & BD_DELTA) != 0u;
         }
         ratio *= bd_remap0(rev) / bd_remap0(fwd);
@@ -644,30 +648,22 @@ fn bd_light_path(
     }
     var dir: vec3f;
     var pdf_dir: f32;
-    // What the light sends along `dir`: Le·cos θ, or I·falloff.
-    var emitted: vec4f;
+    // What the light sends along `dir` per unit of Le (or I): cos θ, or the spot's falloff.
+    var emitted = 1.0;
     if v0.kind == BD_AREA_LIGHT {
         dir = pt_to_world(pt_frame_from_normal(ls.normal), mat_cosine_hemisphere(u));
-        let cos_t = dot(dir, ls.normal);
-        pdf_dir = cos_t / PT_PI;
-        emitted = v0.beta * (ls.pdf * cos_t);
+        emitted = dot(dir, ls.normal);
+        pdf_dir = emitted / PT_PI;
+    } else if pt_light_u(ls.entry, PT_LIGHT_KIND) == PT_LIGHT_SPOT {
+        let axis = pt_light_v3(ls.entry, 3u);
+        let cos_outer = bd_spot_cos_outer(ls.entry);
+        let f = pt_frame_from_normal(axis);
+        dir = pt_uniform_cone(axis, f.s, f.t, cos_outer, u);
+        pdf_dir = bd_spot_pdf(cos_outer);
+        emitted = pt_spot_falloff(dot(dir, axis), pt_light_f(ls.entry, 6u), pt_light_f(ls.entry, 7u));
     } else {
-        var falloff = 1.0;
-        if pt_light_u(ls.entry, PT_LIGHT_KIND) == PT_LIGHT_SPOT {
-            let axis = pt_light_v3(ls.entry, 3u);
-            let cos_outer = max(pt_light_f(ls.entry, 7u), -1.0);
-            let cos_t = 1.0 - u.x * (1.0 - cos_outer);
-            let sin_t = sqrt(max(1.0 - cos_t * cos_t, 0.0));
-            let phi = 2.0 * PT_PI * u.y;
-            let f = pt_frame_from_normal(axis);
-            dir = normalize(cos_t * axis + sin_t * (cos(phi) * f.s + sin(phi) * f.t));
-            pdf_dir = 1.0 / (2.0 * PT_PI * (1.0 - cos_outer));
-            falloff = pt_spot_falloff(dot(dir, axis), pt_light_f(ls.entry, 6u), pt_light_f(ls.entry, 7u));
-        } else {
-            dir = pt_uniform_sphere(u);
-            pdf_dir = PT_INV_4PI;
-        }
-        emitted = v0.beta * (ls.pdf * falloff);
+        dir = pt_uniform_sphere(u);
+        pdf_dir = PT_INV_4PI;
     }
     if !(pdf_dir > 0.0) {
         return 0u;
@@ -675,7 +671,8 @@ fn bd_light_path(
     bd_store_light(0u, v0);
     var n = 1u;
     var last = v0;
-    var w = BdWalk(bd_origin_towards(v0, v0.p + dir), dir, emitted / (ls.pdf * pdf_dir), pdf_dir, PT_NO_HIT, 1.0, false);
+    // β = Le·cos θ / (p_pos · p_dir), v0's β being Le / p_pos.
+    var w = BdWalk(bd_origin_towards(v0, v0.p + dir), dir, v0.beta * (emitted / pdf_dir), pdf_dir, PT_NO_HIT, 1.0, false);
     var at: PtShading;
     loop {
         *rays += 1u;
@@ -684,17 +681,20 @@ fn bd_light_path(
             break;
         }
         var v = bd_hit_vertex(hit, &w, last.p, false, lambda, &at);
-        bd_store_light(n, v);
-        n += 1u;
-        if n >= max_vertices {
+        if n + 1u >= max_vertices {
+            bd_store_light(n, v);
+            n += 1u;
             if bd_cut_by_cap() {
                 *truncated += 1u;
             }
             break;
         }
-        let sc = bd_scatter(&v, &w, last.p, last.n, n - 1u, true, lambda, smp);
+        // Stored after its scattering, which sets its delta flag (and the previous
+        // vertex's reverse density).
+        let sc = bd_scatter(&v, &w, last.p, last.n, n, true, lambda, smp);
+        bd_store_light(n, v);
+        n += 1u;
         if sc.scattered {
-            bd_set_light_flags(n - 1u, v.flags);
             bd_set_light_rev(n - 2u, sc.prev_rev);
         }
         if !sc.alive {
@@ -935,21 +935,12 @@ fn pt_bdpt(
         *rays += 1u;
         let hit = pt_trace(w.o, w.d, 0.0, PT_FAR, false);
         if hit.prim == PT_NO_HIT {
-            // What the escape sees of the lights at infinity, weighted against next-event
-            // estimation of them (as the path tracer does).
-            if (pt_params.scene_flags & PT_HAS_ENVIRONMENT) != 0u {
-                var mis = 1.0;
-                if !w.specular {
-                    mis = pt_power_heuristic(w.pdf_dir, pt_env_pdf(w.d));
-                }
-                l += w.beta * pt_env_radiance(w.d, lambda) * mis;
-            }
-            l += w.beta * pt_suns_seen(w.d, lambda, w.pdf_dir, !w.specular);
+            // The lights at infinity, weighted as the path tracer weighs them.
+            l += w.beta * pt_escaped(w.d, lambda, w.pdf_dir, w.specular);
             break;
         }
         var pt = bd_hit_vertex(hit, &w, last.p, true, lambda, &at);
         t += 1u;
-        bd_set_cam(t - 1u, vec3f(pt.pdf_fwd, 0.0, 0.0));
         // s = 1 draws its own light sample: it runs even where the light subpath is empty.
         for (var s = 0u; s <= max(light_len, 1u); s++) {
             if bd_too_deep(s, t) {

@@ -169,16 +169,22 @@ fn pt_sample_punctual(k: u32, u: vec2f, pmf: f32) -> PtLightSample {
     if ls.kind == PT_LIGHT_DIRECTIONAL {
         let cos_radius = pt_light_f(k, 3u);
         if cos_radius < 1.0 {
-            let cos_theta = 1.0 - u.x * (1.0 - cos_radius);
-            let sin_theta = sqrt(max(1.0 - cos_theta * cos_theta, 0.0));
-            let phi = 2.0 * PT_PI * u.y;
             let t = pt_light_v3(k, 13u);
             let b = pt_light_v3(k, 16u);
-            ls.point = normalize(cos_theta * ls.point + sin_theta * (cos(phi) * t + sin(phi) * b));
+            ls.point = pt_uniform_cone(ls.point, t, b, cos_radius, u);
             ls.pdf = (1.0 / pt_light_f(k, 4u)) * pmf;
         }
     }
     return ls;
+}
+
+// A direction uniform in the cone of unit `axis` (with the orthonormal tangents `t`, `b`)
+// down to cos θ = `cos_max`, by solid angle (a sun's disk, a spot's light).
+fn pt_uniform_cone(axis: vec3f, t: vec3f, b: vec3f, cos_max: f32, u: vec2f) -> vec3f {
+    let cos_theta = 1.0 - u.x * (1.0 - cos_max);
+    let sin_theta = sqrt(max(1.0 - cos_theta * cos_theta, 0.0));
+    let phi = 2.0 * PT_PI * u.y;
+    return normalize(cos_theta * axis + sin_theta * (cos(phi) * t + sin(phi) * b));
 }
 
 // Whether punctual light `k` is a sun with a disk (its samples draw a direction in it).

@@ -257,6 +257,21 @@ fn pt_collapse_wavelengths(wl: ptr<function, PtWavelengths>, k: u32) {
     (*wl).collapsed = true;
 }
 
+// What a path escaping along `d` sees of the lights at infinity (the environment and sun
+// disks), each weighted by the power heuristic against next-event estimation when the
+// last scattering was not a delta (of BSDF pdf `prev_pdf`).
+fn pt_escaped(d: vec3f, lambda: vec4f, prev_pdf: f32, prev_specular: bool) -> vec4f {
+    var l = vec4f(0.0);
+    if (pt_params.scene_flags & PT_HAS_ENVIRONMENT) != 0u {
+        var w = 1.0;
+        if !prev_specular {
+            w = pt_power_heuristic(prev_pdf, pt_env_pdf(d));
+        }
+        l = pt_env_radiance(d, lambda) * w;
+    }
+    return l + pt_suns_seen(d, lambda, prev_pdf, !prev_specular);
+}
+
 fn pt_radiance(
     origin: vec3f,
     dir: vec3f,
@@ -286,15 +301,7 @@ fn pt_radiance(
         *rays += 1u;
         let hit = pt_trace(o, d, 0.0, PT_FAR, false);
         if hit.prim == PT_NO_HIT {
-            if (pt_params.scene_flags & PT_HAS_ENVIRONMENT) != 0u {
-                let le = pt_env_radiance(d, (*wl).lambda);
-                var w = 1.0;
-                if !prev_specular {
-                    w = pt_power_heuristic(prev_pdf, pt_env_pdf(d));
-                }
-                l += beta * le * w;
-            }
-            l += beta * pt_suns_seen(d, (*wl).lambda, prev_pdf, !prev_specular);
+            l += beta * pt_escaped(d, (*wl).lambda, prev_pdf, prev_specular);
             break;
         }
 
