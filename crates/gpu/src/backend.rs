@@ -54,6 +54,15 @@
 //!   differ for points within rounding of an edge. Point, spot and directional lights
 //!   (with a sun's disk) are entries of the light table; their spectra are tabulated at
 //!   1 nm, as the environment's.
+//! * Instances (`wgsl/instances.wgsl`) are traced two-level, as `bvh::TwoLevel` on the
+//!   CPU: each placed object's triangles and tree (in the scene's node layout) are
+//!   uploaded once after the world's, their references rebased into the shared arrays; a
+//!   box BVH over the placements' world bounds, in the tables as the shapes' is, leads a
+//!   ray into an object's space (direction not renormalised, so t stays the world's).
+//!   Placements on emissive materials are copied into the world's triangles first
+//!   ([`tracer::Scene::flatten_instances_where`]): light sampling reads world-space
+//!   triangles from the light table. The atlas integrator flattens every placement (its
+//!   charts are per world triangle).
 //! * Bidirectional path tracing (`wgsl/bdpt.wgsl`) keeps the light subpath and the camera
 //!   subpath's densities in a scratch buffer of [`BDPT_SLOT_BYTES`] per invocation (bands
 //!   of rows as many as 1 GiB of scratch holds) and sums light tracing's splats in an
@@ -409,6 +418,138 @@ fn atlas_failed(e: tracer::Error) -> GpuError {
     GpuError::Unsupported(format!("an atlas of this scene ({e})"))
 }
 
+/// One triangle BVH in the kernel's node layout (the world's, or a placed object's),
+/// its child and leaf references already offset to where it lands in the node and
+/// triangle arrays.
+struct TriangleTree {
+    nodes: Vec<u8>,
+    /// Bytes per node.
+    node_bytes: usize,
+    /// Nodes as the kernel counts them (an 8-wide node once).
+    node_count: usize,
+    /// Entries of the node array it takes (an 8-wide node two).
+    entries: usize,
+    /// The layout with this tree's stack bound.
+    layout: NodeLayout,
+    /// Its triangles in leaf order (indices into the soup it was built from).
+    prim_ids: Vec<u32>,
+}
+
+impl TriangleTree {
+    /// Builds the tree over `soup` in `layout`, for node entries from `node_base` and
+    /// triangles from `tri_base` on.
+    fn build(
+        soup: &[[glam::Vec3; 3]],
+        config: BuildConfig,
+        layout: NodeLayout,
+        node_base: u32,
+        tri_base: u32,
+    ) -> Result<Self, GpuError> {
+        let bvh = Bvh::build(soup, config).map_err(|e| GpuError::Unsupported(format!("this geometry ({e})")))?;
+        let prim_ids = bvh.prim_ids().to_vec();
+        Ok(match layout {
+            NodeLayout::Binary => {
+                // An inner node's left child follows it; `index` is its right child or a
+                // leaf's first triangle.
+                let nodes: Vec<BvhNode> = bvh
+                    .nodes()
+                    .iter()
+                    .map(|n| BvhNode { index: n.index + if n.count > 0 { tri_base } else { node_base }, ..*n })
+                    .collect();
+                let entries = nodes.len();
+                let bytes = bytemuck::cast_slice(&nodes).to_vec();
+                Self {
+                    nodes: bytes,
+                    node_bytes: std::mem::size_of::<BvhNode>(),
+                    node_count: entries,
+                    entries,
+                    layout,
+                    prim_ids,
+                }
+            }
+            NodeLayout::Wide4 { .. } | NodeLayout::Wide8 { .. } => {
+                let width = if matches!(layout, NodeLayout::Wide4 { .. }) { 4 } else { 8 };
+                let mut wide = WideBvh::collapse(&bvh, width);
+                for node in &mut wide.nodes {
+                    for (index, &count) in node.index.iter_mut().zip(&node.count) {
+                        *index += match count {
+                            0 => node_base,
+                            crate::kernel::WIDE_EMPTY => 0,
+                            _ => tri_base,
+                        };
+                    }
+                }
+                let stack = wide.stack_bound;
+                let layout = if width == 4 { NodeLayout::Wide4 { stack } } else { NodeLayout::Wide8 { stack } };
+                Self {
+                    nodes: bytemuck::cast_slice(&wide.nodes).to_vec(),
+                    node_bytes: std::mem::size_of::<WideNode>() * (width / crate::wide::WIDTH),
+                    node_count: wide.nodes.len() * crate::wide::WIDTH / width,
+                    entries: wide.nodes.len(),
+                    layout,
+                    prim_ids,
+                }
+            }
+        })
+    }
+}
+
+/// Floats of an instance's record in the tables (`wgsl/instances.wgsl`): world-to-object
+/// and object-to-world as three rows of four (0..12, 12..24), the normal matrix's rows
+/// (24..27, 28..31, 32..35) with the orientation (27: −1 for a mirroring placement), the
+/// object tree's root entry (31, bits), the material replacing the object's (35, bits;
+/// `u32::MAX` for none) and the CPU primitive id of its first triangle (36, bits).
+pub const INSTANCE_FLOATS: usize = 40;
+
+/// Appends the instances' records, the box BVH over their world bounds (binary nodes of
+/// eight floats, as the shapes') and its leaf slots (record offsets, bits) right after
+/// the nodes; returns the nodes' offset and count (0: no instances).
+fn instance_tables(
+    scene: &Scene,
+    object_trees: &[Option<(u32, Vec<u32>)>],
+    tables: &mut Vec<f32>,
+) -> Result<(u32, u32), GpuError> {
+    if scene.instances.is_empty() {
+        return Ok((0, 0));
+    }
+    let bits = f32::from_bits;
+    let rows = |m: glam::Affine3A| {
+        let m = glam::Mat4::from(m).transpose();
+        [m.x_axis, m.y_axis, m.z_axis].into_iter().flat_map(|r| r.to_array()).collect::<Vec<f32>>()
+    };
+    let mut records = Vec::with_capacity(scene.instances.len());
+    let mut boxes = Vec::with_capacity(scene.instances.len());
+    let mut first_prim = (scene.triangles.len() + scene.shapes.len()) as u32;
+    for inst in &scene.instances {
+        let object = &scene.objects[inst.object as usize];
+        let to_world = glam::Affine3A::from_mat4(inst.transform);
+        let normal = to_world.matrix3.inverse().transpose();
+        let orientation = if to_world.matrix3.determinant() < 0.0 { -1.0 } else { 1.0 };
+        let root = object_trees[inst.object as usize].as_ref().expect("a tree for every placed object").0;
+        records.push(tables.len() as u32);
+        tables.extend(rows(to_world.inverse()));
+        tables.extend(rows(to_world));
+        let n = glam::Mat3::from(normal).transpose();
+        tables.extend(n.x_axis.to_array().into_iter().chain([orientation]));
+        tables.extend(n.y_axis.to_array().into_iter().chain([bits(root)]));
+        tables.extend(n.z_axis.to_array().into_iter().chain([bits(inst.material.unwrap_or(u32::MAX))]));
+        tables.extend([bits(first_prim), 0.0, 0.0, 0.0]);
+        first_prim += object.triangles.len() as u32;
+        boxes.push(object.bounds().transformed(&to_world));
+    }
+    let bvh = bvh::BoxBvh::build(&boxes, tracer::Geometry::shape_build_config())
+        .map_err(|e| GpuError::Unsupported(format!("these instances ({e})")))?;
+    let nodes_offset = tables.len() as u32;
+    for n in bvh.nodes() {
+        tables.extend(n.min);
+        tables.push(bits(n.index));
+        tables.extend(n.max);
+        tables.push(bits(n.count));
+    }
+    tables.extend(bvh.order().iter().map(|&k| bits(records[k as usize])));
+    Ok((nodes_offset, bvh.node_count() as u32))
+}
+
 /// What the kernel's uniforms and the camera need of a scene besides its buffers, kept
 /// from [`SceneData`] into [`GpuScene`].
 #[derive(Clone, Copy, Debug)]
@@ -423,6 +564,8 @@ struct SceneConstants {
     shape_nodes_offset: u32,
     shape_node_count: u32,
     shape_slots_offset: u32,
+    instance_nodes_offset: u32,
+    instance_node_count: u32,
     material_textures_offset: u32,
     uplift_offset: u32,
     decode_offset: u32,
@@ -476,34 +619,43 @@ impl SceneData {
         if let Some(s) = scene.shapes.iter().find(|s| !GPU_SHAPES.contains(&s.shape.name())) {
             return Err(GpuError::Unsupported(format!("{} ({IMPLICIT_NOT_PORTED})", s.shape.name())));
         }
-        if !scene.instances.is_empty() {
-            return Err(GpuError::Unsupported("instances (flatten them first: Scene::flatten_instances)".into()));
+        if scene.instances.iter().any(|i| scene.instance_emits(i)) {
+            return Err(GpuError::Unsupported(
+                "emissive instances (flatten them first: Scene::flatten_instances_where)".into(),
+            ));
         }
         let kernel = crate::materials::generate(&scene.materials, true)?;
         let start = Instant::now();
         let config = BuildConfig { method: options.bvh_builder, ..triangle_build_config() };
-        let bvh = Bvh::build(&scene.triangle_soup(), config)
-            .map_err(|e| GpuError::Unsupported(format!("this geometry ({e})")))?;
-        let (nodes, node_bytes, node_count, layout) = match options.nodes {
-            NodeLayout::Binary => {
-                let nodes: &[u8] = bytemuck::cast_slice(bvh.nodes());
-                (nodes.to_vec(), std::mem::size_of::<BvhNode>(), bvh.nodes().len(), NodeLayout::Binary)
-            }
-            NodeLayout::Wide4 { .. } | NodeLayout::Wide8 { .. } => {
-                let width = if matches!(options.nodes, NodeLayout::Wide4 { .. }) { 4 } else { 8 };
-                let wide = WideBvh::collapse(&bvh, width);
-                let stack = wide.stack_bound;
-                let layout = if width == 4 { NodeLayout::Wide4 { stack } } else { NodeLayout::Wide8 { stack } };
-                let bytes: &[u8] = bytemuck::cast_slice(&wide.nodes);
-                let node_bytes = std::mem::size_of::<WideNode>() * (width / crate::wide::WIDTH);
-                (bytes.to_vec(), node_bytes, wide.nodes.len() * crate::wide::WIDTH / width, layout)
-            }
+        // The world's tree first, then one per placed object (two-level traversal: the
+        // instances' box BVH in the tables leads to them).
+        let world = TriangleTree::build(&scene.triangle_soup(), config, options.nodes, 0, 0)?;
+        let placed: Vec<bool> = {
+            let mut placed = vec![false; scene.objects.len()];
+            scene.instances.iter().for_each(|i| placed[i.object as usize] = true);
+            placed
         };
+        let mut nodes = world.nodes;
+        let (mut entries, mut triangles) = (world.entries, world.prim_ids.len());
+        let mut layout = world.layout;
+        let mut object_trees = vec![None; scene.objects.len()];
+        for (k, o) in scene.objects.iter().enumerate().filter(|&(k, _)| placed[k]) {
+            let soup: Vec<_> = (0..o.triangles.len()).map(|i| o.triangle_vertices(i)).collect();
+            let tree = TriangleTree::build(&soup, config, options.nodes, entries as u32, triangles as u32)?;
+            layout = layout.max_stack(tree.layout);
+            nodes.extend(tree.nodes);
+            object_trees[k] = Some((entries as u32, tree.prim_ids));
+            entries += tree.entries;
+            triangles += soup.len();
+        }
+        let node_bytes = world.node_bytes;
+        let node_count = world.node_count;
         let textured = scene.materials.iter().any(|m| m.textures.is_some());
         let env_map = scene.environment.as_ref().and_then(|e| e.map.as_deref());
         let options = KernelOptions {
             nodes: layout,
             shapes: !scene.shapes.is_empty(),
+            instances: !scene.instances.is_empty(),
             punctual_lights: !scene.punctual_lights.is_empty(),
             textures: textured,
             cutouts: scene.materials.iter().any(|m| m.alpha().is_some()),
@@ -514,40 +666,61 @@ impl SceneData {
         let lights = tracer::lights::Lights::new(scene);
         let pmfs = lights.prim_pmfs();
 
-        let mut tri_verts = Vec::with_capacity(3 * bvh.prim_ids().len());
-        for &prim in bvh.prim_ids() {
-            let v = scene.triangle_vertices(prim as usize);
-            let material = scene.material_ids[prim as usize];
-            let pmf = pmfs.get(prim as usize).copied().unwrap_or(0.0);
+        // Per triangle in leaf order: its vertices, material, light pmf and the CPU's
+        // primitive id (an object's: its own index, the instance adds its first id).
+        let mut tri_verts = Vec::with_capacity(3 * triangles);
+        let mut push_triangle = |v: [glam::Vec3; 3], material: u32, pmf: f32, prim: u32| {
             tri_verts.push([v[0].x, v[0].y, v[0].z, f32::from_bits(material)]);
             tri_verts.push([v[1].x, v[1].y, v[1].z, pmf]);
             tri_verts.push([v[2].x, v[2].y, v[2].z, f32::from_bits(prim)]);
+        };
+        for &prim in &world.prim_ids {
+            let pmf = pmfs.get(prim as usize).copied().unwrap_or(0.0);
+            push_triangle(scene.triangle_vertices(prim as usize), scene.material_ids[prim as usize], pmf, prim);
         }
+        for (o, tree) in scene.objects.iter().zip(&object_trees) {
+            for &i in tree.iter().flat_map(|(_, ids)| ids) {
+                // (Placements on emitters were flattened: no instanced triangle is sampled.)
+                push_triangle(o.triangle_vertices(i as usize), o.material_ids[i as usize], 0.0, i);
+            }
+        }
+        let placed_meshes = || scene.objects.iter().zip(&placed).filter(|(_, p)| **p).map(|(o, _)| o.mesh());
+        let meshes: Vec<tracer::scene::MeshRef> = std::iter::once(scene.mesh()).chain(placed_meshes()).collect();
         let mut scene_flags = 0;
-        if !scene.normals.is_empty() {
+        if meshes.iter().any(|m| !m.normals.is_empty()) {
             scene_flags |= HAS_NORMALS;
         }
-        if !scene.tangents.is_empty() {
+        if meshes.iter().any(|m| !m.tangents.is_empty()) {
             scene_flags |= HAS_TANGENTS;
         }
         // Texture coordinates only where a material reads textures.
-        if textured && !scene.uvs.is_empty() {
+        if textured && meshes.iter().any(|m| !m.uvs.is_empty()) {
             scene_flags |= HAS_UVS;
         }
         let (tri_vidx, attrs) = if scene_flags & (HAS_NORMALS | HAS_TANGENTS | HAS_UVS) != 0 {
-            let vidx = bvh.prim_ids().iter().map(|&p| {
-                let t = scene.triangles[p as usize];
-                [t[0], t[1], t[2], 0]
-            });
-            // Per vertex: normal and u, tangent and v.
-            let uvs = if scene_flags & HAS_UVS != 0 { scene.uvs.as_slice() } else { &[] };
-            let attrs = (0..scene.positions.len()).flat_map(|i| {
-                let n = scene.normals.get(i).copied().unwrap_or([0.0; 3]);
-                let t = scene.tangents.get(i).copied().unwrap_or([0.0; 3]);
-                let uv = uvs.get(i).copied().unwrap_or([0.0; 2]);
-                [[n[0], n[1], n[2], uv[0]], [t[0], t[1], t[2], uv[1]]]
-            });
-            (vidx.collect(), attrs.collect())
+            let (mut vidx, mut attrs) = (Vec::with_capacity(triangles), Vec::new());
+            let mut append = |mesh: &tracer::scene::MeshRef, order: &[u32]| {
+                let base = (attrs.len() / 2) as u32;
+                vidx.extend(order.iter().map(|&p| {
+                    let t = mesh.triangles[p as usize];
+                    [t[0] + base, t[1] + base, t[2] + base, 0]
+                }));
+                // Per vertex: normal and u, tangent and v (zeros where the mesh has none).
+                let uvs = if scene_flags & HAS_UVS != 0 { mesh.uvs } else { &[] };
+                attrs.extend((0..mesh.positions.len()).flat_map(|i| {
+                    let n = mesh.normals.get(i).copied().unwrap_or([0.0; 3]);
+                    let t = mesh.tangents.get(i).copied().unwrap_or([0.0; 3]);
+                    let uv = uvs.get(i).copied().unwrap_or([0.0; 2]);
+                    [[n[0], n[1], n[2], uv[0]], [t[0], t[1], t[2], uv[1]]]
+                }));
+            };
+            append(&scene.mesh(), &world.prim_ids);
+            for (o, tree) in scene.objects.iter().zip(&object_trees) {
+                if let Some((_, ids)) = tree {
+                    append(&o.mesh(), ids);
+                }
+            }
+            (vidx, attrs)
         } else {
             (Vec::new(), Vec::new())
         };
@@ -600,6 +773,7 @@ impl SceneData {
             tables.extend(shape_bvh.order().iter().map(|&k| f32::from_bits(shape_records[k as usize])));
             (nodes_offset, shape_bvh.node_count() as u32, slots_offset)
         };
+        let (instance_nodes_offset, instance_node_count) = instance_tables(scene, &object_trees, &mut tables)?;
 
         // The atlas integrator's atlas, built here by the CPU's code (the same atlas the
         // CPU renders with, for the same scene and settings); its gather runs on the device
@@ -752,6 +926,8 @@ impl SceneData {
             shape_nodes_offset,
             shape_node_count,
             shape_slots_offset,
+            instance_nodes_offset,
+            instance_node_count,
             material_textures_offset,
             uplift_offset,
             decode_offset,
@@ -1028,9 +1204,17 @@ impl GpuBackend {
     pub fn prepare_gpu(&self, mut scene: Scene, options: &SceneOptions) -> Result<GpuScene, tracer::Error> {
         capabilities_for(self.integrator).check_scene(&scene, options)?;
         scene.validate()?;
-        // The kernel traverses one BVH: instances are copied into it (same surfaces; the
-        // memory a two-level structure saves is not saved here).
-        scene.flatten_instances();
+        if matches!(self.integrator, GpuIntegrator::Atlas(_)) {
+            // The atlas charts world-space triangles (its primitive ids are the flattened
+            // scene's).
+            scene.flatten_instances();
+        } else {
+            // Placements traced two-level, each object's triangles and tree uploaded once;
+            // those on emitters are copied into the world's triangles, which light sampling
+            // draws from (a table of world-space triangles).
+            let emits: Vec<bool> = scene.instances.iter().map(|i| scene.instance_emits(i)).collect();
+            scene.flatten_instances_where(|k, _| emits[k]);
+        }
         Ok(self.upload(scene, options)?)
     }
 
@@ -1421,6 +1605,8 @@ impl GpuScene {
             shape_nodes_offset: self.constants.shape_nodes_offset,
             shape_node_count: self.constants.shape_node_count,
             shape_slots_offset: self.constants.shape_slots_offset,
+            instance_nodes_offset: self.constants.instance_nodes_offset,
+            instance_node_count: self.constants.instance_node_count,
             material_textures_offset: self.constants.material_textures_offset,
             uplift_offset: self.constants.uplift_offset,
             decode_offset: self.constants.decode_offset,

@@ -188,10 +188,11 @@ wgsl_struct! {
         /// (`CameraRays::pixels_per_steradian` there / `PixelRect::pixel_count`): bdpt's
         /// W(ω) is this over cos³ θ.
         film_density: f32,
-        /// Padding.
-        pad1: u32,
-        /// Padding.
-        pad2: u32,
+        /// Offset in `pt_tables` of the instances' box BVH (binary nodes of 8 words, then
+        /// its leaf slots: slot → the offset of its instance's record, bits).
+        instance_nodes_offset: u32,
+        /// Nodes of the instances' BVH (0: no instances).
+        instance_node_count: u32,
         /// The region rendered (x, y, width, height; the whole image but for a crop
         /// window): bdpt's splats land only there and its camera density counts its pixels.
         region: [u32; 4],
@@ -356,6 +357,18 @@ pub enum NodeLayout {
     },
 }
 
+impl NodeLayout {
+    /// This layout with the larger stack of the two (the trees of a two-level scene share
+    /// one traversal, so its stack is the deepest tree's).
+    pub fn max_stack(self, other: NodeLayout) -> NodeLayout {
+        match (self, other) {
+            (Self::Wide4 { stack: a }, Self::Wide4 { stack: b }) => Self::Wide4 { stack: a.max(b) },
+            (Self::Wide8 { stack: a }, Self::Wide8 { stack: b }) => Self::Wide8 { stack: a.max(b) },
+            _ => self,
+        }
+    }
+}
+
 /// Bytes of the film buffer before the accumulators: the 64-bit ray counter (two words),
 /// the truncated-path counter and a pad word (`PtFilm`'s header).
 pub const FILM_HEADER_BYTES: u64 = 16;
@@ -449,6 +462,9 @@ pub struct KernelOptions {
     /// Whether the scene has analytic shapes (`PT_HAS_SHAPES`: without, their traversal
     /// and surfaces are not in the kernel).
     pub shapes: bool,
+    /// Whether the scene places instances (`PT_HAS_INSTANCES`: without, the two-level
+    /// traversal and the instance transforms in shading are not in the kernel).
+    pub instances: bool,
     /// Whether the scene has point, spot or directional lights (`PT_HAS_PUNCTUAL`).
     pub punctual_lights: bool,
     /// The spectral mode (`PT_RGB`, the materials' `MAT_RGB`: three colour channels;
@@ -479,6 +495,7 @@ impl Default for KernelOptions {
             integrator: GpuIntegrator::Path,
             sampler: SamplerKind::ZSobol,
             shapes: false,
+            instances: false,
             punctual_lights: false,
             mode: SpectralMode::Hero,
             textures: false,
@@ -615,6 +632,7 @@ pub fn header(options: &KernelOptions) -> String {
     u("PT_WIDE_EMPTY", WIDE_EMPTY);
     u("PT_MAX_BOUNCES", options.max_bounces);
     let _ = writeln!(out, "const PT_HAS_SHAPES: bool = {};", options.shapes);
+    let _ = writeln!(out, "const PT_HAS_INSTANCES: bool = {};", options.instances);
     let _ = writeln!(out, "const PT_HAS_PUNCTUAL: bool = {};", options.punctual_lights);
     let _ = writeln!(out, "const PT_RGB: bool = {};", options.mode == SpectralMode::Rgb);
     let _ = writeln!(out, "const PT_BINS40: bool = {};", options.mode == SpectralMode::Bins40);
@@ -666,7 +684,7 @@ pub fn header(options: &KernelOptions) -> String {
 }
 
 /// The hand-written files, in the order they are concatenated.
-const FILES: [(&str, &str); 15] = [
+const FILES: [(&str, &str); 16] = [
     ("rng.wgsl", include_str!("wgsl/rng.wgsl")),
     ("sampler.wgsl", include_str!("wgsl/sampler.wgsl")),
     ("spectral.wgsl", include_str!("wgsl/spectral.wgsl")),
@@ -675,6 +693,7 @@ const FILES: [(&str, &str); 15] = [
     ("shading.wgsl", include_str!("wgsl/shading.wgsl")),
     ("ray.wgsl", include_str!("wgsl/ray.wgsl")),
     ("shapes.wgsl", include_str!("wgsl/shapes.wgsl")),
+    ("instances.wgsl", include_str!("wgsl/instances.wgsl")),
     ("textures.wgsl", include_str!("wgsl/textures.wgsl")),
     ("envmap.wgsl", include_str!("wgsl/envmap.wgsl")),
     ("lights.wgsl", include_str!("wgsl/lights.wgsl")),

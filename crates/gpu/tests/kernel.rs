@@ -16,6 +16,7 @@ fn options(triangle_test: bvh::TriangleTest) -> KernelOptions {
         integrator: gpu::kernel::GpuIntegrator::Path,
         sampler: tracer::sampler::SamplerKind::ZSobol,
         shapes: true,
+        instances: true,
         punctual_lights: true,
         mode: spectral::SpectralMode::Bins40,
         textures: true,
@@ -72,6 +73,7 @@ fn generated_structs_have_the_host_layout() {
     let binary = KernelOptions {
         nodes: gpu::kernel::NodeLayout::Binary,
         shapes: false,
+        instances: false,
         punctual_lights: false,
         ..options(bvh::TriangleTest::Watertight)
     };

@@ -355,12 +355,37 @@ impl Scene {
     /// same surfaces as one mesh (for backends without two-level traversal, and as the
     /// reference the instanced scene is tested against).
     pub fn flatten_instances(&mut self) {
+        self.flatten_instances_where(|_, _| true);
+        self.objects.clear();
+    }
+
+    /// Copies the instances `copy` picks into the flat arrays, in order, and keeps the
+    /// others as placements (the objects stay): for a backend that traces placements
+    /// two-level but wants some as plain triangles — the GPU samples emitters from a table
+    /// of world-space triangles. `copy` is given each instance's index and placement.
+    pub fn flatten_instances_where(&mut self, mut copy: impl FnMut(usize, &ObjectInstance) -> bool) {
         let objects = std::mem::take(&mut self.objects);
-        for inst in std::mem::take(&mut self.instances) {
+        let mut kept = Vec::new();
+        for (k, inst) in std::mem::take(&mut self.instances).into_iter().enumerate() {
             let o = &objects[inst.object as usize];
+            if !copy(k, &inst) {
+                kept.push(inst);
+                continue;
+            }
             // (Its lights were placed with it already.)
             self.append_geometry(o.mesh(), &inst.transform);
             self.material_ids.extend((0..o.triangles.len()).map(|i| inst.material_of(o, i)));
+        }
+        self.objects = objects;
+        self.instances = kept;
+    }
+
+    /// Whether some triangle of `inst`'s placement is on an emissive material.
+    pub fn instance_emits(&self, inst: &ObjectInstance) -> bool {
+        let emits = |m: u32| self.materials[m as usize].emission.is_some();
+        match inst.material {
+            Some(m) => emits(m),
+            None => self.objects[inst.object as usize].material_ids.iter().any(|&m| emits(m)),
         }
     }
 

@@ -50,35 +50,34 @@ fn pt_surface(hit: PtHit, o: vec3f, d: vec3f) -> PtSurface {
         return PtSurface(h.p, h.n, h.n, vec3f(0.0), pt_tu(rec + 1u), pt_tables[rec + 2u], pt_tables[rec + 3u]);
     }
     let i = hit.prim;
-    let q0 = pt_tri_verts[3u * i];
-    let q1 = pt_tri_verts[3u * i + 1u];
-    let q2 = pt_tri_verts[3u * i + 2u];
-    let v0 = q0.xyz;
-    let v1 = q1.xyz;
-    let v2 = q2.xyz;
+    // (A placed object's vertices are taken into world space first, as on the CPU.)
+    let v = pt_hit_triangle(hit);
     let b0 = 1.0 - hit.u - hit.v;
-    let p = b0 * v0 + hit.u * v1 + hit.v * v2;
-    let cr = cross(v1 - v0, v2 - v0);
+    let p = b0 * v[0] + hit.u * v[1] + hit.v * v[2];
+    let cr = cross(v[1] - v[0], v[2] - v[0]);
     let area = 0.5 * length(cr);
-    let it_ng = cr / (2.0 * area);
+    let it_ng = cr / (2.0 * area) * pt_instance_orientation(hit);
     var it_ns = it_ng;
     var tangent = vec3f(0.0);
     let flags_scene = pt_params.scene_flags;
     if (flags_scene & (PT_HAS_NORMALS | PT_HAS_TANGENTS)) != 0u {
         let vi = pt_tri_vidx[i];
         if (flags_scene & PT_HAS_NORMALS) != 0u && pt_params.shading != PT_SHADING_GEOMETRIC {
-            let n = b0 * pt_attrs[2u * vi.x].xyz + hit.u * pt_attrs[2u * vi.y].xyz + hit.v * pt_attrs[2u * vi.z].xyz;
+            let n_obj = b0 * pt_attrs[2u * vi.x].xyz + hit.u * pt_attrs[2u * vi.y].xyz + hit.v * pt_attrs[2u * vi.z].xyz;
+            let n = pt_instance_normal(hit, n_obj);
             if dot(n, n) > 1e-12 {
                 let nn = normalize(n);
                 it_ns = select(nn, -nn, dot(nn, it_ng) < 0.0);
             }
         }
         if (flags_scene & PT_HAS_TANGENTS) != 0u {
-            tangent = b0 * pt_attrs[2u * vi.x + 1u].xyz + hit.u * pt_attrs[2u * vi.y + 1u].xyz
+            let t_obj = b0 * pt_attrs[2u * vi.x + 1u].xyz + hit.u * pt_attrs[2u * vi.y + 1u].xyz
                 + hit.v * pt_attrs[2u * vi.z + 1u].xyz;
+            tangent = pt_instance_tangent(hit, t_obj);
         }
     }
-    return PtSurface(p, it_ng, it_ns, tangent, bitcast<u32>(q0.w), q1.w, area);
+    let m = pt_instance_material(hit, bitcast<u32>(pt_tri_verts[3u * i].w));
+    return PtSurface(p, it_ng, it_ns, tangent, m, pt_tri_verts[3u * i + 1u].w, area);
 }
 
 // The surface of `hit` on the ray (o, d) with its texture coordinates (returned) and the

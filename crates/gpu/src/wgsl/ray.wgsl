@@ -2,11 +2,15 @@
 // reciprocal direction and the watertight test's permutation and shear, set up once per
 // ray): shared by the binary (traversal.wgsl) and 4-wide (traversal_wide.wgsl) traversals.
 
+// `prim` indexes the triangle arrays (or is a shape's record, PT_SHAPE_PRIM_BIT set);
+// `inst` is the offset of the instance's record for a triangle of a placed object
+// (instances.wgsl), else PT_NO_HIT.
 struct PtHit {
     t: f32,
     u: f32,
     v: f32,
     prim: u32,
+    inst: u32,
 }
 
 struct PtRay {

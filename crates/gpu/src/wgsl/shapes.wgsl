@@ -415,69 +415,81 @@ fn pt_shape_sample(rec: u32, u: vec2f) -> PtAreaSample {
     return PtAreaSample(a + b1 * (b - a) + b2 * (c - a), pt_tv3(rec + 8u));
 }
 
-// The shapes' BVH (`bvh::BoxBvh`, binary nodes of 8 words in `pt_tables`): ordered stack
-// traversal as for the triangles, with its own stack (the triangles' may be sized to a
-// 4-wide tree's bound).
-struct PtShapeNode {
+// The box BVHs in `pt_tables` (`bvh::BoxBvh`, binary nodes of 8 words): the analytic
+// shapes' and the instances' (instances.wgsl). Ordered stack traversal as for the
+// triangles, with its own stack (the triangles' may be sized to a 4-wide tree's bound,
+// and an instance's leaf runs a triangle traversal of its own).
+struct PtBoxNode {
     lo: vec3f,
     index: u32,
     hi: vec3f,
     count: u32,
 }
 
-fn pt_shape_node(i: u32) -> PtShapeNode {
-    let b = pt_params.shape_nodes_offset + 8u * i;
-    return PtShapeNode(pt_tv3(b), pt_tu(b + 3u), pt_tv3(b + 4u), pt_tu(b + 7u));
+fn pt_box_node(nodes: u32, i: u32) -> PtBoxNode {
+    let b = nodes + 8u * i;
+    return PtBoxNode(pt_tv3(b), pt_tu(b + 3u), pt_tv3(b + 4u), pt_tu(b + 7u));
 }
 
-fn pt_shape_box_enter(n: PtShapeNode, r: PtRay, t_max: f32) -> f32 {
-    return pt_box_enter(n.lo, n.hi, r, t_max);
-}
+const PT_BOX_STACK: u32 = 64u;
 
-const PT_SHAPE_STACK: u32 = 64u;
-
-fn pt_trace_shapes(r: PtRay, best_in: PtHit, any_hit: bool) -> PtHit {
+// The closest hit in the instances' BVH (`instances`) or the shapes' closer than `best_in`,
+// or with `any_hit` the first found. A leaf slot holds a record's offset: a shape is
+// intersected, an instance's object traced in its own space.
+fn pt_trace_boxes(instances: bool, r: PtRay, best_in: PtHit, any_hit: bool) -> PtHit {
     var best = best_in;
     var t_max = best_in.t;
-    if pt_params.shape_node_count == 0u || pt_shape_box_enter(pt_shape_node(0u), r, t_max) >= PT_MISS {
+    let nodes = select(pt_params.shape_nodes_offset, pt_params.instance_nodes_offset, instances);
+    let count = select(pt_params.shape_node_count, pt_params.instance_node_count, instances);
+    // (The instances' slots follow their nodes.)
+    let slots = select(pt_params.shape_slots_offset, nodes + 8u * count, instances);
+    if count == 0u || pt_box_enter(pt_box_node(nodes, 0u).lo, pt_box_node(nodes, 0u).hi, r, t_max) >= PT_MISS {
         return best;
     }
-    var stack_node: array<u32, PT_SHAPE_STACK>;
-    var stack_t: array<f32, PT_SHAPE_STACK>;
+    var stack_node: array<u32, PT_BOX_STACK>;
+    var stack_t: array<f32, PT_BOX_STACK>;
     var sp = 0u;
     var node = 0u;
     loop {
-        let n = pt_shape_node(node);
+        let n = pt_box_node(nodes, node);
         var descended = false;
         if n.count > 0u {
             for (var i = n.index; i < n.index + n.count; i++) {
-                let rec = pt_tu(pt_params.shape_slots_offset + i);
-                let h = pt_shape_hit(rec, r.o, r.d, r.t_min, t_max);
-                if h.hit {
-                    t_max = h.t;
-                    best = PtHit(h.t, 0.0, 0.0, PT_SHAPE_PRIM_BIT | rec);
-                    if any_hit {
-                        return best;
+                let rec = pt_tu(slots + i);
+                if instances {
+                    let h = pt_trace_instance(rec, r, t_max, any_hit);
+                    if h.prim != PT_NO_HIT {
+                        t_max = h.t;
+                        best = h;
                     }
+                } else {
+                    let h = pt_shape_hit(rec, r.o, r.d, r.t_min, t_max);
+                    if h.hit {
+                        t_max = h.t;
+                        best = PtHit(h.t, 0.0, 0.0, PT_SHAPE_PRIM_BIT | rec, PT_NO_HIT);
+                    }
+                }
+                if any_hit && best.prim != PT_NO_HIT {
+                    return best;
                 }
             }
         } else {
-            let l = node + 1u;
-            let rr = n.index;
-            let tl = pt_shape_box_enter(pt_shape_node(l), r, t_max);
-            let tr = pt_shape_box_enter(pt_shape_node(rr), r, t_max);
-            var near = l;
+            let l = pt_box_node(nodes, node + 1u);
+            let rn = pt_box_node(nodes, n.index);
+            let tl = pt_box_enter(l.lo, l.hi, r, t_max);
+            let tr = pt_box_enter(rn.lo, rn.hi, r, t_max);
+            var near = node + 1u;
             var t_near = tl;
-            var far = rr;
+            var far = n.index;
             var t_far = tr;
             if tr < tl {
-                near = rr;
+                near = n.index;
                 t_near = tr;
-                far = l;
+                far = node + 1u;
                 t_far = tl;
             }
             if t_near < PT_MISS {
-                if t_far < PT_MISS && sp < PT_SHAPE_STACK {
+                if t_far < PT_MISS && sp < PT_BOX_STACK {
                     stack_node[sp] = far;
                     stack_t[sp] = t_far;
                     sp += 1u;
@@ -517,11 +529,24 @@ fn pt_trace(o: vec3f, d: vec3f, t_min: f32, t_max: f32, any_hit: bool) -> PtHit 
 // The closest hit in (t_min, t_max) among triangles and shapes, or with `any_hit` the
 // first found (`Geometry::intersect`/`occluded`).
 fn pt_trace_opaque(o: vec3f, d: vec3f, t_min: f32, t_max: f32, any_hit: bool) -> PtHit {
-    let best = pt_trace_triangles(o, d, t_min, t_max, any_hit);
-    if !PT_HAS_SHAPES || (any_hit && best.prim != PT_NO_HIT) {
+    var best = PtHit(t_max, 0.0, 0.0, PT_NO_HIT, PT_NO_HIT);
+    if pt_params.node_count > 0u {
+        best = pt_trace_triangles(0u, o, d, t_min, t_max, any_hit);
+    }
+    if !(PT_HAS_SHAPES || PT_HAS_INSTANCES) || (any_hit && best.prim != PT_NO_HIT) {
         return best;
     }
-    return pt_trace_shapes(pt_make_ray(o, d, t_min), best, any_hit);
+    let r = pt_make_ray(o, d, t_min);
+    if PT_HAS_INSTANCES {
+        best = pt_trace_boxes(true, r, best, any_hit);
+        if any_hit && best.prim != PT_NO_HIT {
+            return best;
+        }
+    }
+    if PT_HAS_SHAPES {
+        best = pt_trace_boxes(false, r, best, any_hit);
+    }
+    return best;
 }
 
 // Whether a hit is on a shape (else a triangle).

@@ -233,7 +233,7 @@ fn pt_hit_material(hit: PtHit) -> u32 {
     if pt_is_shape(hit.prim) {
         return pt_tu((hit.prim & ~PT_SHAPE_PRIM_BIT) + 1u);
     }
-    return bitcast<u32>(pt_tri_verts[3u * hit.prim].w);
+    return pt_instance_material(hit, bitcast<u32>(pt_tri_verts[3u * hit.prim].w));
 }
 
 // The CPU's primitive id of a hit (`alpha_hash` hashes it).
@@ -241,7 +241,7 @@ fn pt_hit_cpu_prim(hit: PtHit) -> u32 {
     if pt_is_shape(hit.prim) {
         return pt_tu((hit.prim & ~PT_SHAPE_PRIM_BIT) + 4u);
     }
-    return bitcast<u32>(pt_tri_verts[3u * hit.prim + 2u].w);
+    return pt_instance_cpu_prim(hit, bitcast<u32>(pt_tri_verts[3u * hit.prim + 2u].w));
 }
 
 // `alpha_hash`: a stable hash of a ray and a primitive to [0, 1), in 64-bit arithmetic on
@@ -400,11 +400,9 @@ fn pt_bend_normal(sf: ptr<function, PtSurface>, hit: PtHit, uv: vec2f) {
     if normal == PT_NO_HIT && bump == PT_NO_HIT {
         return;
     }
-    let p0 = pt_tri_verts[3u * hit.prim].xyz;
-    let p1 = pt_tri_verts[3u * hit.prim + 1u].xyz;
-    let p2 = pt_tri_verts[3u * hit.prim + 2u].xyz;
+    let p = pt_hit_triangle(hit);
     let t = pt_triangle_uvs(hit.prim);
-    let der = pt_triangle_uv_derivatives(p0, p1, p2, t[0], t[1], t[2]);
+    let der = pt_triangle_uv_derivatives(p[0], p[1], p[2], t[0], t[1], t[2]);
     var n = (*sf).ns;
     if bump != PT_NO_HIT {
         n = pt_bump_normal(bump, pt_tables[rec + 7u], uv, n, der.dpdu, der.dpdv);

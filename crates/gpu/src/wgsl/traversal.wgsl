@@ -8,20 +8,18 @@ fn pt_slab_enter(node: PtNode, r: PtRay, t_max: f32) -> f32 {
     return pt_box_enter(node.min, node.max, r, t_max);
 }
 
-// The closest triangle hit in (t_min, t_max), or with `any_hit` the first found (shapes.wgsl
-// adds the analytic shapes).
-fn pt_trace_triangles(o: vec3f, d: vec3f, t_min: f32, t_max_in: f32, any_hit: bool) -> PtHit {
-    var best = PtHit(t_max_in, 0.0, 0.0, PT_NO_HIT);
-    if pt_params.node_count == 0u {
-        return best;
-    }
+// The closest triangle hit in (t_min, t_max) in the tree whose root is node `root` (the
+// world's, 0, or a placed object's), or with `any_hit` the first found (shapes.wgsl adds
+// the analytic shapes and the instances).
+fn pt_trace_triangles(root: u32, o: vec3f, d: vec3f, t_min: f32, t_max_in: f32, any_hit: bool) -> PtHit {
+    var best = PtHit(t_max_in, 0.0, 0.0, PT_NO_HIT, PT_NO_HIT);
     let r = pt_make_ray(o, d, t_min);
     var t_max = t_max_in;
-    if pt_slab_enter(pt_nodes[0], r, t_max) >= PT_MISS {
+    if pt_slab_enter(pt_nodes[root], r, t_max) >= PT_MISS {
         return best;
     }
     var stack: PtStack;
-    var node = 0u;
+    var node = root;
     loop {
         let n = pt_nodes[node];
         var descended = false;
@@ -30,7 +28,7 @@ fn pt_trace_triangles(o: vec3f, d: vec3f, t_min: f32, t_max_in: f32, any_hit: bo
                 let h = pt_intersect_triangle(i, r, t_max);
                 if h.x > 0.0 {
                     t_max = h.x;
-                    best = PtHit(h.x, h.y, h.z, i);
+                    best = PtHit(h.x, h.y, h.z, i, PT_NO_HIT);
                     if any_hit {
                         return best;
                     }

@@ -15,7 +15,7 @@ fn pt_wide_leaf(first: u32, count: u32, r: PtRay, s: ptr<function, PtWideState>,
         let h = pt_intersect_triangle(k, r, (*s).t_max);
         if h.x > 0.0 {
             (*s).t_max = h.x;
-            (*s).best = PtHit(h.x, h.y, h.z, k);
+            (*s).best = PtHit(h.x, h.y, h.z, k, PT_NO_HIT);
             (*s).found = true;
             if any_hit {
                 return;
