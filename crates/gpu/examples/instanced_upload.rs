@@ -22,9 +22,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         scene.instances.len(),
         scene.objects.len()
     );
-    // As `GpuBackend::prepare_gpu` does: placements on emitters become world triangles.
+    // As `GpuBackend::prepare_gpu` does: placements on area lights become world triangles.
     let mut two_level = scene.clone();
-    let emits: Vec<bool> = two_level.instances.iter().map(|i| two_level.instance_emits(i)).collect();
+    let emits: Vec<bool> = two_level.instances.iter().map(|i| two_level.instance_has_light(i)).collect();
     two_level.flatten_instances_where(|k, _| emits[k]);
     let mut flat = scene;
     flat.flatten_instances();

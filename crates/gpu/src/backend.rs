@@ -59,7 +59,8 @@
 //!   uploaded once after the world's, their references rebased into the shared arrays; a
 //!   box BVH over the placements' world bounds, in the tables as the shapes' is, leads a
 //!   ray into an object's space (direction not renormalised, so t stays the world's).
-//!   Placements on emissive materials are copied into the world's triangles first
+//!   Placements on sampled area lights (emissive, without an emissive texture) are
+//!   copied into the world's triangles first
 //!   ([`tracer::Scene::flatten_instances_where`]): light sampling reads world-space
 //!   triangles from the light table. The atlas integrator flattens every placement (its
 //!   charts are per world triangle).
@@ -619,9 +620,9 @@ impl SceneData {
         if let Some(s) = scene.shapes.iter().find(|s| !GPU_SHAPES.contains(&s.shape.name())) {
             return Err(GpuError::Unsupported(format!("{} ({IMPLICIT_NOT_PORTED})", s.shape.name())));
         }
-        if scene.instances.iter().any(|i| scene.instance_emits(i)) {
+        if scene.instances.iter().any(|i| scene.instance_has_light(i)) {
             return Err(GpuError::Unsupported(
-                "emissive instances (flatten them first: Scene::flatten_instances_where)".into(),
+                "instances on sampled area lights (flatten them first: Scene::flatten_instances_where)".into(),
             ));
         }
         let kernel = crate::materials::generate(&scene.materials, true)?;
@@ -680,7 +681,7 @@ impl SceneData {
         }
         for (o, tree) in scene.objects.iter().zip(&object_trees) {
             for &i in tree.iter().flat_map(|(_, ids)| ids) {
-                // (Placements on emitters were flattened: no instanced triangle is sampled.)
+                // (Placements on sampled lights were flattened: no instanced triangle is sampled.)
                 push_triangle(o.triangle_vertices(i as usize), o.material_ids[i as usize], 0.0, i);
             }
         }
@@ -1210,9 +1211,9 @@ impl GpuBackend {
             scene.flatten_instances();
         } else {
             // Placements traced two-level, each object's triangles and tree uploaded once;
-            // those on emitters are copied into the world's triangles, which light sampling
+            // those on area lights are copied into the world's triangles, which light sampling
             // draws from (a table of world-space triangles).
-            let emits: Vec<bool> = scene.instances.iter().map(|i| scene.instance_emits(i)).collect();
+            let emits: Vec<bool> = scene.instances.iter().map(|i| scene.instance_has_light(i)).collect();
             scene.flatten_instances_where(|k, _| emits[k]);
         }
         Ok(self.upload(scene, options)?)

@@ -1455,6 +1455,9 @@ fn bdpt_matches_the_cpu() {
     let mut cases = vec![
         ("punctual lights", punctual_scene(), vec![("depth 8", base.clone())]),
         ("glass and mirror", glass_and_mirror_scene(), vec![("depth 8", base.clone())]),
+        // Light subpaths through instanced (mirrored) glass: two-level traversal and
+        // shading on both subpaths.
+        ("instances", instanced_scene(), vec![("depth 8", base.clone())]),
     ];
     if let Some(scene) = cornell() {
         cases.insert(
@@ -1593,7 +1596,7 @@ fn instances_match_the_cpu() {
     let data = SceneData::new(
         &{
             let mut s = scene.clone();
-            let emits: Vec<bool> = s.instances.iter().map(|i| s.instance_emits(i)).collect();
+            let emits: Vec<bool> = s.instances.iter().map(|i| s.instance_has_light(i)).collect();
             s.flatten_instances_where(|k, _| emits[k]);
             s
         },
@@ -1602,7 +1605,7 @@ fn instances_match_the_cpu() {
     .unwrap();
     let vertex_bytes = data.buffer_sizes().iter().find(|(name, _)| *name == "triangle vertices").unwrap().1;
     assert_eq!(vertex_bytes as usize, 48 * (2 + 4 + ball_triangles));
-    // A placement on an emitter left for the kernel is refused (light sampling needs it
+    // A placement on an area light left for the kernel is refused (light sampling needs it
     // in world space).
     assert!(matches!(SceneData::new(&scene, KernelOptions::default()), Err(GpuError::Unsupported(_))));
 

@@ -380,9 +380,14 @@ impl Scene {
         self.instances = kept;
     }
 
-    /// Whether some triangle of `inst`'s placement is on an emissive material.
-    pub fn instance_emits(&self, inst: &ObjectInstance) -> bool {
-        let emits = |m: u32| self.materials[m as usize].emission.is_some();
+    /// Whether some triangle of `inst`'s placement is a light that light sampling draws:
+    /// on an emissive material without an emissive texture (those are left to the paths
+    /// that hit them, see `Lights::new`).
+    pub fn instance_has_light(&self, inst: &ObjectInstance) -> bool {
+        let emits = |m: u32| {
+            let m = &self.materials[m as usize];
+            m.emission.is_some() && !m.has_textured_emission()
+        };
         match inst.material {
             Some(m) => emits(m),
             None => self.objects[inst.object as usize].material_ids.iter().any(|&m| emits(m)),
