@@ -3,14 +3,14 @@
 //! # Design
 //!
 //! * [`GpuBackend::prepare`] (the [`Backend`] impl) checks the scene against the
-//!   backend's [`Capabilities`], flattens it ([`SceneData`]: a binary BVH — binned SAH,
+//!   backend's [`Capabilities`], lays it out as flat arrays ([`SceneData`]: a binary BVH — binned SAH,
 //!   leaves of at most 4 triangles — in `bvh`'s 32-byte node layout, the triangles'
 //!   vertices in leaf order, per-vertex normals and tangents with the triangle → vertex
 //!   map, the CIE 1931 tables, the environment's spectrum, the light distribution, and
 //!   the material kernel from [`crate::materials`]), checks every buffer against the
 //!   device's limits, uploads it and compiles the kernel ([`crate::kernel`]) for the
-//!   scene's materials, the requested triangle test, and whether it has analytic shapes
-//!   and punctual lights (without, their code is not in the kernel). The result, a [`GpuScene`], owns
+//!   scene's materials, the requested triangle test, and whether it has analytic shapes,
+//!   instances and punctual lights (without, their code is not in the kernel). The result, a [`GpuScene`], owns
 //!   all of that: an interactive viewer calling `render_pass` once per frame pays only
 //!   for the frame's samples.
 //! * A pass renders the image in bands of rows (so that the per-pixel accumulators fit
@@ -510,9 +510,6 @@ fn instance_tables(
     object_trees: &[Option<(u32, Vec<u32>)>],
     tables: &mut Vec<f32>,
 ) -> Result<(u32, u32), GpuError> {
-    if scene.instances.is_empty() {
-        return Ok((0, 0));
-    }
     let bits = f32::from_bits;
     let rows = |m: glam::Affine3A| {
         let m = glam::Mat4::from(m).transpose();
@@ -523,6 +520,10 @@ fn instance_tables(
     let mut first_prim = (scene.triangles.len() + scene.shapes.len()) as u32;
     for inst in &scene.instances {
         let object = &scene.objects[inst.object as usize];
+        if object.triangles.is_empty() {
+            // Nothing to hit (its tree is empty: a root would name the next object's).
+            continue;
+        }
         let to_world = glam::Affine3A::from_mat4(inst.transform);
         let normal = to_world.matrix3.inverse().transpose();
         let orientation = if to_world.matrix3.determinant() < 0.0 { -1.0 } else { 1.0 };
@@ -537,6 +538,9 @@ fn instance_tables(
         tables.extend([bits(first_prim), 0.0, 0.0, 0.0]);
         first_prim += object.triangles.len() as u32;
         boxes.push(object.bounds().transformed(&to_world));
+    }
+    if boxes.is_empty() {
+        return Ok((0, 0));
     }
     let bvh = bvh::BoxBvh::build(&boxes, tracer::Geometry::shape_build_config())
         .map_err(|e| GpuError::Unsupported(format!("these instances ({e})")))?;
@@ -645,9 +649,10 @@ impl SceneData {
             let tree = TriangleTree::build(&soup, config, options.nodes, entries as u32, triangles as u32)?;
             layout = layout.max_stack(tree.layout);
             nodes.extend(tree.nodes);
-            object_trees[k] = Some((entries as u32, tree.prim_ids));
+            let root = entries as u32;
             entries += tree.entries;
-            triangles += soup.len();
+            triangles += tree.prim_ids.len();
+            object_trees[k] = Some((root, tree.prim_ids));
         }
         let node_bytes = world.node_bytes;
         let node_count = world.node_count;

@@ -127,7 +127,8 @@ wgsl_struct! {
         shading: u32,
         /// [`HAS_NORMALS`] | [`HAS_TANGENTS`] | [`HAS_ENVIRONMENT`].
         scene_flags: u32,
-        /// BVH nodes (an 8-wide node counts once, though it is two [`WideNode`] entries).
+        /// Nodes of the world's triangle BVH (an 8-wide node counts once, though it is two
+        /// [`WideNode`] entries); placed objects' trees follow in the node array.
         node_count: u32,
         /// Entries of the light table (emissive triangles and shapes, then punctual lights).
         light_count: u32,

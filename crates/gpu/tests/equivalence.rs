@@ -1537,8 +1537,9 @@ fn bdpt_bands_give_the_same_film() {
 }
 
 /// A floor, a smooth copper ball with a lid placed three times (once turned, mirrored
-/// and in glass, once in red: materials of the scene's instead of its own), and a lamp
-/// placed twice (once mirrored: it must still shine down).
+/// and in glass, once in red: materials of the scene's instead of its own), a lamp
+/// placed twice (once mirrored: it must still shine down) and an object without
+/// triangles.
 fn instanced_scene() -> Scene {
     use glam::{Mat4, Quat};
     let mut scene = Scene::default();
@@ -1547,6 +1548,11 @@ fn instanced_scene() -> Scene {
     scene.materials.push(Material::diffuse("red", Colour::reflectance_rgb([0.8, 0.2, 0.1]).unwrap()).unwrap());
     let glass = scene.materials.len() as u32;
     scene.materials.push(Material::dielectric("glass", 1.5).unwrap());
+    // An object of vertices without triangles, placed in view first: nothing to see (its
+    // tree is empty; a root taken from the next object's would show the ball here).
+    let nothing = Scene { positions: vec![[0.0; 3], [0.5, 0.5, 0.5]], ..Scene::default() };
+    let nothing = scene.add_object(nothing, None).unwrap();
+    scene.place(nothing, Mat4::from_translation(Vec3::new(0.0, 0.0, 1.5))).unwrap();
     let mut ball = Scene::default();
     ball.add(
         &uv_sphere(Vec3::new(0.3, 0.5, 0.0), 0.5, 12, 24, false),
@@ -1592,7 +1598,7 @@ fn instances_match_the_cpu() {
     let scene = instanced_scene();
     // Uploaded once per object: the floor's 2, the lamps' 2 × 2, the ball's triangles once
     // (not three times).
-    let ball_triangles = scene.objects[0].triangles.len();
+    let ball_triangles = scene.objects[1].triangles.len();
     let data = SceneData::new(
         &{
             let mut s = scene.clone();

@@ -1,6 +1,7 @@
 // Rays as the traversals take them, mirroring crates/bvh/src/build.rs (`Bvh::traverse`'s
 // reciprocal direction and the watertight test's permutation and shear, set up once per
-// ray): shared by the binary (traversal.wgsl) and 4-wide (traversal_wide.wgsl) traversals.
+// ray): shared by the binary (traversal.wgsl), 4-wide (traversal_wide.wgsl) and 8-wide
+// (traversal_wide8.wgsl) traversals, and by the instances' (instances.wgsl).
 
 // `prim` indexes the triangle arrays (or is a shape's record, PT_SHAPE_PRIM_BIT set);
 // `inst` is the offset of the instance's record for a triangle of a placed object

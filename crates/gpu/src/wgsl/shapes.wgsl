@@ -456,7 +456,8 @@ fn pt_trace_boxes(instances: bool, r: PtRay, best_in: PtHit, any_hit: bool) -> P
         if n.count > 0u {
             for (var i = n.index; i < n.index + n.count; i++) {
                 let rec = pt_tu(slots + i);
-                if instances {
+                // (PT_HAS_INSTANCES: a kernel without compiles the nested traversal away.)
+                if PT_HAS_INSTANCES && instances {
                     let h = pt_trace_instance(rec, r, t_max, any_hit);
                     if h.prim != PT_NO_HIT {
                         t_max = h.t;
@@ -526,8 +527,8 @@ fn pt_trace(o: vec3f, d: vec3f, t_min: f32, t_max: f32, any_hit: bool) -> PtHit 
     return pt_trace_opaque(o, d, t_min, t_max, any_hit);
 }
 
-// The closest hit in (t_min, t_max) among triangles and shapes, or with `any_hit` the
-// first found (`Geometry::intersect`/`occluded`).
+// The closest hit in (t_min, t_max) among the world's triangles, the instances and the
+// shapes, or with `any_hit` the first found (`Geometry::intersect`/`occluded`).
 fn pt_trace_opaque(o: vec3f, d: vec3f, t_min: f32, t_max: f32, any_hit: bool) -> PtHit {
     var best = PtHit(t_max, 0.0, 0.0, PT_NO_HIT, PT_NO_HIT);
     if pt_params.node_count > 0u {
