@@ -24,8 +24,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     );
     // As `GpuBackend::prepare_gpu` does: placements on area lights become world triangles.
     let mut two_level = scene.clone();
-    let emits: Vec<bool> = two_level.instances.iter().map(|i| two_level.instance_has_light(i)).collect();
-    two_level.flatten_instances_where(|k, _| emits[k]);
+    two_level.flatten_light_instances();
     let mut flat = scene;
     flat.flatten_instances();
     for (name, scene) in [("two-level", two_level), ("flattened", flat)] {

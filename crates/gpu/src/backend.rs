@@ -61,7 +61,7 @@
 //!   ray into an object's space (direction not renormalised, so t stays the world's).
 //!   Placements on sampled area lights (emissive, without an emissive texture) are
 //!   copied into the world's triangles first
-//!   ([`tracer::Scene::flatten_instances_where`]): light sampling reads world-space
+//!   ([`tracer::Scene::flatten_light_instances`]): light sampling reads world-space
 //!   triangles from the light table. The atlas integrator flattens every placement (its
 //!   charts are per world triangle).
 //! * Bidirectional path tracing (`wgsl/bdpt.wgsl`) keeps the light subpath and the camera
@@ -520,20 +520,17 @@ fn instance_tables(
     let mut first_prim = (scene.triangles.len() + scene.shapes.len()) as u32;
     for inst in &scene.instances {
         let object = &scene.objects[inst.object as usize];
-        if object.triangles.is_empty() {
-            // Nothing to hit (its tree is empty: a root would name the next object's).
-            continue;
-        }
+        // (Objects without triangles have no tree: nothing to hit.)
+        let Some((root, _)) = &object_trees[inst.object as usize] else { continue };
         let to_world = glam::Affine3A::from_mat4(inst.transform);
         let normal = to_world.matrix3.inverse().transpose();
         let orientation = if to_world.matrix3.determinant() < 0.0 { -1.0 } else { 1.0 };
-        let root = object_trees[inst.object as usize].as_ref().expect("a tree for every placed object").0;
         records.push(tables.len() as u32);
         tables.extend(rows(to_world.inverse()));
         tables.extend(rows(to_world));
         let n = glam::Mat3::from(normal).transpose();
         tables.extend(n.x_axis.to_array().into_iter().chain([orientation]));
-        tables.extend(n.y_axis.to_array().into_iter().chain([bits(root)]));
+        tables.extend(n.y_axis.to_array().into_iter().chain([bits(*root)]));
         tables.extend(n.z_axis.to_array().into_iter().chain([bits(inst.material.unwrap_or(u32::MAX))]));
         tables.extend([bits(first_prim), 0.0, 0.0, 0.0]);
         first_prim += object.triangles.len() as u32;
@@ -626,7 +623,7 @@ impl SceneData {
         }
         if scene.instances.iter().any(|i| scene.instance_has_light(i)) {
             return Err(GpuError::Unsupported(
-                "instances on sampled area lights (flatten them first: Scene::flatten_instances_where)".into(),
+                "instances on sampled area lights (flatten them first: Scene::flatten_light_instances)".into(),
             ));
         }
         let kernel = crate::materials::generate(&scene.materials, true)?;
@@ -644,7 +641,8 @@ impl SceneData {
         let (mut entries, mut triangles) = (world.entries, world.prim_ids.len());
         let mut layout = world.layout;
         let mut object_trees = vec![None; scene.objects.len()];
-        for (k, o) in scene.objects.iter().enumerate().filter(|&(k, _)| placed[k]) {
+        // (An object without triangles gets no tree: its placements are left out.)
+        for (k, o) in scene.objects.iter().enumerate().filter(|&(k, o)| placed[k] && !o.triangles.is_empty()) {
             let soup: Vec<_> = (0..o.triangles.len()).map(|i| o.triangle_vertices(i)).collect();
             let tree = TriangleTree::build(&soup, config, options.nodes, entries as u32, triangles as u32)?;
             layout = layout.max_stack(tree.layout);
@@ -690,8 +688,8 @@ impl SceneData {
                 push_triangle(o.triangle_vertices(i as usize), o.material_ids[i as usize], 0.0, i);
             }
         }
-        let placed_meshes = || scene.objects.iter().zip(&placed).filter(|(_, p)| **p).map(|(o, _)| o.mesh());
-        let meshes: Vec<tracer::scene::MeshRef> = std::iter::once(scene.mesh()).chain(placed_meshes()).collect();
+        let uploaded = scene.objects.iter().zip(&object_trees).filter(|(_, t)| t.is_some()).map(|(o, _)| o.mesh());
+        let meshes: Vec<tracer::scene::MeshRef> = std::iter::once(scene.mesh()).chain(uploaded).collect();
         let mut scene_flags = 0;
         if meshes.iter().any(|m| !m.normals.is_empty()) {
             scene_flags |= HAS_NORMALS;
@@ -1218,8 +1216,7 @@ impl GpuBackend {
             // Placements traced two-level, each object's triangles and tree uploaded once;
             // those on area lights are copied into the world's triangles, which light sampling
             // draws from (a table of world-space triangles).
-            let emits: Vec<bool> = scene.instances.iter().map(|i| scene.instance_has_light(i)).collect();
-            scene.flatten_instances_where(|k, _| emits[k]);
+            scene.flatten_light_instances();
         }
         Ok(self.upload(scene, options)?)
     }

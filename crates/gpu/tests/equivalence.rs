@@ -1602,8 +1602,7 @@ fn instances_match_the_cpu() {
     let data = SceneData::new(
         &{
             let mut s = scene.clone();
-            let emits: Vec<bool> = s.instances.iter().map(|i| s.instance_has_light(i)).collect();
-            s.flatten_instances_where(|k, _| emits[k]);
+            s.flatten_light_instances();
             s
         },
         KernelOptions::default(),

@@ -355,20 +355,27 @@ impl Scene {
     /// same surfaces as one mesh (for backends without two-level traversal, and as the
     /// reference the instanced scene is tested against).
     pub fn flatten_instances(&mut self) {
-        self.flatten_instances_where(|_, _| true);
+        self.flatten_instances_where(|_| true);
         self.objects.clear();
     }
 
-    /// Copies the instances `copy` picks into the flat arrays, in order, and keeps the
-    /// others as placements (the objects stay): for a backend that traces placements
-    /// two-level but wants some as plain triangles — the GPU samples emitters from a table
-    /// of world-space triangles. `copy` is given each instance's index and placement.
-    pub fn flatten_instances_where(&mut self, mut copy: impl FnMut(usize, &ObjectInstance) -> bool) {
+    /// Copies the placements on lights that light sampling draws
+    /// ([`Scene::instance_has_light`]) into the flat arrays and keeps the others (and the
+    /// objects): for a backend that traces placements two-level but samples emitters from
+    /// a table of world-space triangles (the GPU's).
+    pub fn flatten_light_instances(&mut self) {
+        let lights: Vec<bool> = self.instances.iter().map(|i| self.instance_has_light(i)).collect();
+        self.flatten_instances_where(|k| lights[k]);
+    }
+
+    /// Copies the instances whose index `copy` picks into the flat arrays, in order, and
+    /// keeps the others as placements (the objects stay).
+    fn flatten_instances_where(&mut self, copy: impl Fn(usize) -> bool) {
         let objects = std::mem::take(&mut self.objects);
         let mut kept = Vec::new();
         for (k, inst) in std::mem::take(&mut self.instances).into_iter().enumerate() {
             let o = &objects[inst.object as usize];
-            if !copy(k, &inst) {
+            if !copy(k) {
                 kept.push(inst);
                 continue;
             }

@@ -23,9 +23,8 @@ fn pt_affine_vector(at: u32, v: vec3f) -> vec3f {
 // `TwoLevel`'s leaf: the ray taken into the object's space (the direction not
 // renormalised, so t stays the world's) and traced through the object's tree.
 fn pt_trace_instance(rec: u32, r: PtRay, t_max: f32, any_hit: bool) -> PtHit {
-    let o = pt_affine_point(rec, r.o);
-    let d = pt_affine_vector(rec, r.d);
-    var h = pt_trace_triangles(pt_tu(rec + 31u), o, d, r.t_min, t_max, any_hit);
+    let local = pt_make_ray(pt_affine_point(rec, r.o), pt_affine_vector(rec, r.d), r.t_min);
+    var h = pt_trace_triangles(pt_tu(rec + 31u), local, t_max, any_hit);
     if h.prim != PT_NO_HIT {
         h.inst = rec;
     }

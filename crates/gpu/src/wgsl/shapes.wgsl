@@ -443,7 +443,11 @@ fn pt_trace_boxes(instances: bool, r: PtRay, best_in: PtHit, any_hit: bool) -> P
     let count = select(pt_params.shape_node_count, pt_params.instance_node_count, instances);
     // (The instances' slots follow their nodes.)
     let slots = select(pt_params.shape_slots_offset, nodes + 8u * count, instances);
-    if count == 0u || pt_box_enter(pt_box_node(nodes, 0u).lo, pt_box_node(nodes, 0u).hi, r, t_max) >= PT_MISS {
+    if count == 0u {
+        return best;
+    }
+    let root = pt_box_node(nodes, 0u);
+    if pt_box_enter(root.lo, root.hi, r, t_max) >= PT_MISS {
         return best;
     }
     var stack_node: array<u32, PT_BOX_STACK>;
@@ -530,14 +534,15 @@ fn pt_trace(o: vec3f, d: vec3f, t_min: f32, t_max: f32, any_hit: bool) -> PtHit 
 // The closest hit in (t_min, t_max) among the world's triangles, the instances and the
 // shapes, or with `any_hit` the first found (`Geometry::intersect`/`occluded`).
 fn pt_trace_opaque(o: vec3f, d: vec3f, t_min: f32, t_max: f32, any_hit: bool) -> PtHit {
+    // (The ray is set up once for the world's tree, the instances and the shapes.)
+    let r = pt_make_ray(o, d, t_min);
     var best = PtHit(t_max, 0.0, 0.0, PT_NO_HIT, PT_NO_HIT);
     if pt_params.node_count > 0u {
-        best = pt_trace_triangles(0u, o, d, t_min, t_max, any_hit);
+        best = pt_trace_triangles(0u, r, t_max, any_hit);
     }
     if !(PT_HAS_SHAPES || PT_HAS_INSTANCES) || (any_hit && best.prim != PT_NO_HIT) {
         return best;
     }
-    let r = pt_make_ray(o, d, t_min);
     if PT_HAS_INSTANCES {
         best = pt_trace_boxes(true, r, best, any_hit);
         if any_hit && best.prim != PT_NO_HIT {

@@ -8,12 +8,11 @@ fn pt_slab_enter(node: PtNode, r: PtRay, t_max: f32) -> f32 {
     return pt_box_enter(node.min, node.max, r, t_max);
 }
 
-// The closest triangle hit in (t_min, t_max) in the tree whose root is node `root` (the
-// world's, 0, or a placed object's), or with `any_hit` the first found (shapes.wgsl adds
-// the analytic shapes and the instances).
-fn pt_trace_triangles(root: u32, o: vec3f, d: vec3f, t_min: f32, t_max_in: f32, any_hit: bool) -> PtHit {
+// The closest triangle hit of the ray `r` in (r.t_min, t_max) in the tree whose root is
+// node `root` (the world's, 0, or a placed object's), or with `any_hit` the first found
+// (shapes.wgsl adds the analytic shapes and the instances).
+fn pt_trace_triangles(root: u32, r: PtRay, t_max_in: f32, any_hit: bool) -> PtHit {
     var best = PtHit(t_max_in, 0.0, 0.0, PT_NO_HIT, PT_NO_HIT);
-    let r = pt_make_ray(o, d, t_min);
     var t_max = t_max_in;
     if pt_slab_enter(pt_nodes[root], r, t_max) >= PT_MISS {
         return best;

@@ -8,12 +8,11 @@
 // The state, leaf test, slab test and each half's order are traversal_wide_nodes.wgsl's.
 // PT_STACK is the tree's own bound.
 
-// The closest triangle hit in (t_min, t_max) in the tree whose root is node `root` (the
-// world's, 0, or a placed object's), or with `any_hit` the first found (shapes.wgsl adds
-// the analytic shapes and the instances).
-fn pt_trace_triangles(root: u32, o: vec3f, d: vec3f, t_min: f32, t_max_in: f32, any_hit: bool) -> PtHit {
+// The closest triangle hit of the ray `r` in (r.t_min, t_max) in the tree whose root is
+// node `root` (the world's, 0, or a placed object's), or with `any_hit` the first found
+// (shapes.wgsl adds the analytic shapes and the instances).
+fn pt_trace_triangles(root: u32, r: PtRay, t_max_in: f32, any_hit: bool) -> PtHit {
     var s = PtWideState(t_max_in, PtHit(t_max_in, 0.0, 0.0, PT_NO_HIT, PT_NO_HIT), false);
-    let r = pt_make_ray(o, d, t_min);
     var stack: PtStack;
     var node = root;
     loop {
