@@ -845,7 +845,8 @@ fn prepare(
     let sampler = args.sampler.unwrap_or_else(|| default_sampler(&backend.capabilities()));
     let settings = settings(args, spp, mode, sampler, &scene)?;
     backend.capabilities().check_settings(&settings)?;
-    let prepared = backend.prepare(scene, &scene_options(args))?;
+    let options = SceneOptions { first_render: Some((settings.sampler, settings.mode)), ..scene_options(args) };
+    let prepared = backend.prepare(scene, &options)?;
     // Kernel compilation for a non-default sampler belongs to preparation, not to the
     // timed render.
     prepared.warm_up(&settings)?;
@@ -869,7 +870,12 @@ fn loaded_scene(args: &SceneArgs) -> Result<Scene> {
 
 /// The scene-level choices `args` makes.
 fn scene_options(args: &SceneArgs) -> SceneOptions {
-    SceneOptions { triangle_test: args.triangle_test, bvh_width: args.bvh_width, bvh_builder: args.bvh_builder }
+    SceneOptions {
+        triangle_test: args.triangle_test,
+        bvh_width: args.bvh_width,
+        bvh_builder: args.bvh_builder,
+        first_render: None,
+    }
 }
 
 /// The atlas integrator's settings from the command line.

@@ -1080,6 +1080,8 @@ pub struct GpuScene {
     /// The kernels compiled so far, by (sampler, spectral mode) (both are compiled in).
     pipelines: Mutex<Vec<((SamplerKind, SpectralMode), wgpu::ComputePipeline)>>,
     pipeline_layout: wgpu::PipelineLayout,
+    /// The entries of `layout` (with the source, what a compiled kernel is found by).
+    layout_entries: Vec<wgpu::BindGroupLayoutEntry>,
     /// What another sampler's kernel is generated from.
     material_wgsl: String,
     kernel_options: KernelOptions,
@@ -1128,17 +1130,27 @@ pub(crate) fn buffer_entry(binding: u32, ty: wgpu::BufferBindingType) -> wgpu::B
     }
 }
 
-/// Compiles the path kernel `source` into a pipeline with `layout`.
-fn compile(ctx: &GpuContext, layout: &wgpu::PipelineLayout, source: &str) -> Result<wgpu::ComputePipeline, GpuError> {
-    Ok(compile_with_module(ctx, layout, source)?.0)
+/// The path kernel `source` as a pipeline with `layout` (made of `entries`): compiled, or
+/// the one compiled before on the device from the same source and entries.
+fn compile(
+    ctx: &GpuContext,
+    layout: &wgpu::PipelineLayout,
+    entries: &[wgpu::BindGroupLayoutEntry],
+    source: &str,
+) -> Result<wgpu::ComputePipeline, GpuError> {
+    Ok(compile_with_module(ctx, layout, entries, source)?.0)
 }
 
 /// [`compile`], also returning the shader module (for the kernel's other entry points).
 fn compile_with_module(
     ctx: &GpuContext,
     layout: &wgpu::PipelineLayout,
+    entries: &[wgpu::BindGroupLayoutEntry],
     source: &str,
 ) -> Result<(wgpu::ComputePipeline, wgpu::ShaderModule), GpuError> {
+    if let Some(kernel) = ctx.kernels.get(source, entries) {
+        return Ok(kernel);
+    }
     let device = &ctx.device;
     let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
     let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
@@ -1154,6 +1166,7 @@ fn compile_with_module(
         cache: None,
     });
     pop_scope(scope, "the path-tracing kernel does not compile")?;
+    ctx.kernels.insert(source, entries, (pipeline.clone(), module.clone()));
     Ok((pipeline, module))
 }
 
@@ -1189,6 +1202,13 @@ impl GpuBackend {
     /// The kernel options a scene prepared with `options` is uploaded and compiled with
     /// (the scene's own features are filled in by [`SceneData::new`]).
     pub fn kernel_options(&self, options: &SceneOptions) -> KernelOptions {
+        // The kernel the first render needs (others compile on demand), where the
+        // integrator runs it.
+        let caps = capabilities_for(self.integrator);
+        let defaults = RenderSettings::default();
+        let (sampler, mode) = options.first_render.unwrap_or((defaults.sampler, defaults.mode));
+        let sampler = if caps.samplers.contains(&sampler) { sampler } else { caps.samplers[0] };
+        let mode = if caps.spectral_modes.contains(&mode) { mode } else { KernelOptions::default().mode };
         KernelOptions {
             triangle_test: options.triangle_test,
             nodes: match options.bvh_width {
@@ -1197,8 +1217,8 @@ impl GpuBackend {
                 _ => NodeLayout::Binary,
             },
             integrator: self.integrator,
-            // The kernel a render with the default sampler uses; others compile on demand.
-            sampler: capabilities_for(self.integrator).samplers[0],
+            sampler,
+            mode,
             bvh_builder: options.bvh_builder.unwrap_or(KernelOptions::default().bvh_builder),
             ..KernelOptions::default()
         }
@@ -1284,7 +1304,7 @@ impl GpuBackend {
         });
 
         let compile_start = Instant::now();
-        let shader_result = compile_with_module(&self.ctx, &pipeline_layout, &data.shader_source());
+        let shader_result = compile_with_module(&self.ctx, &pipeline_layout, &entries, &data.shader_source());
         let compile_time = compile_start.elapsed();
         let memory_result = pop_scope(memory, "out of GPU memory uploading the scene");
         let validation_result = pop_scope(validation, "uploading the scene");
@@ -1310,6 +1330,7 @@ impl GpuBackend {
             scene,
             pipelines: Mutex::new(vec![((data.options.sampler, data.options.mode), pipeline)]),
             pipeline_layout,
+            layout_entries: entries,
             material_wgsl: data.material_wgsl,
             kernel_options: data.options,
             layout,
@@ -1876,8 +1897,8 @@ impl GpuScene {
             return Ok(p.clone());
         }
         let options = KernelOptions { sampler: key.0, mode: key.1, ..self.kernel_options };
-        let pipeline =
-            compile(&self.ctx, &self.pipeline_layout, &crate::kernel::source(&self.material_wgsl, &options))?;
+        let source = crate::kernel::source(&self.material_wgsl, &options);
+        let pipeline = compile(&self.ctx, &self.pipeline_layout, &self.layout_entries, &source)?;
         pipelines.push((key, pipeline.clone()));
         Ok(pipeline)
     }

@@ -1,8 +1,50 @@
 //! Adapter and device selection.
 
 use crate::GpuError;
+use std::collections::HashMap;
+use std::sync::{Arc, Mutex, PoisonError};
 
-/// An open device and its queue.
+/// A compiled kernel: what [`KernelCache`] keeps.
+pub(crate) type CompiledKernel = (wgpu::ComputePipeline, wgpu::ShaderModule);
+
+/// The kernels compiled on one device, by WGSL source and bind group layout entries.
+///
+/// Why: the driver compiles a path kernel in tens of milliseconds on a GPU but in tens of
+/// seconds on lavapipe, and preparing a second scene with the same materials and
+/// features (another camera, another image size, the same scene again, a copy of the
+/// context with other limits) needs the same kernel. Pipelines made from a layout with
+/// the same entries are compatible with the new scene's bind groups: wgpu deduplicates
+/// identical bind group layouts on a device.
+#[derive(Clone, Default)]
+pub(crate) struct KernelCache(Arc<Mutex<HashMap<KernelKey, CompiledKernel>>>);
+
+/// The source and the layout entries a kernel was compiled with.
+type KernelKey = (String, Vec<wgpu::BindGroupLayoutEntry>);
+
+impl KernelCache {
+    /// The kernel compiled from `source` with `entries`, if it was.
+    pub(crate) fn get(&self, source: &str, entries: &[wgpu::BindGroupLayoutEntry]) -> Option<CompiledKernel> {
+        let kernels = self.0.lock().unwrap_or_else(PoisonError::into_inner);
+        // (Keys are compared in full: the source is a few hundred kilobytes at most.)
+        kernels.get(&(source.to_string(), entries.to_vec())).cloned()
+    }
+
+    /// Keeps a kernel compiled without error.
+    pub(crate) fn insert(&self, source: &str, entries: &[wgpu::BindGroupLayoutEntry], kernel: CompiledKernel) {
+        let mut kernels = self.0.lock().unwrap_or_else(PoisonError::into_inner);
+        kernels.insert((source.to_string(), entries.to_vec()), kernel);
+    }
+
+    /// How many kernels are kept.
+    pub(crate) fn len(&self) -> usize {
+        self.0.lock().unwrap_or_else(PoisonError::into_inner).len()
+    }
+}
+
+/// An open device and its queue. Cloning shares the device, the queue and the kernels
+/// compiled on it (lower [`GpuContext::limits`] on a clone to test what a smaller device
+/// would do without compiling again).
+#[derive(Clone)]
 pub struct GpuContext {
     /// The device.
     pub device: wgpu::Device,
@@ -12,6 +54,8 @@ pub struct GpuContext {
     pub info: wgpu::AdapterInfo,
     /// The device's limits.
     pub limits: wgpu::Limits,
+    /// The kernels compiled on the device (shared by clones).
+    pub(crate) kernels: KernelCache,
 }
 
 impl GpuContext {
@@ -34,7 +78,13 @@ impl GpuContext {
             ..Default::default()
         }))
         .map_err(|e| GpuError::Device(e.to_string()))?;
-        Ok(Self { device, queue, info: adapter.get_info(), limits })
+        Ok(Self { device, queue, info: adapter.get_info(), limits, kernels: KernelCache::default() })
+    }
+
+    /// How many kernels have been compiled on the device and kept for reuse (each distinct
+    /// WGSL source and layout once).
+    pub fn compiled_kernels(&self) -> usize {
+        self.kernels.len()
     }
 }
 

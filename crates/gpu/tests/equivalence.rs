@@ -130,14 +130,19 @@ struct Renders {
     prepare: std::time::Duration,
 }
 
-/// `scene` prepared on the CPU (2 threads) and on `gpu`.
-fn prepare_both(gpu: &GpuBackend, scene: &Scene) -> Result<(CpuScene, gpu::GpuScene), tracer::Error> {
-    let options = SceneOptions::default();
+/// `scene` prepared on the CPU (2 threads) and on `gpu` (its kernel for the sampler and
+/// spectral mode of `first_render`; `None`: those of the default settings, as [`settings`]'s).
+fn prepare_both(
+    gpu: &GpuBackend,
+    scene: &Scene,
+    first_render: Option<&RenderSettings>,
+) -> Result<(CpuScene, gpu::GpuScene), tracer::Error> {
+    let options = SceneOptions { first_render: first_render.map(|s| (s.sampler, s.mode)), ..SceneOptions::default() };
     Ok((CpuBackend::new(2)?.prepare_cpu(scene.clone(), &options)?, gpu.prepare_gpu(scene.clone(), &options)?))
 }
 
 fn render_three(gpu: &GpuBackend, scene: &Scene, s: &RenderSettings) -> Result<Renders, tracer::Error> {
-    let (cpu_scene, gpu_scene) = prepare_both(gpu, scene)?;
+    let (cpu_scene, gpu_scene) = prepare_both(gpu, scene, Some(s))?;
     render_three_with(&cpu_scene, &gpu_scene, s)
 }
 
@@ -179,6 +184,13 @@ fn compare_all(name: &str, r: &Renders) -> Vec<String> {
         .collect()
 }
 
+/// The test binary's one device (a clone of it): a kernel compiled by one test is reused
+/// by every other that needs the same (lavapipe compiles a kernel in tens of seconds).
+fn shared_gpu() -> Option<gpu::GpuContext> {
+    static DEVICE: std::sync::OnceLock<Option<gpu::GpuContext>> = std::sync::OnceLock::new();
+    DEVICE.get_or_init(gpu::require_gpu).clone()
+}
+
 /// Depth 8 without Russian roulette (see the module docs).
 fn settings(width: u32, height: u32, spp: u32) -> RenderSettings {
     RenderSettings {
@@ -202,7 +214,7 @@ fn cornell() -> Option<Scene> {
 
 #[test]
 fn cornell_box_matches_the_cpu() {
-    let Some(ctx) = gpu::require_gpu() else { return };
+    let Some(ctx) = shared_gpu() else { return };
     let Some(scene) = cornell() else { return };
     println!("adapter: {} ({:?})", ctx.info.name, ctx.info.backend);
     let gpu = GpuBackend::with_context(ctx);
@@ -253,14 +265,30 @@ fn model_cases() -> Vec<(String, Material)> {
     v
 }
 
+/// Every case of [`model_cases`] in [`model_scene`], each scene holding the other cases'
+/// materials too (unused): their kernels are then one source, compiled once on the shared
+/// device (lavapipe takes tens of seconds a kernel; each model's specialised kernel alone
+/// is validated by naga in `materials.rs`).
+fn model_case_scenes() -> Vec<(String, Scene)> {
+    let cases = model_cases();
+    let materials: Vec<Material> = cases.iter().map(|(_, m)| m.clone()).collect();
+    cases
+        .into_iter()
+        .map(|(name, m)| {
+            let mut scene = model_scene(m);
+            scene.materials.extend(materials.iter().cloned());
+            (name, scene)
+        })
+        .collect()
+}
+
 #[test]
 fn every_model_and_glass_match_the_cpu() {
-    let Some(ctx) = gpu::require_gpu() else { return };
+    let Some(ctx) = shared_gpu() else { return };
     let gpu = GpuBackend::with_context(ctx);
     let s = settings(32, 32, 128);
     let mut failures = Vec::new();
-    for (name, material) in model_cases() {
-        let scene = model_scene(material);
+    for (name, scene) in model_case_scenes() {
         match render_three(&gpu, &scene, &s) {
             Ok(r) => {
                 println!(
@@ -283,9 +311,9 @@ fn every_model_and_glass_match_the_cpu() {
 /// that few samples suffice.
 #[test]
 fn path_settings_match_the_cpu() {
-    let Some(ctx) = gpu::require_gpu() else { return };
+    let Some(ctx) = shared_gpu() else { return };
     let gpu = GpuBackend::with_context(ctx);
-    let (cpu, gpu) = prepare_both(&gpu, &model_scene(Material::dielectric("glass", 1.5).unwrap())).unwrap();
+    let (cpu, gpu) = prepare_both(&gpu, &model_scene(Material::dielectric("glass", 1.5).unwrap()), None).unwrap();
     let base = settings(32, 32, 64);
     let variants = [
         ("face-forward normals", PathSettings { shading_normals: ShadingNormals::FaceForward, ..base.path }),
@@ -308,9 +336,9 @@ fn path_settings_match_the_cpu() {
 #[test]
 fn max_diffuse_depth_ends_paths_as_on_the_cpu() {
     // One diffuse bounce: direct light only (the second hit's emission, then the end).
-    let Some(ctx) = gpu::require_gpu() else { return };
+    let Some(ctx) = shared_gpu() else { return };
     let Some(scene) = cornell() else { return };
-    let (cpu, gpu) = prepare_both(&GpuBackend::with_context(ctx), &scene).unwrap();
+    let (cpu, gpu) = prepare_both(&GpuBackend::with_context(ctx), &scene, None).unwrap();
     let base = settings(32, 32, 64);
     let limited = RenderSettings { path: PathSettings { max_diffuse_depth: 1, ..base.path }, ..base.clone() };
     let (a, _) = tracer::render(&cpu, &limited, &|_| {}).unwrap();
@@ -329,7 +357,7 @@ fn max_diffuse_depth_ends_paths_as_on_the_cpu() {
 fn every_bvh_builder_renders_the_cpus_image() {
     // `--bvh-builder`: the GPU's binary tree built by each split method; the same paths as
     // the CPU's (its wide tree collapsed from a tree built the same way).
-    let Some(ctx) = gpu::require_gpu() else { return };
+    let Some(ctx) = shared_gpu() else { return };
     let Some(scene) = cornell() else { return };
     let gpu = GpuBackend::with_context(ctx);
     let s = settings(32, 32, 16);
@@ -357,7 +385,9 @@ fn every_bvh_builder_renders_the_cpus_image() {
 
 #[test]
 fn passes_bands_and_reruns_add_up() {
+    // A device of its own: its kernels are counted below.
     let Some(ctx) = gpu::require_gpu() else { return };
+    let device = ctx.clone();
     let Some(scene) = cornell() else { return };
     // Accumulators limited to the largest scene buffer (at least 8 KiB): an image of
     // twice that many rows and a bit is rendered in three bands.
@@ -370,6 +400,7 @@ fn passes_bands_and_reruns_add_up() {
     let prepared = GpuBackend::with_context(ctx).prepare_gpu(scene.clone(), &SceneOptions::default()).unwrap();
     let (whole, _) = tracer::render(&prepared, &s, &|_| {}).unwrap();
     let (again, _) = tracer::render(&prepared, &s, &|_| {}).unwrap();
+    assert_eq!(device.compiled_kernels(), 1, "the default settings' kernel, compiled while preparing");
     assert_eq!(whole, again, "a seed must give the same image");
     // Two passes of 8 samples: the same samples, grouped differently.
     let mut split = Film::new(s.width, s.height);
@@ -388,10 +419,13 @@ fn passes_bands_and_reruns_add_up() {
         }
     }
     // Banded: the same pixels, bit for bit.
-    let ctx = gpu::require_gpu().unwrap();
-    let banded = GpuBackend::with_context(gpu::GpuContext { limits, ..ctx });
+    // A clone of the device with lower limits: the kernel compiled above is reused.
+    let mut ctx = device.clone();
+    ctx.limits = limits;
+    let banded = GpuBackend::with_context(ctx);
     let banded = banded.prepare_gpu(scene, &SceneOptions::default()).unwrap();
     let (bands, stats) = tracer::render(&banded, &s, &|_| {}).unwrap();
+    assert_eq!(device.compiled_kernels(), 1, "the same scene compiled its kernel again");
     assert_eq!(bands, whole, "bands of rows must not change the image");
     assert!(stats.rays >= stats.samples, "{} rays for {} samples", stats.rays, stats.samples);
 }
@@ -401,7 +435,7 @@ fn passes_bands_and_reruns_add_up() {
 /// (whichever runs first); a crop window is, bit for bit, the same pixels of the image.
 #[test]
 fn long_passes_are_merged_in_groups() {
-    let Some(ctx) = gpu::require_gpu() else { return };
+    let Some(ctx) = shared_gpu() else { return };
     let Some(scene) = cornell() else { return };
     let gpu = GpuBackend::with_context(ctx).prepare_gpu(scene, &SceneOptions::default()).unwrap();
     let s = settings(8, 8, 1100);
@@ -487,7 +521,7 @@ fn unsupported_scenes_and_modes_are_clear_errors() {
     let direct = gpu::backend::capabilities_for(gpu::kernel::GpuIntegrator::Direct);
     direct.check_settings(&with_extension(250, 10)).unwrap();
     // The same refusals through a device: before any upload or compilation.
-    let Some(ctx) = gpu::require_gpu() else { return };
+    let Some(ctx) = shared_gpu() else { return };
     let gpu = GpuBackend::with_context(ctx);
     let err = tracer::Backend::prepare(&gpu, torus, &SceneOptions::default()).err().unwrap().to_string();
     assert!(err.contains("does not support analytic shapes of kind implicit surface"), "{err}");
@@ -541,7 +575,7 @@ fn merging_pass_statistics_equals_adding_every_sample() {
 /// matches the CPU's Möller–Trumbore render of the same seed.
 #[test]
 fn moller_trumbore_matches_the_cpu() {
-    let Some(ctx) = gpu::require_gpu() else { return };
+    let Some(ctx) = shared_gpu() else { return };
     let Some(scene) = cornell() else { return };
     let options = SceneOptions { triangle_test: bvh::TriangleTest::MollerTrumbore, ..SceneOptions::default() };
     let cpu = CpuBackend::new(2).unwrap().prepare_cpu(scene.clone(), &options).unwrap();
@@ -559,7 +593,7 @@ fn moller_trumbore_matches_the_cpu() {
 /// roulette (the default) none does.
 #[test]
 fn paths_cut_by_the_bounce_cap_are_counted() {
-    let Some(ctx) = gpu::require_gpu() else { return };
+    let Some(ctx) = shared_gpu() else { return };
     let mut room = Scene::default();
     let walls = Material::diffuse("walls", Colour::constant(0.9))
         .unwrap()
@@ -611,7 +645,7 @@ fn triangle_cloud() -> Scene {
 /// and on a smooth glass sphere (refraction, shading normals).
 #[test]
 fn wide_and_binary_bvhs_give_the_same_image() {
-    let Some(ctx) = gpu::require_gpu() else { return };
+    let Some(ctx) = shared_gpu() else { return };
     let Some(cornell) = cornell() else { return };
     let backend = GpuBackend::with_context(ctx);
     let glass = tracer::scenes::material_sphere(Material::dielectric("glass", 1.5).unwrap());
@@ -649,7 +683,7 @@ fn wide_and_binary_bvhs_give_the_same_image() {
 fn direct_lighting_and_ambient_occlusion_match_the_cpu() {
     use gpu::kernel::GpuIntegrator;
     use tracer::{AmbientOcclusion, Backend, DirectLighting};
-    let Some(ctx) = gpu::require_gpu() else { return };
+    let Some(ctx) = shared_gpu() else { return };
     drop(ctx);
     let Some(scene) = cornell() else { return };
     let s = settings(32, 32, 128);
@@ -666,7 +700,7 @@ fn direct_lighting_and_ambient_occlusion_match_the_cpu() {
     for (name, integrator, cpu) in cases {
         let options = SceneOptions::default();
         let cpu_scene = cpu.prepare(scene.clone(), &options).unwrap();
-        let backend = GpuBackend::with_context(gpu::require_gpu().unwrap()).with_integrator(integrator);
+        let backend = GpuBackend::with_context(shared_gpu().unwrap()).with_integrator(integrator);
         assert_eq!(backend.capabilities().integrator, name);
         let gpu_scene = backend.prepare_gpu(scene.clone(), &options).unwrap();
         let r = render_three_with(cpu_scene.as_ref(), &gpu_scene, &s).unwrap();
@@ -701,14 +735,17 @@ fn paths_follow_the_cpu(label: &str, r: &Renders, limit: f64) -> Option<String> 
 #[test]
 fn sobol_samplers_match_the_cpu() {
     use tracer::sampler::SamplerKind;
-    let Some(ctx) = gpu::require_gpu() else { return };
+    let Some(ctx) = shared_gpu() else { return };
     let Some(scene) = cornell() else { return };
     let gpu = GpuBackend::with_context(ctx);
-    let (cpu_scene, gpu_scene) = prepare_both(&gpu, &scene).unwrap();
-    // Preparing compiles the default sampler's kernel; warming up compiles another's.
-    assert_eq!(gpu_scene.compiled_samplers(), [SamplerKind::ZSobol]);
-    gpu_scene.warm_up(&RenderSettings { sampler: SamplerKind::Independent, ..settings(8, 8, 1) }).unwrap();
-    assert_eq!(gpu_scene.compiled_samplers(), [SamplerKind::ZSobol, SamplerKind::Independent]);
+    // Preparing compiles the kernel of the first render's sampler (without a hint the
+    // default settings'); warming up compiles another's.
+    let (cpu_scene, gpu_scene) = prepare_both(&gpu, &scene, None).unwrap();
+    assert_eq!(gpu_scene.compiled_samplers(), [SamplerKind::Independent]);
+    gpu_scene.warm_up(&RenderSettings { sampler: SamplerKind::ZSobol, ..settings(8, 8, 1) }).unwrap();
+    assert_eq!(gpu_scene.compiled_samplers(), [SamplerKind::Independent, SamplerKind::ZSobol]);
+    let hint = SceneOptions { first_render: Some((SamplerKind::Sobol, SpectralMode::Hero)), ..SceneOptions::default() };
+    assert_eq!(gpu.prepare_gpu(scene, &hint).unwrap().compiled_samplers(), [SamplerKind::Sobol]);
     let mut failures = Vec::new();
     for sampler in [SamplerKind::Independent, SamplerKind::ZSobol, SamplerKind::Sobol] {
         let s = RenderSettings { sampler, ..settings(32, 32, 64) };
@@ -792,7 +829,7 @@ fn shape_scene() -> Scene {
 
 #[test]
 fn analytic_shapes_match_the_cpu() {
-    let Some(ctx) = gpu::require_gpu() else { return };
+    let Some(ctx) = shared_gpu() else { return };
     let gpu = GpuBackend::with_context(ctx);
     let scene = shape_scene();
     let s = settings(32, 32, 128);
@@ -831,7 +868,7 @@ fn punctual_scene() -> Scene {
 fn punctual_lights_match_the_cpu() {
     use gpu::kernel::GpuIntegrator;
     use tracer::{Backend, DirectLighting};
-    let Some(ctx) = gpu::require_gpu() else { return };
+    let Some(ctx) = shared_gpu() else { return };
     let scene = punctual_scene();
     let s = settings(32, 32, 128);
     let mut failures = Vec::new();
@@ -843,7 +880,7 @@ fn punctual_lights_match_the_cpu() {
     // Direct lighting sees the sun's disk unweighted.
     let options = SceneOptions::default();
     let cpu = CpuBackend::with_integrator(2, DirectLighting).unwrap().prepare(scene.clone(), &options).unwrap();
-    let backend = GpuBackend::with_context(gpu::require_gpu().unwrap()).with_integrator(GpuIntegrator::Direct);
+    let backend = GpuBackend::with_context(shared_gpu().unwrap()).with_integrator(GpuIntegrator::Direct);
     let r = render_three_with(cpu.as_ref(), &backend.prepare_gpu(scene, &options).unwrap(), &s).unwrap();
     failures.extend(compare_all("punctual lights, direct", &r));
     assert!(failures.is_empty(), "{failures:#?}");
@@ -859,7 +896,7 @@ fn punctual_lights_match_the_cpu() {
 fn light_inside_absorbing_glass_matches_the_cpu() {
     use shapes::boxes::Cuboid;
     use tracer::ShapeKind;
-    let Some(ctx) = gpu::require_gpu() else { return };
+    let Some(ctx) = shared_gpu() else { return };
     let mut scene = model_scene(Material::diffuse("grey", Colour::constant(0.5)).unwrap());
     let glass = Material::builtin(
         "tinted glass",
@@ -880,7 +917,7 @@ fn light_inside_absorbing_glass_matches_the_cpu() {
 /// the compressed throughput decides (checked once on lavapipe).
 #[test]
 fn russian_roulette_inside_glass_sees_through_radiance_compression() {
-    let Some(ctx) = gpu::require_gpu() else { return };
+    let Some(ctx) = shared_gpu() else { return };
     let mut scene = Scene::default();
     scene.add(&uv_sphere(Vec3::ZERO, 0.5, 32, 64, false), Material::dielectric("glass", 1.5).unwrap());
     scene.environment = Some(Environment::uniform(Colour::constant(1.0)));
@@ -903,10 +940,10 @@ fn russian_roulette_inside_glass_sees_through_radiance_compression() {
 /// lights' scenes, and the Cornell box.
 #[test]
 fn rgb_mode_matches_the_cpu() {
-    let Some(ctx) = gpu::require_gpu() else { return };
+    let Some(ctx) = shared_gpu() else { return };
     let gpu = GpuBackend::with_context(ctx);
     let s = RenderSettings { mode: SpectralMode::Rgb, ..settings(24, 24, 96) };
-    let mut scenes: Vec<(String, Scene)> = model_cases().into_iter().map(|(name, m)| (name, model_scene(m))).collect();
+    let mut scenes = model_case_scenes();
     scenes.push(("analytic shapes".into(), shape_scene()));
     scenes.push(("punctual lights".into(), punctual_scene()));
     scenes.extend(cornell().map(|c| ("Cornell box".to_string(), c)));
@@ -1021,7 +1058,7 @@ fn textured_scene() -> Scene {
 
 #[test]
 fn textures_match_the_cpu() {
-    let Some(ctx) = gpu::require_gpu() else { return };
+    let Some(ctx) = shared_gpu() else { return };
     let gpu = GpuBackend::with_context(ctx);
     let scene = textured_scene();
     let mut failures = Vec::new();
@@ -1051,7 +1088,7 @@ fn textured_sponza_matches_the_cpu() {
         eprintln!("skipping: {} is absent", path.display());
         return;
     }
-    let Some(ctx) = gpu::require_gpu() else { return };
+    let Some(ctx) = shared_gpu() else { return };
     let mut scene = tracer::obj::load_obj(path).unwrap();
     assert!(scene.materials.iter().filter(|m| m.textures.is_some()).count() > 20, "Sponza's textures were not read");
     scene.environment = Some(Environment::white_sky(1.0));
@@ -1101,7 +1138,7 @@ fn sky_map() -> tracer::envmap::EnvironmentMap {
 fn environment_maps_match_the_cpu() {
     use gpu::kernel::GpuIntegrator;
     use tracer::{Backend, DirectLighting};
-    let Some(ctx) = gpu::require_gpu() else { return };
+    let Some(ctx) = shared_gpu() else { return };
     let gpu = GpuBackend::with_context(ctx);
     let metal = Material::builtin(
         "metal",
@@ -1126,7 +1163,7 @@ fn environment_maps_match_the_cpu() {
     }
     let options = SceneOptions::default();
     let cpu = CpuBackend::with_integrator(2, DirectLighting).unwrap().prepare(only_sky.clone(), &options).unwrap();
-    let direct = GpuBackend::with_context(gpu::require_gpu().unwrap()).with_integrator(GpuIntegrator::Direct);
+    let direct = GpuBackend::with_context(shared_gpu().unwrap()).with_integrator(GpuIntegrator::Direct);
     let r = render_three_with(cpu.as_ref(), &direct.prepare_gpu(only_sky, &options).unwrap(), &settings(32, 32, 128))
         .unwrap();
     failures.extend(compare_all("sky map alone, direct", &r));
@@ -1164,7 +1201,7 @@ fn sun_disks_keep_their_sampling_frame() {
 /// measured metal, the textured scene, the sky map and the Cornell box.
 #[test]
 fn bins40_matches_the_cpu() {
-    let Some(ctx) = gpu::require_gpu() else { return };
+    let Some(ctx) = shared_gpu() else { return };
     let gpu = GpuBackend::with_context(ctx);
     let s = RenderSettings { mode: SpectralMode::Bins40, ..settings(24, 24, 64) };
     let cases = model_cases();
@@ -1211,7 +1248,7 @@ fn whitted_matches_the_cpu() {
     use gpu::kernel::GpuIntegrator;
     use tracer::punctual::PunctualLight;
     use tracer::{Backend, Whitted};
-    let Some(ctx) = gpu::require_gpu() else { return };
+    let Some(ctx) = shared_gpu() else { return };
     let mut glass_scene = glass_and_mirror_scene();
     let rgb = |c: [f32; 3]| Colour::illuminant_rgb(c).unwrap();
     glass_scene.punctual_lights = vec![
@@ -1254,7 +1291,7 @@ fn whitted_matches_the_cpu() {
 /// hero and RGB.
 #[test]
 fn custom_bsdf_twins_match_the_cpu() {
-    let Some(ctx) = gpu::require_gpu() else { return };
+    let Some(ctx) = shared_gpu() else { return };
     let gpu = GpuBackend::with_context(ctx);
     let phong = |kd, ks, exponent| {
         let params = phong::PhongParams {
@@ -1298,7 +1335,7 @@ fn custom_bsdf_twins_match_the_cpu() {
 fn the_atlas_gather_on_the_device_gives_the_cpus_irradiance() {
     use gpu::kernel::GpuIntegrator;
     use tracer::integrator::{Atlas, AtlasSettings, SceneView};
-    let Some(ctx) = gpu::require_gpu() else { return };
+    let Some(ctx) = shared_gpu() else { return };
     let Some(scene) = cornell() else { return };
     let backend = GpuBackend::with_context(ctx);
     let geometry = tracer::geometry::Geometry::build(&scene, &SceneOptions::default()).unwrap();
@@ -1343,7 +1380,7 @@ fn the_atlas_gather_on_the_device_gives_the_cpus_irradiance() {
 fn an_atlas_too_large_for_the_device_is_gathered_on_the_cpu() {
     use gpu::kernel::GpuIntegrator;
     use tracer::integrator::{Atlas, AtlasSettings, SceneView};
-    let Some(mut ctx) = gpu::require_gpu() else { return };
+    let Some(mut ctx) = shared_gpu() else { return };
     let Some(scene) = cornell() else { return };
     let settings = AtlasSettings { resolution: 256, samples: 4, direct_samples: 2, ..AtlasSettings::default() };
     let options = KernelOptions { integrator: GpuIntegrator::Atlas(settings), ..KernelOptions::default() };
@@ -1371,7 +1408,7 @@ fn atlas_matches_the_cpu() {
     use gpu::kernel::GpuIntegrator;
     use tracer::integrator::AtlasSettings;
     use tracer::{AtlasGi, Backend};
-    let Some(ctx) = gpu::require_gpu() else { return };
+    let Some(ctx) = shared_gpu() else { return };
     let atlas = AtlasSettings { resolution: 96, samples: 16, direct_samples: 4, ..AtlasSettings::default() };
     let backend = GpuBackend::with_context(ctx).with_integrator(GpuIntegrator::Atlas(atlas));
     assert_eq!(backend.capabilities().integrator, "atlas");
@@ -1437,7 +1474,7 @@ fn compare_with_splats(cpu: &Film, gpu: &Film, gpu_other: &Film) -> SplatCompari
 fn bdpt_matches_the_cpu() {
     use gpu::kernel::GpuIntegrator;
     use tracer::{Backend, Bdpt};
-    let Some(ctx) = gpu::require_gpu() else { return };
+    let Some(ctx) = shared_gpu() else { return };
     let backend = GpuBackend::with_context(ctx).with_integrator(GpuIntegrator::Bdpt);
     assert_eq!(backend.capabilities().integrator, "bdpt");
     assert_eq!(backend.capabilities().max_bounces, None, "bdpt's own cap, as on the CPU");
@@ -1479,9 +1516,12 @@ fn bdpt_matches_the_cpu() {
     for (name, scene, runs) in cases {
         let cpu_scene = cpu.prepare(scene.clone(), &options).unwrap();
         let gpu_scene = backend.prepare_gpu(scene, &options).unwrap();
+        println!("bdpt, {name}: kernel compile {:?}", gpu_scene.stats().compile.unwrap_or_default());
         for (run, s) in runs {
             let (cpu_film, _) = tracer::render(cpu_scene.as_ref(), &s, &|_| {}).unwrap();
+            let started = Instant::now();
             let (gpu_film, _) = tracer::render(&gpu_scene, &s, &|_| {}).unwrap();
+            println!("bdpt, {name}, {run}: gpu render {:?}", started.elapsed());
             let other = RenderSettings { seed: s.seed + 1000, ..s.clone() };
             let (gpu_other, _) = tracer::render(&gpu_scene, &other, &|_| {}).unwrap();
             assert!(gpu_film.has_splats() && gpu_film.light_paths() == s.spp as u64, "{name}, {run}: no light tracing");
@@ -1515,7 +1555,7 @@ fn bdpt_matches_the_cpu() {
 #[test]
 fn bdpt_bands_give_the_same_film() {
     use gpu::kernel::{BDPT_SLOT_BYTES, GpuIntegrator};
-    let Some(ctx) = gpu::require_gpu() else { return };
+    let Some(ctx) = shared_gpu() else { return };
     let Some(scene) = cornell() else { return };
     let options = KernelOptions { integrator: GpuIntegrator::Bdpt, ..KernelOptions::default() };
     let largest = SceneData::new(&scene, options).unwrap().buffer_sizes().iter().map(|b| b.1).max().unwrap();
@@ -1528,8 +1568,9 @@ fn bdpt_bands_give_the_same_film() {
     let (whole, _) =
         tracer::render(&whole_backend.prepare_gpu(scene.clone(), &SceneOptions::default()).unwrap(), &s, &|_| {})
             .unwrap();
-    let ctx = gpu::require_gpu().unwrap();
-    let banded = GpuBackend::with_context(gpu::GpuContext { limits, ..ctx }).with_integrator(GpuIntegrator::Bdpt);
+    let mut ctx = shared_gpu().unwrap();
+    ctx.limits = limits;
+    let banded = GpuBackend::with_context(ctx).with_integrator(GpuIntegrator::Bdpt);
     let (bands, _) =
         tracer::render(&banded.prepare_gpu(scene, &SceneOptions::default()).unwrap(), &s, &|_| {}).unwrap();
     assert!(whole.has_splats());
@@ -1614,10 +1655,10 @@ fn instances_match_the_cpu() {
     // in world space).
     assert!(matches!(SceneData::new(&scene, KernelOptions::default()), Err(GpuError::Unsupported(_))));
 
-    let Some(ctx) = gpu::require_gpu() else { return };
+    let Some(ctx) = shared_gpu() else { return };
     let gpu = GpuBackend::with_context(ctx);
     let s = settings(32, 24, 128);
-    let (cpu_scene, binary) = prepare_both(&gpu, &scene).unwrap();
+    let (cpu_scene, binary) = prepare_both(&gpu, &scene, None).unwrap();
     let r = render_three_with(&cpu_scene, &binary, &s).unwrap();
     assert!(r.cpu.channel_means()[1] > 0.02, "a dark image proves little");
     println!(

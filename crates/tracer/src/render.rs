@@ -155,6 +155,11 @@ pub struct SceneOptions {
     pub bvh_width: BvhWidth,
     /// How the triangle BVH's nodes are split (`None`: binned SAH, the default).
     pub bvh_builder: Option<bvh::SplitMethod>,
+    /// The sampler and spectral mode the renders will use, where known. A backend that
+    /// compiles a kernel per sampler and mode (the GPU's) compiles this one while
+    /// preparing; `None` means those of [`RenderSettings::default`]. Another sampler or
+    /// mode still renders, after compiling its own kernel (on lavapipe tens of seconds).
+    pub first_render: Option<(SamplerKind, SpectralMode)>,
 }
 
 /// What a backend can render. [`Capabilities::check_scene`] and
@@ -384,7 +389,8 @@ impl Capabilities {
 pub struct PrepareStats {
     /// Building the acceleration structure.
     pub build: Duration,
-    /// Compiling kernels, where the backend compiles any.
+    /// Compiling kernels, where the backend compiles any (near zero where the device had
+    /// compiled the same kernel before: the GPU's are kept per device).
     pub compile: Option<Duration>,
     /// Preparing the integrator's per-scene data (the atlas), where it has any.
     pub integrator: Option<Duration>,
