@@ -847,8 +847,8 @@ fn prepare(
     backend.capabilities().check_settings(&settings)?;
     let options = SceneOptions { first_render: Some((settings.sampler, settings.mode)), ..scene_options(args) };
     let prepared = backend.prepare(scene, &options)?;
-    // Kernel compilation for a non-default sampler belongs to preparation, not to the
-    // timed render.
+    // Whatever else the render needs before its first sample (the GPU compiled the
+    // settings' kernel while preparing) belongs to preparation, not to the timed render.
     prepared.warm_up(&settings)?;
     Ok((prepared, settings))
 }
@@ -1130,6 +1130,10 @@ fn run_bench(args: BenchArgs) -> Result<()> {
     let all: Vec<RenderSettings> = args.modes.iter().map(|&mode| RenderSettings { mode, ..base.clone() }).collect();
     for s in &all {
         prepared.capabilities().check_settings(s)?;
+    }
+    // Each other mode's kernel compiles now, not in its first timed run.
+    for s in &all {
+        prepared.warm_up(s)?;
     }
     println!(
         "# {} {}x{} {} spp, {} backend, {}",

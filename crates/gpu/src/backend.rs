@@ -1148,10 +1148,18 @@ fn compile_with_module(
     entries: &[wgpu::BindGroupLayoutEntry],
     source: &str,
 ) -> Result<(wgpu::ComputePipeline, wgpu::ShaderModule), GpuError> {
-    if let Some(kernel) = ctx.kernels.get(source, entries) {
-        return Ok(kernel);
-    }
+    ctx.kernels.get_or_compile(source, entries, || compile_kernel(ctx, layout, source))
+}
+
+/// Compiles `source`'s `pt_main` with `layout` (what [`compile_with_module`] keeps).
+fn compile_kernel(
+    ctx: &GpuContext,
+    layout: &wgpu::PipelineLayout,
+    source: &str,
+) -> Result<(wgpu::ComputePipeline, wgpu::ShaderModule), GpuError> {
     let device = &ctx.device;
+    // (Out of memory caught here too: a pipeline that failed must not be kept.)
+    let memory = device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
     let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
     let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
         label: Some("spt path tracer"),
@@ -1165,8 +1173,9 @@ fn compile_with_module(
         compilation_options: Default::default(),
         cache: None,
     });
-    pop_scope(scope, "the path-tracing kernel does not compile")?;
-    ctx.kernels.insert(source, entries, (pipeline.clone(), module.clone()));
+    let compiled = pop_scope(scope, "the path-tracing kernel does not compile");
+    pop_scope(memory, "out of GPU memory compiling the path-tracing kernel")?;
+    compiled?;
     Ok((pipeline, module))
 }
 

@@ -9,41 +9,85 @@ pub(crate) type CompiledKernel = (wgpu::ComputePipeline, wgpu::ShaderModule);
 
 /// The kernels compiled on one device, by WGSL source and bind group layout entries.
 ///
-/// Why: the driver compiles a path kernel in tens of milliseconds on a GPU but in tens of
-/// seconds on lavapipe, and preparing a second scene with the same materials and
-/// features (another camera, another image size, the same scene again, a copy of the
-/// context with other limits) needs the same kernel. Pipelines made from a layout with
-/// the same entries are compatible with the new scene's bind groups: wgpu deduplicates
-/// identical bind group layouts on a device.
+/// Why: a GPU's driver compiles a path kernel in 0.1–0.2 s, lavapipe in 20–50 s, and
+/// preparing a second scene with the same materials and features (another camera or
+/// image size, the same scene again, a clone of the context with other limits) needs the
+/// same kernel. Pipelines made from a layout with the same entries are compatible with
+/// the new scene's bind groups: wgpu deduplicates identical bind group layouts on a
+/// device. Only the [`KEPT_KERNELS`] most recently compiled are kept: lavapipe's compiled
+/// code is large (a device keeping every kernel of the equivalence tests grew to 24 GB and
+/// was killed), and a scene keeps its own kernels anyway.
 #[derive(Clone, Default)]
-pub(crate) struct KernelCache(Arc<Mutex<HashMap<KernelKey, CompiledKernel>>>);
+pub(crate) struct KernelCache(Arc<Mutex<Kept>>);
+
+/// How many compiled kernels a device keeps beyond those its scenes hold.
+pub const KEPT_KERNELS: usize = 2;
+
+/// The kept kernels' slots, and their keys oldest first.
+#[derive(Default)]
+struct Kept {
+    slots: HashMap<KernelKey, KernelSlot>,
+    order: std::collections::VecDeque<KernelKey>,
+}
 
 /// The source and the layout entries a kernel was compiled with.
 type KernelKey = (String, Vec<wgpu::BindGroupLayoutEntry>);
 
-impl KernelCache {
-    /// The kernel compiled from `source` with `entries`, if it was.
-    pub(crate) fn get(&self, source: &str, entries: &[wgpu::BindGroupLayoutEntry]) -> Option<CompiledKernel> {
-        let kernels = self.0.lock().unwrap_or_else(PoisonError::into_inner);
-        // (Keys are compared in full: the source is a few hundred kilobytes at most.)
-        kernels.get(&(source.to_string(), entries.to_vec())).cloned()
-    }
+/// One kernel's entry: empty until it compiled without error. Locked while it compiles, so
+/// that a second thread asking for the same kernel waits for it instead of compiling too.
+type KernelSlot = Arc<Mutex<Option<CompiledKernel>>>;
 
-    /// Keeps a kernel compiled without error.
-    pub(crate) fn insert(&self, source: &str, entries: &[wgpu::BindGroupLayoutEntry], kernel: CompiledKernel) {
-        let mut kernels = self.0.lock().unwrap_or_else(PoisonError::into_inner);
-        kernels.insert((source.to_string(), entries.to_vec()), kernel);
+fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
+    m.lock().unwrap_or_else(PoisonError::into_inner)
+}
+
+impl KernelCache {
+    /// The kernel compiled from `source` with `entries`: the kept one, or `compile`'s
+    /// (kept if it succeeds; an error is returned and nothing kept).
+    pub(crate) fn get_or_compile(
+        &self,
+        source: &str,
+        entries: &[wgpu::BindGroupLayoutEntry],
+        compile: impl FnOnce() -> Result<CompiledKernel, GpuError>,
+    ) -> Result<CompiledKernel, GpuError> {
+        let slot = {
+            let mut kept = lock(&self.0);
+            let key = (source.to_string(), entries.to_vec());
+            match kept.slots.get(&key) {
+                Some(slot) => Arc::clone(slot),
+                None => {
+                    if kept.order.len() >= KEPT_KERNELS
+                        && let Some(oldest) = kept.order.pop_front()
+                    {
+                        kept.slots.remove(&oldest);
+                    }
+                    let slot = KernelSlot::default();
+                    kept.slots.insert(key.clone(), Arc::clone(&slot));
+                    kept.order.push_back(key);
+                    slot
+                }
+            }
+        };
+        let mut kernel = lock(&slot);
+        if let Some(kept) = &*kernel {
+            return Ok(kept.clone());
+        }
+        let compiled = compile()?;
+        *kernel = Some(compiled.clone());
+        Ok(compiled)
     }
 
     /// How many kernels are kept.
     pub(crate) fn len(&self) -> usize {
-        self.0.lock().unwrap_or_else(PoisonError::into_inner).len()
+        let slots: Vec<KernelSlot> = lock(&self.0).slots.values().cloned().collect();
+        slots.iter().filter(|slot| lock(slot).is_some()).count()
     }
 }
 
 /// An open device and its queue. Cloning shares the device, the queue and the kernels
 /// compiled on it (lower [`GpuContext::limits`] on a clone to test what a smaller device
-/// would do without compiling again).
+/// would do without compiling again; a clone given another `device` would share kernels
+/// that are not its own — open it with [`GpuContext::from_parts`] instead).
 #[derive(Clone)]
 pub struct GpuContext {
     /// The device.
@@ -78,11 +122,17 @@ impl GpuContext {
             ..Default::default()
         }))
         .map_err(|e| GpuError::Device(e.to_string()))?;
-        Ok(Self { device, queue, info: adapter.get_info(), limits, kernels: KernelCache::default() })
+        Ok(Self::from_parts(device, queue, adapter.get_info(), limits))
     }
 
-    /// How many kernels have been compiled on the device and kept for reuse (each distinct
-    /// WGSL source and layout once).
+    /// A context around a device opened elsewhere (e.g. one that also drives a window's
+    /// surface), with no kernels compiled yet.
+    pub fn from_parts(device: wgpu::Device, queue: wgpu::Queue, info: wgpu::AdapterInfo, limits: wgpu::Limits) -> Self {
+        Self { device, queue, info, limits, kernels: KernelCache::default() }
+    }
+
+    /// How many compiled kernels the device keeps for reuse (each distinct WGSL source and
+    /// layout once, the [`KEPT_KERNELS`] most recent).
     pub fn compiled_kernels(&self) -> usize {
         self.kernels.len()
     }

@@ -484,8 +484,9 @@ pub struct KernelOptions {
     pub bvh_builder: bvh::SplitMethod,
 }
 
-/// The backend's default kernel: the watertight test, the binary tree, the path tracer,
-/// ZSobol, hero wavelengths; the scene features (shapes … `env_map`) are set by
+/// A default kernel: the watertight test, the binary tree, the path tracer, ZSobol, hero
+/// wavelengths (the backend's prepared kernel takes its sampler and mode from
+/// `SceneOptions::first_render` instead); the scene features (shapes … `env_map`) are set by
 /// `SceneData::new` from the scene itself.
 impl Default for KernelOptions {
     fn default() -> Self {

@@ -184,13 +184,6 @@ fn compare_all(name: &str, r: &Renders) -> Vec<String> {
         .collect()
 }
 
-/// The test binary's one device (a clone of it): a kernel compiled by one test is reused
-/// by every other that needs the same (lavapipe compiles a kernel in tens of seconds).
-fn shared_gpu() -> Option<gpu::GpuContext> {
-    static DEVICE: std::sync::OnceLock<Option<gpu::GpuContext>> = std::sync::OnceLock::new();
-    DEVICE.get_or_init(gpu::require_gpu).clone()
-}
-
 /// Depth 8 without Russian roulette (see the module docs).
 fn settings(width: u32, height: u32, spp: u32) -> RenderSettings {
     RenderSettings {
@@ -214,7 +207,7 @@ fn cornell() -> Option<Scene> {
 
 #[test]
 fn cornell_box_matches_the_cpu() {
-    let Some(ctx) = shared_gpu() else { return };
+    let Some(ctx) = gpu::require_gpu() else { return };
     let Some(scene) = cornell() else { return };
     println!("adapter: {} ({:?})", ctx.info.name, ctx.info.backend);
     let gpu = GpuBackend::with_context(ctx);
@@ -284,7 +277,7 @@ fn model_case_scenes() -> Vec<(String, Scene)> {
 
 #[test]
 fn every_model_and_glass_match_the_cpu() {
-    let Some(ctx) = shared_gpu() else { return };
+    let Some(ctx) = gpu::require_gpu() else { return };
     let gpu = GpuBackend::with_context(ctx);
     let s = settings(32, 32, 128);
     let mut failures = Vec::new();
@@ -311,7 +304,7 @@ fn every_model_and_glass_match_the_cpu() {
 /// that few samples suffice.
 #[test]
 fn path_settings_match_the_cpu() {
-    let Some(ctx) = shared_gpu() else { return };
+    let Some(ctx) = gpu::require_gpu() else { return };
     let gpu = GpuBackend::with_context(ctx);
     let (cpu, gpu) = prepare_both(&gpu, &model_scene(Material::dielectric("glass", 1.5).unwrap()), None).unwrap();
     let base = settings(32, 32, 64);
@@ -336,7 +329,7 @@ fn path_settings_match_the_cpu() {
 #[test]
 fn max_diffuse_depth_ends_paths_as_on_the_cpu() {
     // One diffuse bounce: direct light only (the second hit's emission, then the end).
-    let Some(ctx) = shared_gpu() else { return };
+    let Some(ctx) = gpu::require_gpu() else { return };
     let Some(scene) = cornell() else { return };
     let (cpu, gpu) = prepare_both(&GpuBackend::with_context(ctx), &scene, None).unwrap();
     let base = settings(32, 32, 64);
@@ -357,7 +350,7 @@ fn max_diffuse_depth_ends_paths_as_on_the_cpu() {
 fn every_bvh_builder_renders_the_cpus_image() {
     // `--bvh-builder`: the GPU's binary tree built by each split method; the same paths as
     // the CPU's (its wide tree collapsed from a tree built the same way).
-    let Some(ctx) = shared_gpu() else { return };
+    let Some(ctx) = gpu::require_gpu() else { return };
     let Some(scene) = cornell() else { return };
     let gpu = GpuBackend::with_context(ctx);
     let s = settings(32, 32, 16);
@@ -385,7 +378,6 @@ fn every_bvh_builder_renders_the_cpus_image() {
 
 #[test]
 fn passes_bands_and_reruns_add_up() {
-    // A device of its own: its kernels are counted below.
     let Some(ctx) = gpu::require_gpu() else { return };
     let device = ctx.clone();
     let Some(scene) = cornell() else { return };
@@ -435,7 +427,7 @@ fn passes_bands_and_reruns_add_up() {
 /// (whichever runs first); a crop window is, bit for bit, the same pixels of the image.
 #[test]
 fn long_passes_are_merged_in_groups() {
-    let Some(ctx) = shared_gpu() else { return };
+    let Some(ctx) = gpu::require_gpu() else { return };
     let Some(scene) = cornell() else { return };
     let gpu = GpuBackend::with_context(ctx).prepare_gpu(scene, &SceneOptions::default()).unwrap();
     let s = settings(8, 8, 1100);
@@ -521,7 +513,7 @@ fn unsupported_scenes_and_modes_are_clear_errors() {
     let direct = gpu::backend::capabilities_for(gpu::kernel::GpuIntegrator::Direct);
     direct.check_settings(&with_extension(250, 10)).unwrap();
     // The same refusals through a device: before any upload or compilation.
-    let Some(ctx) = shared_gpu() else { return };
+    let Some(ctx) = gpu::require_gpu() else { return };
     let gpu = GpuBackend::with_context(ctx);
     let err = tracer::Backend::prepare(&gpu, torus, &SceneOptions::default()).err().unwrap().to_string();
     assert!(err.contains("does not support analytic shapes of kind implicit surface"), "{err}");
@@ -575,7 +567,7 @@ fn merging_pass_statistics_equals_adding_every_sample() {
 /// matches the CPU's Möller–Trumbore render of the same seed.
 #[test]
 fn moller_trumbore_matches_the_cpu() {
-    let Some(ctx) = shared_gpu() else { return };
+    let Some(ctx) = gpu::require_gpu() else { return };
     let Some(scene) = cornell() else { return };
     let options = SceneOptions { triangle_test: bvh::TriangleTest::MollerTrumbore, ..SceneOptions::default() };
     let cpu = CpuBackend::new(2).unwrap().prepare_cpu(scene.clone(), &options).unwrap();
@@ -593,7 +585,7 @@ fn moller_trumbore_matches_the_cpu() {
 /// roulette (the default) none does.
 #[test]
 fn paths_cut_by_the_bounce_cap_are_counted() {
-    let Some(ctx) = shared_gpu() else { return };
+    let Some(ctx) = gpu::require_gpu() else { return };
     let mut room = Scene::default();
     let walls = Material::diffuse("walls", Colour::constant(0.9))
         .unwrap()
@@ -645,7 +637,7 @@ fn triangle_cloud() -> Scene {
 /// and on a smooth glass sphere (refraction, shading normals).
 #[test]
 fn wide_and_binary_bvhs_give_the_same_image() {
-    let Some(ctx) = shared_gpu() else { return };
+    let Some(ctx) = gpu::require_gpu() else { return };
     let Some(cornell) = cornell() else { return };
     let backend = GpuBackend::with_context(ctx);
     let glass = tracer::scenes::material_sphere(Material::dielectric("glass", 1.5).unwrap());
@@ -683,7 +675,7 @@ fn wide_and_binary_bvhs_give_the_same_image() {
 fn direct_lighting_and_ambient_occlusion_match_the_cpu() {
     use gpu::kernel::GpuIntegrator;
     use tracer::{AmbientOcclusion, Backend, DirectLighting};
-    let Some(ctx) = shared_gpu() else { return };
+    let Some(ctx) = gpu::require_gpu() else { return };
     drop(ctx);
     let Some(scene) = cornell() else { return };
     let s = settings(32, 32, 128);
@@ -700,7 +692,7 @@ fn direct_lighting_and_ambient_occlusion_match_the_cpu() {
     for (name, integrator, cpu) in cases {
         let options = SceneOptions::default();
         let cpu_scene = cpu.prepare(scene.clone(), &options).unwrap();
-        let backend = GpuBackend::with_context(shared_gpu().unwrap()).with_integrator(integrator);
+        let backend = GpuBackend::with_context(gpu::require_gpu().unwrap()).with_integrator(integrator);
         assert_eq!(backend.capabilities().integrator, name);
         let gpu_scene = backend.prepare_gpu(scene.clone(), &options).unwrap();
         let r = render_three_with(cpu_scene.as_ref(), &gpu_scene, &s).unwrap();
@@ -735,7 +727,7 @@ fn paths_follow_the_cpu(label: &str, r: &Renders, limit: f64) -> Option<String> 
 #[test]
 fn sobol_samplers_match_the_cpu() {
     use tracer::sampler::SamplerKind;
-    let Some(ctx) = shared_gpu() else { return };
+    let Some(ctx) = gpu::require_gpu() else { return };
     let Some(scene) = cornell() else { return };
     let gpu = GpuBackend::with_context(ctx);
     // Preparing compiles the kernel of the first render's sampler (without a hint the
@@ -829,7 +821,7 @@ fn shape_scene() -> Scene {
 
 #[test]
 fn analytic_shapes_match_the_cpu() {
-    let Some(ctx) = shared_gpu() else { return };
+    let Some(ctx) = gpu::require_gpu() else { return };
     let gpu = GpuBackend::with_context(ctx);
     let scene = shape_scene();
     let s = settings(32, 32, 128);
@@ -868,7 +860,7 @@ fn punctual_scene() -> Scene {
 fn punctual_lights_match_the_cpu() {
     use gpu::kernel::GpuIntegrator;
     use tracer::{Backend, DirectLighting};
-    let Some(ctx) = shared_gpu() else { return };
+    let Some(ctx) = gpu::require_gpu() else { return };
     let scene = punctual_scene();
     let s = settings(32, 32, 128);
     let mut failures = Vec::new();
@@ -880,7 +872,7 @@ fn punctual_lights_match_the_cpu() {
     // Direct lighting sees the sun's disk unweighted.
     let options = SceneOptions::default();
     let cpu = CpuBackend::with_integrator(2, DirectLighting).unwrap().prepare(scene.clone(), &options).unwrap();
-    let backend = GpuBackend::with_context(shared_gpu().unwrap()).with_integrator(GpuIntegrator::Direct);
+    let backend = GpuBackend::with_context(gpu::require_gpu().unwrap()).with_integrator(GpuIntegrator::Direct);
     let r = render_three_with(cpu.as_ref(), &backend.prepare_gpu(scene, &options).unwrap(), &s).unwrap();
     failures.extend(compare_all("punctual lights, direct", &r));
     assert!(failures.is_empty(), "{failures:#?}");
@@ -896,7 +888,7 @@ fn punctual_lights_match_the_cpu() {
 fn light_inside_absorbing_glass_matches_the_cpu() {
     use shapes::boxes::Cuboid;
     use tracer::ShapeKind;
-    let Some(ctx) = shared_gpu() else { return };
+    let Some(ctx) = gpu::require_gpu() else { return };
     let mut scene = model_scene(Material::diffuse("grey", Colour::constant(0.5)).unwrap());
     let glass = Material::builtin(
         "tinted glass",
@@ -917,7 +909,7 @@ fn light_inside_absorbing_glass_matches_the_cpu() {
 /// the compressed throughput decides (checked once on lavapipe).
 #[test]
 fn russian_roulette_inside_glass_sees_through_radiance_compression() {
-    let Some(ctx) = shared_gpu() else { return };
+    let Some(ctx) = gpu::require_gpu() else { return };
     let mut scene = Scene::default();
     scene.add(&uv_sphere(Vec3::ZERO, 0.5, 32, 64, false), Material::dielectric("glass", 1.5).unwrap());
     scene.environment = Some(Environment::uniform(Colour::constant(1.0)));
@@ -940,7 +932,7 @@ fn russian_roulette_inside_glass_sees_through_radiance_compression() {
 /// lights' scenes, and the Cornell box.
 #[test]
 fn rgb_mode_matches_the_cpu() {
-    let Some(ctx) = shared_gpu() else { return };
+    let Some(ctx) = gpu::require_gpu() else { return };
     let gpu = GpuBackend::with_context(ctx);
     let s = RenderSettings { mode: SpectralMode::Rgb, ..settings(24, 24, 96) };
     let mut scenes = model_case_scenes();
@@ -1058,7 +1050,7 @@ fn textured_scene() -> Scene {
 
 #[test]
 fn textures_match_the_cpu() {
-    let Some(ctx) = shared_gpu() else { return };
+    let Some(ctx) = gpu::require_gpu() else { return };
     let gpu = GpuBackend::with_context(ctx);
     let scene = textured_scene();
     let mut failures = Vec::new();
@@ -1088,7 +1080,7 @@ fn textured_sponza_matches_the_cpu() {
         eprintln!("skipping: {} is absent", path.display());
         return;
     }
-    let Some(ctx) = shared_gpu() else { return };
+    let Some(ctx) = gpu::require_gpu() else { return };
     let mut scene = tracer::obj::load_obj(path).unwrap();
     assert!(scene.materials.iter().filter(|m| m.textures.is_some()).count() > 20, "Sponza's textures were not read");
     scene.environment = Some(Environment::white_sky(1.0));
@@ -1138,7 +1130,7 @@ fn sky_map() -> tracer::envmap::EnvironmentMap {
 fn environment_maps_match_the_cpu() {
     use gpu::kernel::GpuIntegrator;
     use tracer::{Backend, DirectLighting};
-    let Some(ctx) = shared_gpu() else { return };
+    let Some(ctx) = gpu::require_gpu() else { return };
     let gpu = GpuBackend::with_context(ctx);
     let metal = Material::builtin(
         "metal",
@@ -1163,7 +1155,7 @@ fn environment_maps_match_the_cpu() {
     }
     let options = SceneOptions::default();
     let cpu = CpuBackend::with_integrator(2, DirectLighting).unwrap().prepare(only_sky.clone(), &options).unwrap();
-    let direct = GpuBackend::with_context(shared_gpu().unwrap()).with_integrator(GpuIntegrator::Direct);
+    let direct = GpuBackend::with_context(gpu::require_gpu().unwrap()).with_integrator(GpuIntegrator::Direct);
     let r = render_three_with(cpu.as_ref(), &direct.prepare_gpu(only_sky, &options).unwrap(), &settings(32, 32, 128))
         .unwrap();
     failures.extend(compare_all("sky map alone, direct", &r));
@@ -1201,7 +1193,7 @@ fn sun_disks_keep_their_sampling_frame() {
 /// measured metal, the textured scene, the sky map and the Cornell box.
 #[test]
 fn bins40_matches_the_cpu() {
-    let Some(ctx) = shared_gpu() else { return };
+    let Some(ctx) = gpu::require_gpu() else { return };
     let gpu = GpuBackend::with_context(ctx);
     let s = RenderSettings { mode: SpectralMode::Bins40, ..settings(24, 24, 64) };
     let cases = model_cases();
@@ -1248,7 +1240,7 @@ fn whitted_matches_the_cpu() {
     use gpu::kernel::GpuIntegrator;
     use tracer::punctual::PunctualLight;
     use tracer::{Backend, Whitted};
-    let Some(ctx) = shared_gpu() else { return };
+    let Some(ctx) = gpu::require_gpu() else { return };
     let mut glass_scene = glass_and_mirror_scene();
     let rgb = |c: [f32; 3]| Colour::illuminant_rgb(c).unwrap();
     glass_scene.punctual_lights = vec![
@@ -1291,7 +1283,7 @@ fn whitted_matches_the_cpu() {
 /// hero and RGB.
 #[test]
 fn custom_bsdf_twins_match_the_cpu() {
-    let Some(ctx) = shared_gpu() else { return };
+    let Some(ctx) = gpu::require_gpu() else { return };
     let gpu = GpuBackend::with_context(ctx);
     let phong = |kd, ks, exponent| {
         let params = phong::PhongParams {
@@ -1335,7 +1327,7 @@ fn custom_bsdf_twins_match_the_cpu() {
 fn the_atlas_gather_on_the_device_gives_the_cpus_irradiance() {
     use gpu::kernel::GpuIntegrator;
     use tracer::integrator::{Atlas, AtlasSettings, SceneView};
-    let Some(ctx) = shared_gpu() else { return };
+    let Some(ctx) = gpu::require_gpu() else { return };
     let Some(scene) = cornell() else { return };
     let backend = GpuBackend::with_context(ctx);
     let geometry = tracer::geometry::Geometry::build(&scene, &SceneOptions::default()).unwrap();
@@ -1380,7 +1372,7 @@ fn the_atlas_gather_on_the_device_gives_the_cpus_irradiance() {
 fn an_atlas_too_large_for_the_device_is_gathered_on_the_cpu() {
     use gpu::kernel::GpuIntegrator;
     use tracer::integrator::{Atlas, AtlasSettings, SceneView};
-    let Some(mut ctx) = shared_gpu() else { return };
+    let Some(mut ctx) = gpu::require_gpu() else { return };
     let Some(scene) = cornell() else { return };
     let settings = AtlasSettings { resolution: 256, samples: 4, direct_samples: 2, ..AtlasSettings::default() };
     let options = KernelOptions { integrator: GpuIntegrator::Atlas(settings), ..KernelOptions::default() };
@@ -1408,7 +1400,7 @@ fn atlas_matches_the_cpu() {
     use gpu::kernel::GpuIntegrator;
     use tracer::integrator::AtlasSettings;
     use tracer::{AtlasGi, Backend};
-    let Some(ctx) = shared_gpu() else { return };
+    let Some(ctx) = gpu::require_gpu() else { return };
     let atlas = AtlasSettings { resolution: 96, samples: 16, direct_samples: 4, ..AtlasSettings::default() };
     let backend = GpuBackend::with_context(ctx).with_integrator(GpuIntegrator::Atlas(atlas));
     assert_eq!(backend.capabilities().integrator, "atlas");
@@ -1474,7 +1466,7 @@ fn compare_with_splats(cpu: &Film, gpu: &Film, gpu_other: &Film) -> SplatCompari
 fn bdpt_matches_the_cpu() {
     use gpu::kernel::GpuIntegrator;
     use tracer::{Backend, Bdpt};
-    let Some(ctx) = shared_gpu() else { return };
+    let Some(ctx) = gpu::require_gpu() else { return };
     let backend = GpuBackend::with_context(ctx).with_integrator(GpuIntegrator::Bdpt);
     assert_eq!(backend.capabilities().integrator, "bdpt");
     assert_eq!(backend.capabilities().max_bounces, None, "bdpt's own cap, as on the CPU");
@@ -1555,7 +1547,7 @@ fn bdpt_matches_the_cpu() {
 #[test]
 fn bdpt_bands_give_the_same_film() {
     use gpu::kernel::{BDPT_SLOT_BYTES, GpuIntegrator};
-    let Some(ctx) = shared_gpu() else { return };
+    let Some(ctx) = gpu::require_gpu() else { return };
     let Some(scene) = cornell() else { return };
     let options = KernelOptions { integrator: GpuIntegrator::Bdpt, ..KernelOptions::default() };
     let largest = SceneData::new(&scene, options).unwrap().buffer_sizes().iter().map(|b| b.1).max().unwrap();
@@ -1564,13 +1556,14 @@ fn bdpt_bands_give_the_same_film() {
     assert!(largest < 4 * 32 * BDPT_SLOT_BYTES, "the largest buffer ({largest} B) would allow wider bands");
     let limit = largest.max(3 * 32 * BDPT_SLOT_BYTES);
     let limits = wgpu::Limits { max_storage_buffer_binding_size: limit, ..ctx.limits.clone() };
+    let mut banded_ctx = ctx.clone();
     let whole_backend = GpuBackend::with_context(ctx).with_integrator(GpuIntegrator::Bdpt);
     let (whole, _) =
         tracer::render(&whole_backend.prepare_gpu(scene.clone(), &SceneOptions::default()).unwrap(), &s, &|_| {})
             .unwrap();
-    let mut ctx = shared_gpu().unwrap();
-    ctx.limits = limits;
-    let banded = GpuBackend::with_context(ctx).with_integrator(GpuIntegrator::Bdpt);
+    // (A clone of the device with lower limits: the kernel compiled above is reused.)
+    banded_ctx.limits = limits;
+    let banded = GpuBackend::with_context(banded_ctx).with_integrator(GpuIntegrator::Bdpt);
     let (bands, _) =
         tracer::render(&banded.prepare_gpu(scene, &SceneOptions::default()).unwrap(), &s, &|_| {}).unwrap();
     assert!(whole.has_splats());
@@ -1655,7 +1648,7 @@ fn instances_match_the_cpu() {
     // in world space).
     assert!(matches!(SceneData::new(&scene, KernelOptions::default()), Err(GpuError::Unsupported(_))));
 
-    let Some(ctx) = shared_gpu() else { return };
+    let Some(ctx) = gpu::require_gpu() else { return };
     let gpu = GpuBackend::with_context(ctx);
     let s = settings(32, 24, 128);
     let (cpu_scene, binary) = prepare_both(&gpu, &scene, None).unwrap();
