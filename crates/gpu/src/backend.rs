@@ -1130,19 +1130,10 @@ pub(crate) fn buffer_entry(binding: u32, ty: wgpu::BufferBindingType) -> wgpu::B
     }
 }
 
-/// The path kernel `source` as a pipeline with `layout` (made of `entries`): compiled, or
-/// the one compiled before on the device from the same source and entries.
-fn compile(
-    ctx: &GpuContext,
-    layout: &wgpu::PipelineLayout,
-    entries: &[wgpu::BindGroupLayoutEntry],
-    source: &str,
-) -> Result<wgpu::ComputePipeline, GpuError> {
-    Ok(compile_with_module(ctx, layout, entries, source)?.0)
-}
-
-/// [`compile`], also returning the shader module (for the kernel's other entry points).
-fn compile_with_module(
+/// The path kernel `source` as a pipeline with `layout` (made of `entries`) and its shader
+/// module (for the kernel's other entry points): the one the device keeps from the same
+/// source and entries, else compiled.
+fn kernel(
     ctx: &GpuContext,
     layout: &wgpu::PipelineLayout,
     entries: &[wgpu::BindGroupLayoutEntry],
@@ -1151,7 +1142,7 @@ fn compile_with_module(
     ctx.kernels.get_or_compile(source, entries, || compile_kernel(ctx, layout, source))
 }
 
-/// Compiles `source`'s `pt_main` with `layout` (what [`compile_with_module`] keeps).
+/// Compiles `source`'s `pt_main` with `layout` (what [`kernel`] keeps).
 fn compile_kernel(
     ctx: &GpuContext,
     layout: &wgpu::PipelineLayout,
@@ -1313,7 +1304,7 @@ impl GpuBackend {
         });
 
         let compile_start = Instant::now();
-        let shader_result = compile_with_module(&self.ctx, &pipeline_layout, &entries, &data.shader_source());
+        let shader_result = kernel(&self.ctx, &pipeline_layout, &entries, &data.shader_source());
         let compile_time = compile_start.elapsed();
         let memory_result = pop_scope(memory, "out of GPU memory uploading the scene");
         let validation_result = pop_scope(validation, "uploading the scene");
@@ -1907,7 +1898,7 @@ impl GpuScene {
         }
         let options = KernelOptions { sampler: key.0, mode: key.1, ..self.kernel_options };
         let source = crate::kernel::source(&self.material_wgsl, &options);
-        let pipeline = compile(&self.ctx, &self.pipeline_layout, &self.layout_entries, &source)?;
+        let (pipeline, _) = kernel(&self.ctx, &self.pipeline_layout, &self.layout_entries, &source)?;
         pipelines.push((key, pipeline.clone()));
         Ok(pipeline)
     }

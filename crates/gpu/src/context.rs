@@ -9,7 +9,8 @@ pub(crate) type CompiledKernel = (wgpu::ComputePipeline, wgpu::ShaderModule);
 
 /// The kernels compiled on one device, by WGSL source and bind group layout entries.
 ///
-/// Why: a GPU's driver compiles a path kernel in 0.1–0.2 s, lavapipe in 20–50 s, and
+/// Why: a GPU's driver compiles a path kernel in about a second (H100: 0.9–1.2 s, 8–12 ms
+/// from its own disk cache; `docs/gpu/figures-h100.txt`), lavapipe in 20–50 s, and
 /// preparing a second scene with the same materials and features (another camera or
 /// image size, the same scene again, a clone of the context with other limits) needs the
 /// same kernel. Pipelines made from a layout with the same entries are compatible with

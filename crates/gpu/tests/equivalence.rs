@@ -259,9 +259,9 @@ fn model_cases() -> Vec<(String, Material)> {
 }
 
 /// Every case of [`model_cases`] in [`model_scene`], each scene holding the other cases'
-/// materials too (unused): their kernels are then one source, compiled once on the shared
-/// device (lavapipe takes tens of seconds a kernel; each model's specialised kernel alone
-/// is validated by naga in `materials.rs`).
+/// materials too (unused): their kernels are then one source, compiled once and kept by
+/// the test's device (lavapipe takes tens of seconds a kernel; each model's specialised
+/// kernel alone is validated by naga in `materials.rs`).
 fn model_case_scenes() -> Vec<(String, Scene)> {
     let cases = model_cases();
     let materials: Vec<Material> = cases.iter().map(|(_, m)| m.clone()).collect();
