@@ -245,6 +245,10 @@ struct ViewArgs {
     /// Spectral sampling mode.
     #[arg(long, default_value = "hero")]
     spectral: SpectralMode,
+    /// With --backend gpu: read every frame back and show it through a CPU framebuffer,
+    /// instead of drawing it from the device through a wgpu surface.
+    #[arg(long)]
+    no_gpu_surface: bool,
 }
 
 fn run_view(args: ViewArgs) -> Result<()> {
@@ -262,6 +266,7 @@ fn run_view(args: ViewArgs) -> Result<()> {
         exit_after_frames: args.frames,
         save_on_exit: args.save.clone(),
         title: args.scene.scene.display().to_string(),
+        device_display: !args.no_gpu_surface,
     };
     options.validate()?;
     let stats = viewer::run(prepared, settings, options)?;
@@ -669,6 +674,11 @@ struct BenchArgs {
     /// time are reported, after one untimed frame.
     #[arg(long, value_name = "N")]
     frames: Option<u32>,
+    /// With --frames and --backend gpu: leave each frame's display pixels on the device
+    /// instead of reading them back (what `spt view --backend gpu` does with its wgpu
+    /// surface, less the drawing onto the window).
+    #[arg(long, requires = "frames")]
+    frames_on_device: bool,
 }
 
 pub(crate) fn parse_vec3(s: &str) -> Result<Vec3, String> {
@@ -1157,7 +1167,7 @@ fn run_bench(args: BenchArgs) -> Result<()> {
         stats.total.as_secs_f64() * 1e3
     );
     if let Some(frames) = args.frames {
-        return bench_frames(Arc::from(prepared), &all, args.spp, frames);
+        return bench_frames(Arc::from(prepared), &all, args.spp, frames, args.frames_on_device);
     }
     println!("{:<8} {:>12} {:>12} {:>10} {:>10}", "mode", "Msamples/s", "Mrays/s", "wall_s", "nan");
     for settings in &all {
@@ -1182,8 +1192,15 @@ fn run_bench(args: BenchArgs) -> Result<()> {
 }
 
 /// `spt bench --frames`: viewer frames through [`tracer::Accumulation`], timed one by
-/// one after an untimed first frame.
-fn bench_frames(prepared: Arc<dyn PreparedScene>, all: &[RenderSettings], spp: u32, frames: u32) -> Result<()> {
+/// one after an untimed first frame; `on_device`: displayed on the GPU's device without a
+/// read-back.
+fn bench_frames(
+    prepared: Arc<dyn PreparedScene>,
+    all: &[RenderSettings],
+    spp: u32,
+    frames: u32,
+    on_device: bool,
+) -> Result<()> {
     if frames == 0 {
         bail!("--frames must be at least 1");
     }
@@ -1198,15 +1215,25 @@ fn bench_frames(prepared: Arc<dyn PreparedScene>, all: &[RenderSettings], spp: u
         let settings = RenderSettings { spp: budget, ..settings.clone() };
         let mut acc = Arc::clone(&prepared).accumulate(&settings)?;
         let mut out = vec![0u32; settings.width as usize * settings.height as usize];
-        acc.add(spp)?;
-        acc.display(&mut out)?;
+        let mut frame = |acc: &mut Box<dyn tracer::Accumulation>| -> Result<()> {
+            acc.add(spp)?;
+            if !on_device {
+                return Ok(acc.display(&mut out)?);
+            }
+            let device = acc
+                .as_any_mut()
+                .and_then(|a| a.downcast_mut::<gpu::accumulation::DeviceAccumulation>())
+                .context("--frames-on-device needs --backend gpu and an integrator whose film stays on the device")?;
+            device.display_frame()?;
+            Ok(())
+        };
+        frame(&mut acc)?;
         acc.restart(&settings)?;
         let mut times = Vec::with_capacity(frames as usize);
         let start = Instant::now();
         for _ in 0..frames {
             let t = Instant::now();
-            acc.add(spp)?;
-            acc.display(&mut out)?;
+            frame(&mut acc)?;
             times.push(t.elapsed());
         }
         let wall = start.elapsed().as_secs_f64();

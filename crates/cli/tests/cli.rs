@@ -597,12 +597,15 @@ fn compare_charts_error_against_time() {
     assert!(!o.status.success() && stderr(&o).contains("neither a preset"), "{}", stderr(&o));
 }
 
-/// `spt view --backend gpu` keeps its statistics on the device and reads back only display
-/// pixels; what it saves after 3 frames of 2 samples is, byte for byte, what
-/// `spt render --spp 6` writes with the same settings (its exact film is assembled from
+/// `spt view --backend gpu` keeps its statistics on the device and draws its frames onto
+/// the window from there, through a wgpu surface (lavapipe presents to Xvfb): the window
+/// shows, within one 8-bit step, the image `spt render --spp 6` writes with the same
+/// settings — read from Xvfb's own framebuffer (`-fbdir`, XWD format) while the viewer,
+/// done refining at `--max-spp 6`, holds it. SIGTERM then quits it as its window would,
+/// writing `--save`'s image: byte for byte the render's (its exact film is assembled from
 /// the device's accumulators on saving).
 #[test]
-fn the_gpu_viewer_saves_the_image_a_render_of_its_samples_gives() {
+fn the_gpu_viewer_shows_and_saves_the_image_a_render_of_its_samples_gives() {
     let scene =
         Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/scenes/cornell-box/CornellBox-Original.obj");
     if !scene.exists() {
@@ -619,16 +622,12 @@ fn the_gpu_viewer_saves_the_image_a_render_of_its_samples_gives() {
     }
     let dir = temp_dir("gpu-view");
     let (viewed, rendered) = (dir.join("viewed.exr"), dir.join("rendered.exr"));
-    let common = ["--backend", "gpu", "--width", "24", "--height", "16", "--seed", "5"];
-    let o = std::process::Command::new("xvfb-run")
-        .args(["-a", "-s", "-screen 0 640x480x24", env!("CARGO_BIN_EXE_spt"), "view", scene.to_str().unwrap()])
-        .args(common)
-        .args(["--spp-per-frame", "2", "--frames", "3", "--save", viewed.to_str().unwrap()])
-        .env_remove("WAYLAND_DISPLAY")
-        .output()
-        .unwrap();
-    assert!(o.status.success(), "{}", stderr(&o));
-    assert!(stderr(&o).contains("3 frames, 6 spp"), "{}", stderr(&o));
+    let (framebuffers, done) = (dir.join("fb"), dir.join("done"));
+    let _ = std::fs::remove_dir_all(&framebuffers);
+    let _ = std::fs::remove_file(&done);
+    std::fs::create_dir_all(&framebuffers).unwrap();
+    let (width, height) = (48u32, 32u32);
+    let common = ["--backend", "gpu", "--width", "48", "--height", "32", "--seed", "5"];
     let o = spt(&[
         &["render", scene.to_str().unwrap(), "--sampler", "independent"],
         &common[..],
@@ -636,8 +635,86 @@ fn the_gpu_viewer_saves_the_image_a_render_of_its_samples_gives() {
     ]
     .concat());
     assert!(o.status.success(), "{}", stderr(&o));
+    // What the window should show: the render's linear values, sRGB-encoded to 8 bits
+    // (IEC 61966-2-1, as `Film::display_pixels`).
+    let srgb = |linear: f32| {
+        let v = linear.clamp(0.0, 1.0);
+        let encoded = if v <= 0.003_130_8 { 12.92 * v } else { 1.055 * v.powf(1.0 / 2.4) - 0.055 };
+        (encoded * 255.0 + 0.5) as u8
+    };
+    let expected: Vec<[u8; 3]> =
+        image::open(&rendered).unwrap().into_rgb32f().pixels().map(|p| p.0.map(srgb)).collect();
+    assert!(expected.iter().any(|p| p.iter().any(|&c| c > 20)), "the Cornell box is not black");
+
+    // The viewer in the background of a shell that ends it (SIGTERM) once `done` exists,
+    // or after 300 s.
+    let hold = r#"SPT="$1"; shift; "$SPT" "$@" & pid=$!; i=0
+while [ ! -e "$0" ] && [ $i -lt 3000 ] && kill -0 $pid 2>/dev/null; do sleep 0.1; i=$((i+1)); done
+kill -TERM $pid 2>/dev/null; wait $pid"#;
+    let server = format!("-screen 0 320x240x24 -fbdir {}", framebuffers.display());
+    let mut viewer = std::process::Command::new("xvfb-run")
+        .args(["-a", "-s", &server, "sh", "-c", hold, done.to_str().unwrap(), env!("CARGO_BIN_EXE_spt")])
+        .args(["view", scene.to_str().unwrap()])
+        .args(common)
+        .args(["--spp-per-frame", "2", "--max-spp", "6", "--save", viewed.to_str().unwrap()])
+        .env_remove("WAYLAND_DISPLAY")
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+
+    // The window (placed at the screen's corner: Xvfb runs no window manager) until it
+    // shows the 6-spp image, or the viewer ends, or 300 s pass.
+    let screen = framebuffers.join("Xvfb_screen0");
+    let start = std::time::Instant::now();
+    let mut worst = None;
+    while start.elapsed() < std::time::Duration::from_secs(300) && viewer.try_wait().unwrap().is_none() {
+        std::thread::sleep(std::time::Duration::from_millis(200));
+        let Some(shown) = std::fs::read(&screen).ok().and_then(|xwd| xwd_corner(&xwd, width, height)) else {
+            continue;
+        };
+        let step = shown
+            .iter()
+            .zip(&expected)
+            .flat_map(|(a, b)| (0..3).map(move |c| a[c].abs_diff(b[c])))
+            .max()
+            .unwrap_or(u8::MAX);
+        worst = Some(step);
+        if step <= 1 {
+            break;
+        }
+    }
+    std::fs::write(&done, b"").unwrap();
+    let o = viewer.wait_with_output().unwrap();
+    let err = stderr(&o);
+    assert!(o.status.success(), "{err}");
+    assert!(err.contains("frames drawn from the GPU's device through a wgpu surface"), "{err}");
+    assert!(
+        worst.is_some_and(|w| w <= 1),
+        "the window's pixels differ from the render's by {worst:?} 8-bit steps (None: no window)\n{err}"
+    );
+    assert!(err.contains("interrupted") && err.contains("3 frames, 6 spp"), "{err}");
     let (a, b) = (std::fs::read(&viewed).unwrap(), std::fs::read(&rendered).unwrap());
     assert!(a == b, "the viewer's 6 spp differ from the render's");
+}
+
+/// The top-left `width × height` pixels of an Xvfb framebuffer file (XWD: a big-endian
+/// header, a colour map, then ZPixmap rows), as RGB; `None` until the file is complete.
+fn xwd_corner(xwd: &[u8], width: u32, height: u32) -> Option<Vec<[u8; 3]>> {
+    let field = |i: usize| Some(u32::from_be_bytes(xwd.get(4 * i..4 * i + 4)?.try_into().ok()?) as usize);
+    let (header, bits_per_pixel, bytes_per_line, colours) = (field(0)?, field(11)?, field(12)?, field(19)?);
+    let (little_endian, masks) = (field(7)? == 0, [field(14)?, field(15)?, field(16)?]);
+    assert_eq!((field(1)?, bits_per_pixel), (7, 32), "an XWD file of 32-bit pixels");
+    let pixels = xwd.get(header + 12 * colours..)?;
+    let mut out = Vec::with_capacity((width * height) as usize);
+    for y in 0..height as usize {
+        for x in 0..width as usize {
+            let bytes: [u8; 4] = pixels.get(y * bytes_per_line + 4 * x..)?.get(..4)?.try_into().ok()?;
+            let word = if little_endian { u32::from_le_bytes(bytes) } else { u32::from_be_bytes(bytes) } as usize;
+            out.push(masks.map(|m| ((word & m) >> m.trailing_zeros()) as u8));
+        }
+    }
+    Some(out)
 }
 
 /// `spt render --reference REF.exr` prints the relMSE after passes ending at 1, 2, 4, …
@@ -1102,4 +1179,27 @@ fn a_closed_pipe_ends_spt_quietly() {
         .output()
         .expect("sh runs");
     assert!(!stderr(&o).contains("panicked"), "{}", stderr(&o));
+}
+
+/// `spt bench --frames N` times viewer frames (a row per mode with frames/s and the frame
+/// count), and `--frames-on-device` is refused, by name, where frames cannot stay on a GPU.
+#[test]
+fn bench_times_viewer_frames_and_refuses_device_frames_on_the_cpu() {
+    let dir = temp_dir("bench-frames");
+    let scene = write_scene(&dir, OBJ);
+    let args = ["bench", scene.to_str().unwrap(), "--backend", "cpu", "--width", "8", "--height", "6"];
+    let o = spt(&[&args[..], &["--spp", "1", "--frames", "3", "--modes", "rgb,hero"]].concat());
+    let out = String::from_utf8_lossy(&o.stdout).into_owned();
+    assert!(o.status.success(), "{}", stderr(&o));
+    let rows: Vec<Vec<&str>> = out.lines().map(|l| l.split_whitespace().collect()).collect();
+    let row = |mode: &str| rows.iter().find(|r| r.first() == Some(&mode)).unwrap_or_else(|| panic!("{out}"));
+    for mode in ["rgb", "hero"] {
+        let r = row(mode);
+        assert_eq!(r.last(), Some(&"3"), "three frames: {out}");
+        assert!(r[1].parse::<f64>().is_ok_and(|fps| fps > 0.0), "frames/s: {out}");
+    }
+    let o = spt(&[&args[..], &["--frames", "2", "--frames-on-device"]].concat());
+    assert!(!o.status.success() && stderr(&o).contains("--frames-on-device needs --backend gpu"), "{}", stderr(&o));
+    let o = spt(&[&args[..], &["--frames-on-device"]].concat());
+    assert!(!o.status.success() && stderr(&o).contains("--frames"), "{}", stderr(&o));
 }

@@ -12,6 +12,7 @@
 
 use crate::backend::{DISPATCH_BUDGET, GpuScene, SAMPLES_PER_READBACK, map_read};
 use crate::kernel::{FILM_HEADER_BYTES, PixelAccum, display_source};
+use crate::present::DeviceFrame;
 use crate::{GpuContext, GpuError};
 use std::sync::Arc;
 use tracer::accumulation::{Accumulation, check_accumulation_settings};
@@ -69,6 +70,29 @@ impl Display {
         }
         Ok(Self { pipeline, layout })
     }
+
+    /// The kernel's bind group: its parameters, the accumulators, the folded means and the
+    /// display words it writes.
+    fn bind_group(&self, ctx: &GpuContext, buffers: [&wgpu::Buffer; 4]) -> wgpu::BindGroup {
+        let entries: Vec<wgpu::BindGroupEntry> = (0..)
+            .zip(buffers)
+            .map(|(binding, b)| wgpu::BindGroupEntry { binding, resource: b.as_entire_binding() })
+            .collect();
+        ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("spt display"),
+            layout: &self.layout,
+            entries: &entries,
+        })
+    }
+
+    /// Runs the kernel of `bind` over a `width × height` image.
+    fn encode(&self, encoder: &mut wgpu::CommandEncoder, bind: &wgpu::BindGroup, width: u32, height: u32) {
+        let mut pass = encoder
+            .begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("spt display"), timestamp_writes: None });
+        pass.set_pipeline(&self.pipeline);
+        pass.set_bind_group(0, bind, &[]);
+        pass.dispatch_workgroups(width.div_ceil(8), height.div_ceil(8), 1);
+    }
 }
 
 /// The buffers of one image size.
@@ -82,9 +106,14 @@ struct Buffers {
     path_bind: wgpu::BindGroup,
     /// Per pixel: the folded samples' mean (xyz) and count (w), for the display.
     folded: wgpu::Buffer,
+    display_params: wgpu::Buffer,
     display_out: wgpu::Buffer,
     display_readback: wgpu::Buffer,
     display_bind: wgpu::BindGroup,
+    /// Frames made for a window ([`DeviceAccumulation::display_frame`]), each with the
+    /// display kernel's bind group writing it; one whose clones were all dropped is
+    /// written again.
+    frames: Vec<(DeviceFrame, wgpu::BindGroup)>,
 }
 
 impl Buffers {
@@ -167,16 +196,7 @@ impl DeviceAccumulation {
         });
         ctx.queue.write_buffer(&display_params, 0, bytemuck::cast_slice(&[width, height, 0, 0]));
         let path_bind = scene.bind_group(&params, &accum, None);
-        let display_bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("spt display"),
-            layout: &display.layout,
-            entries: &[
-                wgpu::BindGroupEntry { binding: 0, resource: display_params.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 1, resource: accum.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 2, resource: folded.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 3, resource: display_out.as_entire_binding() },
-            ],
-        });
+        let display_bind = display.bind_group(ctx, [&display_params, &accum, &folded, &display_out]);
         if let Some(e) = pollster::block_on(scope.pop()) {
             return Err(GpuError::Shader(format!("out of GPU memory for a {width}×{height} accumulation: {e}")));
         }
@@ -192,9 +212,11 @@ impl DeviceAccumulation {
             accum_readback,
             path_bind,
             folded,
+            display_params,
             display_out,
             display_readback,
             display_bind,
+            frames: Vec::new(),
         })
     }
 
@@ -280,15 +302,7 @@ impl DeviceAccumulation {
             return Ok(());
         }
         let mut encoder = ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
-        {
-            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("spt display"),
-                timestamp_writes: None,
-            });
-            pass.set_pipeline(&self.display.pipeline);
-            pass.set_bind_group(0, &b.display_bind, &[]);
-            pass.dispatch_workgroups(b.width.div_ceil(8), b.height.div_ceil(8), 1);
-        }
+        self.display.encode(&mut encoder, &b.display_bind, b.width, b.height);
         encoder.copy_buffer_to_buffer(&b.display_out, 0, &b.display_readback, 0, Some(bytes));
         ctx.queue.submit([encoder.finish()]);
         {
@@ -297,6 +311,40 @@ impl DeviceAccumulation {
         }
         b.display_readback.unmap();
         Ok(())
+    }
+
+    /// The running mean as display words on the device (what [`Accumulation::display`]
+    /// reads back), for a window that draws them from there
+    /// ([`crate::present::WindowSurface`]). Returns once the GPU has made them, so a
+    /// viewer's frame time is its render's; nothing is copied to the CPU.
+    pub fn display_frame(&mut self) -> Result<DeviceFrame, GpuError> {
+        let scene = Arc::clone(&self.scene);
+        let ctx = scene.context();
+        let b = &mut self.buffers;
+        let slot = match b.frames.iter().position(|(frame, _)| frame.is_free()) {
+            Some(i) => i,
+            None => {
+                let pixels = crate::present::frame_buffer(ctx, b.width as u64 * b.height as u64, "display frame")?;
+                let bind = self.display.bind_group(ctx, [&b.display_params, &b.accum, &b.folded, &pixels]);
+                let frame = DeviceFrame { width: b.width, height: b.height, pixels: Arc::new(pixels) };
+                b.frames.push((frame, bind));
+                b.frames.len() - 1
+            }
+        };
+        let (frame, bind) = &b.frames[slot];
+        let mut encoder = ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
+        self.display.encode(&mut encoder, bind, b.width, b.height);
+        let done = ctx.queue.submit([encoder.finish()]);
+        ctx.device
+            .poll(wgpu::PollType::Wait { submission_index: Some(done), timeout: None })
+            .map_err(|e| GpuError::Shader(format!("waiting for the GPU: {e}")))?;
+        Ok(frame.clone())
+    }
+
+    /// The context the accumulation renders with (a window surface showing its frames
+    /// must be made from it).
+    pub fn context(&self) -> &GpuContext {
+        self.scene.context()
     }
 }
 
@@ -344,6 +392,10 @@ impl Accumulation for DeviceAccumulation {
             self.read_into(&mut film)?;
         }
         Ok(film)
+    }
+
+    fn as_any_mut(&mut self) -> Option<&mut dyn std::any::Any> {
+        Some(self)
     }
 
     fn counters(&mut self) -> tracer::Result<PathCounters> {

@@ -101,6 +101,9 @@ pub struct GpuContext {
     pub limits: wgpu::Limits,
     /// The kernels compiled on the device (shared by clones).
     pub(crate) kernels: KernelCache,
+    /// The instance and adapter the device was opened from, for window surfaces
+    /// ([`crate::present::WindowSurface`]); `None` for [`GpuContext::from_parts`].
+    pub(crate) adapter: Option<(wgpu::Instance, wgpu::Adapter)>,
 }
 
 impl GpuContext {
@@ -123,13 +126,15 @@ impl GpuContext {
             ..Default::default()
         }))
         .map_err(|e| GpuError::Device(e.to_string()))?;
-        Ok(Self::from_parts(device, queue, adapter.get_info(), limits))
+        let info = adapter.get_info();
+        Ok(Self { adapter: Some((instance, adapter)), ..Self::from_parts(device, queue, info, limits) })
     }
 
-    /// A context around a device opened elsewhere (e.g. one that also drives a window's
-    /// surface), with no kernels compiled yet.
+    /// A context around a device opened elsewhere, with no kernels compiled yet. It cannot
+    /// make window surfaces ([`crate::present::WindowSurface`] needs the adapter; contexts
+    /// from [`GpuContext::new`] can).
     pub fn from_parts(device: wgpu::Device, queue: wgpu::Queue, info: wgpu::AdapterInfo, limits: wgpu::Limits) -> Self {
-        Self { device, queue, info, limits, kernels: KernelCache::default() }
+        Self { device, queue, info, limits, kernels: KernelCache::default(), adapter: None }
     }
 
     /// How many compiled kernels the device keeps for reuse (each distinct WGSL source and

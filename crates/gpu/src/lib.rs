@@ -10,7 +10,8 @@
 //! * [`backend`]: [`GpuBackend`], the tracer's [`tracer::Backend`] on the GPU, and
 //!   [`GpuScene`], a scene prepared on the device;
 //! * [`accumulation`]: a viewer's frame-by-frame refinement with the statistics kept on
-//!   the device and only display pixels read back.
+//!   the device and only display pixels read back — or none: [`present`] draws its
+//!   frames onto a window's surface from the device.
 //!
 //! Citations: "the thesis", "the lecture" and the papers named in comments are listed in `docs/references.md`.
 
@@ -19,6 +20,7 @@ pub mod backend;
 pub mod context;
 pub mod kernel;
 pub mod materials;
+pub mod present;
 pub mod wide;
 
 pub use backend::{GpuBackend, GpuScene};

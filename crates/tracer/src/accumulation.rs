@@ -48,6 +48,14 @@ pub trait Accumulation: Send {
 
     /// Rays traced and paths cut since the last (re)start.
     fn counters(&mut self) -> Result<PathCounters>;
+
+    /// The accumulation itself, for a caller that knows its backend and can use more of
+    /// it than this trait offers (a viewer drawing the GPU's frames onto a window surface
+    /// from the device: `gpu::accumulation::DeviceAccumulation`). `None` (the default):
+    /// only this trait.
+    fn as_any_mut(&mut self) -> Option<&mut dyn std::any::Any> {
+        None
+    }
 }
 
 /// Checks what an accumulation of a scene prepared with `capabilities` is asked to

@@ -5,11 +5,20 @@
 //! `worker` module) asks the given [`PreparedScene`] (prepared by any backend) for
 //! `spp_per_frame` more samples of every pixel each frame, through the backend's
 //! [`tracer::Accumulation`] (the GPU keeps its statistics on the device), and hands the
-//! per-pixel running mean g_i = g_{i−1} + (f_i − g_{i−1})/i to the window, which shows it
-//! through a CPU framebuffer (softbuffer, so it works under Xvfb and needs no GPU
-//! surface). The window never waits for a frame: input is handled while one renders. Any
+//! per-pixel running mean g_i = g_{i−1} + (f_i − g_{i−1})/i to the window. The window
+//! never waits for a frame: input is handled while one renders. Any
 //! camera move starts the accumulation again, with one quarter-size preview frame first
 //! (shown scaled up, so dragging stays fluid); a resize starts it at the new size.
+//!
+//! How frames reach the screen: on the GPU backend, through a wgpu surface on the
+//! backend's own device — the render thread draws the display kernel's pixels onto the
+//! window from the device (`gpu::present`) and nothing is copied to the CPU. (The render
+//! thread presents, not the window's: wgpu reconfigures a surface only while no other
+//! thread submits work to the device.) Where that surface cannot be made (an adapter that
+//! cannot present to the window, or [`ViewerOptions::device_display`] off) and on the
+//! CPU backend, the pixels come to the window thread, which shows them through a CPU
+//! framebuffer (softbuffer: works under Xvfb and needs no GPU). The viewer says which on
+//! standard error when the window opens.
 //!
 //! Controls:
 //!
@@ -24,7 +33,7 @@
 //! | Shift | five times larger fly steps and turns |
 //! | `R` | back to the starting camera |
 //! | `P` / `X` | save the current mean image as `spt-view-<spp>spp.png` (8-bit sRGB) / `.exr` (linear) in the working directory |
-//! | Escape, closing the window | quit |
+//! | Escape, closing the window, Ctrl-C or SIGTERM | quit (writing `--save`'s image) |
 //!
 //! The title bar shows the samples per pixel so far and the sampling rate:
 //! `spt — <title> — <spp> spp, <M> M samples/s (<backend>)`.
@@ -44,7 +53,6 @@ use anyhow::{Context as _, anyhow, bail};
 use camera_control::CameraControl;
 use std::num::NonZeroU32;
 use std::path::{Path, PathBuf};
-use std::rc::Rc;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 use tracer::RenderSettings;
@@ -56,7 +64,7 @@ use winit::event::{ElementState, KeyEvent, MouseButton, MouseScrollDelta, Window
 use winit::event_loop::{ActiveEventLoop, ControlFlow, EventLoop};
 use winit::keyboard::{Key, KeyCode, ModifiersState, NamedKey, PhysicalKey};
 use winit::window::{Window, WindowId};
-use worker::{Command, Frame, Pace, Worker};
+use worker::{Command, Frame, Pace, Pixels, Worker};
 
 /// How the viewer window behaves.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -78,6 +86,9 @@ pub struct ViewerOptions {
     pub save_on_exit: Option<PathBuf>,
     /// What the title bar calls the scene.
     pub title: String,
+    /// On the GPU backend, show frames through a wgpu surface on its device (no copy to
+    /// the CPU); `false` reads every frame back to a CPU framebuffer, as other backends do.
+    pub device_display: bool,
 }
 
 impl Default for ViewerOptions {
@@ -90,6 +101,7 @@ impl Default for ViewerOptions {
             exit_after_frames: None,
             save_on_exit: None,
             title: "scene".into(),
+            device_display: true,
         }
     }
 }
@@ -177,8 +189,17 @@ pub fn run(
     winit::platform::x11::EventLoopBuilderExtX11::with_any_thread(&mut builder, true);
     let event_loop = builder.build().map_err(no_window)?;
     let proxy = event_loop.create_proxy();
+    let interrupted = event_loop.create_proxy();
+    // Ctrl-C (or SIGTERM) in the terminal quits as the window's close button does, so the
+    // image is still saved. Once the loop is gone the signal ends the process as it would
+    // have without the handler. A second viewer in one process keeps the first's handler.
+    let _ = ctrlc::set_handler(move || {
+        if interrupted.send_event(Wake::Quit).is_err() {
+            std::process::exit(130);
+        }
+    });
     let worker = Worker::start(Arc::clone(&scene), accumulation, pace, move || {
-        let _ = proxy.send_event(Wake);
+        let _ = proxy.send_event(Wake::Frame);
     })?;
 
     let mut app = App {
@@ -193,6 +214,7 @@ pub fn run(
         options,
         window: None,
         surface: None,
+        on_screen: false,
         input: Input::default(),
         stats: Counters::default(),
         title_at: None,
@@ -259,10 +281,13 @@ struct App {
     spp: u32,
     /// Whether the worker is still refining the view (as of its last frame).
     refining: bool,
-    /// The image on screen, 0RGB.
+    /// The image on screen, 0RGB, where frames come to the CPU.
     pixels: Vec<u32>,
-    window: Option<Rc<Window>>,
-    surface: Option<softbuffer::Surface<Rc<Window>, Rc<Window>>>,
+    window: Option<Arc<Window>>,
+    surface: Option<softbuffer::Surface<Arc<Window>, Arc<Window>>>,
+    /// Whether the last frame shown was put on the window by the render thread (through
+    /// its wgpu surface) rather than into `pixels`.
+    on_screen: bool,
     input: Input,
     stats: Counters,
     title_at: Option<Instant>,
@@ -298,9 +323,14 @@ impl App {
         let attributes = Window::default_attributes()
             .with_title(format!("spt — {}", self.options.title))
             .with_inner_size(PhysicalSize::new(self.settings.width, self.settings.height));
-        let window = Rc::new(event_loop.create_window(attributes).map_err(no_window)?);
+        let window = Arc::new(event_loop.create_window(attributes).map_err(no_window)?);
         let context = softbuffer::Context::new(window.clone()).map_err(no_window)?;
         let surface = softbuffer::Surface::new(&context, window.clone()).map_err(no_window)?;
+        if self.options.device_display {
+            // The GPU backend's render thread takes the window over with a wgpu surface
+            // (other backends' ignore this); until it does, frames come here.
+            self.worker.send(Command::Present(window.clone()));
+        }
         self.window = Some(window.clone());
         self.surface = Some(surface);
         let size = window.inner_size();
@@ -337,16 +367,20 @@ impl App {
         if frame.generation != self.generation {
             return;
         }
-        let (w, h) = (self.settings.width as usize, self.settings.height as usize);
-        let (fw, fh) = (frame.width as usize, frame.height as usize);
-        if (fw, fh) == (w, h) {
-            self.pixels.copy_from_slice(&frame.pixels);
-        } else if fw > 0 && fh > 0 {
-            // Nearest neighbour: a preview (or a frame of the size before a resize).
-            for y in 0..h {
-                let row = &frame.pixels[(y * fh / h) * fw..][..fw];
-                for (x, p) in self.pixels[y * w..][..w].iter_mut().enumerate() {
-                    *p = row[x * fw / w];
+        self.on_screen = matches!(frame.pixels, Pixels::OnScreen);
+        // Else the render thread drew it on the window already.
+        if let Pixels::Host(pixels) = &frame.pixels {
+            let (w, h) = (self.settings.width as usize, self.settings.height as usize);
+            let (fw, fh) = (frame.width as usize, frame.height as usize);
+            if (fw, fh) == (w, h) {
+                self.pixels.copy_from_slice(pixels);
+            } else if fw > 0 && fh > 0 {
+                // Nearest neighbour: a preview (or a frame of the size before a resize).
+                for y in 0..h {
+                    let row = &pixels[(y * fh / h) * fw..][..fw];
+                    for (x, p) in self.pixels[y * w..][..w].iter_mut().enumerate() {
+                        *p = row[x * fw / w];
+                    }
                 }
             }
         }
@@ -381,6 +415,10 @@ impl App {
     }
 
     fn present(&mut self) -> anyhow::Result<()> {
+        if self.on_screen {
+            self.worker.send(Command::Redraw);
+            return Ok(());
+        }
         let Some(surface) = self.surface.as_mut() else { return Ok(()) };
         let (w, h) = (self.settings.width, self.settings.height);
         let (Some(nw), Some(nh)) = (NonZeroU32::new(w), NonZeroU32::new(h)) else { return Ok(()) };
@@ -508,16 +546,27 @@ impl App {
     }
 }
 
-/// The worker's signal that a frame is in its mailbox.
+/// What other threads tell the window's event loop.
 #[derive(Clone, Copy, Debug)]
-struct Wake;
+enum Wake {
+    /// The worker put a frame in its mailbox.
+    Frame,
+    /// Ctrl-C or SIGTERM: quit (saving, where asked to).
+    Quit,
+}
 
 /// Divisor of the preview frames' width and height while the camera moves.
 const PREVIEW_DIVISOR: u32 = 4;
 
 impl ApplicationHandler<Wake> for App {
-    fn user_event(&mut self, event_loop: &ActiveEventLoop, _: Wake) {
-        self.frame_arrived(event_loop);
+    fn user_event(&mut self, event_loop: &ActiveEventLoop, wake: Wake) {
+        match wake {
+            Wake::Frame => self.frame_arrived(event_loop),
+            Wake::Quit => {
+                eprintln!("viewer: interrupted, quitting");
+                event_loop.exit();
+            }
+        }
     }
 
     fn resumed(&mut self, event_loop: &ActiveEventLoop) {

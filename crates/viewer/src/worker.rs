@@ -7,6 +7,13 @@
 //! shown, so a slow window never queues frames up) and wakes the event loop. After a
 //! camera move the worker first renders one preview frame at a quarter of the size
 //! (resolution scaling while moving: dragging stays fluid), then refines at full size.
+//!
+//! On the GPU backend the worker also owns the window's wgpu surface once the window
+//! hands it over ([`Command::Present`]): it draws each frame from the device onto the
+//! window itself and tells the window only that it did ([`Pixels::OnScreen`]). The
+//! surface lives on this thread because wgpu configures a surface (at creation, at each
+//! resize) only while no other thread submits work to the device, and this thread is the
+//! one that submits.
 
 use crate::PREVIEW_DIVISOR;
 use anyhow::{Context as _, anyhow};
@@ -25,6 +32,20 @@ pub(crate) enum Command {
     /// Write the current image (PNG or EXR by extension); the reply says how many samples
     /// per pixel it held.
     Save(PathBuf, Sender<anyhow::Result<u32>>),
+    /// Draw frames onto this window through a wgpu surface on the GPU backend's device
+    /// (ignored on other backends; where the surface cannot be made, frames keep coming
+    /// as pixels, and the reason is printed).
+    Present(Arc<winit::window::Window>),
+    /// Draw the last frame onto the window again (it was exposed).
+    Redraw,
+}
+
+/// A frame's pixels.
+pub(crate) enum Pixels {
+    /// 0x00RRGGBB, row-major, for the window to show.
+    Host(Vec<u32>),
+    /// Already drawn on the window from the device.
+    OnScreen,
 }
 
 /// A finished frame and the session's totals.
@@ -33,8 +54,7 @@ pub(crate) struct Frame {
     pub generation: u64,
     pub width: u32,
     pub height: u32,
-    /// 0x00RRGGBB, row-major.
-    pub pixels: Vec<u32>,
+    pub pixels: Pixels,
     /// Samples per pixel of the view so far (0 for a preview).
     pub spp: u32,
     /// A quarter-size frame shown while the camera moves.
@@ -128,7 +148,8 @@ struct State {
     pace: Pace,
     generation: u64,
     preview_pending: bool,
-    pixels: Vec<u32>,
+    /// The window's surface on the GPU backend's device, and the frame last drawn on it.
+    screen: Option<(gpu::present::WindowSurface, Option<gpu::present::DeviceFrame>)>,
     frames: u32,
     samples: u64,
     time: Duration,
@@ -143,7 +164,7 @@ impl State {
             pace,
             generation: 0,
             preview_pending: false,
-            pixels: Vec::new(),
+            screen: None,
             frames: 0,
             samples: 0,
             time: Duration::ZERO,
@@ -185,6 +206,9 @@ impl State {
                 self.generation = generation;
                 self.main.restart(&settings).with_context(|| format!("{backend} backend"))?;
                 self.preview_pending = preview;
+                if let Some((surface, _)) = &mut self.screen {
+                    surface.resize(settings.width, settings.height);
+                }
             }
             Command::Save(path, reply) => {
                 let saved = self.main.film().and_then(|film| {
@@ -193,8 +217,55 @@ impl State {
                 });
                 let _ = reply.send(saved.map_err(anyhow::Error::from));
             }
+            Command::Present(window) => {
+                let Some(device) = device_accumulation(self.main.as_mut()) else {
+                    if backend != "cpu" {
+                        eprintln!(
+                            "viewer: frames read back to a CPU framebuffer (this render's film is kept on the CPU by the \
+                             {backend} backend)"
+                        );
+                    }
+                    return Ok(());
+                };
+                let settings = device.settings();
+                let (width, height) = (settings.width, settings.height);
+                match gpu::present::WindowSurface::new(device.context(), window, width, height) {
+                    Ok(surface) => {
+                        eprintln!(
+                            "viewer: frames drawn from the GPU's device through a wgpu surface ({})",
+                            surface.describe()
+                        );
+                        self.screen = Some((surface, None));
+                    }
+                    Err(e) => eprintln!("viewer: frames read back to a CPU framebuffer (no wgpu surface: {e})"),
+                }
+            }
+            Command::Redraw => {
+                if let Some((surface, Some(frame))) = &mut self.screen {
+                    surface.present(frame).context("drawing in the window")?;
+                }
+            }
         }
         Ok(())
+    }
+
+    /// The running mean of the main accumulation (`preview`: of the preview's) drawn on
+    /// the window from the device where the worker has its surface, else read back.
+    fn shown(&mut self, preview: bool) -> anyhow::Result<Pixels> {
+        let accumulation = if preview { self.preview.as_deref_mut() } else { Some(self.main.as_mut()) }
+            .ok_or_else(|| anyhow!("no preview to show"))?;
+        if let Some((surface, shown)) = &mut self.screen
+            && let Some(device) = device_accumulation(accumulation)
+        {
+            let frame = device.display_frame()?;
+            surface.present(&frame).context("drawing in the window")?;
+            *shown = Some(frame);
+            return Ok(Pixels::OnScreen);
+        }
+        let settings = accumulation.settings();
+        let mut pixels = vec![0; settings.width as usize * settings.height as usize];
+        accumulation.display(&mut pixels)?;
+        Ok(Pixels::Host(pixels))
     }
 
     /// One full-size frame of the current view.
@@ -204,8 +275,7 @@ impl State {
         let spp = self.pace.spp_per_frame.min(self.pace.max_spp - self.main.samples());
         let start = Instant::now();
         self.main.add(spp).with_context(|| format!("{backend} backend"))?;
-        self.pixels.resize(settings.width as usize * settings.height as usize, 0);
-        self.main.display(&mut self.pixels).with_context(|| format!("{backend} backend"))?;
+        let pixels = self.shown(false).with_context(|| format!("{backend} backend"))?;
         self.time += start.elapsed();
         self.samples += settings.width as u64 * settings.height as u64 * spp as u64;
         self.frames += 1;
@@ -213,7 +283,7 @@ impl State {
             generation: self.generation,
             width: settings.width,
             height: settings.height,
-            pixels: self.pixels.clone(),
+            pixels,
             spp: self.main.samples(),
             preview: false,
             refining: self.refining(),
@@ -242,8 +312,7 @@ impl State {
             None => self.preview.insert(Arc::clone(&self.scene).accumulate(&settings)?),
         };
         preview.add(1).with_context(|| format!("{backend} backend"))?;
-        let mut pixels = vec![0; settings.width as usize * settings.height as usize];
-        preview.display(&mut pixels).with_context(|| format!("{backend} backend"))?;
+        let pixels = self.shown(true).with_context(|| format!("{backend} backend"))?;
         Ok(Frame {
             generation: self.generation,
             width: settings.width,
@@ -257,6 +326,11 @@ impl State {
             time: self.time,
         })
     }
+}
+
+/// The GPU backend's accumulation behind `accumulation`, if it is one.
+fn device_accumulation(accumulation: &mut dyn Accumulation) -> Option<&mut gpu::accumulation::DeviceAccumulation> {
+    accumulation.as_any_mut().and_then(|a| a.downcast_mut())
 }
 
 #[cfg(test)]

@@ -29,6 +29,7 @@ fn main() -> anyhow::Result<()> {
         exit_after_frames: Some(number(1, 3)?),
         save_on_exit: Some(PathBuf::from(out)),
         title: "material sphere".into(),
+        ..ViewerOptions::default()
     };
     let stats = viewer::run(scene, RenderSettings::default(), options)?;
     println!("frames {} spp {} samples/s {:.0}", stats.frames, stats.spp, stats.samples_per_second);
