@@ -270,7 +270,17 @@ fn run_view(args: ViewArgs) -> Result<()> {
     };
     options.validate()?;
     let stats = viewer::run(prepared, settings, options)?;
-    eprintln!("{} frames, {} spp, {:.3} M samples/s", stats.frames, stats.spp, stats.samples_per_second / 1e6);
+    eprintln!(
+        "{} frames ({} drawn from the GPU's device), {} spp, {:.3} M samples/s",
+        stats.frames,
+        stats.frames_on_device,
+        stats.spp,
+        stats.samples_per_second / 1e6
+    );
+    if stats.interrupted {
+        // As a shell reports a command ended by Ctrl-C (128 + SIGINT), after saving.
+        std::process::exit(130);
+    }
     Ok(())
 }
 
@@ -1214,6 +1224,9 @@ fn bench_frames(
     for settings in all {
         let settings = RenderSettings { spp: budget, ..settings.clone() };
         let mut acc = Arc::clone(&prepared).accumulate(&settings)?;
+        if on_device && !acc.as_any_mut().is_some_and(|a| a.is::<gpu::accumulation::DeviceAccumulation>()) {
+            bail!("--frames-on-device needs --backend gpu and an integrator whose film stays on the device");
+        }
         let mut out = vec![0u32; settings.width as usize * settings.height as usize];
         let mut frame = |acc: &mut Box<dyn tracer::Accumulation>| -> Result<()> {
             acc.add(spp)?;

@@ -4,7 +4,8 @@
 //! across frames: a frame is its dispatches plus a small display kernel
 //! (`wgsl/display.wgsl`) whose 4-byte pixels are all that is read back — 8 MB at 1080p
 //! instead of the 66 MB of accumulators and a 2M-pixel merge on the CPU that
-//! [`PreparedScene::render_pass`] costs. Exactness is kept: at every multiple of
+//! [`PreparedScene::render_pass`] costs — or nothing at all, where a window draws them
+//! from the device ([`DeviceAccumulation::display_frame`], [`crate::present`]). Exactness is kept: at every multiple of
 //! [`SAMPLES_PER_READBACK`] in the sample index (where `render_pass` reads back too) the
 //! accumulators are folded into an exact [`Film`] on the CPU and their means uploaded for
 //! the display kernel, so [`Accumulation::film`] gives the bytes a render of the same
@@ -24,7 +25,8 @@ use tracer::render::{PixelRect, PreparedScene, RenderSettings};
 const PIXEL_BYTES: u64 = std::mem::size_of::<PixelAccum>() as u64;
 
 /// Bytes the device holds per pixel: accumulators, their read-back copy, the folded
-/// means (16) and the display word with its read-back copy (4 + 4).
+/// means (16) and the display word with its read-back copy (4 + 4). A window's frames
+/// ([`DeviceAccumulation::display_frame`]) add 4 each, at most two at a time in the viewer.
 pub const DEVICE_BYTES_PER_PIXEL: u64 = 2 * PIXEL_BYTES + 16 + 8;
 
 /// The display kernel: compiled once per accumulation.

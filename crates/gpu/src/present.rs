@@ -172,10 +172,17 @@ impl Presenter {
     }
 }
 
+/// Makes the window's surface again (after the surface was lost).
+type MakeSurface = Box<dyn Fn() -> Result<wgpu::Surface<'static>, GpuError> + Send + Sync>;
+
 /// A window's surface configured for a device, and the draw of frames onto it.
+///
+/// Configure it (make, resize, present) from one thread only, the one that submits the
+/// device's work: wgpu configures a surface only while no other thread submits.
 pub struct WindowSurface {
     ctx: GpuContext,
     surface: wgpu::Surface<'static>,
+    make_surface: MakeSurface,
     config: wgpu::SurfaceConfiguration,
     presenter: Presenter,
 }
@@ -185,8 +192,8 @@ pub struct WindowSurface {
 pub enum Presented {
     /// The frame is on screen.
     Shown,
-    /// The window cannot show it now (minimised, a timeout, a surface reconfigured after
-    /// a change): draw again at the next redraw.
+    /// The window cannot show it now (minimised, a timeout, a surface still outdated
+    /// after configuring it again): present it again later.
     Skipped,
 }
 
@@ -195,22 +202,25 @@ impl WindowSurface {
     /// `width × height`. Fails where the context cannot present (opened with
     /// [`GpuContext::from_parts`], or an adapter that cannot present to this window, as a
     /// headless one).
-    pub fn new(
+    pub fn new<W: wgpu::WindowHandle + wgpu::rwh::HasDisplayHandle + Clone + 'static>(
         ctx: &GpuContext,
-        window: impl Into<wgpu::SurfaceTarget<'static>>,
+        window: W,
         width: u32,
         height: u32,
     ) -> Result<Self, GpuError> {
-        let (instance, adapter) = ctx.adapter.as_ref().ok_or_else(|| {
+        let (instance, adapter) = ctx.adapter.clone().ok_or_else(|| {
             GpuError::Unsupported("presenting from a device opened elsewhere (GpuContext::from_parts)".into())
         })?;
-        let surface = instance
-            .create_surface(window)
-            .map_err(|e| GpuError::Device(format!("cannot make a window surface: {e}")))?;
+        let make_surface: MakeSurface = Box::new(move || {
+            instance
+                .create_surface(window.clone())
+                .map_err(|e| GpuError::Device(format!("cannot make a window surface: {e}")))
+        });
+        let surface = make_surface()?;
         if !adapter.is_surface_supported(&surface) {
             return Err(GpuError::Unsupported(format!("presenting to this window from {}", ctx.info.name)));
         }
-        let caps = surface.get_capabilities(adapter);
+        let caps = surface.get_capabilities(&adapter);
         // A format that stores the display words' bytes as they are (no sRGB encoding by
         // the target) where there is one: the shader then does no conversion.
         let format = caps
@@ -220,13 +230,13 @@ impl WindowSurface {
             .find(|f| matches!(f, wgpu::TextureFormat::Bgra8Unorm | wgpu::TextureFormat::Rgba8Unorm))
             .or_else(|| caps.formats.first().copied())
             .ok_or_else(|| GpuError::Unsupported(format!("presenting to this window from {}", ctx.info.name)))?;
-        // Mailbox shows the newest frame without waiting for the display's refresh (the
-        // window thread must not wait); FIFO, which every surface has, otherwise.
-        let present_mode = if caps.present_modes.contains(&wgpu::PresentMode::Mailbox) {
-            wgpu::PresentMode::Mailbox
-        } else {
-            wgpu::PresentMode::Fifo
-        };
+        // Mailbox shows the newest frame without waiting for the display's refresh, so
+        // the render thread that presents goes on refining; then Immediate (it may tear);
+        // FIFO, which every surface has, waits for the refresh.
+        let present_mode = [wgpu::PresentMode::Mailbox, wgpu::PresentMode::Immediate]
+            .into_iter()
+            .find(|m| caps.present_modes.contains(m))
+            .unwrap_or(wgpu::PresentMode::Fifo);
         let config = wgpu::SurfaceConfiguration {
             usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
             format,
@@ -238,13 +248,9 @@ impl WindowSurface {
             view_formats: Vec::new(),
             color_space: wgpu::SurfaceColorSpace::Auto,
         };
-        let scope = ctx.device.push_error_scope(wgpu::ErrorFilter::Validation);
-        surface.configure(&ctx.device, &config);
-        if let Some(e) = pollster::block_on(scope.pop()) {
-            return Err(GpuError::Device(format!("cannot configure the window surface: {e}")));
-        }
+        configure(ctx, &surface, &config)?;
         let presenter = Presenter::new(ctx, format)?;
-        Ok(Self { ctx: ctx.clone(), surface, config, presenter })
+        Ok(Self { ctx: ctx.clone(), surface, make_surface, config, presenter })
     }
 
     /// The surface's texture format and present mode, for messages.
@@ -253,33 +259,54 @@ impl WindowSurface {
     }
 
     /// Follows the window to `width × height`.
-    pub fn resize(&mut self, width: u32, height: u32) {
+    pub fn resize(&mut self, width: u32, height: u32) -> Result<(), GpuError> {
         let (width, height) = (width.max(1), height.max(1));
         if (width, height) != (self.config.width, self.config.height) {
             self.config.width = width;
             self.config.height = height;
-            self.surface.configure(&self.ctx.device, &self.config);
+            configure(&self.ctx, &self.surface, &self.config)?;
         }
+        Ok(())
     }
 
-    /// Draws `frame` over the whole window and presents it.
+    /// Draws `frame` over the whole window and presents it. An outdated surface is
+    /// configured again and a lost one made again, then tried once more; a window that
+    /// cannot show a frame now (minimised, a timeout) is [`Presented::Skipped`].
     pub fn present(&mut self, frame: &DeviceFrame) -> Result<Presented, GpuError> {
-        let texture = match self.surface.get_current_texture() {
-            wgpu::CurrentSurfaceTexture::Success(t) | wgpu::CurrentSurfaceTexture::Suboptimal(t) => t,
-            wgpu::CurrentSurfaceTexture::Timeout | wgpu::CurrentSurfaceTexture::Occluded => {
-                return Ok(Presented::Skipped);
+        let mut retried = false;
+        let texture = loop {
+            match self.surface.get_current_texture() {
+                wgpu::CurrentSurfaceTexture::Success(t) | wgpu::CurrentSurfaceTexture::Suboptimal(t) => break t,
+                wgpu::CurrentSurfaceTexture::Timeout | wgpu::CurrentSurfaceTexture::Occluded => {
+                    return Ok(Presented::Skipped);
+                }
+                wgpu::CurrentSurfaceTexture::Outdated if !retried => configure(&self.ctx, &self.surface, &self.config)?,
+                wgpu::CurrentSurfaceTexture::Lost if !retried => {
+                    self.surface = (self.make_surface)()?;
+                    configure(&self.ctx, &self.surface, &self.config)?;
+                }
+                wgpu::CurrentSurfaceTexture::Outdated | wgpu::CurrentSurfaceTexture::Lost => {
+                    return Ok(Presented::Skipped);
+                }
+                wgpu::CurrentSurfaceTexture::Validation => {
+                    return Err(GpuError::Device("the window surface reported a validation error".into()));
+                }
             }
-            wgpu::CurrentSurfaceTexture::Outdated | wgpu::CurrentSurfaceTexture::Lost => {
-                self.surface.configure(&self.ctx.device, &self.config);
-                return Ok(Presented::Skipped);
-            }
-            wgpu::CurrentSurfaceTexture::Validation => {
-                return Err(GpuError::Device("the window surface reported a validation error".into()));
-            }
+            retried = true;
         };
         let view = texture.texture.create_view(&wgpu::TextureViewDescriptor::default());
         self.presenter.draw(&self.ctx, frame, &view, self.config.width, self.config.height);
         self.ctx.queue.present(texture);
         Ok(Presented::Shown)
+    }
+}
+
+/// Configures `surface` with `config`, its validation errors returned (not panicked on).
+fn configure(ctx: &GpuContext, surface: &wgpu::Surface, config: &wgpu::SurfaceConfiguration) -> Result<(), GpuError> {
+    let scope = ctx.device.push_error_scope(wgpu::ErrorFilter::Validation);
+    surface.configure(&ctx.device, config);
+    match pollster::block_on(scope.pop()) {
+        Some(e) => Err(GpuError::Device(format!("cannot configure the window surface: {e}"))),
+        None => Ok(()),
     }
 }

@@ -17,8 +17,8 @@
 //! thread submits work to the device.) Where that surface cannot be made (an adapter that
 //! cannot present to the window, or [`ViewerOptions::device_display`] off) and on the
 //! CPU backend, the pixels come to the window thread, which shows them through a CPU
-//! framebuffer (softbuffer: works under Xvfb and needs no GPU). The viewer says which on
-//! standard error when the window opens.
+//! framebuffer (softbuffer: works under Xvfb and needs no GPU). On the GPU backend the
+//! viewer says which on standard error when the window opens.
 //!
 //! Controls:
 //!
@@ -136,6 +136,11 @@ pub struct ViewStats {
     pub spp: u32,
     /// Samples per second over all frames (samples taken / time spent rendering).
     pub samples_per_second: f64,
+    /// Full-size frames drawn onto the window from the GPU's device (through the wgpu
+    /// surface) rather than read back.
+    pub frames_on_device: u32,
+    /// Whether the viewer quit on Ctrl-C or SIGTERM.
+    pub interrupted: bool,
 }
 
 /// Opens a window and shows `scene` refining progressively until the window is closed
@@ -175,12 +180,17 @@ pub fn run(
         camera: Some(camera),
         ..settings.clone()
     };
-    let accumulation = Arc::clone(&scene).accumulate(&first).context("render settings")?;
+    let mut accumulation = Arc::clone(&scene).accumulate(&first).context("render settings")?;
+    let on_device = accumulation.as_any_mut().is_some_and(|a| a.is::<gpu::accumulation::DeviceAccumulation>());
     let pace = Pace {
         spp_per_frame: options.spp_per_frame,
         max_spp: options.max_spp.unwrap_or(MAX_PIXEL_SAMPLES),
         max_frames: options.exit_after_frames,
+        await_window: on_device && options.device_display,
     };
+    if on_device && !options.device_display {
+        eprintln!("viewer: frames read back to a CPU framebuffer (the wgpu surface was turned off)");
+    }
     let bounds = scene.scene().bounds();
     let scene_size = if bounds.is_empty() { 1.0 } else { bounds.extent().length() };
 
@@ -189,15 +199,7 @@ pub fn run(
     winit::platform::x11::EventLoopBuilderExtX11::with_any_thread(&mut builder, true);
     let event_loop = builder.build().map_err(no_window)?;
     let proxy = event_loop.create_proxy();
-    let interrupted = event_loop.create_proxy();
-    // Ctrl-C (or SIGTERM) in the terminal quits as the window's close button does, so the
-    // image is still saved. Once the loop is gone the signal ends the process as it would
-    // have without the handler. A second viewer in one process keeps the first's handler.
-    let _ = ctrlc::set_handler(move || {
-        if interrupted.send_event(Wake::Quit).is_err() {
-            std::process::exit(130);
-        }
-    });
+    let _interrupts = Interrupts::route_to(event_loop.create_proxy());
     let worker = Worker::start(Arc::clone(&scene), accumulation, pace, move || {
         let _ = proxy.send_event(Wake::Frame);
     })?;
@@ -215,6 +217,7 @@ pub fn run(
         window: None,
         surface: None,
         on_screen: false,
+        interrupted: false,
         input: Input::default(),
         stats: Counters::default(),
         title_at: None,
@@ -228,7 +231,48 @@ pub fn run(
     if let Some(path) = app.options.save_on_exit.clone() {
         app.save(&path)?;
     }
-    Ok(ViewStats { frames: app.stats.frames, spp: app.spp, samples_per_second: app.stats.rate() })
+    Ok(ViewStats {
+        frames: app.stats.frames,
+        spp: app.spp,
+        samples_per_second: app.stats.rate(),
+        frames_on_device: app.stats.frames_on_device,
+        interrupted: app.interrupted,
+    })
+}
+
+/// Where Ctrl-C and SIGTERM go: the running viewer's event loop, which quits as its
+/// window's close button makes it (so the image is still saved). The handler is the
+/// process's (installed once); with no viewer running the signal ends the process with
+/// status 130, as it would have without a handler.
+struct Interrupts;
+
+static INTERRUPT_TARGET: std::sync::Mutex<Option<winit::event_loop::EventLoopProxy<Wake>>> =
+    std::sync::Mutex::new(None);
+
+impl Interrupts {
+    /// Routes interrupts to `proxy` until the returned value is dropped.
+    fn route_to(proxy: winit::event_loop::EventLoopProxy<Wake>) -> Self {
+        static INSTALLED: std::sync::Once = std::sync::Once::new();
+        INSTALLED.call_once(|| {
+            let installed = ctrlc::set_handler(|| {
+                let target = INTERRUPT_TARGET.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+                if target.as_ref().is_none_or(|p| p.send_event(Wake::Quit).is_err()) {
+                    std::process::exit(130);
+                }
+            });
+            if let Err(e) = installed {
+                eprintln!("viewer: Ctrl-C will not save the image (no signal handler: {e})");
+            }
+        });
+        *INTERRUPT_TARGET.lock().unwrap_or_else(std::sync::PoisonError::into_inner) = Some(proxy);
+        Self
+    }
+}
+
+impl Drop for Interrupts {
+    fn drop(&mut self) {
+        *INTERRUPT_TARGET.lock().unwrap_or_else(std::sync::PoisonError::into_inner) = None;
+    }
 }
 
 fn no_window(e: impl std::fmt::Display) -> anyhow::Error {
@@ -256,6 +300,7 @@ struct Counters {
     time: Duration,
     recent_samples: u64,
     recent_time: Duration,
+    frames_on_device: u32,
 }
 
 impl Counters {
@@ -273,7 +318,7 @@ struct App {
     options: ViewerOptions,
     control: CameraControl,
     /// The render thread (it owns the running render: on the device for the GPU backend,
-    /// whose frames read back only the display pixels).
+    /// whose frames it draws onto the window itself through a wgpu surface).
     worker: Worker,
     /// The view the window shows: frames of older views are dropped.
     generation: u64,
@@ -288,6 +333,8 @@ struct App {
     /// Whether the last frame shown was put on the window by the render thread (through
     /// its wgpu surface) rather than into `pixels`.
     on_screen: bool,
+    /// Whether Ctrl-C or SIGTERM ended the session.
+    interrupted: bool,
     input: Input,
     stats: Counters,
     title_at: Option<Instant>,
@@ -364,6 +411,9 @@ impl App {
         self.stats.recent_time += frame.time.saturating_sub(self.stats.time);
         self.stats.samples = frame.samples;
         self.stats.time = frame.time;
+        if matches!(frame.pixels, Pixels::OnScreen) && !frame.preview {
+            self.stats.frames_on_device += 1;
+        }
         if frame.generation != self.generation {
             return;
         }
@@ -446,7 +496,8 @@ impl App {
         let was_refining = self.refining;
         self.show(frame);
         self.update_title(was_refining && !self.refining);
-        if let Some(w) = &self.window {
+        // A frame the render thread drew on the window needs no redraw here.
+        if let Some(w) = self.window.as_ref().filter(|_| !self.on_screen) {
             w.request_redraw();
         }
         if let Some(n) = self.options.exit_after_frames
@@ -564,6 +615,7 @@ impl ApplicationHandler<Wake> for App {
             Wake::Frame => self.frame_arrived(event_loop),
             Wake::Quit => {
                 eprintln!("viewer: interrupted, quitting");
+                self.interrupted = true;
                 event_loop.exit();
             }
         }

@@ -18,7 +18,7 @@
 use crate::PREVIEW_DIVISOR;
 use anyhow::{Context as _, anyhow};
 use std::path::PathBuf;
-use std::sync::mpsc::{self, Receiver, Sender, TryRecvError};
+use std::sync::mpsc::{self, Receiver, RecvTimeoutError, Sender, TryRecvError};
 use std::sync::{Arc, Mutex, PoisonError};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
@@ -83,6 +83,9 @@ pub(crate) struct Pace {
     pub spp_per_frame: u32,
     pub max_spp: u32,
     pub max_frames: Option<u32>,
+    /// Render nothing until the window's [`Command::Present`] (the GPU backend's frames
+    /// are then all drawn from the device, none read back first).
+    pub await_window: bool,
 }
 
 impl Worker {
@@ -148,8 +151,11 @@ struct State {
     pace: Pace,
     generation: u64,
     preview_pending: bool,
-    /// The window's surface on the GPU backend's device, and the frame last drawn on it.
-    screen: Option<(gpu::present::WindowSurface, Option<gpu::present::DeviceFrame>)>,
+    /// Whether the worker waits for the window's [`Command::Present`] before its first
+    /// frame (the GPU backend's frames then all go to the surface, none to the CPU).
+    awaiting_window: bool,
+    /// The window's surface on the GPU backend's device.
+    screen: Option<Screen>,
     frames: u32,
     samples: u64,
     time: Duration,
@@ -164,6 +170,7 @@ impl State {
             pace,
             generation: 0,
             preview_pending: false,
+            awaiting_window: pace.await_window,
             screen: None,
             frames: 0,
             samples: 0,
@@ -177,13 +184,24 @@ impl State {
 
     fn run(&mut self, commands: &Receiver<Command>, mailbox: &Mailbox, wake: &dyn Fn()) -> anyhow::Result<()> {
         loop {
-            // Commands first (all that are waiting); with nothing to render, wait for one.
+            // Commands first (all that are waiting); with nothing to render, wait for one
+            // (and try again, now and then, to show a frame the window skipped).
             loop {
-                let command = if self.refining() || self.preview_pending {
+                let busy = !self.awaiting_window && (self.refining() || self.preview_pending);
+                let command = if busy {
                     match commands.try_recv() {
                         Ok(c) => c,
                         Err(TryRecvError::Empty) => break,
                         Err(TryRecvError::Disconnected) => return Ok(()),
+                    }
+                } else if self.screen.as_ref().is_some_and(|s| s.skipped) {
+                    match commands.recv_timeout(RETRY_SKIPPED) {
+                        Ok(c) => c,
+                        Err(RecvTimeoutError::Timeout) => {
+                            self.redraw()?;
+                            continue;
+                        }
+                        Err(RecvTimeoutError::Disconnected) => return Ok(()),
                     }
                 } else {
                     match commands.recv() {
@@ -206,8 +224,8 @@ impl State {
                 self.generation = generation;
                 self.main.restart(&settings).with_context(|| format!("{backend} backend"))?;
                 self.preview_pending = preview;
-                if let Some((surface, _)) = &mut self.screen {
-                    surface.resize(settings.width, settings.height);
+                if let Some(screen) = &mut self.screen {
+                    screen.surface.resize(settings.width, settings.height).context("resizing the window surface")?;
                 }
             }
             Command::Save(path, reply) => {
@@ -218,6 +236,7 @@ impl State {
                 let _ = reply.send(saved.map_err(anyhow::Error::from));
             }
             Command::Present(window) => {
+                self.awaiting_window = false;
                 let Some(device) = device_accumulation(self.main.as_mut()) else {
                     if backend != "cpu" {
                         eprintln!(
@@ -235,37 +254,55 @@ impl State {
                             "viewer: frames drawn from the GPU's device through a wgpu surface ({})",
                             surface.describe()
                         );
-                        self.screen = Some((surface, None));
+                        self.screen = Some(Screen { surface, shown: None, skipped: false });
                     }
                     Err(e) => eprintln!("viewer: frames read back to a CPU framebuffer (no wgpu surface: {e})"),
                 }
             }
-            Command::Redraw => {
-                if let Some((surface, Some(frame))) = &mut self.screen {
-                    surface.present(frame).context("drawing in the window")?;
-                }
-            }
+            Command::Redraw => self.redraw()?,
         }
         Ok(())
     }
 
-    /// The running mean of the main accumulation (`preview`: of the preview's) drawn on
-    /// the window from the device where the worker has its surface, else read back.
-    fn shown(&mut self, preview: bool) -> anyhow::Result<Pixels> {
+    /// The running mean of the main accumulation (`preview`: of the preview's): on the
+    /// device where the worker has the window's surface, else read back.
+    fn made(&mut self, preview: bool) -> anyhow::Result<Made> {
         let accumulation = if preview { self.preview.as_deref_mut() } else { Some(self.main.as_mut()) }
             .ok_or_else(|| anyhow!("no preview to show"))?;
-        if let Some((surface, shown)) = &mut self.screen
+        if self.screen.is_some()
             && let Some(device) = device_accumulation(accumulation)
         {
-            let frame = device.display_frame()?;
-            surface.present(&frame).context("drawing in the window")?;
-            *shown = Some(frame);
-            return Ok(Pixels::OnScreen);
+            return Ok(Made::Device(device.display_frame()?));
         }
         let settings = accumulation.settings();
         let mut pixels = vec![0; settings.width as usize * settings.height as usize];
         accumulation.display(&mut pixels)?;
-        Ok(Pixels::Host(pixels))
+        Ok(Made::Host(pixels))
+    }
+
+    /// Puts a frame on the window (a device frame) or hands its pixels on (read back).
+    fn show(&mut self, made: Made) -> anyhow::Result<Pixels> {
+        match (made, &mut self.screen) {
+            (Made::Host(pixels), _) => Ok(Pixels::Host(pixels)),
+            (Made::Device(frame), Some(screen)) => {
+                screen.shown = Some(frame);
+                self.redraw()?;
+                Ok(Pixels::OnScreen)
+            }
+            (Made::Device(_), None) => Err(anyhow!("a frame on the device without a window surface")),
+        }
+    }
+
+    /// Draws the last device frame onto the window again (remembering whether the window
+    /// skipped it).
+    fn redraw(&mut self) -> anyhow::Result<()> {
+        if let Some(screen) = &mut self.screen
+            && let Some(frame) = &screen.shown
+        {
+            let presented = screen.surface.present(frame).context("drawing in the window")?;
+            screen.skipped = presented == gpu::present::Presented::Skipped;
+        }
+        Ok(())
     }
 
     /// One full-size frame of the current view.
@@ -275,8 +312,10 @@ impl State {
         let spp = self.pace.spp_per_frame.min(self.pace.max_spp - self.main.samples());
         let start = Instant::now();
         self.main.add(spp).with_context(|| format!("{backend} backend"))?;
-        let pixels = self.shown(false).with_context(|| format!("{backend} backend"))?;
+        let made = self.made(false).with_context(|| format!("{backend} backend"))?;
+        // The frame's time is its render's; drawing it on the window comes after.
         self.time += start.elapsed();
+        let pixels = self.show(made)?;
         self.samples += settings.width as u64 * settings.height as u64 * spp as u64;
         self.frames += 1;
         Ok(Frame {
@@ -312,7 +351,8 @@ impl State {
             None => self.preview.insert(Arc::clone(&self.scene).accumulate(&settings)?),
         };
         preview.add(1).with_context(|| format!("{backend} backend"))?;
-        let pixels = self.shown(true).with_context(|| format!("{backend} backend"))?;
+        let made = self.made(true).with_context(|| format!("{backend} backend"))?;
+        let pixels = self.show(made)?;
         Ok(Frame {
             generation: self.generation,
             width: settings.width,
@@ -327,6 +367,27 @@ impl State {
         })
     }
 }
+
+/// A frame as the worker made it.
+enum Made {
+    /// Read back.
+    Host(Vec<u32>),
+    /// On the device.
+    Device(gpu::present::DeviceFrame),
+}
+
+/// The window's wgpu surface, owned by the worker.
+struct Screen {
+    surface: gpu::present::WindowSurface,
+    /// The frame last put on the window (kept for redraws; the accumulation does not
+    /// write into it while it is held).
+    shown: Option<gpu::present::DeviceFrame>,
+    /// Whether the window skipped `shown` (minimised, a timeout): drawn again later.
+    skipped: bool,
+}
+
+/// How often an idle worker tries again to show a frame the window skipped.
+const RETRY_SKIPPED: Duration = Duration::from_millis(100);
 
 /// The GPU backend's accumulation behind `accumulation`, if it is one.
 fn device_accumulation(accumulation: &mut dyn Accumulation) -> Option<&mut gpu::accumulation::DeviceAccumulation> {
@@ -395,7 +456,7 @@ mod tests {
         let settings = RenderSettings { width: 16, height: 12, spp: 1, ..RenderSettings::default() };
         let accumulation = (Arc::clone(&scene) as Arc<dyn PreparedScene>).accumulate(&settings).unwrap();
         let (woke, wakes) = mpsc::channel();
-        let pace = Pace { spp_per_frame: 1, max_spp: 4, max_frames: None };
+        let pace = Pace { spp_per_frame: 1, max_spp: 4, max_frames: None, await_window: false };
         let worker = Worker::start(scene.clone(), accumulation, pace, move || {
             let _ = woke.send(());
         })
