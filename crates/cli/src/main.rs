@@ -278,7 +278,8 @@ fn run_view(args: ViewArgs) -> Result<()> {
         stats.samples_per_second / 1e6
     );
     if stats.interrupted {
-        // As a shell reports a command ended by Ctrl-C (128 + SIGINT), after saving.
+        // As a shell reports a command ended by Ctrl-C (128 + SIGINT; SIGTERM too), after
+        // saving.
         std::process::exit(130);
     }
     Ok(())

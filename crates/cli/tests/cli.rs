@@ -710,15 +710,15 @@ kill -TERM $pid 2>/dev/null; wait $pid"#;
 }
 
 /// The top-left `width × height` pixels of an Xvfb framebuffer file (XWD: a big-endian
-/// header, a colour map, then ZPixmap rows), as RGB; `None` until the file is complete
-/// (a version-7 file of 32-bit pixels with 8-bit channel masks).
+/// header, a colour map, then ZPixmap rows), as RGB; `None` until the file is complete.
 fn xwd_corner(xwd: &[u8], width: u32, height: u32) -> Option<Vec<[u8; 3]>> {
     let field = |i: usize| Some(u32::from_be_bytes(xwd.get(4 * i..4 * i + 4)?.try_into().ok()?) as usize);
     let (header, bits_per_pixel, bytes_per_line, colours) = (field(0)?, field(11)?, field(12)?, field(19)?);
     let (little_endian, masks) = (field(7)? == 0, [field(14)?, field(15)?, field(16)?]);
-    if (field(1)?, bits_per_pixel) != (7, 32) || masks.iter().any(|m| m.count_ones() != 8) {
+    if field(1)? != 7 {
         return None;
     }
+    assert!(bits_per_pixel == 32 && masks.iter().all(|m| m.count_ones() == 8), "an XWD file of 32-bit RGB pixels");
     let pixels = xwd.get(header + 12 * colours..)?;
     let mut out = Vec::with_capacity((width * height) as usize);
     for y in 0..height as usize {

@@ -271,7 +271,8 @@ impl WindowSurface {
 
     /// Draws `frame` over the whole window and presents it. An outdated surface is
     /// configured again and a lost one made again, then tried once more; a window that
-    /// cannot show a frame now (minimised, a timeout) is [`Presented::Skipped`].
+    /// cannot show a frame now (minimised, a timeout, a surface that cannot be configured
+    /// or made again yet) is [`Presented::Skipped`].
     pub fn present(&mut self, frame: &DeviceFrame) -> Result<Presented, GpuError> {
         let mut retried = false;
         let texture = loop {
@@ -280,10 +281,21 @@ impl WindowSurface {
                 wgpu::CurrentSurfaceTexture::Timeout | wgpu::CurrentSurfaceTexture::Occluded => {
                     return Ok(Presented::Skipped);
                 }
-                wgpu::CurrentSurfaceTexture::Outdated if !retried => configure(&self.ctx, &self.surface, &self.config)?,
+                // Failing to configure or make it now (a window in the middle of a change,
+                // minimised to nothing) is a frame skipped, not an error: later presents try again.
+                wgpu::CurrentSurfaceTexture::Outdated if !retried => {
+                    if configure(&self.ctx, &self.surface, &self.config).is_err() {
+                        return Ok(Presented::Skipped);
+                    }
+                }
                 wgpu::CurrentSurfaceTexture::Lost if !retried => {
-                    self.surface = (self.make_surface)()?;
-                    configure(&self.ctx, &self.surface, &self.config)?;
+                    match (self.make_surface)() {
+                        Ok(surface) => self.surface = surface,
+                        Err(_) => return Ok(Presented::Skipped),
+                    }
+                    if configure(&self.ctx, &self.surface, &self.config).is_err() {
+                        return Ok(Presented::Skipped);
+                    }
                 }
                 wgpu::CurrentSurfaceTexture::Outdated | wgpu::CurrentSurfaceTexture::Lost => {
                     return Ok(Presented::Skipped);

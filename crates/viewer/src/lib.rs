@@ -217,6 +217,7 @@ pub fn run(
         window: None,
         surface: None,
         on_screen: false,
+        awaiting_device: pace.await_window,
         interrupted: false,
         input: Input::default(),
         stats: Counters::default(),
@@ -256,7 +257,10 @@ impl Interrupts {
         INSTALLED.call_once(|| {
             let installed = ctrlc::set_handler(|| {
                 let target = INTERRUPT_TARGET.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
-                if target.as_ref().is_none_or(|p| p.send_event(Wake::Quit).is_err()) {
+                // A viewer whose loop has ended is saving and about to return: let it.
+                if let Some(proxy) = target.as_ref() {
+                    let _ = proxy.send_event(Wake::Quit);
+                } else {
                     std::process::exit(130);
                 }
             });
@@ -333,6 +337,9 @@ struct App {
     /// Whether the last frame shown was put on the window by the render thread (through
     /// its wgpu surface) rather than into `pixels`.
     on_screen: bool,
+    /// Whether the render thread is to draw the frames (it has not said it cannot): the
+    /// window then draws nothing itself, so that softbuffer never draws over its surface.
+    awaiting_device: bool,
     /// Whether Ctrl-C or SIGTERM ended the session.
     interrupted: bool,
     input: Input,
@@ -411,8 +418,9 @@ impl App {
         self.stats.recent_time += frame.time.saturating_sub(self.stats.time);
         self.stats.samples = frame.samples;
         self.stats.time = frame.time;
-        if matches!(frame.pixels, Pixels::OnScreen) && !frame.preview {
-            self.stats.frames_on_device += 1;
+        self.stats.frames_on_device = frame.frames_on_device;
+        if let Pixels::Host(_) = frame.pixels {
+            self.awaiting_device = false;
         }
         if frame.generation != self.generation {
             return;
@@ -467,6 +475,9 @@ impl App {
     fn present(&mut self) -> anyhow::Result<()> {
         if self.on_screen {
             self.worker.send(Command::Redraw);
+            return Ok(());
+        }
+        if self.awaiting_device {
             return Ok(());
         }
         let Some(surface) = self.surface.as_mut() else { return Ok(()) };

@@ -63,6 +63,8 @@ pub(crate) struct Frame {
     pub refining: bool,
     /// Full-size frames rendered in the session, samples taken and time spent on them.
     pub frames: u32,
+    /// Full-size frames of the session drawn on the window from the device (not skipped).
+    pub frames_on_device: u32,
     pub samples: u64,
     pub time: Duration,
 }
@@ -157,6 +159,7 @@ struct State {
     /// The window's surface on the GPU backend's device.
     screen: Option<Screen>,
     frames: u32,
+    frames_on_device: u32,
     samples: u64,
     time: Duration,
 }
@@ -173,6 +176,7 @@ impl State {
             awaiting_window: pace.await_window,
             screen: None,
             frames: 0,
+            frames_on_device: 0,
             samples: 0,
             time: Duration::ZERO,
         }
@@ -316,6 +320,9 @@ impl State {
         // The frame's time is its render's; drawing it on the window comes after.
         self.time += start.elapsed();
         let pixels = self.show(made)?;
+        if matches!(pixels, Pixels::OnScreen) && self.screen.as_ref().is_some_and(|s| !s.skipped) {
+            self.frames_on_device += 1;
+        }
         self.samples += settings.width as u64 * settings.height as u64 * spp as u64;
         self.frames += 1;
         Ok(Frame {
@@ -327,6 +334,7 @@ impl State {
             preview: false,
             refining: self.refining(),
             frames: self.frames,
+            frames_on_device: self.frames_on_device,
             samples: self.samples,
             time: self.time,
         })
@@ -362,6 +370,7 @@ impl State {
             preview: true,
             refining: true,
             frames: self.frames,
+            frames_on_device: self.frames_on_device,
             samples: self.samples,
             time: self.time,
         })
