@@ -347,9 +347,10 @@ const STORAGE_BUFFERS: u32 = 8;
 const GPU_SHAPES: [&str; 3] = ["sphere", "box", "polygon"];
 
 /// Why implicit surfaces are refused.
-const IMPLICIT_NOT_PORTED: &str = "implicit surfaces are not ported to the GPU: their root finder (closed forms, \
-     Laguerre's method with deflation and polishing, clipping to the bounds) works in f64, which WGSL does not have \
-     (wgpu offers f64 only as a native extension, which lavapipe and many GPUs lack)";
+const IMPLICIT_NOT_PORTED: &str = "implicit surfaces are not ported to the GPU yet: their root finder (closed forms, \
+     Laguerre's method with deflation and polishing, clipping to the bounds) works in f64, which WGSL has only through \
+     wgpu's SHADER_F64 feature (lavapipe and desktop GPUs offer it, many mobile and web ones do not), and its WGSL \
+     port is not written";
 
 /// What the GPU backend running the path tracer can render: hero wavelengths, triangle
 /// meshes, registered models, both triangle tests, at most [`MAX_BOUNCES`] bounces.
