@@ -1225,20 +1225,16 @@ fn bench_frames(
     for settings in all {
         let settings = RenderSettings { spp: budget, ..settings.clone() };
         let mut acc = Arc::clone(&prepared).accumulate(&settings)?;
-        if on_device && !acc.as_any_mut().is_some_and(|a| a.is::<gpu::accumulation::DeviceAccumulation>()) {
+        if on_device && gpu::accumulation::DeviceAccumulation::of(acc.as_mut()).is_none() {
             bail!("--frames-on-device needs --backend gpu and an integrator whose film stays on the device");
         }
         let mut out = vec![0u32; settings.width as usize * settings.height as usize];
         let mut frame = |acc: &mut Box<dyn tracer::Accumulation>| -> Result<()> {
             acc.add(spp)?;
-            if !on_device {
-                return Ok(acc.display(&mut out)?);
+            match gpu::accumulation::DeviceAccumulation::of(acc.as_mut()).filter(|_| on_device) {
+                Some(device) => drop(device.display_frame()?),
+                None => acc.display(&mut out)?,
             }
-            let device = acc
-                .as_any_mut()
-                .and_then(|a| a.downcast_mut::<gpu::accumulation::DeviceAccumulation>())
-                .context("--frames-on-device needs --backend gpu and an integrator whose film stays on the device")?;
-            device.display_frame()?;
             Ok(())
         };
         frame(&mut acc)?;

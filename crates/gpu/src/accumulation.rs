@@ -326,7 +326,7 @@ impl DeviceAccumulation {
         let slot = match b.frames.iter().position(|(frame, _)| frame.is_free()) {
             Some(i) => i,
             None => {
-                let pixels = crate::present::frame_buffer(ctx, b.width as u64 * b.height as u64, "display frame")?;
+                let pixels = crate::present::frame_buffer(ctx, b.width as u64 * b.height as u64)?;
                 let bind = self.display.bind_group(ctx, [&b.display_params, &b.accum, &b.folded, &pixels]);
                 let frame = DeviceFrame { width: b.width, height: b.height, pixels: Arc::new(pixels) };
                 b.frames.push((frame, bind));
@@ -341,6 +341,12 @@ impl DeviceAccumulation {
             .poll(wgpu::PollType::Wait { submission_index: Some(done), timeout: None })
             .map_err(|e| GpuError::Shader(format!("waiting for the GPU: {e}")))?;
         Ok(frame.clone())
+    }
+
+    /// The GPU's accumulation behind `accumulation`, if it is one (a viewer or benchmark
+    /// that can use [`DeviceAccumulation::display_frame`]).
+    pub fn of(accumulation: &mut dyn Accumulation) -> Option<&mut Self> {
+        accumulation.as_any_mut().and_then(|a| a.downcast_mut())
     }
 
     /// The context the accumulation renders with (a window surface showing its frames

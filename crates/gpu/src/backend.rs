@@ -1023,7 +1023,7 @@ impl SceneData {
 }
 
 /// One buffer of `needed` bytes against the binding and allocation limits.
-fn check_size(what: &'static str, needed: u64, limits: &wgpu::Limits) -> Result<(), GpuError> {
+pub(crate) fn check_size(what: &'static str, needed: u64, limits: &wgpu::Limits) -> Result<(), GpuError> {
     let checks = [
         ("max_storage_buffer_binding_size", limits.max_storage_buffer_binding_size),
         ("max_buffer_size", limits.max_buffer_size),

@@ -32,7 +32,7 @@ impl DeviceFrame {
         if pixels.len() as u64 != width as u64 * height as u64 {
             return Err(GpuError::Shader(format!("{} display pixels for a {width}×{height} frame", pixels.len())));
         }
-        let buffer = frame_buffer(ctx, pixels.len() as u64, "uploaded display pixels")?;
+        let buffer = frame_buffer(ctx, pixels.len() as u64)?;
         ctx.queue.write_buffer(&buffer, 0, bytemuck::cast_slice(pixels));
         Ok(Self { width, height, pixels: Arc::new(buffer) })
     }
@@ -44,19 +44,11 @@ impl DeviceFrame {
 }
 
 /// A buffer for `pixels` display words (at least one word: wgpu binds no empty buffer).
-pub(crate) fn frame_buffer(ctx: &GpuContext, pixels: u64, label: &str) -> Result<wgpu::Buffer, GpuError> {
+pub(crate) fn frame_buffer(ctx: &GpuContext, pixels: u64) -> Result<wgpu::Buffer, GpuError> {
     let bytes = pixels.max(1) * 4;
-    let limit = ctx.limits.max_storage_buffer_binding_size.min(ctx.limits.max_buffer_size);
-    if bytes > limit {
-        return Err(GpuError::Limit {
-            what: "a frame's display pixels",
-            needed: bytes,
-            limit_name: "max_storage_buffer_binding_size",
-            limit,
-        });
-    }
+    crate::backend::check_size("a frame's display pixels", bytes, &ctx.limits)?;
     Ok(ctx.device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some(label),
+        label: Some("display frame"),
         size: bytes,
         usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
         mapped_at_creation: false,
@@ -77,10 +69,8 @@ impl Presenter {
         let device = &ctx.device;
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
         let entry = |binding, ty| wgpu::BindGroupLayoutEntry {
-            binding,
             visibility: wgpu::ShaderStages::FRAGMENT,
-            ty: wgpu::BindingType::Buffer { ty, has_dynamic_offset: false, min_binding_size: None },
-            count: None,
+            ..crate::backend::buffer_entry(binding, ty)
         };
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("spt present"),

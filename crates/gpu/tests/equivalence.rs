@@ -676,7 +676,6 @@ fn direct_lighting_and_ambient_occlusion_match_the_cpu() {
     use gpu::kernel::GpuIntegrator;
     use tracer::{AmbientOcclusion, Backend, DirectLighting};
     let Some(ctx) = gpu::require_gpu() else { return };
-    drop(ctx);
     let Some(scene) = cornell() else { return };
     let s = settings(32, 32, 128);
     let reach = 150.0; // the box is 550 wide: some corners occluded, the open middle not
@@ -692,7 +691,7 @@ fn direct_lighting_and_ambient_occlusion_match_the_cpu() {
     for (name, integrator, cpu) in cases {
         let options = SceneOptions::default();
         let cpu_scene = cpu.prepare(scene.clone(), &options).unwrap();
-        let backend = GpuBackend::with_context(gpu::require_gpu().unwrap()).with_integrator(integrator);
+        let backend = GpuBackend::with_context(ctx.clone()).with_integrator(integrator);
         assert_eq!(backend.capabilities().integrator, name);
         let gpu_scene = backend.prepare_gpu(scene.clone(), &options).unwrap();
         let r = render_three_with(cpu_scene.as_ref(), &gpu_scene, &s).unwrap();

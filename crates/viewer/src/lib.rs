@@ -181,7 +181,7 @@ pub fn run(
         ..settings.clone()
     };
     let mut accumulation = Arc::clone(&scene).accumulate(&first).context("render settings")?;
-    let on_device = accumulation.as_any_mut().is_some_and(|a| a.is::<gpu::accumulation::DeviceAccumulation>());
+    let on_device = gpu::accumulation::DeviceAccumulation::of(accumulation.as_mut()).is_some();
     let pace = Pace {
         spp_per_frame: options.spp_per_frame,
         max_spp: options.max_spp.unwrap_or(MAX_PIXEL_SAMPLES),

@@ -17,6 +17,7 @@
 
 use crate::PREVIEW_DIVISOR;
 use anyhow::{Context as _, anyhow};
+use gpu::accumulation::DeviceAccumulation;
 use std::path::PathBuf;
 use std::sync::mpsc::{self, Receiver, RecvTimeoutError, Sender, TryRecvError};
 use std::sync::{Arc, Mutex, PoisonError};
@@ -241,7 +242,7 @@ impl State {
             }
             Command::Present(window) => {
                 self.awaiting_window = false;
-                let Some(device) = device_accumulation(self.main.as_mut()) else {
+                let Some(device) = DeviceAccumulation::of(self.main.as_mut()) else {
                     if backend != "cpu" {
                         eprintln!(
                             "viewer: frames read back to a CPU framebuffer (this render's film is kept on the CPU by the \
@@ -268,33 +269,22 @@ impl State {
         Ok(())
     }
 
-    /// The running mean of the main accumulation (`preview`: of the preview's): on the
-    /// device where the worker has the window's surface, else read back.
-    fn made(&mut self, preview: bool) -> anyhow::Result<Made> {
+    /// The running mean of the main accumulation (`preview`: of the preview's): where the
+    /// worker has the window's surface, made on the device as the frame to draw next
+    /// ([`Pixels::OnScreen`] once [`State::redraw`] drew it), else read back.
+    fn made(&mut self, preview: bool) -> anyhow::Result<Pixels> {
         let accumulation = if preview { self.preview.as_deref_mut() } else { Some(self.main.as_mut()) }
             .ok_or_else(|| anyhow!("no preview to show"))?;
-        if self.screen.is_some()
-            && let Some(device) = device_accumulation(accumulation)
+        if let Some(screen) = &mut self.screen
+            && let Some(device) = DeviceAccumulation::of(accumulation)
         {
-            return Ok(Made::Device(device.display_frame()?));
+            screen.shown = Some(device.display_frame()?);
+            return Ok(Pixels::OnScreen);
         }
         let settings = accumulation.settings();
         let mut pixels = vec![0; settings.width as usize * settings.height as usize];
         accumulation.display(&mut pixels)?;
-        Ok(Made::Host(pixels))
-    }
-
-    /// Puts a frame on the window (a device frame) or hands its pixels on (read back).
-    fn show(&mut self, made: Made) -> anyhow::Result<Pixels> {
-        match (made, &mut self.screen) {
-            (Made::Host(pixels), _) => Ok(Pixels::Host(pixels)),
-            (Made::Device(frame), Some(screen)) => {
-                screen.shown = Some(frame);
-                self.redraw()?;
-                Ok(Pixels::OnScreen)
-            }
-            (Made::Device(_), None) => Err(anyhow!("a frame on the device without a window surface")),
-        }
+        Ok(Pixels::Host(pixels))
     }
 
     /// Draws the last device frame onto the window again (remembering whether the window
@@ -316,12 +306,12 @@ impl State {
         let spp = self.pace.spp_per_frame.min(self.pace.max_spp - self.main.samples());
         let start = Instant::now();
         self.main.add(spp).with_context(|| format!("{backend} backend"))?;
-        let made = self.made(false).with_context(|| format!("{backend} backend"))?;
+        let pixels = self.made(false).with_context(|| format!("{backend} backend"))?;
         // The frame's time is its render's; drawing it on the window comes after.
         self.time += start.elapsed();
-        let pixels = self.show(made)?;
-        if matches!(pixels, Pixels::OnScreen) && self.screen.as_ref().is_some_and(|s| !s.skipped) {
-            self.frames_on_device += 1;
+        if let Pixels::OnScreen = pixels {
+            self.redraw()?;
+            self.frames_on_device += u32::from(self.screen.as_ref().is_some_and(|s| !s.skipped));
         }
         self.samples += settings.width as u64 * settings.height as u64 * spp as u64;
         self.frames += 1;
@@ -359,8 +349,10 @@ impl State {
             None => self.preview.insert(Arc::clone(&self.scene).accumulate(&settings)?),
         };
         preview.add(1).with_context(|| format!("{backend} backend"))?;
-        let made = self.made(true).with_context(|| format!("{backend} backend"))?;
-        let pixels = self.show(made)?;
+        let pixels = self.made(true).with_context(|| format!("{backend} backend"))?;
+        if let Pixels::OnScreen = pixels {
+            self.redraw()?;
+        }
         Ok(Frame {
             generation: self.generation,
             width: settings.width,
@@ -377,14 +369,6 @@ impl State {
     }
 }
 
-/// A frame as the worker made it.
-enum Made {
-    /// Read back.
-    Host(Vec<u32>),
-    /// On the device.
-    Device(gpu::present::DeviceFrame),
-}
-
 /// The window's wgpu surface, owned by the worker.
 struct Screen {
     surface: gpu::present::WindowSurface,
@@ -397,11 +381,6 @@ struct Screen {
 
 /// How often an idle worker tries again to show a frame the window skipped.
 const RETRY_SKIPPED: Duration = Duration::from_millis(100);
-
-/// The GPU backend's accumulation behind `accumulation`, if it is one.
-fn device_accumulation(accumulation: &mut dyn Accumulation) -> Option<&mut gpu::accumulation::DeviceAccumulation> {
-    accumulation.as_any_mut().and_then(|a| a.downcast_mut())
-}
 
 #[cfg(test)]
 mod tests {
