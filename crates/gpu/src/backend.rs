@@ -45,13 +45,18 @@
 //!   as their linear-sRGB values, metals at the CPU's channel wavelengths, no dispersion)
 //!   and bins40 (a kernel tracing each sample as ten paths of four of the 40 bins from the
 //!   same sample values; the CPU carries all 40 in one path). Refused up front by the
-//!   capability check: implicit surfaces (their solver works in f64) and custom
-//!   (out-of-workspace) BSDFs that ship no WGSL twin (`brdf::BsdfBuilder::wgsl_twin`;
-//!   those that do are compiled in as one more model).
+//!   capability check: custom (out-of-workspace) BSDFs that ship no WGSL twin
+//!   (`brdf::BsdfBuilder::wgsl_twin`; those that do are compiled in as one more model), and
+//!   implicit surfaces on a device without wgpu's `SHADER_F64` (their root finder works in
+//!   f64; [`capabilities_on`]).
 //! * Spheres, boxes and polygons (`wgsl/shapes.wgsl`) are records in the tables with a
 //!   binary BVH of their own, traversed after the triangles' as on the CPU; the polygon's
 //!   inside test evaluates its orientation determinant in f32 (f64 on the CPU), which can
-//!   differ for points within rounding of an edge. Point, spot and directional lights
+//!   differ for points within rounding of an edge. Implicit surfaces (`wgsl/implicit.wgsl`)
+//!   are solved in f64 as on the CPU — clipping, the closed forms, Laguerre's method with
+//!   deflation and polishing — in kernels of their own (only scenes with implicit surfaces
+//!   carry f64 code, its arrays sized to their highest degree); the cubic's acos and cos and
+//!   the cube root, which Vulkan lacks in f64, are computed in f64 by the kernel. Point, spot and directional lights
 //!   (with a sun's disk) are entries of the light table; their spectra are tabulated at
 //!   1 nm, as the environment's.
 //! * Instances (`wgsl/instances.wgsl`) are traced two-level, as `bvh::TwoLevel` on the
@@ -196,11 +201,49 @@ pub fn shape_record(shape: &ShapeKind, material: u32, pmf: f32, prim: u32) -> Ve
             }
             (ShapeCode::Polygon, v)
         }
-        ShapeKind::Implicit(_) => unreachable!("implicit surfaces are refused before"),
+        ShapeKind::Implicit(s) => {
+            let terms = s.poly.terms();
+            let mut v = vec![bits(crate::kernel::root_solver_code(s.solver))];
+            v.extend(s.bounds.min.to_array());
+            v.extend(s.bounds.max.to_array());
+            v.extend([bits(s.poly.degree()), bits(terms.len() as u32)]);
+            for t in terms {
+                let [x, y, z] = t.exps.map(u32::from);
+                let (exponent, mantissa) = split_f64(t.coeff);
+                v.extend([bits(x | y << 8 | z << 16), bits(exponent as u32)]);
+                v.extend(mantissa);
+            }
+            (ShapeCode::Implicit, v)
+        }
     };
     let mut record = vec![bits(code as u32), bits(material), pmf, shape.shape().area(), bits(prim)];
     record.extend(own);
     record
+}
+
+/// `x` as 2^e · (a + b + c) with a, b, c f32 and a + b + c ∈ [1, 2) (or 0) — exactly:
+/// a holds the mantissa's first 24 bits, b the next 24, c the last 5, so their sum in f64 is
+/// `x`'s mantissa. How an f64 travels in the kernel's f32 tables (WGSL cannot bitcast two
+/// words to an f64); `wgsl/implicit.wgsl` sums the parts and applies `ldexp`.
+pub fn split_f64(x: f64) -> (i32, [f32; 3]) {
+    if x == 0.0 || !x.is_finite() {
+        return (0, [x as f32, 0.0, 0.0]);
+    }
+    let (mut m, mut e) = (x, 0i32);
+    // (Halving a number ≥ 2 and doubling any are exact.)
+    while m.abs() >= 2.0 {
+        m *= 0.5;
+        e += 1;
+    }
+    while m.abs() < 1.0 {
+        m *= 2.0;
+        e -= 1;
+    }
+    let a = m as f32;
+    let rest = m - a as f64;
+    let b = rest as f32;
+    let c = (rest - b as f64) as f32;
+    (e, [a, b, c])
 }
 
 /// Fills a punctual light's floats of its light-table entry (`LightKind`'s layout), its
@@ -237,6 +280,16 @@ fn punctual_entry(light: &PunctualLight, spectrum: f32, entry: &mut [f32; LIGHT_
             LightKind::Directional
         }
     }
+}
+
+/// [`KernelOptions::implicit_coeffs`] for `scene`: its implicit surfaces' highest degree + 1
+/// (at least 5, the quartic's), 0 without.
+fn implicit_coeffs(scene: &Scene) -> u32 {
+    let degrees = scene.shapes.iter().filter_map(|s| match &s.shape {
+        ShapeKind::Implicit(i) => Some(i.poly.degree() + 1),
+        _ => None,
+    });
+    degrees.max().map_or(0, |n| n.max(5))
 }
 
 /// How the kernel's triangle BVH is built (binned SAH, leaves of at most four triangles
@@ -343,30 +396,47 @@ const FILM_BAND_CAP: u64 = 64 << 20;
 /// Storage buffers the kernel binds (six of ours, two of the material kernel's).
 const STORAGE_BUFFERS: u32 = 8;
 
-/// The analytic shapes the kernel intersects (`wgsl/shapes.wgsl`).
+/// The analytic shapes the kernel intersects on any device (`wgsl/shapes.wgsl`).
 const GPU_SHAPES: [&str; 3] = ["sphere", "box", "polygon"];
 
-/// Why implicit surfaces are refused.
-const IMPLICIT_NOT_PORTED: &str = "implicit surfaces are not ported to the GPU yet: their root finder (closed forms, \
-     Laguerre's method with deflation and polishing, clipping to the bounds) works in f64, which WGSL has only through \
-     wgpu's SHADER_F64 feature (lavapipe and desktop GPUs offer it, many mobile and web ones do not), and its WGSL \
-     port is not written";
+/// The kind of shape that needs f64 in the kernel (`wgsl/implicit.wgsl`).
+const IMPLICIT: &str = "implicit surface";
 
-/// What the GPU backend running the path tracer can render: hero wavelengths, triangle
-/// meshes, registered models, both triangle tests, at most [`MAX_BOUNCES`] bounces.
+/// Why implicit surfaces are refused on a device without f64.
+const IMPLICIT_NEEDS_F64: &str = "this device lacks wgpu's SHADER_F64 feature (64-bit floats in shaders), in which the \
+     implicit surfaces' root finder works (as on the CPU)";
+
+/// What the GPU backend running the path tracer can render on a device with wgpu's
+/// `SHADER_F64` (every desktop GPU and lavapipe; see [`capabilities_on`]): hero, RGB and
+/// 40-bin wavelengths, triangle meshes and every analytic shape, registered models and custom
+/// BSDFs with a WGSL twin, both triangle tests, at most [`MAX_BOUNCES`] bounces.
 pub fn capabilities() -> Capabilities {
     capabilities_for(GpuIntegrator::Path)
 }
 
-/// [`capabilities`] of a backend running `integrator`.
+/// [`capabilities`] of a backend running `integrator` (on a device with `SHADER_F64`).
 pub fn capabilities_for(integrator: GpuIntegrator) -> Capabilities {
+    capabilities_with(integrator, true)
+}
+
+/// [`capabilities_for`] on the device of `ctx`: without `SHADER_F64`
+/// ([`GpuContext::shader_f64`]) implicit surfaces are refused.
+pub fn capabilities_on(integrator: GpuIntegrator, ctx: &GpuContext) -> Capabilities {
+    capabilities_with(integrator, ctx.shader_f64())
+}
+
+fn capabilities_with(integrator: GpuIntegrator, shader_f64: bool) -> Capabilities {
+    let mut kinds = GPU_SHAPES.to_vec();
+    if shader_f64 {
+        kinds.push(IMPLICIT);
+    }
     Capabilities {
         backend: "gpu",
         spectral_modes: vec![SpectralMode::Hero, SpectralMode::Rgb, SpectralMode::Bins40],
         // ZSobol first (the default): on an H100 it reaches the independent sampler's error
         // 1.76× sooner on the Cornell box (docs/gpu.md).
         samplers: vec![SamplerKind::ZSobol, SamplerKind::Sobol, SamplerKind::Independent],
-        analytic_shapes: ShapeSupport { kinds: GPU_SHAPES.to_vec(), why_not: IMPLICIT_NOT_PORTED },
+        analytic_shapes: ShapeSupport { kinds, why_not: IMPLICIT_NEEDS_F64 },
         custom_bsdfs: CustomBsdfs::WithWgslTwin,
         punctual_lights: true,
         textures: true,
@@ -615,13 +685,11 @@ struct PendingGather {
 impl SceneData {
     /// Flattens `scene` (validated, within the backend's capabilities) for a kernel with
     /// `options`: builds its BVH and light distribution and generates its materials.
-    /// Fails with [`GpuError::Unsupported`] for what the kernel cannot trace (implicit
-    /// surfaces, custom BSDFs without a WGSL twin) and passes on the material code
-    /// generator's errors.
+    /// Fails with [`GpuError::Unsupported`] for what the kernel cannot trace (custom BSDFs
+    /// without a WGSL twin) and passes on the material code generator's errors. A scene with
+    /// implicit surfaces gets a kernel that needs `SHADER_F64` (the backend's capability
+    /// check refuses it on devices without).
     pub fn new(scene: &Scene, options: KernelOptions) -> Result<Self, GpuError> {
-        if let Some(s) = scene.shapes.iter().find(|s| !GPU_SHAPES.contains(&s.shape.name())) {
-            return Err(GpuError::Unsupported(format!("{} ({IMPLICIT_NOT_PORTED})", s.shape.name())));
-        }
         if scene.instances.iter().any(|i| scene.instance_has_light(i)) {
             return Err(GpuError::Unsupported(
                 "instances on sampled area lights (flatten them first: Scene::flatten_light_instances)".into(),
@@ -662,6 +730,7 @@ impl SceneData {
             shapes: !scene.shapes.is_empty(),
             instances: !scene.instances.is_empty(),
             punctual_lights: !scene.punctual_lights.is_empty(),
+            implicit_coeffs: implicit_coeffs(scene),
             textures: textured,
             cutouts: scene.materials.iter().any(|m| m.alpha().is_some()),
             env_map: env_map.is_some(),
@@ -969,6 +1038,11 @@ impl SceneData {
         self.tables[first..end].chunks_exact(LIGHT_FLOATS)
     }
 
+    /// The kernel options with the scene's own features filled in.
+    pub fn options(&self) -> &KernelOptions {
+        &self.options
+    }
+
     /// The BVH nodes as uploaded (binary, 4- or 8-wide, [`KernelOptions::nodes`]).
     pub fn node_bytes(&self) -> &[u8] {
         &self.nodes
@@ -1205,7 +1279,7 @@ impl GpuBackend {
     pub fn kernel_options(&self, options: &SceneOptions) -> KernelOptions {
         // The kernel the first render needs (others compile on demand), where the
         // integrator runs it.
-        let caps = capabilities_for(self.integrator);
+        let caps = capabilities_on(self.integrator, &self.ctx);
         let defaults = RenderSettings::default();
         let (sampler, mode) = options.first_render.unwrap_or((defaults.sampler, defaults.mode));
         let sampler = if caps.samplers.contains(&sampler) { sampler } else { caps.samplers[0] };
@@ -1227,7 +1301,7 @@ impl GpuBackend {
 
     /// Checks `scene` against the capabilities, uploads it and compiles its kernel.
     pub fn prepare_gpu(&self, mut scene: Scene, options: &SceneOptions) -> Result<GpuScene, tracer::Error> {
-        capabilities_for(self.integrator).check_scene(&scene, options)?;
+        capabilities_on(self.integrator, &self.ctx).check_scene(&scene, options)?;
         scene.validate()?;
         if matches!(self.integrator, GpuIntegrator::Atlas(_)) {
             // The atlas charts world-space triangles (its primitive ids are the flattened
@@ -2012,7 +2086,7 @@ impl From<GpuError> for tracer::Error {
 
 impl Backend for GpuBackend {
     fn capabilities(&self) -> Capabilities {
-        capabilities_for(self.integrator)
+        capabilities_on(self.integrator, &self.ctx)
     }
 
     fn prepare(&self, scene: Scene, options: &SceneOptions) -> tracer::Result<Box<dyn PreparedScene>> {
@@ -2022,7 +2096,7 @@ impl Backend for GpuBackend {
 
 impl PreparedScene for GpuScene {
     fn capabilities(&self) -> Capabilities {
-        capabilities_for(self.constants.integrator)
+        capabilities_on(self.constants.integrator, &self.ctx)
     }
 
     fn scene(&self) -> &Scene {

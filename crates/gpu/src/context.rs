@@ -122,6 +122,8 @@ impl GpuContext {
         let limits = adapter.limits();
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("spt"),
+            // f64 in shaders where the adapter has it: implicit surfaces' root finder needs it.
+            required_features: adapter.features() & wgpu::Features::SHADER_F64,
             required_limits: limits.clone(),
             ..Default::default()
         }))
@@ -135,6 +137,12 @@ impl GpuContext {
     /// from [`GpuContext::new`] can).
     pub fn from_parts(device: wgpu::Device, queue: wgpu::Queue, info: wgpu::AdapterInfo, limits: wgpu::Limits) -> Self {
         Self { device, queue, info, limits, kernels: KernelCache::default(), adapter: None }
+    }
+
+    /// Whether kernels may use f64 (wgpu's `SHADER_F64`, requested by [`GpuContext::new`]
+    /// where the adapter offers it): implicit surfaces need it.
+    pub fn shader_f64(&self) -> bool {
+        self.device.features().contains(wgpu::Features::SHADER_F64)
     }
 
     /// How many compiled kernels the device keeps for reuse (each distinct WGSL source and

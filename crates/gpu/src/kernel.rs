@@ -439,6 +439,18 @@ pub enum ShapeCode {
     Cuboid = 1,
     /// `shapes::polygon::Polygon`.
     Polygon = 2,
+    /// `shapes::implicit::Implicit` (`wgsl/implicit.wgsl`, in f64).
+    Implicit = 3,
+}
+
+/// An implicit surface's root finder in its record (`PT_IMPLICIT_*`).
+pub fn root_solver_code(solver: shapes::roots::RootSolver) -> u32 {
+    use shapes::roots::RootSolver;
+    match solver {
+        RootSolver::ClosedForm => 0,
+        RootSolver::Laguerre { polish: true } => 1,
+        RootSolver::Laguerre { polish: false } => 2,
+    }
 }
 
 /// A shape hit's primitive id in the kernel: this bit set, the record's offset below it.
@@ -468,6 +480,11 @@ pub struct KernelOptions {
     pub instances: bool,
     /// Whether the scene has point, spot or directional lights (`PT_HAS_PUNCTUAL`).
     pub punctual_lights: bool,
+    /// The length of the implicit surfaces' coefficient arrays (`PT_IMPLICIT_COEFFS`: the
+    /// highest degree + 1, at least 5 for the quartic), 0 without implicit surfaces — then
+    /// `wgsl/implicit.wgsl` and its f64 are not in the kernel, which therefore compiles on
+    /// devices without wgpu's `SHADER_F64`.
+    pub implicit_coeffs: u32,
     /// The spectral mode (`PT_RGB`, the materials' `MAT_RGB`: three colour channels;
     /// `PT_BINS40`: the 40 fixed bins as ten paths of four per sample); a render in another
     /// mode gets another kernel.
@@ -499,6 +516,7 @@ impl Default for KernelOptions {
             shapes: false,
             instances: false,
             punctual_lights: false,
+            implicit_coeffs: 0,
             mode: SpectralMode::Hero,
             textures: false,
             cutouts: false,
@@ -596,7 +614,7 @@ pub fn header(options: &KernelOptions) -> String {
     for kind in [LightKind::Triangle, LightKind::Shape, LightKind::Point, LightKind::Spot, LightKind::Directional] {
         u(&format!("PT_LIGHT_{}", format!("{kind:?}").to_ascii_uppercase()), kind as u32);
     }
-    for code in [ShapeCode::Sphere, ShapeCode::Cuboid, ShapeCode::Polygon] {
+    for code in [ShapeCode::Sphere, ShapeCode::Cuboid, ShapeCode::Polygon, ShapeCode::Implicit] {
         u(&format!("PT_SHAPE_{}", format!("{code:?}").to_ascii_uppercase()), code as u32);
     }
     u("PT_SHAPE_PRIM_BIT", SHAPE_PRIM_BIT);
@@ -705,6 +723,44 @@ const FILES: [(&str, &str); 16] = [
     ("atlas.wgsl", include_str!("wgsl/atlas.wgsl")),
 ];
 
+/// `wgsl/implicit.wgsl` with its constants (from `shapes`) for coefficient arrays of
+/// `coeffs` entries, or, with 0, a stub that never hits: the f64 code only where a scene has
+/// implicit surfaces.
+pub fn implicit_source(coeffs: u32) -> String {
+    use shapes::roots::RootSolver;
+    if coeffs == 0 {
+        return "\n// ---- implicit surfaces (none in this scene)\nfn pt_implicit_hit(rec: u32, o: vec3f, d: vec3f, \
+                t_min: f32, t_max: f32) -> PtShapeHit {\n    return pt_no_shape_hit();\n}\n\
+                fn pt_implicit_surface(rec: u32, o: vec3f, d: vec3f, t: f32) -> PtShapeHit {\n    \
+                return pt_no_shape_hit();\n}\n"
+            .to_string();
+    }
+    let mut out = String::from("\n// ---- implicit.wgsl\n");
+    let _ = writeln!(out, "const PT_IMPLICIT_COEFFS: u32 = {coeffs}u;");
+    for (name, solver) in [
+        ("CLOSED_FORM", RootSolver::ClosedForm),
+        ("LAGUERRE_POLISH", RootSolver::Laguerre { polish: true }),
+        ("LAGUERRE_PLAIN", RootSolver::Laguerre { polish: false }),
+    ] {
+        let _ = writeln!(out, "const PT_IMPLICIT_{name}: u32 = {}u;", root_solver_code(solver));
+    }
+    let _ = writeln!(
+        out,
+        "const PT_IM_MAX_ITERATIONS: u32 = {}u;",
+        shapes::roots::LaguerreSettings::default().max_iterations
+    );
+    for (name, v) in [
+        ("PT_IM_PAD_REL", shapes::implicit::PAD_REL),
+        ("PT_IM_S_EPS", shapes::implicit::S_EPS),
+        ("PT_IM_REAL_IM_TOL", shapes::roots::REAL_IM_TOL),
+        ("PT_IM_LEAD_TOL", shapes::roots::LEAD_TOL),
+    ] {
+        let _ = writeln!(out, "const {name}: f64 = {v:e};");
+    }
+    out.push_str(include_str!("wgsl/implicit.wgsl"));
+    out
+}
+
 /// The kernel's entry point, last.
 const MAIN: &str = include_str!("wgsl/main.wgsl");
 
@@ -755,6 +811,7 @@ pub fn source(material_wgsl: &str, options: &KernelOptions) -> String {
              rays: ptr<function, u32>, truncated: ptr<function, u32>) -> vec4f {\n    return vec4f(0.0);\n}\n",
         );
     }
+    out.push_str(&implicit_source(options.implicit_coeffs));
     let _ = write!(out, "\n// ---- triangle test\n{triangle}\n// ---- main.wgsl\n{MAIN}");
     if matches!(options.integrator, GpuIntegrator::Atlas(_)) {
         let _ = write!(out, "\n// ---- atlas_gather.wgsl\n{}", include_str!("wgsl/atlas_gather.wgsl"));

@@ -450,17 +450,18 @@ fn long_passes_are_merged_in_groups() {
 
 #[test]
 fn unsupported_scenes_and_modes_are_clear_errors() {
-    // Implicit surfaces (the only shapes not ported): no device needed to find out, from
-    // the capabilities or the data; spheres, boxes and polygons are accepted.
+    // Implicit surfaces need f64 in the kernel: accepted on a device with SHADER_F64 (what
+    // `capabilities` describes), refused on one without; spheres, boxes and polygons always.
     let torus = tracer::scenes::glass_torus(shapes::roots::RootSolver::ClosedForm).unwrap();
-    match SceneData::new(&torus, KernelOptions::default()) {
-        Err(e @ GpuError::Unsupported(_)) => assert!(e.to_string().contains("f64"), "{e}"),
-        Err(e) => panic!("wrong error {e}"),
-        Ok(_) => panic!("a scene with an implicit surface was accepted"),
-    }
+    let data = SceneData::new(&torus, KernelOptions::default()).unwrap();
+    assert_eq!(data.options().implicit_coeffs, 5, "a quartic's arrays");
     let caps = gpu::backend::capabilities();
-    let err = caps.check_scene(&torus, &SceneOptions::default()).unwrap_err().to_string();
+    caps.check_scene(&torus, &SceneOptions::default()).unwrap();
+    let mut without_f64 = caps.clone();
+    without_f64.analytic_shapes.kinds.retain(|k| *k != "implicit surface");
+    let err = without_f64.check_scene(&torus, &SceneOptions::default()).unwrap_err().to_string();
     assert!(err.contains("implicit surface (1 in this scene)") && err.contains("--backend cpu"), "{err}");
+    assert!(err.contains("SHADER_F64"), "{err}");
     let flake = tracer::scenes::sphere_flake(1).unwrap();
     caps.check_scene(&flake, &SceneOptions::default()).unwrap();
     SceneData::new(&flake, KernelOptions::default()).unwrap();
@@ -515,8 +516,9 @@ fn unsupported_scenes_and_modes_are_clear_errors() {
     // The same refusals through a device: before any upload or compilation.
     let Some(ctx) = gpu::require_gpu() else { return };
     let gpu = GpuBackend::with_context(ctx);
-    let err = tracer::Backend::prepare(&gpu, torus, &SceneOptions::default()).err().unwrap().to_string();
-    assert!(err.contains("does not support analytic shapes of kind implicit surface"), "{err}");
+    let on_device = tracer::Backend::capabilities(&gpu);
+    let implicit = on_device.analytic_shapes.kinds.contains(&"implicit surface");
+    assert_eq!(implicit, gpu.context().shader_f64(), "{:?}", on_device.analytic_shapes.kinds);
     let scene = model_scene(Material::diffuse("grey", Colour::constant(0.5)).unwrap());
     let prepared = gpu.prepare_gpu(scene, &SceneOptions::default()).unwrap();
     let deep = RenderSettings { path: PathSettings { max_depth: 1000, ..s.path }, ..s.clone() };
@@ -874,6 +876,82 @@ fn punctual_lights_match_the_cpu() {
     let backend = GpuBackend::with_context(gpu::require_gpu().unwrap()).with_integrator(GpuIntegrator::Direct);
     let r = render_three_with(cpu.as_ref(), &backend.prepare_gpu(scene, &options).unwrap(), &s).unwrap();
     failures.extend(compare_all("punctual lights, direct", &r));
+    assert!(failures.is_empty(), "{failures:#?}");
+}
+
+/// Implicit surfaces in f64 (`wgsl/implicit.wgsl`) in one room: a glass torus solved in
+/// closed form (a quartic), a rough-metal heart by Laguerre's method without polishing (degree
+/// 6), a red ball by Laguerre with polishing, on a box floor under a glowing ball and a sky.
+fn implicit_scene() -> Scene {
+    use shapes::boxes::Cuboid;
+    use shapes::implicit::{Implicit, parse};
+    use shapes::roots::RootSolver;
+    use tracer::ShapeKind;
+    let mut scene = Scene::default();
+    let implicit = |expression: &str, min: [f32; 3], max: [f32; 3], solver| {
+        let bounds = bvh::Aabb { min: Vec3::from(min), max: Vec3::from(max) };
+        ShapeKind::Implicit(Implicit::new(parse(expression).unwrap(), bounds, solver).unwrap())
+    };
+    let torus = Implicit::torus(0.6, 0.2, RootSolver::ClosedForm).unwrap();
+    scene.add_shape(ShapeKind::Implicit(torus), Material::dielectric("glass", 1.5).unwrap());
+    let metal = Material::builtin(
+        "metal",
+        ModelId::RoughConductor,
+        &[("metal", ParamValue::Scalar(1.0)), ("alpha", ParamValue::Scalar(0.25))],
+    )
+    .unwrap();
+    let heart = "((x - 1.5)^2 + 2.25 y^2 + z^2 - 1)^3 - (x - 1.5)^2 z^3 - 0.1125 y^2 z^3";
+    let unpolished = RootSolver::Laguerre { polish: false };
+    scene.add_shape(implicit(heart, [0.3, -0.8, -1.05], [2.7, 0.8, 1.3], unpolished), metal);
+    let ball = "(x + 1.4)^2 + y^2 + (z + 0.6)^2 - 0.25";
+    let polished = RootSolver::Laguerre { polish: true };
+    let red = Material::diffuse("red", Colour::reflectance_rgb([0.7, 0.15, 0.1]).unwrap()).unwrap();
+    scene.add_shape(implicit(ball, [-1.9, -0.5, -1.1], [-0.9, 0.5, -0.1], polished), red);
+    let floor = Cuboid::axis_aligned(Vec3::new(-4.0, -4.0, -1.3), Vec3::new(4.0, 4.0, -1.1)).unwrap();
+    let grey = Material::diffuse("floor", Colour::reflectance_rgb([0.6, 0.55, 0.5]).unwrap()).unwrap();
+    scene.add_shape(ShapeKind::Cuboid(floor), grey);
+    let lamp = Material::diffuse("lamp", Colour::constant(0.0))
+        .unwrap()
+        .with_emission(Colour::illuminant_rgb([20.0, 18.0, 15.0]).unwrap());
+    let bulb = shapes::sphere::Sphere::new(Vec3::new(-1.0, -1.5, 2.2), 0.3, Default::default()).unwrap();
+    scene.add_shape(ShapeKind::Sphere(bulb), lamp);
+    scene.environment = Some(Environment::uniform(Colour::constant(0.2)));
+    scene.camera = Some(Camera {
+        eye: Vec3::new(0.0, -4.2, 1.6),
+        center: Vec3::new(0.0, 0.0, -0.3),
+        up: Vec3::Z,
+        fov_y_deg: 48.0,
+    });
+    scene
+}
+
+/// Implicit surfaces (`implicit.wgsl`, on devices with `SHADER_F64`): the room of
+/// [`implicit_scene`] (every root solver, degrees 2, 4 and 6) and `scenes/cornell-spheres.toml`
+/// (the scene file's glass ball, an expression solved in closed form, beside a gold sphere).
+#[test]
+fn implicit_surfaces_match_the_cpu() {
+    let Some(ctx) = gpu::require_gpu() else { return };
+    if !ctx.shader_f64() {
+        assert!(std::env::var_os("SPT_REQUIRE_GPU").is_none(), "{} lacks SHADER_F64", ctx.info.name);
+        eprintln!("skipping: {} lacks SHADER_F64", ctx.info.name);
+        return;
+    }
+    let gpu = GpuBackend::with_context(ctx);
+    let mut failures = Vec::new();
+    let room = render_three(&gpu, &implicit_scene(), &settings(24, 24, 96)).unwrap();
+    println!("implicit surfaces: kernel compiled in {:?}", room.compile);
+    assert!(room.cpu.channel_means()[1] > 0.02, "a dark image proves little");
+    failures.extend(compare_all("implicit surfaces", &room));
+    let file = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/cornell-spheres.toml");
+    match tracer::scene_file::load_scene_file(&file) {
+        Ok(scene) => {
+            let r = render_three(&gpu, &scene, &settings(24, 24, 96)).unwrap();
+            println!("cornell-spheres.toml: kernel compiled in {:?}", r.compile);
+            failures.extend(compare_all("cornell-spheres.toml", &r));
+        }
+        // (Its box is the shared Cornell box.)
+        Err(e) => eprintln!("skipping cornell-spheres.toml: {e}"),
+    }
     assert!(failures.is_empty(), "{failures:#?}");
 }
 

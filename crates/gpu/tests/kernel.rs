@@ -18,6 +18,7 @@ fn options(triangle_test: bvh::TriangleTest) -> KernelOptions {
         shapes: true,
         instances: true,
         punctual_lights: true,
+        implicit_coeffs: 0,
         mode: spectral::SpectralMode::Bins40,
         textures: true,
         cutouts: true,
@@ -26,14 +27,26 @@ fn options(triangle_test: bvh::TriangleTest) -> KernelOptions {
     }
 }
 
-/// The whole kernel for a one-material scene, parsed and validated by naga.
-fn kernel_module(options: &KernelOptions) -> (String, naga::Module) {
+/// The whole kernel for a one-material scene, parsed by naga.
+fn parsed_kernel(options: &KernelOptions) -> (String, naga::Module) {
     let materials = [Material::diffuse("grey", Colour::constant(0.5)).unwrap()];
     let src = kernel::source(&generate(&materials, true).unwrap().wgsl, options);
     let module = naga::front::wgsl::parse_str(&src).unwrap_or_else(|e| panic!("{}", e.emit_to_string(&src)));
-    naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::default())
-        .validate(&module)
-        .unwrap_or_else(|e| panic!("{}", e.emit_to_string(&src)));
+    (src, module)
+}
+
+/// Whether naga validates `module` with `capabilities` (the error, rendered, if not).
+fn validate(src: &str, module: &naga::Module, capabilities: naga::valid::Capabilities) -> Result<(), String> {
+    naga::valid::Validator::new(naga::valid::ValidationFlags::all(), capabilities)
+        .validate(module)
+        .map(|_| ())
+        .map_err(|e| e.emit_to_string(src))
+}
+
+/// [`parsed_kernel`], validated by naga without optional capabilities (no f64).
+fn kernel_module(options: &KernelOptions) -> (String, naga::Module) {
+    let (src, module) = parsed_kernel(options);
+    validate(&src, &module, naga::valid::Capabilities::default()).unwrap_or_else(|e| panic!("{e}"));
     (src, module)
 }
 
@@ -126,6 +139,7 @@ fn constant(module: &naga::Module, name: &str) -> Vec<f64> {
     let literal = |h: naga::Handle<naga::Expression>| match module.global_expressions[h] {
         naga::Expression::Literal(Literal::F32(v)) => v as f64,
         naga::Expression::Literal(Literal::U32(v)) => v as f64,
+        naga::Expression::Literal(Literal::F64(v)) => v,
         ref other => panic!("{name}: {other:?}"),
     };
     match &module.global_expressions[c.init] {
@@ -152,6 +166,46 @@ fn shared_constants_are_the_rust_values() {
         let name = format!("PT_SHADING_{}", mode.name().to_ascii_uppercase().replace('-', "_"));
         assert_eq!(constant(&module, &name), vec![mode.code() as f64], "{name}");
     }
+}
+
+/// Implicit surfaces bring their f64 code into their own kernels only: such a kernel validates
+/// with naga's FLOAT64 capability (wgpu's `SHADER_F64`) and not without, the others need no
+/// f64; the solver's constants are `shapes`' and the arrays sized as asked.
+#[test]
+fn implicit_surfaces_compile_in_f64_only_where_a_scene_has_them() {
+    use naga::valid::Capabilities;
+    let with = KernelOptions { implicit_coeffs: 7, ..options(bvh::TriangleTest::Watertight) };
+    let (src, module) = parsed_kernel(&with);
+    assert!(src.contains("// ---- implicit.wgsl"));
+    validate(&src, &module, Capabilities::default() | Capabilities::FLOAT64).unwrap_or_else(|e| panic!("{e}"));
+    let err = validate(&src, &module, Capabilities::default()).unwrap_err();
+    assert!(err.contains("FLOAT64"), "{err}");
+    assert_eq!(constant(&module, "PT_IMPLICIT_COEFFS"), vec![7.0]);
+    assert_eq!(constant(&module, "PT_IM_S_EPS"), vec![shapes::implicit::S_EPS]);
+    assert_eq!(constant(&module, "PT_IM_PAD_REL"), vec![shapes::implicit::PAD_REL]);
+    assert_eq!(constant(&module, "PT_IM_REAL_IM_TOL"), vec![shapes::roots::REAL_IM_TOL]);
+    assert_eq!(constant(&module, "PT_IM_LEAD_TOL"), vec![shapes::roots::LEAD_TOL]);
+    let uses_f64 = |m: &naga::Module| {
+        m.types.iter().any(|(_, t)| matches!(t.inner, TypeInner::Scalar(s) | TypeInner::Vector { scalar: s, .. } if s == naga::Scalar::F64))
+    };
+    assert!(uses_f64(&module));
+    let (without, module) = kernel_module(&options(bvh::TriangleTest::Watertight));
+    assert!(!without.contains("// ---- implicit.wgsl") && !uses_f64(&module));
+}
+
+/// An implicit surface's coefficients travel in the f32 tables as 2^e times three f32 whose
+/// sum in f64 is the mantissa, exactly: checked over 40 orders of magnitude each way.
+#[test]
+fn f64_coefficients_split_into_f32_parts_exactly() {
+    let mut rng = rng::Pcg32::seed_from_u64(64);
+    for k in 0..20_000 {
+        let x = (rng.next_f64() - 0.5) * 10f64.powi(k % 81 - 40);
+        let (e, [a, b, c]) = gpu::backend::split_f64(x);
+        let m = a as f64 + b as f64 + c as f64;
+        assert!(x == 0.0 || (1.0..2.0).contains(&m.abs()), "{x}: mantissa {m}");
+        assert_eq!(m * 2f64.powi(e), x, "{x} = 2^{e} · ({a} + {b} + {c})");
+    }
+    assert_eq!(gpu::backend::split_f64(0.0), (0, [0.0; 3]));
 }
 
 #[test]

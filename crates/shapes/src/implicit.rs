@@ -21,4 +21,4 @@ mod tests;
 
 pub use parser::parse;
 pub use poly::{MAX_DEGREE, Poly3, Term};
-pub use shape::Implicit;
+pub use shape::{Implicit, PAD_REL, S_EPS};

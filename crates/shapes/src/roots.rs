@@ -62,7 +62,7 @@ pub const REAL_IM_TOL: f64 = 1e-6;
 /// Leading coefficients with |c_n| ≤ `LEAD_TOL`·max|c_i| count as zero in the closed
 /// forms. The dropped root has magnitude ≳ |c_{n−1}/c_n| ≥ 1e13 times the scale of the
 /// other coefficients, and dividing by such a c_n would wreck the closed formulas.
-const LEAD_TOL: f64 = 1e-13;
+pub const LEAD_TOL: f64 = 1e-13;
 
 /// Whether a complex root `(re, im)` counts as real (see [`REAL_IM_TOL`]).
 #[inline]

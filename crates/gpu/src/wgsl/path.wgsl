@@ -32,7 +32,8 @@ fn pt_lobe_leaks(ng: vec3f, wo_world: vec3f, wi_world: vec3f, flags: u32, two_si
 
 // A surface hit: position from the vertices, geometric and shading normals, tangent
 // (`SceneView::interaction`), and the primitive's material, light pmf and area. A shape's
-// surface is its intersection with the ray (o, d) again: the same root as in the traversal.
+// surface is its intersection with the ray (o, d) again: the same root as in the traversal
+// (an implicit surface's: its point at the traversal's t, `pt_shape_surface`).
 struct PtSurface {
     p: vec3f,
     ng: vec3f,
@@ -46,7 +47,7 @@ struct PtSurface {
 fn pt_surface(hit: PtHit, o: vec3f, d: vec3f) -> PtSurface {
     if pt_is_shape(hit.prim) {
         let rec = hit.prim & ~PT_SHAPE_PRIM_BIT;
-        let h = pt_shape_hit(rec, o, d, 0.0, PT_FAR);
+        let h = pt_shape_surface(rec, o, d, hit.t);
         return PtSurface(h.p, h.n, h.n, vec3f(0.0), pt_tu(rec + 1u), pt_tables[rec + 2u], pt_tables[rec + 3u]);
     }
     let i = hit.prim;
@@ -230,13 +231,11 @@ fn pt_light_contribution(
     }
     let off = pt_offset_ray_origin(p, select(-sf.ng, sf.ng, dot(wi_world, sf.ng) > 0.0));
     *rays += 1u;
-    var blocked: bool;
-    if finite_light {
-        blocked = pt_trace(off, ls.point - off, 0.0, PT_SHADOW_T_MAX, true).prim != PT_NO_HIT;
-    } else {
-        blocked = pt_trace(off, wi_world, 0.0, PT_FAR, true).prim != PT_NO_HIT;
-    }
-    if blocked {
+    // (One trace for both kinds of light: every call site is a copy of the traversal in the
+    // compiled kernel.)
+    let shadow_dir = select(wi_world, ls.point - off, finite_light);
+    let shadow_t_max = select(PT_FAR, PT_SHADOW_T_MAX, finite_light);
+    if pt_trace(off, shadow_dir, 0.0, shadow_t_max, true).prim != PT_NO_HIT {
         return out;
     }
     var w = 1.0;

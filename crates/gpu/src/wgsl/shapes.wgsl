@@ -1,4 +1,5 @@
-// Analytic shapes, mirroring crates/shapes/src/sphere.rs, boxes.rs and polygon.rs
+// Analytic shapes, mirroring crates/shapes/src/sphere.rs, boxes.rs and polygon.rs (implicit
+// surfaces: implicit.wgsl)
 // (`Shape::intersect`, `Shape::sample_area`) and crates/tracer/src/geometry.rs
 // (`Geometry::intersect`/`occluded`: the triangles first, then the shapes' BVH within the
 // closest triangle hit). Each shape is a record in `pt_tables` (written by
@@ -323,8 +324,31 @@ fn pt_shape_hit(rec: u32, o: vec3f, d: vec3f, t_min: f32, t_max: f32) -> PtShape
         case PT_SHAPE_CUBOID: {
             return pt_cuboid_hit(rec, o, d, t_min, t_max);
         }
+        case PT_SHAPE_IMPLICIT: {
+            return pt_implicit_hit(rec, o, d, t_min, t_max);
+        }
         default: {
             return pt_polygon_hit(rec, o, d, t_min, t_max);
+        }
+    }
+}
+
+// The surface of the shape at `rec` hit by (o, d) at `t` (the traversal's): intersected again
+// (the same root), but an implicit surface's point is taken at t and its normal from ∇F there,
+// so that the kernel holds one copy of its root finder less (each call site is one).
+fn pt_shape_surface(rec: u32, o: vec3f, d: vec3f, t: f32) -> PtShapeHit {
+    switch pt_tu(rec) {
+        case PT_SHAPE_SPHERE: {
+            return pt_sphere_hit(rec, o, d, 0.0, PT_FAR);
+        }
+        case PT_SHAPE_CUBOID: {
+            return pt_cuboid_hit(rec, o, d, 0.0, PT_FAR);
+        }
+        case PT_SHAPE_IMPLICIT: {
+            return pt_implicit_surface(rec, o, d, t);
+        }
+        default: {
+            return pt_polygon_hit(rec, o, d, 0.0, PT_FAR);
         }
     }
 }

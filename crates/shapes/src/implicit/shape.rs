@@ -10,13 +10,13 @@ use glam::{DVec3, Vec2, Vec3};
 /// The clipping box is the bounds grown by this fraction of their diagonal on every
 /// side, so that a surface touching its tight box (a sphere in [−r, r]³) has its root
 /// strictly inside the parameter interval, not on its rounded end.
-const PAD_REL: f64 = 1e-6;
+pub const PAD_REL: f64 = 1e-6;
 
 /// Roots at s ≤ `S_EPS` (in units of the box diagonal from the clipped start) are
 /// ignored: only the spurious root at the ray's own origin when that lies on the surface
 /// to solver precision. It is no substitute for offsetting secondary rays' origins (the
 /// tracer's job): f32 offsets are ~1e-7 relative, 100× larger.
-const S_EPS: f64 = 1e-9;
+pub const S_EPS: f64 = 1e-9;
 
 /// An implicit polynomial surface F = 0 inside a bounding box.
 #[derive(Clone, Debug, PartialEq)]
