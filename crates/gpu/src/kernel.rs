@@ -703,8 +703,13 @@ pub fn header(options: &KernelOptions) -> String {
     out
 }
 
+/// The analytic shapes' hit record and the tables' readers (`wgsl/shape_hit.wgsl`), which
+/// [`implicit_source`] needs: a test kernel of implicit surfaces binds `pt_tables` and
+/// declares `PT_MISS` and takes these two pieces.
+pub const SHAPE_HIT_SOURCE: &str = include_str!("wgsl/shape_hit.wgsl");
+
 /// The hand-written files, in the order they are concatenated.
-const FILES: [(&str, &str); 16] = [
+const FILES: [(&str, &str); 17] = [
     ("rng.wgsl", include_str!("wgsl/rng.wgsl")),
     ("sampler.wgsl", include_str!("wgsl/sampler.wgsl")),
     ("spectral.wgsl", include_str!("wgsl/spectral.wgsl")),
@@ -712,6 +717,7 @@ const FILES: [(&str, &str); 16] = [
     ("offset.wgsl", include_str!("wgsl/offset.wgsl")),
     ("shading.wgsl", include_str!("wgsl/shading.wgsl")),
     ("ray.wgsl", include_str!("wgsl/ray.wgsl")),
+    ("shape_hit.wgsl", SHAPE_HIT_SOURCE),
     ("shapes.wgsl", include_str!("wgsl/shapes.wgsl")),
     ("instances.wgsl", include_str!("wgsl/instances.wgsl")),
     ("textures.wgsl", include_str!("wgsl/textures.wgsl")),

@@ -13,34 +13,15 @@ use shapes::{Aabb, Ray, Shape};
 use tracer::ShapeKind;
 use wgpu::util::DeviceExt;
 
-/// What the test kernel needs of `wgsl/shapes.wgsl` (the tables, the hit record), and its
-/// entry point: per ray 9 words (the record's offset as bits, origin, direction, t_min,
-/// t_max), per result 8 (hit 0/1, t, point, normal).
+/// The test kernel's bindings and entry point (with `gpu::kernel::SHAPE_HIT_SOURCE` and the
+/// implicit surfaces' source): per ray 9 words (the record's offset as bits, origin,
+/// direction, t_min, t_max), per result 8 (hit 0/1, t, point, normal).
 const TEST_KERNEL: &str = r#"
 @group(0) @binding(0) var<storage, read> pt_tables: array<f32>;
 @group(0) @binding(1) var<storage, read> rays: array<f32>;
 @group(0) @binding(2) var<storage, read_write> results: array<f32>;
 
 const PT_MISS: f32 = 3.4e38;
-
-struct PtShapeHit {
-    t: f32,
-    p: vec3f,
-    n: vec3f,
-    hit: bool,
-}
-
-fn pt_tv3(i: u32) -> vec3f {
-    return vec3f(pt_tables[i], pt_tables[i + 1u], pt_tables[i + 2u]);
-}
-
-fn pt_tu(i: u32) -> u32 {
-    return bitcast<u32>(pt_tables[i]);
-}
-
-fn pt_no_shape_hit() -> PtShapeHit {
-    return PtShapeHit(PT_MISS, vec3f(0.0), vec3f(0.0), false);
-}
 
 @compute @workgroup_size(64)
 fn test_implicit(@builtin(global_invocation_id) id: vec3u) {
@@ -121,7 +102,7 @@ fn rays_for(bounds: Aabb, n: usize, rng: &mut Pcg32) -> Vec<Ray> {
 /// The device's intersections of `rays` with the records at `records` (one per ray).
 fn trace_on_device(ctx: &gpu::GpuContext, coeffs: u32, tables: &[f32], rays: &[(u32, Ray)]) -> Vec<[f32; 8]> {
     let device = &ctx.device;
-    let source = format!("{}{TEST_KERNEL}", gpu::kernel::implicit_source(coeffs));
+    let source = format!("{}{}{TEST_KERNEL}", gpu::kernel::SHAPE_HIT_SOURCE, gpu::kernel::implicit_source(coeffs));
     let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
     let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
         label: Some("implicit test"),

@@ -15,24 +15,7 @@
 
 const PT_F32_EPSILON: f32 = 1.1920929e-7;
 
-struct PtShapeHit {
-    t: f32,
-    p: vec3f,
-    n: vec3f,
-    hit: bool,
-}
-
-fn pt_tv3(i: u32) -> vec3f {
-    return vec3f(pt_tables[i], pt_tables[i + 1u], pt_tables[i + 2u]);
-}
-
-fn pt_tu(i: u32) -> u32 {
-    return bitcast<u32>(pt_tables[i]);
-}
-
-fn pt_no_shape_hit() -> PtShapeHit {
-    return PtShapeHit(PT_MISS, vec3f(0.0), vec3f(0.0), false);
-}
+// (The hit record `PtShapeHit` and the tables' readers `pt_tv3`, `pt_tu`: shape_hit.wgsl.)
 
 // sphere.rs: `first_in_range` — the first of the two parameters along the unit direction
 // (near one first) inside (t_min, t_max), as a ray parameter; PT_MISS if neither.
