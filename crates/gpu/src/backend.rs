@@ -55,8 +55,10 @@
 //!   differ for points within rounding of an edge. Implicit surfaces (`wgsl/implicit.wgsl`)
 //!   are solved in f64 as on the CPU — clipping, the closed forms, Laguerre's method with
 //!   deflation and polishing — in kernels of their own (only scenes with implicit surfaces
-//!   carry f64 code, its arrays sized to their highest degree); the cubic's acos and cos and
-//!   the cube root, which Vulkan lacks in f64, are computed in f64 by the kernel. Point, spot and directional lights
+//!   carry f64 code, its arrays sized to their highest degree); Vulkan lacks f64 `acos`,
+//!   `cos` and `pow`, so the trigonometric cubic's angle is taken in f32 and its cosines and
+//!   the cube root in f64 by the kernel's own code, the roots then polished in f64 as on the
+//!   CPU (`wgsl/implicit.wgsl` lists every difference). Point, spot and directional lights
 //!   (with a sun's disk) are entries of the light table; their spectra are tabulated at
 //!   1 nm, as the environment's.
 //! * Instances (`wgsl/instances.wgsl`) are traced two-level, as `bvh::TwoLevel` on the
@@ -221,7 +223,7 @@ pub fn shape_record(shape: &ShapeKind, material: u32, pmf: f32, prim: u32) -> Ve
     record
 }
 
-/// `x` as 2^e · (a + b + c) with a, b, c f32 and a + b + c ∈ [1, 2) (or 0) — exactly:
+/// `x` as 2^e · (a + b + c) with a, b, c f32 and |a + b + c| ∈ [1, 2) (or 0) — exactly:
 /// a holds the mantissa's first 24 bits, b the next 24, c the last 5, so their sum in f64 is
 /// `x`'s mantissa. How an f64 travels in the kernel's f32 tables (WGSL cannot bitcast two
 /// words to an f64); `wgsl/implicit.wgsl` sums the parts and applies `ldexp`.
@@ -407,7 +409,8 @@ const IMPLICIT_NEEDS_F64: &str = "this device lacks wgpu's SHADER_F64 feature (6
      implicit surfaces' root finder works (as on the CPU)";
 
 /// What the GPU backend running the path tracer can render on a device with wgpu's
-/// `SHADER_F64` (every desktop GPU and lavapipe; see [`capabilities_on`]): hero, RGB and
+/// `SHADER_F64` (lavapipe and the Vulkan drivers of most desktop GPUs have it, wgpu's Metal
+/// backend and many mobile and web adapters do not; see [`capabilities_on`]): hero, RGB and
 /// 40-bin wavelengths, triangle meshes and every analytic shape, registered models and custom
 /// BSDFs with a WGSL twin, both triangle tests, at most [`MAX_BOUNCES`] bounces.
 pub fn capabilities() -> Capabilities {

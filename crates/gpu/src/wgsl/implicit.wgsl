@@ -8,21 +8,28 @@
 //
 // Record (`gpu::backend::shape_record`): +5 solver (PT_IMPLICIT_*), +6 bounds min, +9 bounds max,
 // +12 degree, +13 term count, +14 the terms, 5 words each: the exponents (x | y << 8 | z << 16),
-// the coefficient's binary exponent (i32 bits) and its mantissa in [1, 2) as three f32 whose sum
-// in f64 is exact (WGSL cannot bitcast two words to an f64).
+// the coefficient's binary exponent (i32 bits) and its mantissa (|m| in [1, 2)) as three f32
+// whose sum in f64 is exact (WGSL cannot bitcast two words to an f64).
 //
-// Differences from the CPU: Vulkan's GLSL.std.450 has no f64 acos, cos, sin or pow, so the
-// trigonometric cubic's cos and acos and Cardano's cube root are computed here in f64 (a reduced
-// argument's Taylor series; an f32 estimate refined by Newton's method) — within an ulp or two of
-// libm's, which the closed forms' Newton polishing absorbs; the polynomial along the ray is
-// expanded by multiplying out its linear factors instead of by binomial coefficients (the same
-// terms up to rounding), and |z| of a complex number is not libm's hypot.
+// Differences from the CPU (each at the level of rounding; the roots are polished by Newton's
+// method in f64 as on the CPU):
+// * Vulkan's GLSL.std.450 has no f64 acos, cos, sin or pow: the trigonometric cubic takes
+//   θ = acos in f32 (~10⁻⁷ off) and cos, sin of θ/3 from an f64 Taylor series, the other two
+//   candidates by the angle-addition formulas; cube roots are an f32 estimate refined by two
+//   Newton steps in f64; the quartic's |q|^(2/3) is cbrt(|q|)²; Laguerre's "random" step
+//   (where P′ = P″ = 0) takes cos and sin of the iteration count in f32.
+// * The polynomial along the ray is expanded by multiplying out its linear factors instead of
+//   by binomial coefficients (the same terms up to rounding); ∇F's monomials are multiplied
+//   left to right; |z| of a complex number is not libm's hypot.
+// * WGSL cannot tell −0.0 from +0.0: Cardano's −sign(R) and the quadratic's sign(b) take +1 for
+//   −0.0 (Rust's signum and copysign take −1), which picks the other (equally valid) formula
+//   for the same roots.
+// * The shading point is taken at the traversal's f32 t (`pt_implicit_surface`).
 
 alias PtImCoeffs = array<f64, PT_IMPLICIT_COEFFS>;
 alias PtImComplex = array<vec2<f64>, PT_IMPLICIT_COEFFS>;
 
 const PT_IM_EPSILON: f64 = 2.220446049250313e-16;
-const PT_IM_PI: f64 = 3.141592653589793;
 
 // ---- f64 functions GLSL.std.450 lacks
 
@@ -85,10 +92,11 @@ fn pt_im_cbrt(x: f64) -> f64 {
 }
 
 // ---- The closed forms (quadratic.rs, cubic.rs, quartic.rs, eval.rs) on polynomials of degree
-// ≤ 4 held in registers. A call site is a copy of its callee in the compiled kernel (and a
-// lavapipe compile took 460 s with a copy per use), so each piece is called once: one cubic
-// serves the cubic, the quartic's resolvent and a quartic whose leading coefficient is
-// negligible; one low-degree solve and one polishing serve every degree.
+// ≤ 4 held in registers, not arrays. A call site is a copy of its callee in the compiled kernel
+// (a lavapipe compile took 464 s with a copy per use), so the large pieces are called once: one
+// cubic serves the cubic, the quartic's resolvent and a quartic whose leading coefficient is
+// negligible; one low-degree solve serves degrees 1 and 2 and a cubic that is not one; the
+// quartic's own roots take a second polishing.
 
 // c.x + c.y t + c.z t² + c.w t³ + c4 t⁴.
 struct PtImPoly {
@@ -343,7 +351,8 @@ fn pt_im_closed_form(p: PtImPoly, len: u32) -> PtImRoots {
         m = max(out.r[out.n - 1u], 0.0);
     }
     let s = sqrt(2.0 * m);
-    let rho2 = max(max(abs(qp), pt_im_cbrt(qq * qq)), sqrt(abs(qr)));
+    let cbrt_q = pt_im_cbrt(abs(qq));
+    let rho2 = max(max(abs(qp), cbrt_q * cbrt_q), sqrt(abs(qr)));
     var e1: f64;
     var e2: f64;
     if m > 1e-4 * rho2 {
