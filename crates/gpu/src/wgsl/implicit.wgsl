@@ -521,14 +521,13 @@ fn pt_im_laguer(a: ptr<function, PtImComplex>, m: u32, start: vec2<f64>) -> PtIm
     return PtImLaguer(x, false);
 }
 
-// `laguerre_roots_from` (every search from `start`, deflation, optional polishing on the original
-// polynomial) followed by `real_roots_in`'s filter: the nearly real roots in [lo, hi], ascending,
-// into `out`; their count. `c[0..len]` has a non-zero leading coefficient, len ≥ 2. Searches and
+// `laguerre_roots_from` (every search from `lo`, the first finite end as on the CPU, deflation,
+// optional polishing on the original polynomial) followed by `real_roots_in`'s filter: the nearly
+// real roots in [lo, hi], ascending, into `out`; their count. `c[0..len]` has a non-zero leading coefficient, len ≥ 2. Searches and
 // polishing share one call of `pt_im_laguer` (one copy in the compiled kernel).
 fn pt_im_laguerre_real(
     c: ptr<function, PtImCoeffs>,
     len: u32,
-    start: f64,
     polish: bool,
     lo: f64,
     hi: f64,
@@ -542,7 +541,7 @@ fn pt_im_laguerre_real(
     let degree = len - 1u;
     var ad: PtImComplex;
     var found: PtImComplex;
-    let x0 = vec2<f64>(start, 0.0);
+    let x0 = vec2<f64>(lo, 0.0);
     // Steps 0 … degree − 1 find a root of the deflated polynomial of degree − step from x0 and
     // divide it out; with polishing, steps degree … 2·degree − 1 run Laguerre again from each
     // root on the original polynomial, restored into `ad`.
@@ -629,7 +628,7 @@ fn pt_im_real_roots(
         return n;
     }
     // (The closed-form solver's fall-back above degree 4 polishes.)
-    return pt_im_laguerre_real(c, len, lo, solver != PT_IMPLICIT_LAGUERRE_PLAIN, lo, hi, out);
+    return pt_im_laguerre_real(c, len, solver != PT_IMPLICIT_LAGUERRE_PLAIN, lo, hi, out);
 }
 
 // ---- implicit/poly.rs and shape.rs
