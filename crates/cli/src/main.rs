@@ -406,6 +406,11 @@ struct SceneArgs {
     /// approximates (the path tracer, CPU or GPU).
     #[arg(long, default_value_t = 0)]
     max_diffuse_depth: u32,
+    /// Run the CPU path tracer's general loop even where the scene needs no more than
+    /// diffuse triangles, instead of its lanes kernel (eight paths per vector
+    /// instruction; the same image to the bit): to measure what the specialisation saves.
+    #[arg(long)]
+    no_lanes: bool,
     /// Bounces before Russian roulette starts.
     #[arg(long, default_value_t = 3)]
     rr_depth: u32,
@@ -818,6 +823,7 @@ fn settings(
             specular_extension: args.extension,
             shading_normals: args.shading_normals,
             max_diffuse_depth: args.max_diffuse_depth,
+            lanes: !args.no_lanes,
         },
         camera,
         crop: None,

@@ -33,6 +33,7 @@ pub use whitted::{WHITTED_DEFAULT_DEPTH, Whitted};
 
 mod atlas;
 mod bdpt;
+mod lanes;
 mod simple;
 mod whitted;
 
@@ -54,6 +55,11 @@ pub struct PathSettings {
     /// direct light plus one diffuse bounce of indirect light wherever the camera looks,
     /// also through glass — what the atlas integrator approximates.
     pub max_diffuse_depth: u32,
+    /// Whether the path tracer may run its lanes kernel where a scene needs no more than
+    /// diffuse triangles (`integrator::lanes`: eight paths per vector instruction, the same
+    /// image to the bit); false runs the general loop everywhere, to measure what the
+    /// specialisation saves.
+    pub lanes: bool,
 }
 
 impl Default for PathSettings {
@@ -64,6 +70,7 @@ impl Default for PathSettings {
             specular_extension: 0,
             shading_normals: ShadingNormals::Adapted,
             max_diffuse_depth: 0,
+            lanes: true,
         }
     }
 }
@@ -584,6 +591,35 @@ impl Integrator for PathTracer {
         counters: &mut PathCounters,
     ) -> SampledSpectrum<N> {
         path_radiance(view, ray, wl, settings, sampler, counters)
+    }
+
+    /// In lanes where the scene allows it ([`PathSettings::lanes`]), else one path at a
+    /// time.
+    fn radiance_block<const N: usize, S: Sampler>(
+        &self,
+        view: &SceneView,
+        settings: &PathSettings,
+        block: &mut [CameraSample<N, S>],
+        counters: &mut PathCounters,
+    ) {
+        if settings.lanes
+            && let Some(scene) = lanes::LaneScene::for_view(view, settings)
+        {
+            return lanes::radiance_block(&scene, view, settings, block, counters);
+        }
+        for s in block {
+            s.radiance = path_radiance(view, s.ray, &mut s.wl, settings, &mut s.sampler, counters);
+        }
+    }
+}
+
+impl PathTracer {
+    /// Whether the path tracer runs `view`'s scene with `settings` in its lanes kernel
+    /// (eight paths per vector instruction where the scene needs no more than diffuse
+    /// triangles; the same image as its general loop, bit for bit): what `spt render`
+    /// reports, and what tests check before comparing the two.
+    pub fn runs_in_lanes(view: &SceneView, settings: &PathSettings) -> bool {
+        settings.lanes && lanes::LaneScene::for_view(view, settings).is_some()
     }
 }
 

@@ -1,0 +1,705 @@
+//! The path tracer over lanes, for scenes that need no more than diffuse triangles: eight
+//! paths side by side in structure-of-arrays form, so that everything between the ray
+//! queries — surface data, emission and its MIS weight, the shading frame, the light
+//! sample's geometry, the Lambertian sample, the spectra at the paths' wavelengths,
+//! Russian roulette — runs as vector instructions across the paths (AVX2 where the
+//! machine has it, chosen at run time), while the rays go through the same BVH queries
+//! one at a time. A path that ends hands its lane to the block's next camera sample.
+//!
+//! It is [`PathTracer`]'s estimator, not an approximation of it: every value is computed
+//! by the same operations in the same order as the general loop (`path_radiance`), from
+//! the same sample values drawn in the same order per path, so the image is the same to
+//! the bit (`lanes_render_the_general_loops_image_bit_for_bit` checks it; Rust never
+//! contracts a·b + c into a fused multiply-add, so the AVX2 build rounds as the baseline).
+//!
+//! The specialisation ("model no more than a scene needs") applies where every material
+//! is an untextured [`brdf::Lambert`] whose colours are RGB uplifts or constants, the mesh
+//! has neither shading normals (or they are ignored) nor tangents, and there are no
+//! analytic shapes, instances, environment or punctual lights, and no diffuse-depth limit
+//! ([`LaneScene::for_view`]). Anything else runs the general loop.
+
+use super::{
+    CameraSample, PathCounters, PathSettings, RR_MIN_TERMINATION, SHADOW_T_MAX, SceneView, ShadingNormals,
+    power_heuristic,
+};
+use crate::geometry::HitSurface;
+use crate::lights::LightSource;
+use crate::material::{ModelParams, Surface};
+use crate::sampler::Sampler;
+use crate::shading::MIN_SHADING_COSINE;
+use brdf::sampling::sin_cos_quarter;
+use bvh::Ray;
+use glam::{Vec2, Vec3};
+use shapes::offset::offset_ray_origin;
+use spectral::spectrum::{Colour, Spectrum};
+use spectral::uplift::d65_normalised;
+use spectral::{SampledSpectrum, SigmoidPolynomial};
+use std::f32::consts::{FRAC_1_PI, FRAC_PI_4};
+
+/// Paths side by side: one AVX2 register of f32.
+pub const LANES: usize = 64;
+
+/// One f32 per lane.
+type F = [f32; LANES];
+/// One flag per lane.
+type M = [bool; LANES];
+
+/// A colour as the lanes evaluate it: `Colour::sample`'s three cases in one branch-free
+/// form, `(scale · S(c₀λ² + c₁λ + c₂)) · D65(λ)` (D65 only for an illuminant, scale 1 for a
+/// reflectance: both multiplications by 1 are exact) or a constant.
+#[derive(Clone, Copy, Debug, Default)]
+struct LaneColour {
+    poly: [f32; 3],
+    scale: f32,
+    illuminant: bool,
+    constant: Option<f32>,
+    rgb: [f32; 3],
+}
+
+impl LaneColour {
+    /// The lanes' form of `c`, or `None` for a spectrum they do not evaluate.
+    fn of(c: &Colour) -> Option<Self> {
+        let base = Self { rgb: c.rgb, scale: 1.0, ..Self::default() };
+        let p = |p: &SigmoidPolynomial| [p.c0, p.c1, p.c2];
+        match &c.spectrum {
+            Spectrum::Constant(v) => Some(Self { constant: Some(*v), ..base }),
+            Spectrum::RgbAlbedo(s) => Some(Self { poly: p(&s.poly), ..base }),
+            Spectrum::RgbIlluminant(s) => Some(Self { poly: p(&s.poly), scale: s.scale, illuminant: true, ..base }),
+            _ => None,
+        }
+    }
+}
+
+/// What the lanes need of a scene, per material: its albedo and its emission.
+pub(crate) struct LaneScene {
+    albedo: Vec<LaneColour>,
+    emission: Vec<Option<LaneColour>>,
+}
+
+impl LaneScene {
+    /// The lanes' tables for `view` rendered with `settings`, or `None` where the scene or
+    /// the settings need the general loop (see the module documentation).
+    pub(crate) fn for_view(view: &SceneView, settings: &PathSettings) -> Option<Self> {
+        let scene = view.scene;
+        let plain = scene.shapes.is_empty()
+            && scene.instances.is_empty()
+            && view.geometry.instances.is_none()
+            && scene.environment.is_none()
+            && scene.punctual_lights.is_empty()
+            && view.lights.suns().is_empty()
+            && view.lights.environment_pmf() == 0.0
+            && scene.tangents.is_empty()
+            && (scene.normals.is_empty() || settings.shading_normals == ShadingNormals::Geometric)
+            && settings.max_diffuse_depth == 0
+            && scene.material_ids.len() == scene.triangles.len();
+        if !plain {
+            return None;
+        }
+        let mut albedo = Vec::with_capacity(scene.materials.len());
+        let mut emission = Vec::with_capacity(scene.materials.len());
+        for m in &scene.materials {
+            let Surface::Builtin(ModelParams::Lambert(p)) = &m.surface else { return None };
+            if m.textures.is_some() {
+                return None;
+            }
+            albedo.push(LaneColour::of(&p.reflectance)?);
+            emission.push(match &m.emission {
+                Some(e) => Some(LaneColour::of(e)?),
+                None => None,
+            });
+        }
+        Some(Self { albedo, emission })
+    }
+}
+
+/// The colours of the lanes' materials gathered into one array per coefficient, so that
+/// their evaluation vectorises across the lanes.
+#[derive(Clone, Copy)]
+struct Gathered {
+    c0: F,
+    c1: F,
+    c2: F,
+    scale: F,
+    illuminant: M,
+    is_constant: M,
+    constant: F,
+    rgb: [F; 3],
+}
+
+impl Default for Gathered {
+    fn default() -> Self {
+        let (z, no) = ([0.0; LANES], [false; LANES]);
+        Self { c0: z, c1: z, c2: z, scale: z, illuminant: no, is_constant: no, constant: z, rgb: [z; 3] }
+    }
+}
+
+impl Gathered {
+    #[inline(always)]
+    fn set(&mut self, k: usize, c: &LaneColour) {
+        [self.c0[k], self.c1[k], self.c2[k]] = c.poly;
+        self.scale[k] = c.scale;
+        self.illuminant[k] = c.illuminant;
+        self.is_constant[k] = c.constant.is_some();
+        self.constant[k] = c.constant.unwrap_or(0.0);
+        for (i, v) in c.rgb.iter().enumerate() {
+            self.rgb[i][k] = *v;
+        }
+    }
+
+    /// The colours at wavelengths `lambda` (per lane, with `d65` the normalised D65 there),
+    /// as `Colour::sample` computes them; in RGB mode the colours' channels.
+    #[inline(always)]
+    fn eval<const N: usize>(&self, lambda: &[F; N], d65: &[F; N], rgb: bool) -> [F; N] {
+        let mut out = [[0.0; LANES]; N];
+        if rgb {
+            for (i, o) in out.iter_mut().enumerate().take(3) {
+                *o = self.rgb[i];
+            }
+            return out;
+        }
+        for i in 0..N {
+            for k in 0..LANES {
+                let l = lambda[i][k];
+                let s = SigmoidPolynomial { c0: self.c0[k], c1: self.c1[k], c2: self.c2[k] }.eval(l);
+                let d = if self.illuminant[k] { d65[i][k] } else { 1.0 };
+                let v = self.scale[k] * s * d;
+                out[i][k] = if self.is_constant[k] { self.constant[k] } else { v };
+            }
+        }
+        out
+    }
+}
+
+/// Three coordinates per lane.
+#[derive(Clone, Copy)]
+struct V3 {
+    x: F,
+    y: F,
+    z: F,
+}
+
+impl Default for V3 {
+    fn default() -> Self {
+        Self { x: [0.0; LANES], y: [0.0; LANES], z: [0.0; LANES] }
+    }
+}
+
+impl V3 {
+    #[inline(always)]
+    fn get(&self, k: usize) -> Vec3 {
+        Vec3::new(self.x[k], self.y[k], self.z[k])
+    }
+
+    #[inline(always)]
+    fn set(&mut self, k: usize, v: Vec3) {
+        (self.x[k], self.y[k], self.z[k]) = (v.x, v.y, v.z);
+    }
+}
+
+/// glam's `Vec3::dot`, per lane.
+#[inline(always)]
+fn dot(a: &V3, b: &V3, k: usize) -> f32 {
+    (a.x[k] * b.x[k]) + (a.y[k] * b.y[k]) + (a.z[k] * b.z[k])
+}
+
+/// glam's `Vec3::dot` of a vector with lane `k` of `b`.
+#[inline(always)]
+fn dot_with(a: (f32, f32, f32), b: &V3, k: usize) -> f32 {
+    (a.0 * b.x[k]) + (a.1 * b.y[k]) + (a.2 * b.z[k])
+}
+
+/// `SampledSpectrum::is_black` of lane `k`.
+#[inline(always)]
+fn black<const N: usize>(s: &[F; N], k: usize) -> bool {
+    // Without the early exit of `all`, which would keep the lanes' loops from vectorising.
+    s.iter().fold(true, |b, v| b & (v[k] == 0.0))
+}
+
+/// The paths in the lanes.
+struct Lanes<const N: usize> {
+    /// The block index of each lane's camera sample (`None`: the lane is free).
+    slot: [Option<usize>; LANES],
+    origin: V3,
+    dir: V3,
+    lambda: [F; N],
+    /// The normalised D65 at each path's wavelengths (illuminants' factor, fixed per path).
+    d65: [F; N],
+    beta: [F; N],
+    radiance: [F; N],
+    prev_pdf: F,
+    prev_p: V3,
+    bounce: [u32; LANES],
+}
+
+/// [`super::PathTracer`]'s estimate for every sample of `block`, in lanes (see the module
+/// documentation), with the AVX2 instructions where the machine has them.
+pub(crate) fn radiance_block<const N: usize, S: Sampler>(
+    lanes: &LaneScene,
+    view: &SceneView,
+    settings: &PathSettings,
+    block: &mut [CameraSample<N, S>],
+    counters: &mut PathCounters,
+) {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
+        // SAFETY: the CPU has the features the function is compiled for (just detected).
+        unsafe { radiance_block_avx2(lanes, view, settings, block, counters) };
+        return;
+    }
+    run(lanes, view, settings, block, counters);
+}
+
+/// [`run`] compiled for AVX2 (eight lanes to a register).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+unsafe fn radiance_block_avx2<const N: usize, S: Sampler>(
+    lanes: &LaneScene,
+    view: &SceneView,
+    settings: &PathSettings,
+    block: &mut [CameraSample<N, S>],
+    counters: &mut PathCounters,
+) {
+    run(lanes, view, settings, block, counters);
+}
+
+/// The lanes' loop: one bounce of every lane per turn.
+#[inline(always)]
+fn run<const N: usize, S: Sampler>(
+    ls: &LaneScene,
+    view: &SceneView,
+    settings: &PathSettings,
+    block: &mut [CameraSample<N, S>],
+    counters: &mut PathCounters,
+) {
+    let scene = view.scene;
+    let lights = view.lights;
+    let rgb = block.first().is_some_and(|s| s.wl.is_rgb());
+    let mut st = Lanes::<N> {
+        slot: [None; LANES],
+        origin: V3::default(),
+        dir: V3::default(),
+        lambda: [[0.0; LANES]; N],
+        d65: [[0.0; LANES]; N],
+        beta: [[0.0; LANES]; N],
+        radiance: [[0.0; LANES]; N],
+        prev_pdf: [0.0; LANES],
+        prev_p: V3::default(),
+        bounce: [0; LANES],
+    };
+    let mut next = 0;
+    // Ends lane k's path: its estimate goes to its camera sample, the lane is free.
+    let finish = |st: &mut Lanes<N>, block: &mut [CameraSample<N, S>], k: usize| {
+        if let Some(b) = st.slot[k].take() {
+            block[b].radiance = SampledSpectrum(std::array::from_fn(|i| st.radiance[i][k]));
+        }
+    };
+    loop {
+        // Free lanes take the block's next camera samples.
+        for k in 0..LANES {
+            if st.slot[k].is_none() && next < block.len() {
+                let s = &block[next];
+                st.slot[k] = Some(next);
+                st.origin.set(k, s.ray.origin);
+                st.dir.set(k, s.ray.dir);
+                st.prev_p.set(k, s.ray.origin);
+                for i in 0..N {
+                    st.lambda[i][k] = s.wl.lambda[i];
+                    st.d65[i][k] = if rgb { 0.0 } else { d65_normalised(s.wl.lambda[i]) };
+                    st.beta[i][k] = 1.0;
+                    st.radiance[i][k] = 0.0;
+                }
+                st.prev_pdf[k] = 0.0;
+                st.bounce[k] = 0;
+                next += 1;
+            }
+        }
+        if st.slot.iter().all(Option::is_none) {
+            break;
+        }
+
+        // The closest hits, one query per path; a path that leaves the scene ends (no
+        // environment). Lanes without a path carry triangle 0's data, never used.
+        let mut live: M = [false; LANES];
+        let (mut bu, mut bv): (F, F) = ([0.0; LANES], [0.0; LANES]);
+        let (mut v0, mut v1, mut v2) = (V3::default(), V3::default(), V3::default());
+        let mut albedo = Gathered::default();
+        let mut emission = Gathered::default();
+        let mut emissive: M = [false; LANES];
+        let mut pmf: F = [0.0; LANES];
+        let mesh = scene.mesh();
+        for k in 0..LANES {
+            let Some(b) = st.slot[k] else { continue };
+            counters.rays += 1;
+            let ray = if st.bounce[k] == 0 { block[b].ray } else { Ray::new(st.origin.get(k), st.dir.get(k)) };
+            let hit = view.intersect(&ray);
+            let Some(hit) = hit else {
+                finish(&mut st, block, k);
+                continue;
+            };
+            let HitSurface::Triangle { u, v } = hit.surface else { unreachable!("a scene of triangles only") };
+            live[k] = true;
+            (bu[k], bv[k]) = (u, v);
+            let tri = mesh.triangles[hit.prim as usize];
+            v0.set(k, Vec3::from_array(mesh.positions[tri[0] as usize]));
+            v1.set(k, Vec3::from_array(mesh.positions[tri[1] as usize]));
+            v2.set(k, Vec3::from_array(mesh.positions[tri[2] as usize]));
+            let m = scene.material_ids[hit.prim as usize] as usize;
+            albedo.set(k, &ls.albedo[m]);
+            if let Some(e) = &ls.emission[m] {
+                emissive[k] = true;
+                emission.set(k, e);
+                pmf[k] = lights.prim_pmf(hit.prim);
+            }
+        }
+
+        // The surface at the hits (`SceneView::surface_at`), the emission the paths see
+        // with its MIS weight, and the shading frame.
+        let (mut p, mut ng, mut wo) = (V3::default(), V3::default(), V3::default());
+        let mut area: F = [0.0; LANES];
+        let mut front: M = [false; LANES];
+        for k in 0..LANES {
+            let (u, v) = (bu[k], bv[k]);
+            let b0 = 1.0 - u - v;
+            p.x[k] = b0 * v0.x[k] + u * v1.x[k] + v * v2.x[k];
+            p.y[k] = b0 * v0.y[k] + u * v1.y[k] + v * v2.y[k];
+            p.z[k] = b0 * v0.z[k] + u * v1.z[k] + v * v2.z[k];
+            let e1 = (v1.x[k] - v0.x[k], v1.y[k] - v0.y[k], v1.z[k] - v0.z[k]);
+            let e2 = (v2.x[k] - v0.x[k], v2.y[k] - v0.y[k], v2.z[k] - v0.z[k]);
+            let c = (e1.1 * e2.2 - e2.1 * e1.2, e1.2 * e2.0 - e2.2 * e1.0, e1.0 * e2.1 - e2.0 * e1.1);
+            let a = 0.5 * ((c.0 * c.0) + (c.1 * c.1) + (c.2 * c.2)).sqrt();
+            area[k] = a;
+            let twice = 2.0 * a;
+            (ng.x[k], ng.y[k], ng.z[k]) = (c.0 / twice, c.1 / twice, c.2 / twice);
+            (wo.x[k], wo.y[k], wo.z[k]) = (-st.dir.x[k], -st.dir.y[k], -st.dir.z[k]);
+            front[k] = dot(&wo, &ng, k) > 0.0;
+        }
+        if emissive.iter().any(|&e| e) {
+            let le = emission.eval(&st.lambda, &st.d65, rgb);
+            for k in 0..LANES {
+                let w = if st.bounce[k] == 0 {
+                    1.0
+                } else {
+                    let d = (p.x[k] - st.prev_p.x[k], p.y[k] - st.prev_p.y[k], p.z[k] - st.prev_p.z[k]);
+                    let dist2 = (d.0 * d.0) + (d.1 * d.1) + (d.2 * d.2);
+                    let cos_l = dot(&wo, &ng, k);
+                    let light_pdf = pmf[k] * dist2 / (cos_l * area[k]);
+                    power_heuristic(st.prev_pdf[k], light_pdf)
+                };
+                let seen = live[k] && front[k] && emissive[k];
+                for i in 0..N {
+                    let add = st.beta[i][k] * le[i][k] * w;
+                    st.radiance[i][k] = if seen { st.radiance[i][k] + add } else { st.radiance[i][k] };
+                }
+            }
+        }
+        if settings.max_depth > 0 {
+            // A Lambertian surface is not specular: no extension past the limit.
+            for k in 0..LANES {
+                if live[k] && st.bounce[k] >= settings.max_depth {
+                    live[k] = false;
+                    finish(&mut st, block, k);
+                }
+            }
+        }
+
+        // The normals the BSDF sees (`shading_normals` with n_s = n_g, two-sided) and
+        // its frame (`Frame::from_normal`), ω_o in it, and the albedo.
+        let (mut nf, mut fs, mut ft) = (V3::default(), V3::default(), V3::default());
+        let mut ngf = V3::default();
+        let mut wol = V3::default();
+        let face_forward = settings.shading_normals == ShadingNormals::FaceForward;
+        for k in 0..LANES {
+            let cos_o = dot(&wo, &ng, k);
+            let side = if cos_o >= 0.0 { 1.0 } else { -1.0 };
+            let a = side * cos_o;
+            let s = (MIN_SHADING_COSINE - a) * side;
+            let bent = (ng.x[k] + s * wo.x[k], ng.y[k] + s * wo.y[k], ng.z[k] + s * wo.z[k]);
+            let rcp = 1.0 / ((bent.0 * bent.0) + (bent.1 * bent.1) + (bent.2 * bent.2)).sqrt();
+            let ok = rcp.is_finite() && rcp > 0.0;
+            let adapted = if ok { (bent.0 * rcp, bent.1 * rcp, bent.2 * rcp) } else { (ng.x[k], ng.y[k], ng.z[k]) };
+            let keep = face_forward || a >= MIN_SHADING_COSINE;
+            let n = if keep { (ng.x[k], ng.y[k], ng.z[k]) } else { adapted };
+            let flip = !front[k];
+            let n = if flip { (-n.0, -n.1, -n.2) } else { n };
+            (nf.x[k], nf.y[k], nf.z[k]) = n;
+            (ngf.x[k], ngf.y[k], ngf.z[k]) =
+                if flip { (-ng.x[k], -ng.y[k], -ng.z[k]) } else { (ng.x[k], ng.y[k], ng.z[k]) };
+            let sign = 1.0f32.copysign(n.2);
+            let a = -1.0 / (sign + n.2);
+            let b = n.0 * n.1 * a;
+            (fs.x[k], fs.y[k], fs.z[k]) = (1.0 + sign * n.0 * n.0 * a, sign * b, -sign * n.0);
+            (ft.x[k], ft.y[k], ft.z[k]) = (b, sign + n.1 * n.1 * a, -n.1);
+            (wol.x[k], wol.y[k], wol.z[k]) = (dot(&wo, &fs, k), dot(&wo, &ft, k), dot(&wo, &nf, k));
+        }
+        // f = R/π (`Lambert::eval` on the same hemisphere, and its sample's value).
+        let mut fr = albedo.eval(&st.lambda, &st.d65, rgb);
+        for v in fr.iter_mut().flatten() {
+            *v *= FRAC_1_PI;
+        }
+
+        // Next-event estimation: the light samples (one query each into the lights'
+        // distribution), then their geometry, MIS weight and BSDF across the lanes.
+        let (mut lp, mut ln) = (V3::default(), V3::default());
+        let mut lpdf: F = [0.0; LANES];
+        let mut lemissive: M = [false; LANES];
+        let mut light_colour = Gathered::default();
+        for k in 0..LANES {
+            let Some(b) = st.slot[k].filter(|_| live[k]) else { continue };
+            let u = block[b].sampler.next_2d();
+            let Some(s) = lights.sample(scene, u) else { continue };
+            let LightSource::Primitive(t) = s.source else { continue };
+            lp.set(k, s.point);
+            ln.set(k, s.normal);
+            lpdf[k] = s.pdf;
+            if let Some(e) = &ls.emission[scene.material_ids[t as usize] as usize] {
+                lemissive[k] = true;
+                light_colour.set(k, e);
+            }
+        }
+        let lle = light_colour.eval(&st.lambda, &st.d65, rgb);
+        let mut shadow: M = [false; LANES];
+        let mut weight: F = [0.0; LANES];
+        let mut origin = V3::default();
+        for k in 0..LANES {
+            let d = (lp.x[k] - p.x[k], lp.y[k] - p.y[k], lp.z[k] - p.z[k]);
+            let dist2 = (d.0 * d.0) + (d.1 * d.1) + (d.2 * d.2);
+            let dist = dist2.sqrt();
+            let wi = (d.0 / dist, d.1 / dist, d.2 / dist);
+            let cos_l = -dot_with(wi, &ln, k);
+            let emits = lemissive[k] && cos_l > 0.0;
+            let light_pdf = if emits { lpdf[k] * dist2 / cos_l } else { 0.0 };
+            let le_black = !emits || black(&lle, k);
+            let wil = (dot_with(wi, &fs, k), dot_with(wi, &ft, k), dot_with(wi, &nf, k));
+            let same_side = dot_with(wi, &ngf, k) * dot(&wo, &ngf, k) > 0.0;
+            let same_hemisphere = wol.z[k] * wil.2 > 0.0;
+            let f_black = !same_hemisphere || black(&fr, k);
+            shadow[k] = live[k] && lemissive[k] && light_pdf > 0.0 && !le_black && same_side && !f_black;
+            let pdf = if same_hemisphere { wil.2.abs().max(0.0) * FRAC_1_PI } else { 0.0 };
+            let w = power_heuristic(light_pdf, pdf);
+            weight[k] = wil.2.abs() * w / light_pdf;
+            let s = if dot_with(wi, &ng, k) > 0.0 { 1.0 } else { -1.0 };
+            let o = offset_ray_origin(p.get(k), Vec3::new(s * ng.x[k], s * ng.y[k], s * ng.z[k]));
+            origin.set(k, o);
+        }
+        for k in 0..LANES {
+            if shadow[k] {
+                counters.rays += 1;
+                let o = origin.get(k);
+                if view.occluded(&Ray::segment(o, lp.get(k) - o, 0.0, SHADOW_T_MAX)) {
+                    shadow[k] = false;
+                }
+            }
+        }
+        for k in 0..LANES {
+            for i in 0..N {
+                let add = st.beta[i][k] * fr[i][k] * lle[i][k] * weight[k];
+                st.radiance[i][k] = if shadow[k] { st.radiance[i][k] + add } else { st.radiance[i][k] };
+            }
+        }
+
+        // The next direction: cosine-weighted on ω_o's side (`Lambert::sample`).
+        let mut u2 = [Vec2::ZERO; LANES];
+        for k in 0..LANES {
+            if let Some(b) = st.slot[k].filter(|_| live[k]) {
+                let sampler = &mut block[b].sampler;
+                let _ = sampler.next_1d(); // the lobe choice, which a Lambertian BSDF ignores
+                u2[k] = sampler.next_2d();
+            }
+        }
+        let mut go: M = [false; LANES];
+        for k in 0..LANES {
+            let (ox, oy) = (2.0 * u2[k].x - 1.0, 2.0 * u2[k].y - 1.0);
+            let x_major = ox.abs() > oy.abs();
+            let (r, minor) = if x_major { (ox, oy) } else { (oy, ox) };
+            let (s, c) = sin_cos_quarter(FRAC_PI_4 * (minor / r));
+            let (cos_t, sin_t) = if x_major { (c, s) } else { (s, c) };
+            let centre = ox == 0.0 && oy == 0.0;
+            let (dx, dy) = if centre { (0.0, 0.0) } else { (r * cos_t, r * sin_t) };
+            let z = (1.0 - ((dx * dx) + (dy * dy))).max(0.0).sqrt();
+            let z = if wol.z[k] < 0.0 { -z } else { z };
+            let pdf = z.abs().max(0.0) * FRAC_1_PI;
+            let wi = (
+                fs.x[k] * dx + ft.x[k] * dy + nf.x[k] * z,
+                fs.y[k] * dx + ft.y[k] * dy + nf.y[k] * z,
+                fs.z[k] * dx + ft.z[k] * dy + nf.z[k] * z,
+            );
+            let cos_ng = (wi.0 * ng.x[k]) + (wi.1 * ng.y[k]) + (wi.2 * ng.z[k]);
+            let crosses = cos_ng * dot(&wo, &ng, k) <= 0.0;
+            go[k] = live[k] && wol.z[k] != 0.0 && pdf > 0.0 && !black(&fr, k) && !crosses;
+            let k_beta = z.abs() / pdf;
+            for i in 0..N {
+                let b = st.beta[i][k] * (fr[i][k] * k_beta);
+                st.beta[i][k] = if go[k] { b } else { st.beta[i][k] };
+            }
+            let s = if cos_ng > 0.0 { 1.0 } else { -1.0 };
+            let o = offset_ray_origin(p.get(k), Vec3::new(s * ng.x[k], s * ng.y[k], s * ng.z[k]));
+            let g = go[k];
+            st.prev_pdf[k] = if g { pdf } else { st.prev_pdf[k] };
+            st.prev_p.x[k] = if g { p.x[k] } else { st.prev_p.x[k] };
+            st.prev_p.y[k] = if g { p.y[k] } else { st.prev_p.y[k] };
+            st.prev_p.z[k] = if g { p.z[k] } else { st.prev_p.z[k] };
+            st.origin.x[k] = if g { o.x } else { st.origin.x[k] };
+            st.origin.y[k] = if g { o.y } else { st.origin.y[k] };
+            st.origin.z[k] = if g { o.z } else { st.origin.z[k] };
+            st.dir.x[k] = if g { wi.0 } else { st.dir.x[k] };
+            st.dir.y[k] = if g { wi.1 } else { st.dir.y[k] };
+            st.dir.z[k] = if g { wi.2 } else { st.dir.z[k] };
+            st.bounce[k] += g as u32;
+        }
+
+        // Russian roulette (`survives_roulette`, no transmissions: η-scale 1).
+        for k in 0..LANES {
+            if live[k] && !go[k] {
+                finish(&mut st, block, k);
+                continue;
+            }
+            let Some(b) = st.slot[k].filter(|_| live[k]) else { continue };
+            if st.bounce[k] >= settings.rr_depth {
+                let u = block[b].sampler.next_1d();
+                let max = (0..N).map(|i| st.beta[i][k]).fold(f32::NEG_INFINITY, f32::max);
+                let q = (1.0 - max * 1.0).max(RR_MIN_TERMINATION);
+                if u < q {
+                    finish(&mut st, block, k);
+                    continue;
+                }
+                for i in 0..N {
+                    st.beta[i][k] /= 1.0 - q;
+                }
+            }
+            if black(&st.beta, k) {
+                finish(&mut st, block, k);
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::Geometry;
+    use crate::lights::Lights;
+    use crate::material::Material;
+    use crate::mesh::{quad, uv_sphere};
+    use crate::render::SceneOptions;
+    use crate::sampler::Pcg32;
+    use crate::scene::Scene;
+    use spectral::SampledWavelengths;
+
+    /// A diffuse room: coloured walls (RGB uplifts), a grey constant, a smooth sphere (its
+    /// normals ignored: geometric shading) and two lamps, one a coloured uplift, one a
+    /// constant; walls seen edge-on, so that grazing hits and adapted normals occur.
+    fn room() -> Scene {
+        let mut scene = Scene::default();
+        let wall = |rgb: [f32; 3]| Material::diffuse("wall", Colour::reflectance_rgb(rgb).unwrap()).unwrap();
+        scene.add(&quad(Vec3::ZERO, Vec3::Y, 1.0), wall([0.7, 0.7, 0.7]));
+        scene.add(&quad(Vec3::new(-1.0, 1.0, 0.0), Vec3::X, 1.0), wall([0.6, 0.1, 0.1]));
+        scene.add(&quad(Vec3::new(1.0, 1.0, 0.0), -Vec3::X, 1.0), wall([0.1, 0.6, 0.1]));
+        scene.add(&quad(Vec3::new(0.0, 1.0, -1.0), Vec3::Z, 1.0), wall([0.2, 0.3, 0.8]));
+        scene.add(&uv_sphere(Vec3::new(0.2, 0.4, 0.0), 0.4, 12, 24, false), wall([0.9, 0.8, 0.2]));
+        let lamp = |c: Colour| Material::diffuse("lamp", Colour::constant(0.0)).unwrap().with_emission(c);
+        scene.add(
+            &quad(Vec3::new(0.0, 1.99, 0.0), -Vec3::Y, 0.3),
+            lamp(Colour::illuminant_rgb([4.0, 3.0, 2.0]).unwrap()),
+        );
+        scene.add(&quad(Vec3::new(-0.6, 1.0, -0.99), Vec3::Z, 0.1), lamp(Colour::constant(2.0)));
+        // Tangents would orient the BSDF's frame: the lanes take scenes without (OBJ files).
+        scene.tangents.clear();
+        scene
+    }
+
+    /// Camera samples of a pinhole at (0, 1, 3) over the room, each with its own stream.
+    fn block<const N: usize>(wl: impl Fn(f32) -> SampledWavelengths<N>) -> Vec<CameraSample<N, Pcg32>> {
+        (0..600)
+            .map(|i| {
+                let mut sampler = Pcg32::for_sample(7, i, 0);
+                let (u_wl, jitter) = sampler.camera(true);
+                let target = Vec3::new(2.4 * jitter.x - 1.2, 2.2 * jitter.y - 0.1, 0.0);
+                let origin = Vec3::new(0.0, 1.0, 3.0);
+                let ray = Ray::new(origin, (target - origin).normalize());
+                CameraSample { ray, wl: wl(u_wl), sampler, radiance: SampledSpectrum::zero() }
+            })
+            .collect()
+    }
+
+    /// Every sample's estimate from the general loop, from the lanes compiled for the
+    /// baseline and (where the machine has it) for AVX2, compared bit for bit.
+    fn lanes_equal_the_general_loop<const N: usize>(wl: impl Fn(f32) -> SampledWavelengths<N>, settings: PathSettings) {
+        let scene = room();
+        let geometry = Geometry::build(&scene, &SceneOptions::default()).unwrap();
+        let lights = Lights::new(&scene);
+        let view = SceneView::new(&scene, &geometry, &lights);
+        let lanes = LaneScene::for_view(&view, &settings).expect("a scene for the lanes");
+        let mut general = block(&wl);
+        let mut rays = PathCounters::default();
+        for s in &mut general {
+            s.radiance = super::super::path_radiance(&view, s.ray, &mut s.wl, &settings, &mut s.sampler, &mut rays);
+        }
+        assert!(general.iter().filter(|s| !s.radiance.is_black()).count() > 300, "the room is lit");
+        let mut variants = vec![("baseline", block(&wl), PathCounters::default())];
+        let (name, b, c) = variants.last_mut().unwrap();
+        run(&lanes, &view, &settings, b, c);
+        let _ = name;
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
+            let (mut b, mut c) = (block(&wl), PathCounters::default());
+            // SAFETY: the features were just detected.
+            unsafe { radiance_block_avx2(&lanes, &view, &settings, &mut b, &mut c) };
+            variants.push(("avx2", b, c));
+        }
+        for (name, b, c) in &variants {
+            assert_eq!(c.rays, rays.rays, "{name}: rays traced");
+            for (i, (g, l)) in general.iter().zip(b).enumerate() {
+                let (g, l) = (g.radiance.0.map(f32::to_bits), l.radiance.0.map(f32::to_bits));
+                assert_eq!(g, l, "{name}: sample {i} ({settings:?})");
+            }
+        }
+    }
+
+    #[test]
+    fn lanes_compute_the_general_loops_estimate_bit_for_bit() {
+        let base = PathSettings { rr_depth: 2, shading_normals: ShadingNormals::Geometric, ..Default::default() };
+        lanes_equal_the_general_loop(SampledWavelengths::<4>::sample_hero, base);
+        lanes_equal_the_general_loop(|_| SampledWavelengths::<3>::rgb(), base);
+        lanes_equal_the_general_loop(|_| SampledWavelengths::<40>::fixed_bins(380.0, 10.0), base);
+        lanes_equal_the_general_loop(SampledWavelengths::<4>::sample_hero, PathSettings { max_depth: 2, ..base });
+        let ff = PathSettings { shading_normals: ShadingNormals::FaceForward, ..base };
+        let mut scene = room();
+        scene.normals.clear();
+        let geometry = Geometry::build(&scene, &SceneOptions::default()).unwrap();
+        let lights = Lights::new(&scene);
+        assert!(LaneScene::for_view(&SceneView::new(&scene, &geometry, &lights), &ff).is_some());
+    }
+
+    #[test]
+    fn only_scenes_of_diffuse_triangles_run_in_lanes() {
+        let scene = room();
+        let geometry = Geometry::build(&scene, &SceneOptions::default()).unwrap();
+        let lights = Lights::new(&scene);
+        let view = SceneView::new(&scene, &geometry, &lights);
+        let geometric = PathSettings { shading_normals: ShadingNormals::Geometric, ..Default::default() };
+        assert!(super::super::PathTracer::runs_in_lanes(&view, &geometric));
+        // Smooth normals that the BSDF would see, a diffuse-depth limit, or the switch off.
+        assert!(!super::super::PathTracer::runs_in_lanes(&view, &PathSettings::default()));
+        assert!(!super::super::PathTracer::runs_in_lanes(&view, &PathSettings { max_diffuse_depth: 2, ..geometric }));
+        assert!(!super::super::PathTracer::runs_in_lanes(&view, &PathSettings { lanes: false, ..geometric }));
+        // Another model, a spectrum the lanes do not evaluate, an environment, tangents.
+        for change in 0..4 {
+            let mut other = room();
+            match change {
+                0 => other.materials[0] = Material::builtin("mirror", brdf::ModelId::Mirror, &[]).unwrap(),
+                1 => {
+                    let sun = Spectrum::Blackbody { kelvin: 5800.0, scale: 1.0 };
+                    let lamp = other.materials.len() - 1;
+                    other.materials[lamp].emission =
+                        Some(Colour::from_spectrum(sun, spectral::spectrum::ColourRole::Illuminant));
+                }
+                2 => other.environment = Some(crate::scene::Environment::uniform(Colour::constant(0.1))),
+                _ => other.tangents = vec![[1.0, 0.0, 0.0]; other.positions.len()],
+            }
+            let geometry = Geometry::build(&other, &SceneOptions::default()).unwrap();
+            let lights = Lights::new(&other);
+            let view = SceneView::new(&other, &geometry, &lights);
+            assert!(!super::super::PathTracer::runs_in_lanes(&view, &geometric), "change {change}");
+        }
+    }
+}
