@@ -1,4 +1,4 @@
-//! The path tracer over lanes, for scenes that need no more than diffuse triangles: eight
+//! The path tracer over lanes, for scenes that need no more than diffuse triangles: 64
 //! paths side by side in structure-of-arrays form, so that everything between the ray
 //! queries — surface data, emission and its MIS weight, the shading frame, the light
 //! sample's geometry, the Lambertian sample, the spectra at the paths' wavelengths,
@@ -6,17 +6,24 @@
 //! machine has it, chosen at run time), while the rays go through the same BVH queries
 //! one at a time. A path that ends hands its lane to the block's next camera sample.
 //!
-//! It is [`PathTracer`]'s estimator, not an approximation of it: every value is computed
+//! Why 64 lanes, not 8 (one AVX2 register): LLVM unrolls a loop of 8 completely before
+//! its loop vectoriser runs, and the straight-line vectoriser that is left packed only
+//! part of the work; loops of 64 are vectorised as loops, eight lanes per instruction
+//! with the selects and gathers they need (Cornell box, one thread, against the general
+//! loop: 8 lanes +10–20 %, 64 lanes +24 %, docs/figures.md).
+//!
+//! It is [`super::PathTracer`]'s estimator, not an approximation of it: every value is computed
 //! by the same operations in the same order as the general loop (`path_radiance`), from
 //! the same sample values drawn in the same order per path, so the image is the same to
-//! the bit (`lanes_render_the_general_loops_image_bit_for_bit` checks it; Rust never
+//! the bit (`lanes_compute_the_general_loops_estimate_bit_for_bit` checks it; Rust never
 //! contracts a·b + c into a fused multiply-add, so the AVX2 build rounds as the baseline).
 //!
 //! The specialisation ("model no more than a scene needs") applies where every material
 //! is an untextured [`brdf::Lambert`] whose colours are RGB uplifts or constants, the mesh
 //! has neither shading normals (or they are ignored) nor tangents, and there are no
 //! analytic shapes, instances, environment or punctual lights, and no diffuse-depth limit
-//! ([`LaneScene::for_view`]). Anything else runs the general loop.
+//! ([`LaneScene::for_view`]). Anything else runs the general loop. `spt render --no-lanes`
+//! (`PathSettings::lanes`) runs the general loop everywhere, to measure the difference.
 
 use super::{
     CameraSample, PathCounters, PathSettings, RR_MIN_TERMINATION, SHADOW_T_MAX, SceneView, ShadingNormals,
@@ -36,7 +43,7 @@ use spectral::uplift::d65_normalised;
 use spectral::{SampledSpectrum, SigmoidPolynomial};
 use std::f32::consts::{FRAC_1_PI, FRAC_PI_4};
 
-/// Paths side by side: one AVX2 register of f32.
+/// Paths side by side (eight to an AVX2 instruction; see the module documentation).
 pub const LANES: usize = 64;
 
 /// One f32 per lane.
