@@ -2,8 +2,8 @@
 //! paths side by side in structure-of-arrays form, so that everything between the ray
 //! queries — surface data, emission and its MIS weight, the shading frame, the light
 //! sample's geometry, the Lambertian sample, the spectra at the paths' wavelengths,
-//! Russian roulette — runs as vector instructions across the paths (AVX2 where the
-//! machine has it, chosen at run time), while the rays go through the same BVH queries
+//! Russian roulette — runs as vector instructions across the paths (AVX-512 or AVX2 where
+//! the machine has it, chosen at run time), while the rays go through the same BVH queries
 //! one at a time. A path that ends hands its lane to the block's next camera sample.
 //!
 //! Why 64 lanes, not 8 (one AVX2 register): LLVM unrolls a loop of 8 completely before
@@ -37,7 +37,7 @@ use crate::shading::MIN_SHADING_COSINE;
 use brdf::sampling::sin_cos_quarter;
 use bvh::Ray;
 use glam::{Vec2, Vec3};
-use shapes::offset::offset_ray_origin;
+use shapes::offset::{OFFSET_FLOAT_SCALE, OFFSET_INT_SCALE, OFFSET_ORIGIN};
 use spectral::spectrum::{Colour, Spectrum};
 use spectral::uplift::d65_normalised;
 use spectral::{SampledSpectrum, SigmoidPolynomial};
@@ -177,6 +177,22 @@ impl Gathered {
     }
 }
 
+/// One coordinate of `shapes::offset::offset_ray_origin(p, n)`, the same value, with the
+/// ulp count converted without Rust's saturating `as i32` (which LLVM leaves scalar): for
+/// |256·n| < 257 — every unit normal — the truncation is the same; anything else (NaN, or
+/// garbage in a lane without a path) moves 0 ulps, as `as i32` does for NaN. The integer
+/// steps wrap, as they do in the release build of the original.
+#[inline(always)]
+fn offset_coordinate(p: f32, n: f32) -> f32 {
+    let x = OFFSET_INT_SCALE * n;
+    let x = if x.abs() < OFFSET_INT_SCALE + 1.0 { x } else { 0.0 };
+    // SAFETY: x is finite and below 257 in magnitude, so it fits an i32.
+    let of = unsafe { x.to_int_unchecked::<i32>() };
+    let bits = p.to_bits() as i32;
+    let moved = f32::from_bits((if p < 0.0 { bits.wrapping_sub(of) } else { bits.wrapping_add(of) }) as u32);
+    if p.abs() < OFFSET_ORIGIN { p + OFFSET_FLOAT_SCALE * n } else { moved }
+}
+
 /// Three coordinates per lane.
 #[derive(Clone, Copy)]
 struct V3 {
@@ -248,11 +264,47 @@ pub(crate) fn radiance_block<const N: usize, S: Sampler>(
     counters: &mut PathCounters,
 ) {
     #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
+    if has_avx512() {
         // SAFETY: the CPU has the features the function is compiled for (just detected).
+        unsafe { radiance_block_avx512(lanes, view, settings, block, counters) };
+        return;
+    }
+    #[cfg(target_arch = "x86_64")]
+    if has_avx2() {
+        // SAFETY: as above.
         unsafe { radiance_block_avx2(lanes, view, settings, block, counters) };
         return;
     }
+    run(lanes, view, settings, block, counters);
+}
+
+/// Whether the CPU has what [`radiance_block_avx2`] is compiled for.
+#[cfg(target_arch = "x86_64")]
+fn has_avx2() -> bool {
+    std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
+}
+
+/// Whether the CPU has what [`radiance_block_avx512`] is compiled for.
+#[cfg(target_arch = "x86_64")]
+fn has_avx512() -> bool {
+    has_avx2()
+        && std::arch::is_x86_feature_detected!("avx512f")
+        && std::arch::is_x86_feature_detected!("avx512vl")
+        && std::arch::is_x86_feature_detected!("avx512bw")
+        && std::arch::is_x86_feature_detected!("avx512dq")
+}
+
+/// [`run`] compiled for AVX-512 (sixteen lanes to a register, the width Mitsuba 3's LLVM
+/// back end uses on such machines).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma,avx512f,avx512vl,avx512bw,avx512dq")]
+unsafe fn radiance_block_avx512<const N: usize, S: Sampler>(
+    lanes: &LaneScene,
+    view: &SceneView,
+    settings: &PathSettings,
+    block: &mut [CameraSample<N, S>],
+    counters: &mut PathCounters,
+) {
     run(lanes, view, settings, block, counters);
 }
 
@@ -485,8 +537,9 @@ fn run<const N: usize, S: Sampler>(
             let w = power_heuristic(light_pdf, pdf);
             weight[k] = wil.2.abs() * w / light_pdf;
             let s = if dot_with(wi, &ng, k) > 0.0 { 1.0 } else { -1.0 };
-            let o = offset_ray_origin(p.get(k), Vec3::new(s * ng.x[k], s * ng.y[k], s * ng.z[k]));
-            origin.set(k, o);
+            origin.x[k] = offset_coordinate(p.x[k], s * ng.x[k]);
+            origin.y[k] = offset_coordinate(p.y[k], s * ng.y[k]);
+            origin.z[k] = offset_coordinate(p.z[k], s * ng.z[k]);
         }
         for k in 0..LANES {
             if shadow[k] {
@@ -539,15 +592,19 @@ fn run<const N: usize, S: Sampler>(
                 st.beta[i][k] = if go[k] { b } else { st.beta[i][k] };
             }
             let s = if cos_ng > 0.0 { 1.0 } else { -1.0 };
-            let o = offset_ray_origin(p.get(k), Vec3::new(s * ng.x[k], s * ng.y[k], s * ng.z[k]));
+            let o = (
+                offset_coordinate(p.x[k], s * ng.x[k]),
+                offset_coordinate(p.y[k], s * ng.y[k]),
+                offset_coordinate(p.z[k], s * ng.z[k]),
+            );
             let g = go[k];
             st.prev_pdf[k] = if g { pdf } else { st.prev_pdf[k] };
             st.prev_p.x[k] = if g { p.x[k] } else { st.prev_p.x[k] };
             st.prev_p.y[k] = if g { p.y[k] } else { st.prev_p.y[k] };
             st.prev_p.z[k] = if g { p.z[k] } else { st.prev_p.z[k] };
-            st.origin.x[k] = if g { o.x } else { st.origin.x[k] };
-            st.origin.y[k] = if g { o.y } else { st.origin.y[k] };
-            st.origin.z[k] = if g { o.z } else { st.origin.z[k] };
+            st.origin.x[k] = if g { o.0 } else { st.origin.x[k] };
+            st.origin.y[k] = if g { o.1 } else { st.origin.y[k] };
+            st.origin.z[k] = if g { o.2 } else { st.origin.z[k] };
             st.dir.x[k] = if g { wi.0 } else { st.dir.x[k] };
             st.dir.y[k] = if g { wi.1 } else { st.dir.y[k] };
             st.dir.z[k] = if g { wi.2 } else { st.dir.z[k] };
@@ -629,7 +686,7 @@ mod tests {
     }
 
     /// Every sample's estimate from the general loop, from the lanes compiled for the
-    /// baseline and (where the machine has it) for AVX2, compared bit for bit.
+    /// baseline and (where the machine has them) for AVX2 and AVX-512, compared bit for bit.
     fn lanes_equal_the_general_loop<const N: usize>(wl: impl Fn(f32) -> SampledWavelengths<N>, settings: PathSettings) {
         let scene = room();
         let geometry = Geometry::build(&scene, &SceneOptions::default()).unwrap();
@@ -647,11 +704,20 @@ mod tests {
         run(&lanes, &view, &settings, b, c);
         let _ = name;
         #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
+        if has_avx2() {
             let (mut b, mut c) = (block(&wl), PathCounters::default());
             // SAFETY: the features were just detected.
             unsafe { radiance_block_avx2(&lanes, &view, &settings, &mut b, &mut c) };
             variants.push(("avx2", b, c));
+        }
+        #[cfg(target_arch = "x86_64")]
+        if has_avx512() {
+            let (mut b, mut c) = (block(&wl), PathCounters::default());
+            // SAFETY: the features were just detected.
+            unsafe { radiance_block_avx512(&lanes, &view, &settings, &mut b, &mut c) };
+            variants.push(("avx512", b, c));
+        } else {
+            eprintln!("(no AVX-512 on this machine: its build of the lanes is not compared)");
         }
         for (name, b, c) in &variants {
             assert_eq!(c.rays, rays.rays, "{name}: rays traced");
@@ -675,6 +741,25 @@ mod tests {
         let geometry = Geometry::build(&scene, &SceneOptions::default()).unwrap();
         let lights = Lights::new(&scene);
         assert!(LaneScene::for_view(&SceneView::new(&scene, &geometry, &lights), &ff).is_some());
+    }
+
+    #[test]
+    fn the_lanes_offset_equals_the_library_offset() {
+        let mut rng = Pcg32::for_sample(3, 0, 0);
+        for i in 0..200_000 {
+            let scale = [1e-3, 0.03, 1.0, 30.0, 1e4][i % 5];
+            let p = Vec3::new(rng.next_f32() - 0.5, rng.next_f32() - 0.5, rng.next_f32() - 0.5) * 2.0 * scale;
+            let n = Vec3::new(rng.next_f32() - 0.5, rng.next_f32() - 0.5, rng.next_f32() - 0.5).normalize();
+            // Unit normals, and ones rounded a little long (|256·n| just above 256).
+            let n = if i % 7 == 0 { n * (1.0 + 4.0 * f32::EPSILON) } else { n };
+            let want = shapes::offset::offset_ray_origin(p, n);
+            let got = Vec3::new(offset_coordinate(p.x, n.x), offset_coordinate(p.y, n.y), offset_coordinate(p.z, n.z));
+            assert_eq!(want.to_array().map(f32::to_bits), got.to_array().map(f32::to_bits), "p {p}, n {n}");
+        }
+        assert_eq!(
+            offset_coordinate(1.0, f32::NAN).to_bits(),
+            shapes::offset::offset_ray_origin(Vec3::ONE, Vec3::NAN).x.to_bits()
+        );
     }
 
     #[test]
