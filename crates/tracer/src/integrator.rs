@@ -56,7 +56,7 @@ pub struct PathSettings {
     /// also through glass — what the atlas integrator approximates.
     pub max_diffuse_depth: u32,
     /// Whether the path tracer may run its lanes kernel where a scene needs no more than
-    /// diffuse triangles (`integrator::lanes`: eight paths per vector instruction, the same
+    /// diffuse triangles (`integrator::lanes`: 8 or 16 paths per vector instruction, the same
     /// image to the bit); false runs the general loop everywhere, to measure what the
     /// specialisation saves.
     pub lanes: bool,
@@ -151,9 +151,7 @@ pub trait Integrator: Send + Sync + 'static {
         block: &mut [CameraSample<N, S>],
         counters: &mut PathCounters,
     ) {
-        for s in block {
-            s.radiance = self.radiance(view, s.ray, &mut s.wl, settings, &mut s.sampler, counters);
-        }
+        radiance_each(self, view, settings, block, counters);
     }
 
     /// Whether the integrator also adds light to pixels other than its samples' own (it
@@ -178,6 +176,20 @@ pub trait Integrator: Send + Sync + 'static {
     ) {
         let _ = splats;
         self.radiance_block(view, settings, block, counters);
+    }
+}
+
+/// [`Integrator::radiance_block`] one sample at a time (the default, and where a
+/// specialised block method does not apply).
+fn radiance_each<const N: usize, S: Sampler, I: Integrator + ?Sized>(
+    integrator: &I,
+    view: &SceneView,
+    settings: &PathSettings,
+    block: &mut [CameraSample<N, S>],
+    counters: &mut PathCounters,
+) {
+    for s in block {
+        s.radiance = integrator.radiance(view, s.ray, &mut s.wl, settings, &mut s.sampler, counters);
     }
 }
 
@@ -233,6 +245,9 @@ pub struct SceneView<'a> {
     absorbing: bool,
     /// The camera and image, where the backend gives them.
     film: Option<FilmView>,
+    /// The path tracer's lanes tables for this scene, if it is one for them: found on the
+    /// first block that asks, then kept for the view's life (a tile), not per block.
+    lanes: std::sync::OnceLock<Option<lanes::LaneScene>>,
 }
 
 /// Surface data at a hit.
@@ -266,7 +281,8 @@ impl<'a> SceneView<'a> {
         let dispersive = scene.materials.iter().any(|m| m.is_dispersive());
         let cutouts = scene.materials.iter().any(|m| m.alpha().is_some());
         let absorbing = scene.materials.iter().any(|m| !m.is_two_sided() && m.absorption().is_some());
-        Self { scene, geometry, lights, dispersive, cutouts, absorbing, film: None }
+        let lanes = std::sync::OnceLock::new();
+        Self { scene, geometry, lights, dispersive, cutouts, absorbing, film: None, lanes }
     }
 
     /// This view with the camera and the image region being rendered (for integrators
@@ -274,6 +290,11 @@ impl<'a> SceneView<'a> {
     pub fn with_film(mut self, rays: RayGenerator, region: PixelRect) -> Self {
         self.film = Some(FilmView { rays, region });
         self
+    }
+
+    /// The lanes' tables where the path tracer runs this scene with `settings` in lanes.
+    fn lane_scene(&self, settings: &PathSettings) -> Option<&lanes::LaneScene> {
+        self.lanes.get_or_init(|| lanes::LaneScene::of(self)).as_ref().filter(|l| l.admits(settings))
     }
 
     /// The camera and image region, if the backend gave them.
@@ -602,24 +623,20 @@ impl Integrator for PathTracer {
         block: &mut [CameraSample<N, S>],
         counters: &mut PathCounters,
     ) {
-        if settings.lanes
-            && let Some(scene) = lanes::LaneScene::for_view(view, settings)
-        {
-            return lanes::radiance_block(&scene, view, settings, block, counters);
-        }
-        for s in block {
-            s.radiance = path_radiance(view, s.ray, &mut s.wl, settings, &mut s.sampler, counters);
+        match view.lane_scene(settings) {
+            Some(scene) => lanes::radiance_block(scene, view, settings, block, counters),
+            None => radiance_each(self, view, settings, block, counters),
         }
     }
 }
 
 impl PathTracer {
     /// Whether the path tracer runs `view`'s scene with `settings` in its lanes kernel
-    /// (eight paths per vector instruction where the scene needs no more than diffuse
+    /// (8 or 16 paths per vector instruction where the scene needs no more than diffuse
     /// triangles; the same image as its general loop, bit for bit): what `spt render`
     /// reports, and what tests check before comparing the two.
     pub fn runs_in_lanes(view: &SceneView, settings: &PathSettings) -> bool {
-        settings.lanes && lanes::LaneScene::for_view(view, settings).is_some()
+        view.lane_scene(settings).is_some()
     }
 }
 

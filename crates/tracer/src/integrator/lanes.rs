@@ -22,7 +22,7 @@
 //! is an untextured [`brdf::Lambert`] whose colours are RGB uplifts or constants, the mesh
 //! has neither shading normals (or they are ignored) nor tangents, and there are no
 //! analytic shapes, instances, environment or punctual lights, and no diffuse-depth limit
-//! ([`LaneScene::for_view`]). Anything else runs the general loop. `spt render --no-lanes`
+//! ([`LaneScene::of`], [`LaneScene::admits`]). Anything else runs the general loop. `spt render --no-lanes`
 //! (`PathSettings::lanes`) runs the general loop everywhere, to measure the difference.
 
 use super::{
@@ -81,12 +81,15 @@ impl LaneColour {
 pub(crate) struct LaneScene {
     albedo: Vec<LaneColour>,
     emission: Vec<Option<LaneColour>>,
+    /// Whether the mesh has shading normals (which only geometric shading may ignore).
+    normals: bool,
 }
 
 impl LaneScene {
-    /// The lanes' tables for `view` rendered with `settings`, or `None` where the scene or
-    /// the settings need the general loop (see the module documentation).
-    pub(crate) fn for_view(view: &SceneView, settings: &PathSettings) -> Option<Self> {
+    /// The lanes' tables for `view`'s scene, or `None` where the scene needs the general
+    /// loop (see the module documentation). Computed once per view
+    /// ([`SceneView::lane_scene`]); [`LaneScene::admits`] checks the settings.
+    pub(crate) fn of(view: &SceneView) -> Option<Self> {
         let scene = view.scene;
         let plain = scene.shapes.is_empty()
             && scene.instances.is_empty()
@@ -96,8 +99,6 @@ impl LaneScene {
             && view.lights.suns().is_empty()
             && view.lights.environment_pmf() == 0.0
             && scene.tangents.is_empty()
-            && (scene.normals.is_empty() || settings.shading_normals == ShadingNormals::Geometric)
-            && settings.max_diffuse_depth == 0
             && scene.material_ids.len() == scene.triangles.len();
         if !plain {
             return None;
@@ -115,7 +116,15 @@ impl LaneScene {
                 None => None,
             });
         }
-        Some(Self { albedo, emission })
+        Some(Self { albedo, emission, normals: !scene.normals.is_empty() })
+    }
+
+    /// Whether the lanes render this scene with `settings` (the switch on, shading normals
+    /// absent or ignored, no diffuse-depth limit).
+    pub(crate) fn admits(&self, settings: &PathSettings) -> bool {
+        settings.lanes
+            && (!self.normals || settings.shading_normals == ShadingNormals::Geometric)
+            && settings.max_diffuse_depth == 0
     }
 }
 
@@ -255,7 +264,7 @@ struct Lanes<const N: usize> {
 }
 
 /// [`super::PathTracer`]'s estimate for every sample of `block`, in lanes (see the module
-/// documentation), with the AVX2 instructions where the machine has them.
+/// documentation), with the widest vector instructions the machine has.
 pub(crate) fn radiance_block<const N: usize, S: Sampler>(
     lanes: &LaneScene,
     view: &SceneView,
@@ -264,61 +273,51 @@ pub(crate) fn radiance_block<const N: usize, S: Sampler>(
     counters: &mut PathCounters,
 ) {
     #[cfg(target_arch = "x86_64")]
-    if has_avx512() {
-        // SAFETY: the CPU has the features the function is compiled for (just detected).
-        unsafe { radiance_block_avx512(lanes, view, settings, block, counters) };
-        return;
-    }
-    #[cfg(target_arch = "x86_64")]
-    if has_avx2() {
-        // SAFETY: as above.
-        unsafe { radiance_block_avx2(lanes, view, settings, block, counters) };
-        return;
+    {
+        if has_avx512() {
+            // SAFETY: the CPU has the features the function is compiled for (just detected).
+            return unsafe { radiance_block_avx512(lanes, view, settings, block, counters) };
+        }
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: as above.
+            return unsafe { radiance_block_avx2(lanes, view, settings, block, counters) };
+        }
     }
     run(lanes, view, settings, block, counters);
 }
 
-/// Whether the CPU has what [`radiance_block_avx2`] is compiled for.
-#[cfg(target_arch = "x86_64")]
-fn has_avx2() -> bool {
-    std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
-}
-
-/// Whether the CPU has what [`radiance_block_avx512`] is compiled for.
+/// Whether the CPU has what `radiance_block_avx512` is compiled for.
 #[cfg(target_arch = "x86_64")]
 fn has_avx512() -> bool {
-    has_avx2()
-        && std::arch::is_x86_feature_detected!("avx512f")
-        && std::arch::is_x86_feature_detected!("avx512vl")
-        && std::arch::is_x86_feature_detected!("avx512bw")
-        && std::arch::is_x86_feature_detected!("avx512dq")
+    use std::arch::is_x86_feature_detected as has;
+    has!("avx512f") && has!("avx512vl") && has!("avx512bw") && has!("avx512dq")
 }
 
-/// [`run`] compiled for AVX-512 (sixteen lanes to a register, the width Mitsuba 3's LLVM
-/// back end uses on such machines).
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,fma,avx512f,avx512vl,avx512bw,avx512dq")]
-unsafe fn radiance_block_avx512<const N: usize, S: Sampler>(
-    lanes: &LaneScene,
-    view: &SceneView,
-    settings: &PathSettings,
-    block: &mut [CameraSample<N, S>],
-    counters: &mut PathCounters,
-) {
-    run(lanes, view, settings, block, counters);
+/// [`run`] compiled for more vector instructions than the baseline: one function per
+/// instruction set, chosen by [`radiance_block`] at run time. (No `fma`: Rust never
+/// contracts a·b + c, so it would change nothing.)
+macro_rules! compiled_for {
+    ($($(#[$doc:meta])* $name:ident: $features:literal;)*) => {$(
+        $(#[$doc])*
+        #[cfg(target_arch = "x86_64")]
+        #[target_feature(enable = $features)]
+        unsafe fn $name<const N: usize, S: Sampler>(
+            lanes: &LaneScene,
+            view: &SceneView,
+            settings: &PathSettings,
+            block: &mut [CameraSample<N, S>],
+            counters: &mut PathCounters,
+        ) {
+            run(lanes, view, settings, block, counters);
+        }
+    )*};
 }
 
-/// [`run`] compiled for AVX2 (eight lanes to a register).
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,fma")]
-unsafe fn radiance_block_avx2<const N: usize, S: Sampler>(
-    lanes: &LaneScene,
-    view: &SceneView,
-    settings: &PathSettings,
-    block: &mut [CameraSample<N, S>],
-    counters: &mut PathCounters,
-) {
-    run(lanes, view, settings, block, counters);
+compiled_for! {
+    /// Sixteen lanes to a register, the width Mitsuba 3's LLVM back end uses on such machines.
+    radiance_block_avx512: "avx2,avx512f,avx512vl,avx512bw,avx512dq";
+    /// Eight lanes to a register.
+    radiance_block_avx2: "avx2";
 }
 
 /// The lanes' loop: one bounce of every lane per turn.
@@ -345,6 +344,7 @@ fn run<const N: usize, S: Sampler>(
         prev_p: V3::default(),
         bounce: [0; LANES],
     };
+    let mesh = scene.mesh();
     let mut next = 0;
     // Ends lane k's path: its estimate goes to its camera sample, the lane is free.
     let finish = |st: &mut Lanes<N>, block: &mut [CameraSample<N, S>], k: usize| {
@@ -385,7 +385,6 @@ fn run<const N: usize, S: Sampler>(
         let mut emission = Gathered::default();
         let mut emissive: M = [false; LANES];
         let mut pmf: F = [0.0; LANES];
-        let mesh = scene.mesh();
         for k in 0..LANES {
             let Some(b) = st.slot[k] else { continue };
             counters.rays += 1;
@@ -415,7 +414,8 @@ fn run<const N: usize, S: Sampler>(
         // with its MIS weight, and the shading frame.
         let (mut p, mut ng, mut wo) = (V3::default(), V3::default(), V3::default());
         let mut area: F = [0.0; LANES];
-        let mut front: M = [false; LANES];
+        // ω_o · n_g: which side the path arrived on, the emitter's cosine, the leak test's.
+        let mut cos_o: F = [0.0; LANES];
         for k in 0..LANES {
             let (u, v) = (bu[k], bv[k]);
             let b0 = 1.0 - u - v;
@@ -430,7 +430,7 @@ fn run<const N: usize, S: Sampler>(
             let twice = 2.0 * a;
             (ng.x[k], ng.y[k], ng.z[k]) = (c.0 / twice, c.1 / twice, c.2 / twice);
             (wo.x[k], wo.y[k], wo.z[k]) = (-st.dir.x[k], -st.dir.y[k], -st.dir.z[k]);
-            front[k] = dot(&wo, &ng, k) > 0.0;
+            cos_o[k] = dot(&wo, &ng, k);
         }
         if emissive.iter().any(|&e| e) {
             let le = emission.eval(&st.lambda, &st.d65, rgb);
@@ -440,11 +440,10 @@ fn run<const N: usize, S: Sampler>(
                 } else {
                     let d = (p.x[k] - st.prev_p.x[k], p.y[k] - st.prev_p.y[k], p.z[k] - st.prev_p.z[k]);
                     let dist2 = (d.0 * d.0) + (d.1 * d.1) + (d.2 * d.2);
-                    let cos_l = dot(&wo, &ng, k);
-                    let light_pdf = pmf[k] * dist2 / (cos_l * area[k]);
+                    let light_pdf = pmf[k] * dist2 / (cos_o[k] * area[k]);
                     power_heuristic(st.prev_pdf[k], light_pdf)
                 };
-                let seen = live[k] && front[k] && emissive[k];
+                let seen = live[k] && cos_o[k] > 0.0 && emissive[k];
                 for i in 0..N {
                     let add = st.beta[i][k] * le[i][k] * w;
                     st.radiance[i][k] = if seen { st.radiance[i][k] + add } else { st.radiance[i][k] };
@@ -464,13 +463,11 @@ fn run<const N: usize, S: Sampler>(
         // The normals the BSDF sees (`shading_normals` with n_s = n_g, two-sided) and
         // its frame (`Frame::from_normal`), ω_o in it, and the albedo.
         let (mut nf, mut fs, mut ft) = (V3::default(), V3::default(), V3::default());
-        let mut ngf = V3::default();
         let mut wol = V3::default();
         let face_forward = settings.shading_normals == ShadingNormals::FaceForward;
         for k in 0..LANES {
-            let cos_o = dot(&wo, &ng, k);
-            let side = if cos_o >= 0.0 { 1.0 } else { -1.0 };
-            let a = side * cos_o;
+            let side = if cos_o[k] >= 0.0 { 1.0 } else { -1.0 };
+            let a = side * cos_o[k];
             let s = (MIN_SHADING_COSINE - a) * side;
             let bent = (ng.x[k] + s * wo.x[k], ng.y[k] + s * wo.y[k], ng.z[k] + s * wo.z[k]);
             let rcp = 1.0 / ((bent.0 * bent.0) + (bent.1 * bent.1) + (bent.2 * bent.2)).sqrt();
@@ -478,11 +475,9 @@ fn run<const N: usize, S: Sampler>(
             let adapted = if ok { (bent.0 * rcp, bent.1 * rcp, bent.2 * rcp) } else { (ng.x[k], ng.y[k], ng.z[k]) };
             let keep = face_forward || a >= MIN_SHADING_COSINE;
             let n = if keep { (ng.x[k], ng.y[k], ng.z[k]) } else { adapted };
-            let flip = !front[k];
-            let n = if flip { (-n.0, -n.1, -n.2) } else { n };
+            // Two-sided: the side the path arrived on is the front.
+            let n = if cos_o[k] > 0.0 { n } else { (-n.0, -n.1, -n.2) };
             (nf.x[k], nf.y[k], nf.z[k]) = n;
-            (ngf.x[k], ngf.y[k], ngf.z[k]) =
-                if flip { (-ng.x[k], -ng.y[k], -ng.z[k]) } else { (ng.x[k], ng.y[k], ng.z[k]) };
             let sign = 1.0f32.copysign(n.2);
             let a = -1.0 / (sign + n.2);
             let b = n.0 * n.1 * a;
@@ -529,14 +524,17 @@ fn run<const N: usize, S: Sampler>(
             let light_pdf = if emits { lpdf[k] * dist2 / cos_l } else { 0.0 };
             let le_black = !emits || black(&lle, k);
             let wil = (dot_with(wi, &fs, k), dot_with(wi, &ft, k), dot_with(wi, &nf, k));
-            let same_side = dot_with(wi, &ngf, k) * dot(&wo, &ngf, k) > 0.0;
+            // On ω_o's side of n_g (`light_contribution` flips n_g to that side first, which
+            // negates both factors: the same product).
+            let cos_i = dot_with(wi, &ng, k);
+            let same_side = cos_i * cos_o[k] > 0.0;
             let same_hemisphere = wol.z[k] * wil.2 > 0.0;
             let f_black = !same_hemisphere || black(&fr, k);
             shadow[k] = live[k] && lemissive[k] && light_pdf > 0.0 && !le_black && same_side && !f_black;
             let pdf = if same_hemisphere { wil.2.abs().max(0.0) * FRAC_1_PI } else { 0.0 };
             let w = power_heuristic(light_pdf, pdf);
             weight[k] = wil.2.abs() * w / light_pdf;
-            let s = if dot_with(wi, &ng, k) > 0.0 { 1.0 } else { -1.0 };
+            let s = if cos_i > 0.0 { 1.0 } else { -1.0 };
             origin.x[k] = offset_coordinate(p.x[k], s * ng.x[k]);
             origin.y[k] = offset_coordinate(p.y[k], s * ng.y[k]);
             origin.z[k] = offset_coordinate(p.z[k], s * ng.z[k]);
@@ -584,7 +582,7 @@ fn run<const N: usize, S: Sampler>(
                 fs.z[k] * dx + ft.z[k] * dy + nf.z[k] * z,
             );
             let cos_ng = (wi.0 * ng.x[k]) + (wi.1 * ng.y[k]) + (wi.2 * ng.z[k]);
-            let crosses = cos_ng * dot(&wo, &ng, k) <= 0.0;
+            let crosses = cos_ng * cos_o[k] <= 0.0;
             go[k] = live[k] && wol.z[k] != 0.0 && pdf > 0.0 && !black(&fr, k) && !crosses;
             let k_beta = z.abs() / pdf;
             for i in 0..N {
@@ -621,7 +619,7 @@ fn run<const N: usize, S: Sampler>(
             if st.bounce[k] >= settings.rr_depth {
                 let u = block[b].sampler.next_1d();
                 let max = (0..N).map(|i| st.beta[i][k]).fold(f32::NEG_INFINITY, f32::max);
-                let q = (1.0 - max * 1.0).max(RR_MIN_TERMINATION);
+                let q = (1.0 - max).max(RR_MIN_TERMINATION);
                 if u < q {
                     finish(&mut st, block, k);
                     continue;
@@ -692,29 +690,28 @@ mod tests {
         let geometry = Geometry::build(&scene, &SceneOptions::default()).unwrap();
         let lights = Lights::new(&scene);
         let view = SceneView::new(&scene, &geometry, &lights);
-        let lanes = LaneScene::for_view(&view, &settings).expect("a scene for the lanes");
+        let lanes = view.lane_scene(&settings).expect("a scene for the lanes");
         let mut general = block(&wl);
         let mut rays = PathCounters::default();
         for s in &mut general {
             s.radiance = super::super::path_radiance(&view, s.ray, &mut s.wl, &settings, &mut s.sampler, &mut rays);
         }
         assert!(general.iter().filter(|s| !s.radiance.is_black()).count() > 300, "the room is lit");
-        let mut variants = vec![("baseline", block(&wl), PathCounters::default())];
-        let (name, b, c) = variants.last_mut().unwrap();
-        run(&lanes, &view, &settings, b, c);
-        let _ = name;
+        let (mut b, mut c) = (block(&wl), PathCounters::default());
+        run(lanes, &view, &settings, &mut b, &mut c);
+        let mut variants = vec![("baseline", b, c)];
         #[cfg(target_arch = "x86_64")]
-        if has_avx2() {
+        if std::arch::is_x86_feature_detected!("avx2") {
             let (mut b, mut c) = (block(&wl), PathCounters::default());
             // SAFETY: the features were just detected.
-            unsafe { radiance_block_avx2(&lanes, &view, &settings, &mut b, &mut c) };
+            unsafe { radiance_block_avx2(lanes, &view, &settings, &mut b, &mut c) };
             variants.push(("avx2", b, c));
         }
         #[cfg(target_arch = "x86_64")]
         if has_avx512() {
             let (mut b, mut c) = (block(&wl), PathCounters::default());
             // SAFETY: the features were just detected.
-            unsafe { radiance_block_avx512(&lanes, &view, &settings, &mut b, &mut c) };
+            unsafe { radiance_block_avx512(lanes, &view, &settings, &mut b, &mut c) };
             variants.push(("avx512", b, c));
         } else {
             eprintln!("(no AVX-512 on this machine: its build of the lanes is not compared)");
@@ -740,7 +737,7 @@ mod tests {
         scene.normals.clear();
         let geometry = Geometry::build(&scene, &SceneOptions::default()).unwrap();
         let lights = Lights::new(&scene);
-        assert!(LaneScene::for_view(&SceneView::new(&scene, &geometry, &lights), &ff).is_some());
+        assert!(SceneView::new(&scene, &geometry, &lights).lane_scene(&ff).is_some());
     }
 
     #[test]
