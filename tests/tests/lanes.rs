@@ -1,6 +1,7 @@
-//! The path tracer's lanes kernel (eight paths per vector instruction, for scenes of
-//! diffuse triangles) against its general loop on the shared Cornell box and the bunny in
-//! it: the same image, to the bit, in every spectral mode and with every sampler.
+//! The path tracer's lanes kernel (eight paths per vector instruction on the diffuse
+//! surfaces of triangle scenes, the others one lane at a time) against its general loop on
+//! the shared Cornell box, the bunny, and glass and mirror spheres in the box: the same
+//! image, to the bit, in every spectral mode and with every sampler.
 
 use glam::Vec3;
 use spectral::SpectralMode;
@@ -66,18 +67,29 @@ fn lanes_render_the_general_loops_image_of_the_cornell_box() {
 #[test]
 fn lanes_render_the_general_loops_image_of_the_bunny() {
     let Some(mut scene) = load("scenes/bunny/bunny.obj") else { return };
-    // Flat-shaded (the lanes leave interpolated normals to the general loop), lit by a
-    // lamp above it.
-    scene.normals.clear();
+    // Lit by a lamp above it.
     let lamp = tracer::material::Material::diffuse("lamp", spectral::spectrum::Colour::constant(0.0))
         .unwrap()
         .with_emission(spectral::spectrum::Colour::illuminant_rgb([8.0, 7.0, 6.0]).unwrap());
     let b = scene.bounds();
     let (centre, extent) = (0.5 * (b.min + b.max), (b.max - b.min).max_element());
-    let mut light = tracer::mesh::quad(centre + Vec3::Y * extent, -Vec3::Y, 0.5 * extent);
-    (light.tangents, light.normals) = (Vec::new(), Vec::new());
+    let light = tracer::mesh::quad(centre + Vec3::Y * extent, -Vec3::Y, 0.5 * extent);
     scene.add(&light, lamp);
     let camera =
         Camera { eye: centre + Vec3::new(0.3, 0.4, 2.5) * extent, center: centre, up: Vec3::Y, fov_y_deg: 35.0 };
     lanes_and_general_loop_agree(scene, camera, 4);
+}
+
+#[test]
+fn lanes_render_the_general_loops_image_of_glass_and_mirror_spheres_in_the_box() {
+    let Some(mut scene) = load("scenes/cornell-box/CornellBox-Original-fixed.obj") else { return };
+    // Smooth-shaded UV spheres (normals and tangents per vertex) of glass and of a mirror,
+    // which the lanes shade one lane at a time.
+    let glass = tracer::material::Material::dielectric("glass", 1.5).unwrap();
+    scene.add(&tracer::mesh::uv_sphere(Vec3::new(-0.45, 0.3, 0.55), 0.3, 24, 48, false), glass);
+    let mirror = tracer::material::Material::builtin("mirror", brdf::ModelId::Mirror, &[]).unwrap();
+    scene.add(&tracer::mesh::uv_sphere(Vec3::new(0.33, 0.85, 0.37), 0.25, 24, 48, false), mirror);
+    let camera =
+        Camera { eye: Vec3::new(0.0, 1.0, 3.9), center: Vec3::new(0.0, 1.0, 0.0), up: Vec3::Y, fov_y_deg: 39.3077 };
+    lanes_and_general_loop_agree(scene, camera, 8);
 }

@@ -1027,7 +1027,7 @@ fn run_render(args: RenderArgs) -> Result<()> {
         )
     };
     eprintln!(
-        "{}: {} triangles{instanced}, {} shapes, {} emissive, {} built in {:.1} ms{}; {}×{} at {} spp, {} mode, {} backend",
+        "{}: {} triangles{instanced}, {} shapes, {} emissive, {} built in {:.1} ms{}; {}×{} at {} spp, {} mode, {} backend{}",
         args.scene.scene.display(),
         s.triangles.len(),
         s.shapes.len(),
@@ -1042,7 +1042,8 @@ fn run_render(args: RenderArgs) -> Result<()> {
         settings.height,
         settings.spp,
         settings.mode.name(),
-        prepared.capabilities().backend
+        prepared.capabilities().backend,
+        prepared.kernel(&settings).map_or(String::new(), |k| format!(" ({k})"))
     );
     if !s.has_lights() {
         eprintln!("warning: the scene has no light (no Ke > 0, and --sky none): the image will be black");

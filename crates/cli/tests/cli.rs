@@ -68,7 +68,14 @@ fn renders_the_shared_cornell_box_with_defaults_but_small() {
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(stderr(&o).contains("36 triangles, 0 shapes, 2 emissive"), "{}", stderr(&o));
+    // Diffuse triangles: the path tracer runs in lanes, and says so, unless told not to.
+    assert!(stderr(&o).contains("cpu backend (lanes)"), "{}", stderr(&o));
     assert!(out.exists());
+    let o = spt(&["render", scene.to_str().unwrap(), "--width", "8", "--height", "8", "--spp", "1", "--no-lanes"]
+        .into_iter()
+        .chain(["-o", out.to_str().unwrap()])
+        .collect::<Vec<_>>());
+    assert!(o.status.success() && !stderr(&o).contains("(lanes)"), "{}", stderr(&o));
 }
 
 #[test]

@@ -181,6 +181,10 @@ impl<I: Integrator> PreparedScene for CpuScene<I> {
         self.stats
     }
 
+    fn kernel(&self, settings: &RenderSettings) -> Option<&'static str> {
+        self.integrator.kernel(&self.view(), &settings.path)
+    }
+
     fn render_pass(
         &self,
         settings: &RenderSettings,

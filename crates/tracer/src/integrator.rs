@@ -154,6 +154,13 @@ pub trait Integrator: Send + Sync + 'static {
         radiance_each(self, view, settings, block, counters);
     }
 
+    /// The specialised kernel the integrator runs `view`'s scene with `settings` in, if
+    /// any, for reports (the path tracer's "lanes"); `None`: its general code.
+    fn kernel(&self, view: &SceneView, settings: &PathSettings) -> Option<&'static str> {
+        let _ = (view, settings);
+        None
+    }
+
     /// Whether the integrator also adds light to pixels other than its samples' own (it
     /// traces paths from the lights to the camera). A backend then runs
     /// [`Integrator::radiance_block_splatting`] with the film in view
@@ -614,6 +621,10 @@ impl Integrator for PathTracer {
         path_radiance(view, ray, wl, settings, sampler, counters)
     }
 
+    fn kernel(&self, view: &SceneView, settings: &PathSettings) -> Option<&'static str> {
+        Self::runs_in_lanes(view, settings).then_some("lanes")
+    }
+
     /// In lanes where the scene allows it ([`PathSettings::lanes`]), else one path at a
     /// time.
     fn radiance_block<const N: usize, S: Sampler>(
@@ -881,6 +892,50 @@ fn diffuse_limit_reached<const N: usize>(
     *diffuse_bounces > settings.max_diffuse_depth
 }
 
+/// A path's state between its vertices: what [`path_radiance`] carries from one bounce to
+/// the next, and what the lanes hand to [`path_vertex`] at a surface they do not vectorise.
+pub(crate) struct PathState<'a, const N: usize> {
+    /// The radiance found so far.
+    pub(crate) l: SampledSpectrum<N>,
+    /// The throughput.
+    pub(crate) beta: SampledSpectrum<N>,
+    /// The pdf of the previous BSDF sample, and whether it was a delta (no MIS then).
+    pub(crate) prev_pdf: f32,
+    pub(crate) prev_specular: bool,
+    /// The previous vertex (the camera at first).
+    pub(crate) prev_p: Vec3,
+    /// The bounces so far.
+    pub(crate) bounce: u32,
+    /// The product of η'² over the transmissions so far, which Russian roulette undoes
+    /// (`survives_roulette`).
+    pub(crate) eta_scale: f32,
+    /// The purely specular bounces left past `max_depth`.
+    pub(crate) extension_left: u32,
+    /// The non-specular bounces so far (for `max_diffuse_depth`).
+    pub(crate) diffuse_bounces: u32,
+    /// The absorbing material the last segment left its vertex into, if any.
+    pub(crate) inside: Option<&'a spectral::spectrum::Colour>,
+}
+
+impl<const N: usize> PathState<'_, N> {
+    /// A path leaving the camera at `origin`.
+    #[inline(always)]
+    pub(crate) fn new(origin: Vec3, settings: &PathSettings) -> Self {
+        Self {
+            l: SampledSpectrum::zero(),
+            beta: SampledSpectrum::one(),
+            prev_pdf: 0.0,
+            prev_specular: true,
+            prev_p: origin,
+            bounce: 0,
+            eta_scale: 1.0,
+            extension_left: settings.specular_extension,
+            diffuse_bounces: 0,
+            inside: None,
+        }
+    }
+}
+
 /// [`PathTracer`]'s estimate.
 fn path_radiance<const N: usize, S: Sampler>(
     view: &SceneView,
@@ -892,122 +947,133 @@ fn path_radiance<const N: usize, S: Sampler>(
 ) -> SampledSpectrum<N> {
     let scene = view.scene;
     let lights = view.lights;
-    let mut l = SampledSpectrum::<N>::zero();
-    let mut beta = SampledSpectrum::<N>::one();
-    // The pdf of the previous BSDF sample, and whether it was a delta (no MIS then).
-    let mut prev_pdf = 0.0f32;
-    let mut prev_specular = true;
-    let mut prev_p = ray.origin;
-    let mut bounce = 0u32;
-    // The product of η'² over the transmissions so far, which Russian roulette undoes
-    // (`survives_roulette`).
-    let mut eta_scale = 1.0f32;
-    let mut extension_left = settings.specular_extension;
-    let mut diffuse_bounces = 0u32;
-    // The absorbing material the last segment left its vertex into, if any.
-    let mut inside: Option<&spectral::spectrum::Colour> = None;
+    let mut st = PathState::new(ray.origin, settings);
     loop {
         counters.rays += 1;
         let Some(hit) = view.intersect(&ray) else {
             if let Some(env) = &scene.environment {
                 let le = env.radiance_from(ray.dir, wl);
-                let w = if prev_specular { 1.0 } else { power_heuristic(prev_pdf, lights.environment_pdf(ray.dir)) };
-                l += beta * le * w;
+                let w =
+                    if st.prev_specular { 1.0 } else { power_heuristic(st.prev_pdf, lights.environment_pdf(ray.dir)) };
+                st.l += st.beta * le * w;
             }
             if !lights.suns().is_empty() {
-                l += beta * view.suns_seen(ray.dir, wl, (!prev_specular).then_some(prev_pdf));
+                st.l += st.beta * view.suns_seen(ray.dir, wl, (!st.prev_specular).then_some(st.prev_pdf));
             }
             break;
         };
-        let material = view.material(hit.prim);
-        let it = view.interaction(&hit, material, settings.shading_normals);
-        let wo_world = -ray.dir;
-        let front = wo_world.dot(it.ng) > 0.0;
-
-        if view.absorbing {
-            beta *= segment_transmittance(material, front, hit.t, inside, wl);
-        }
-
-        // Emission seen by this path (one-sided: front face only).
-        if front && let Some(le) = material.emission_at(it.uv, wl) {
-            let w = if prev_specular {
-                1.0
-            } else {
-                let dist2 = (it.p - prev_p).length_squared();
-                let cos_l = wo_world.dot(it.ng);
-                let light_pdf = lights.prim_pmf(hit.prim) * dist2 / (cos_l * it.area);
-                power_heuristic(prev_pdf, light_pdf)
-            };
-            l += beta * le * w;
-        }
-
-        if settings.max_depth > 0 && bounce >= settings.max_depth {
-            // Past the limit, continue only through purely specular surfaces, while the
-            // extension lasts.
-            let flags = material.bsdf_at(it.uv, wl).flags();
-            if extension_left == 0 || !flags.is_specular() || flags.is_non_specular() {
-                break;
-            }
-            extension_left -= 1;
-        }
-        if settings.max_diffuse_depth > 0 && diffuse_limit_reached(material, &it, wl, &mut diffuse_bounces, settings) {
-            break;
-        }
-
-        // Dispersion: from here on the path follows one wavelength (a random lane, moved
-        // to lane 0, so that the BSDF refracts it with its own index).
-        if material.is_dispersive() && !wl.is_rgb() && !wl.is_collapsed() {
-            let k = ((sampler.next_1d() * N as f32) as usize).min(N - 1);
-            wl.collapse_to(k);
-            beta.0.swap(0, k);
-            l.0.swap(0, k);
-            for b in &mut beta.0[1..] {
-                *b = 0.0;
-            }
-        }
-
-        let (ng, ns) = shading_normals(settings.shading_normals, it.ng, it.ns, wo_world, material.is_two_sided());
-        let frame = Frame::from_normal_tangent(ns, it.tangent);
-        let wo = frame.to_local(wo_world);
-        let bsdf = material.bsdf_at(it.uv, wl);
-        let flags = bsdf.flags();
-
-        // Next-event estimation: one shadow ray to a point on a light.
-        if flags.is_non_specular() {
-            let at = Shading { it: &it, material, ng, wo_world, frame: &frame, wo };
-            if let Some((f, le, k)) = next_event(view, &at, &bsdf, wl, Mis::Power, sampler.next_2d(), counters) {
-                l += beta * f * le * k;
-            }
-        }
-
-        // Continue the path by sampling the BSDF.
-        let uc = sampler.next_1d();
-        let u = sampler.next_2d();
-        let Some(s) = bsdf.sample(wo, uc, u) else { break };
-        if s.pdf <= 0.0 || s.f.is_black() {
-            break;
-        }
-        let wi_world = frame.to_world(s.wi);
-        if lobe_leaks(material, settings.shading_normals, it.ng, wo_world, wi_world, s.flags) {
-            break;
-        }
-        beta *= s.f * (s.wi.z.abs() / s.pdf);
-        eta_scale *= compression(&bsdf, wo, s.flags.contains(ScatterFlags::TRANSMISSION));
-        prev_pdf = s.pdf;
-        prev_specular = s.flags.is_specular();
-        prev_p = it.p;
-        if view.absorbing {
-            inside = entered_medium(material, it.ng, wi_world);
-        }
-        ray = Ray::new(it.spawn_origin(wi_world), wi_world);
-        bounce += 1;
-
-        if bounce >= settings.rr_depth && !survives_roulette(&mut beta, eta_scale, sampler.next_1d()) {
-            break;
-        }
-        if beta.is_black() {
-            break;
+        match path_vertex(view, &hit, ray.dir, wl, settings, sampler, counters, &mut st) {
+            Some(next) => ray = next,
+            None => break,
         }
     }
-    l
+    st.l
+}
+
+/// One vertex of [`PathTracer`]'s path, at `hit` of a ray along `dir`: the emission seen
+/// there, next-event estimation, the BSDF sample, Russian roulette. The next ray, or
+/// `None` where the path ends.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+pub(crate) fn path_vertex<'a, const N: usize, S: Sampler>(
+    view: &SceneView<'a>,
+    hit: &SceneHit,
+    dir: Vec3,
+    wl: &mut SampledWavelengths<N>,
+    settings: &PathSettings,
+    sampler: &mut S,
+    counters: &mut PathCounters,
+    st: &mut PathState<'a, N>,
+) -> Option<Ray> {
+    let lights = view.lights;
+    let material = view.material(hit.prim);
+    let it = view.interaction(hit, material, settings.shading_normals);
+    let wo_world = -dir;
+    let front = wo_world.dot(it.ng) > 0.0;
+
+    if view.absorbing {
+        st.beta *= segment_transmittance(material, front, hit.t, st.inside, wl);
+    }
+
+    // Emission seen by this path (one-sided: front face only).
+    if front && let Some(le) = material.emission_at(it.uv, wl) {
+        let w = if st.prev_specular {
+            1.0
+        } else {
+            let dist2 = (it.p - st.prev_p).length_squared();
+            let cos_l = wo_world.dot(it.ng);
+            let light_pdf = lights.prim_pmf(hit.prim) * dist2 / (cos_l * it.area);
+            power_heuristic(st.prev_pdf, light_pdf)
+        };
+        st.l += st.beta * le * w;
+    }
+
+    if settings.max_depth > 0 && st.bounce >= settings.max_depth {
+        // Past the limit, continue only through purely specular surfaces, while the
+        // extension lasts.
+        let flags = material.bsdf_at(it.uv, wl).flags();
+        if st.extension_left == 0 || !flags.is_specular() || flags.is_non_specular() {
+            return None;
+        }
+        st.extension_left -= 1;
+    }
+    if settings.max_diffuse_depth > 0 && diffuse_limit_reached(material, &it, wl, &mut st.diffuse_bounces, settings) {
+        return None;
+    }
+
+    // Dispersion: from here on the path follows one wavelength (a random lane, moved
+    // to lane 0, so that the BSDF refracts it with its own index).
+    if material.is_dispersive() && !wl.is_rgb() && !wl.is_collapsed() {
+        let k = ((sampler.next_1d() * N as f32) as usize).min(N - 1);
+        wl.collapse_to(k);
+        st.beta.0.swap(0, k);
+        st.l.0.swap(0, k);
+        for b in &mut st.beta.0[1..] {
+            *b = 0.0;
+        }
+    }
+
+    let (ng, ns) = shading_normals(settings.shading_normals, it.ng, it.ns, wo_world, material.is_two_sided());
+    let frame = Frame::from_normal_tangent(ns, it.tangent);
+    let wo = frame.to_local(wo_world);
+    let bsdf = material.bsdf_at(it.uv, wl);
+    let flags = bsdf.flags();
+
+    // Next-event estimation: one shadow ray to a point on a light.
+    if flags.is_non_specular() {
+        let at = Shading { it: &it, material, ng, wo_world, frame: &frame, wo };
+        if let Some((f, le, k)) = next_event(view, &at, &bsdf, wl, Mis::Power, sampler.next_2d(), counters) {
+            st.l += st.beta * f * le * k;
+        }
+    }
+
+    // Continue the path by sampling the BSDF.
+    let uc = sampler.next_1d();
+    let u = sampler.next_2d();
+    let s = bsdf.sample(wo, uc, u)?;
+    if s.pdf <= 0.0 || s.f.is_black() {
+        return None;
+    }
+    let wi_world = frame.to_world(s.wi);
+    if lobe_leaks(material, settings.shading_normals, it.ng, wo_world, wi_world, s.flags) {
+        return None;
+    }
+    st.beta *= s.f * (s.wi.z.abs() / s.pdf);
+    st.eta_scale *= compression(&bsdf, wo, s.flags.contains(ScatterFlags::TRANSMISSION));
+    st.prev_pdf = s.pdf;
+    st.prev_specular = s.flags.is_specular();
+    st.prev_p = it.p;
+    if view.absorbing {
+        st.inside = entered_medium(material, it.ng, wi_world);
+    }
+    let ray = Ray::new(it.spawn_origin(wi_world), wi_world);
+    st.bounce += 1;
+
+    if st.bounce >= settings.rr_depth && !survives_roulette(&mut st.beta, st.eta_scale, sampler.next_1d()) {
+        return None;
+    }
+    if st.beta.is_black() {
+        return None;
+    }
+    Some(ray)
 }

@@ -430,6 +430,13 @@ pub trait PreparedScene: Send + Sync + 'static {
     /// What preparing it took.
     fn stats(&self) -> PrepareStats;
 
+    /// The specialised kernel a render with `settings` runs in, if any (the CPU path
+    /// tracer's "lanes"), for reports; the default: none.
+    fn kernel(&self, settings: &RenderSettings) -> Option<&'static str> {
+        let _ = settings;
+        None
+    }
+
     /// Adds samples `first_sample .. first_sample + spp` of every pixel to `film` (which
     /// must have the settings' size); `progress` is told how many samples each finished
     /// piece of work took.

@@ -1,10 +1,13 @@
-//! The path tracer over lanes, for scenes that need no more than diffuse triangles: 64
-//! paths side by side in structure-of-arrays form, so that everything between the ray
-//! queries — surface data, emission and its MIS weight, the shading frame, the light
-//! sample's geometry, the Lambertian sample, the spectra at the paths' wavelengths,
-//! Russian roulette — runs as vector instructions across the paths (AVX-512 or AVX2 where
-//! the machine has it, chosen at run time), while the rays go through the same BVH queries
-//! one at a time. A path that ends hands its lane to the block's next camera sample.
+//! The path tracer over lanes, for scenes of triangles: 64 paths side by side in
+//! structure-of-arrays form, so that everything between the ray queries on diffuse
+//! surfaces — surface data and shading normals, emission and its MIS weight, the shading
+//! frame, the light sample's geometry, the Lambertian sample, the spectra at the paths'
+//! wavelengths, Russian roulette — runs as vector instructions across the paths (AVX-512
+//! or AVX2 where the machine has it, chosen at run time), while the rays go through the
+//! same BVH queries one at a time. A path at any other surface (glass, a mirror, a
+//! textured or rough material) is shaded there by the general loop's own code
+//! ([`path_vertex`]), one lane at a time, and goes on in its lane. A path that ends hands
+//! its lane to the block's next camera sample.
 //!
 //! Why 64 lanes, not 8 (one AVX2 register): LLVM unrolls a loop of 8 completely before
 //! its loop vectoriser runs, and the straight-line vectoriser that is left packed only
@@ -18,16 +21,18 @@
 //! the bit (`lanes_compute_the_general_loops_estimate_bit_for_bit` checks it; Rust never
 //! contracts a·b + c into a fused multiply-add, so the AVX2 build rounds as the baseline).
 //!
-//! The specialisation ("model no more than a scene needs") applies where every material
-//! is an untextured [`brdf::Lambert`] whose colours are RGB uplifts or constants, the mesh
-//! has neither shading normals (or they are ignored) nor tangents, and there are no
-//! analytic shapes, instances, environment or punctual lights, and no diffuse-depth limit
-//! ([`LaneScene::of`], [`LaneScene::admits`]). Anything else runs the general loop. `spt render --no-lanes`
-//! (`PathSettings::lanes`) runs the general loop everywhere, to measure the difference.
+//! The specialisation ("model no more than a scene needs") applies where the scene is
+//! triangles only (no analytic shapes or instances), lit by its emissive triangles alone
+//! (no environment, punctual lights or suns), every emitter's colour an RGB uplift or a
+//! constant, no material disperses or absorbs, at least one material is an untextured
+//! [`brdf::Lambert`] with such colours (the surfaces the lanes shade), and there is no
+//! diffuse-depth limit ([`LaneScene::of`], [`LaneScene::admits`]). Anything else runs the
+//! general loop. `spt render --no-lanes` (`PathSettings::lanes`) runs the general loop
+//! everywhere, to measure the difference.
 
 use super::{
-    CameraSample, PathCounters, PathSettings, RR_MIN_TERMINATION, SHADOW_T_MAX, SceneView, ShadingNormals,
-    power_heuristic,
+    CameraSample, PathCounters, PathSettings, PathState, RR_MIN_TERMINATION, SHADOW_T_MAX, SceneView, ShadingNormals,
+    path_vertex, power_heuristic,
 };
 use crate::geometry::HitSurface;
 use crate::lights::LightSource;
@@ -77,12 +82,15 @@ impl LaneColour {
     }
 }
 
-/// What the lanes need of a scene, per material: its albedo and its emission.
+/// What the lanes need of a scene, per material: its albedo where the lanes shade it
+/// (`None`: one lane at a time, by the general loop's [`path_vertex`]) and its emission.
 pub(crate) struct LaneScene {
-    albedo: Vec<LaneColour>,
+    albedo: Vec<Option<LaneColour>>,
     emission: Vec<Option<LaneColour>>,
-    /// Whether the mesh has shading normals (which only geometric shading may ignore).
+    /// Whether the mesh has shading normals, interpolated unless geometric shading ignores them.
     normals: bool,
+    /// Whether the mesh has tangents, which orient the BSDF's frame about its normal.
+    tangents: bool,
 }
 
 impl LaneScene {
@@ -98,7 +106,8 @@ impl LaneScene {
             && scene.punctual_lights.is_empty()
             && view.lights.suns().is_empty()
             && view.lights.environment_pmf() == 0.0
-            && scene.tangents.is_empty()
+            && !view.dispersive
+            && !view.absorbing
             && scene.material_ids.len() == scene.triangles.len();
         if !plain {
             return None;
@@ -106,25 +115,25 @@ impl LaneScene {
         let mut albedo = Vec::with_capacity(scene.materials.len());
         let mut emission = Vec::with_capacity(scene.materials.len());
         for m in &scene.materials {
-            let Surface::Builtin(ModelParams::Lambert(p)) = &m.surface else { return None };
-            if m.textures.is_some() {
-                return None;
-            }
-            albedo.push(LaneColour::of(&p.reflectance)?);
+            albedo.push(match &m.surface {
+                Surface::Builtin(ModelParams::Lambert(p)) if m.textures.is_none() => LaneColour::of(&p.reflectance),
+                _ => None,
+            });
+            // Every emitter's colour, which next-event estimation evaluates in the lanes.
             emission.push(match &m.emission {
                 Some(e) => Some(LaneColour::of(e)?),
                 None => None,
             });
         }
-        Some(Self { albedo, emission, normals: !scene.normals.is_empty() })
+        // Without a surface for the lanes, the general loop is the faster.
+        let (normals, tangents) = (!scene.normals.is_empty(), !scene.tangents.is_empty());
+        albedo.iter().any(Option::is_some).then_some(Self { albedo, emission, normals, tangents })
     }
 
-    /// Whether the lanes render this scene with `settings` (the switch on, shading normals
-    /// absent or ignored, no diffuse-depth limit).
+    /// Whether the lanes render this scene with `settings` (the switch on, no
+    /// diffuse-depth limit).
     pub(crate) fn admits(&self, settings: &PathSettings) -> bool {
-        settings.lanes
-            && (!self.normals || settings.shading_normals == ShadingNormals::Geometric)
-            && settings.max_diffuse_depth == 0
+        settings.lanes && settings.max_diffuse_depth == 0
     }
 }
 
@@ -259,8 +268,13 @@ struct Lanes<const N: usize> {
     beta: [F; N],
     radiance: [F; N],
     prev_pdf: F,
+    prev_specular: M,
     prev_p: V3,
     bounce: [u32; LANES],
+    /// `PathState::eta_scale`, changed only at surfaces shaded one lane at a time.
+    eta_scale: F,
+    /// `PathState::extension_left`, likewise.
+    extension_left: [u32; LANES],
 }
 
 /// [`super::PathTracer`]'s estimate for every sample of `block`, in lanes (see the module
@@ -341,10 +355,15 @@ fn run<const N: usize, S: Sampler>(
         beta: [[0.0; LANES]; N],
         radiance: [[0.0; LANES]; N],
         prev_pdf: [0.0; LANES],
+        prev_specular: [true; LANES],
         prev_p: V3::default(),
         bounce: [0; LANES],
+        eta_scale: [1.0; LANES],
+        extension_left: [0; LANES],
     };
     let mesh = scene.mesh();
+    // Whether the shading normals are interpolated (`SceneView::surface_at`).
+    let smooth = ls.normals && settings.shading_normals != ShadingNormals::Geometric;
     let mut next = 0;
     // Ends lane k's path: its estimate goes to its camera sample, the lane is free.
     let finish = |st: &mut Lanes<N>, block: &mut [CameraSample<N, S>], k: usize| {
@@ -368,7 +387,10 @@ fn run<const N: usize, S: Sampler>(
                     st.radiance[i][k] = 0.0;
                 }
                 st.prev_pdf[k] = 0.0;
+                st.prev_specular[k] = true;
                 st.bounce[k] = 0;
+                st.eta_scale[k] = 1.0;
+                st.extension_left[k] = settings.specular_extension;
                 next += 1;
             }
         }
@@ -377,10 +399,14 @@ fn run<const N: usize, S: Sampler>(
         }
 
         // The closest hits, one query per path; a path that leaves the scene ends (no
-        // environment). Lanes without a path carry triangle 0's data, never used.
+        // environment). A hit on a surface the lanes do not shade is shaded there and then,
+        // one lane at a time, by the general loop's code; the lanes shade the others
+        // (`live`). Lanes without such a hit carry zeros, never used.
         let mut live: M = [false; LANES];
         let (mut bu, mut bv): (F, F) = ([0.0; LANES], [0.0; LANES]);
         let (mut v0, mut v1, mut v2) = (V3::default(), V3::default(), V3::default());
+        let (mut n0, mut n1, mut n2) = (V3::default(), V3::default(), V3::default());
+        let (mut t0, mut t1, mut t2) = (V3::default(), V3::default(), V3::default());
         let mut albedo = Gathered::default();
         let mut emission = Gathered::default();
         let mut emissive: M = [false; LANES];
@@ -395,14 +421,30 @@ fn run<const N: usize, S: Sampler>(
                 continue;
             };
             let HitSurface::Triangle { u, v } = hit.surface else { unreachable!("a scene of triangles only") };
+            let m = scene.material_ids[hit.prim as usize] as usize;
+            let Some(a) = &ls.albedo[m] else {
+                if !vertex_in_one_lane(&mut st, k, view, settings, &hit, ray.dir, &mut block[b], counters) {
+                    finish(&mut st, block, k);
+                }
+                continue;
+            };
             live[k] = true;
             (bu[k], bv[k]) = (u, v);
             let tri = mesh.triangles[hit.prim as usize];
             v0.set(k, Vec3::from_array(mesh.positions[tri[0] as usize]));
             v1.set(k, Vec3::from_array(mesh.positions[tri[1] as usize]));
             v2.set(k, Vec3::from_array(mesh.positions[tri[2] as usize]));
-            let m = scene.material_ids[hit.prim as usize] as usize;
-            albedo.set(k, &ls.albedo[m]);
+            if smooth {
+                n0.set(k, Vec3::from_array(mesh.normals[tri[0] as usize]));
+                n1.set(k, Vec3::from_array(mesh.normals[tri[1] as usize]));
+                n2.set(k, Vec3::from_array(mesh.normals[tri[2] as usize]));
+            }
+            if ls.tangents {
+                t0.set(k, Vec3::from_array(mesh.tangents[tri[0] as usize]));
+                t1.set(k, Vec3::from_array(mesh.tangents[tri[1] as usize]));
+                t2.set(k, Vec3::from_array(mesh.tangents[tri[2] as usize]));
+            }
+            albedo.set(k, a);
             if let Some(e) = &ls.emission[m] {
                 emissive[k] = true;
                 emission.set(k, e);
@@ -432,10 +474,32 @@ fn run<const N: usize, S: Sampler>(
             (wo.x[k], wo.y[k], wo.z[k]) = (-st.dir.x[k], -st.dir.y[k], -st.dir.z[k]);
             cos_o[k] = dot(&wo, &ng, k);
         }
+        // The shading normal: interpolated, normalised and turned to n_g's side where it
+        // is long enough, n_g otherwise.
+        let mut ns = ng;
+        if smooth {
+            for k in 0..LANES {
+                let (u, v) = (bu[k], bv[k]);
+                let b0 = 1.0 - u - v;
+                let n = (
+                    b0 * n0.x[k] + u * n1.x[k] + v * n2.x[k],
+                    b0 * n0.y[k] + u * n1.y[k] + v * n2.y[k],
+                    b0 * n0.z[k] + u * n1.z[k] + v * n2.z[k],
+                );
+                let len2 = (n.0 * n.0) + (n.1 * n.1) + (n.2 * n.2);
+                let r = 1.0 / len2.sqrt();
+                let n = (n.0 * r, n.1 * r, n.2 * r);
+                let n = if dot_with(n, &ng, k) < 0.0 { (-n.0, -n.1, -n.2) } else { n };
+                let long = len2 > 1e-12;
+                ns.x[k] = if long { n.0 } else { ng.x[k] };
+                ns.y[k] = if long { n.1 } else { ng.y[k] };
+                ns.z[k] = if long { n.2 } else { ng.z[k] };
+            }
+        }
         if emissive.iter().any(|&e| e) {
             let le = emission.eval(&st.lambda, &st.d65, rgb);
             for k in 0..LANES {
-                let w = if st.bounce[k] == 0 {
+                let w = if st.prev_specular[k] {
                     1.0
                 } else {
                     let d = (p.x[k] - st.prev_p.x[k], p.y[k] - st.prev_p.y[k], p.z[k] - st.prev_p.z[k]);
@@ -460,21 +524,21 @@ fn run<const N: usize, S: Sampler>(
             }
         }
 
-        // The normals the BSDF sees (`shading_normals` with n_s = n_g, two-sided) and
-        // its frame (`Frame::from_normal`), ω_o in it, and the albedo.
+        // The normals the BSDF sees (`shading_normals`, two-sided) and its frame
+        // (`Frame::from_normal_tangent`), ω_o in it, and the albedo.
         let (mut nf, mut fs, mut ft) = (V3::default(), V3::default(), V3::default());
         let mut wol = V3::default();
         let face_forward = settings.shading_normals == ShadingNormals::FaceForward;
         for k in 0..LANES {
             let side = if cos_o[k] >= 0.0 { 1.0 } else { -1.0 };
-            let a = side * cos_o[k];
+            let a = side * dot(&wo, &ns, k);
             let s = (MIN_SHADING_COSINE - a) * side;
-            let bent = (ng.x[k] + s * wo.x[k], ng.y[k] + s * wo.y[k], ng.z[k] + s * wo.z[k]);
+            let bent = (ns.x[k] + s * wo.x[k], ns.y[k] + s * wo.y[k], ns.z[k] + s * wo.z[k]);
             let rcp = 1.0 / ((bent.0 * bent.0) + (bent.1 * bent.1) + (bent.2 * bent.2)).sqrt();
             let ok = rcp.is_finite() && rcp > 0.0;
             let adapted = if ok { (bent.0 * rcp, bent.1 * rcp, bent.2 * rcp) } else { (ng.x[k], ng.y[k], ng.z[k]) };
             let keep = face_forward || a >= MIN_SHADING_COSINE;
-            let n = if keep { (ng.x[k], ng.y[k], ng.z[k]) } else { adapted };
+            let n = if keep { (ns.x[k], ns.y[k], ns.z[k]) } else { adapted };
             // Two-sided: the side the path arrived on is the front.
             let n = if cos_o[k] > 0.0 { n } else { (-n.0, -n.1, -n.2) };
             (nf.x[k], nf.y[k], nf.z[k]) = n;
@@ -483,6 +547,35 @@ fn run<const N: usize, S: Sampler>(
             let b = n.0 * n.1 * a;
             (fs.x[k], fs.y[k], fs.z[k]) = (1.0 + sign * n.0 * n.0 * a, sign * b, -sign * n.0);
             (ft.x[k], ft.y[k], ft.z[k]) = (b, sign + n.1 * n.1 * a, -n.1);
+        }
+        if ls.tangents {
+            // `Frame::from_normal_tangent`: the interpolated tangent made orthogonal to the
+            // normal (Gram–Schmidt), where it is not (nearly) parallel to it.
+            for k in 0..LANES {
+                let (u, v) = (bu[k], bv[k]);
+                let b0 = 1.0 - u - v;
+                let t = (
+                    b0 * t0.x[k] + u * t1.x[k] + v * t2.x[k],
+                    b0 * t0.y[k] + u * t1.y[k] + v * t2.y[k],
+                    b0 * t0.z[k] + u * t1.z[k] + v * t2.z[k],
+                );
+                let n = (nf.x[k], nf.y[k], nf.z[k]);
+                let d = (n.0 * t.0) + (n.1 * t.1) + (n.2 * t.2);
+                let s = (t.0 - n.0 * d, t.1 - n.1 * d, t.2 - n.2 * d);
+                let len2 = (s.0 * s.0) + (s.1 * s.1) + (s.2 * s.2);
+                let parallel = len2.is_nan() || len2 <= 1e-8 * ((t.0 * t.0) + (t.1 * t.1) + (t.2 * t.2));
+                let len = len2.sqrt();
+                let s = (s.0 / len, s.1 / len, s.2 / len);
+                let t = (n.1 * s.2 - s.1 * n.2, n.2 * s.0 - s.2 * n.0, n.0 * s.1 - s.0 * n.1);
+                fs.x[k] = if parallel { fs.x[k] } else { s.0 };
+                fs.y[k] = if parallel { fs.y[k] } else { s.1 };
+                fs.z[k] = if parallel { fs.z[k] } else { s.2 };
+                ft.x[k] = if parallel { ft.x[k] } else { t.0 };
+                ft.y[k] = if parallel { ft.y[k] } else { t.1 };
+                ft.z[k] = if parallel { ft.z[k] } else { t.2 };
+            }
+        }
+        for k in 0..LANES {
             (wol.x[k], wol.y[k], wol.z[k]) = (dot(&wo, &fs, k), dot(&wo, &ft, k), dot(&wo, &nf, k));
         }
         // f = R/π (`Lambert::eval` on the same hemisphere, and its sample's value).
@@ -597,6 +690,7 @@ fn run<const N: usize, S: Sampler>(
             );
             let g = go[k];
             st.prev_pdf[k] = if g { pdf } else { st.prev_pdf[k] };
+            st.prev_specular[k] &= !g;
             st.prev_p.x[k] = if g { p.x[k] } else { st.prev_p.x[k] };
             st.prev_p.y[k] = if g { p.y[k] } else { st.prev_p.y[k] };
             st.prev_p.z[k] = if g { p.z[k] } else { st.prev_p.z[k] };
@@ -609,7 +703,7 @@ fn run<const N: usize, S: Sampler>(
             st.bounce[k] += g as u32;
         }
 
-        // Russian roulette (`survives_roulette`, no transmissions: η-scale 1).
+        // Russian roulette (`survives_roulette`).
         for k in 0..LANES {
             if live[k] && !go[k] {
                 finish(&mut st, block, k);
@@ -619,7 +713,7 @@ fn run<const N: usize, S: Sampler>(
             if st.bounce[k] >= settings.rr_depth {
                 let u = block[b].sampler.next_1d();
                 let max = (0..N).map(|i| st.beta[i][k]).fold(f32::NEG_INFINITY, f32::max);
-                let q = (1.0 - max).max(RR_MIN_TERMINATION);
+                let q = (1.0 - max * st.eta_scale[k]).max(RR_MIN_TERMINATION);
                 if u < q {
                     finish(&mut st, block, k);
                     continue;
@@ -635,6 +729,56 @@ fn run<const N: usize, S: Sampler>(
     }
 }
 
+/// Lane `k`'s vertex at `hit` (of a ray along `dir`) on a surface the lanes do not shade,
+/// by the general loop's [`path_vertex`]: the lane's state goes in and comes out with the
+/// next ray; false where the path ends there. Out of line: it is the rarer case, and
+/// inlined it would crowd the lanes' loop.
+#[allow(clippy::too_many_arguments)]
+#[inline(never)]
+fn vertex_in_one_lane<const N: usize, S: Sampler>(
+    st: &mut Lanes<N>,
+    k: usize,
+    view: &SceneView,
+    settings: &PathSettings,
+    hit: &crate::geometry::SceneHit,
+    dir: Vec3,
+    sample: &mut CameraSample<N, S>,
+    counters: &mut PathCounters,
+) -> bool {
+    let mut path = PathState {
+        l: SampledSpectrum(std::array::from_fn(|i| st.radiance[i][k])),
+        beta: SampledSpectrum(std::array::from_fn(|i| st.beta[i][k])),
+        prev_pdf: st.prev_pdf[k],
+        prev_specular: st.prev_specular[k],
+        prev_p: st.prev_p.get(k),
+        bounce: st.bounce[k],
+        eta_scale: st.eta_scale[k],
+        extension_left: st.extension_left[k],
+        // No diffuse-depth limit and no absorbing media in the lanes' scenes.
+        diffuse_bounces: 0,
+        inside: None,
+    };
+    let next = path_vertex(view, hit, dir, &mut sample.wl, settings, &mut sample.sampler, counters, &mut path);
+    for i in 0..N {
+        st.radiance[i][k] = path.l.0[i];
+        st.beta[i][k] = path.beta.0[i];
+    }
+    st.prev_pdf[k] = path.prev_pdf;
+    st.prev_specular[k] = path.prev_specular;
+    st.prev_p.set(k, path.prev_p);
+    st.bounce[k] = path.bounce;
+    st.eta_scale[k] = path.eta_scale;
+    st.extension_left[k] = path.extension_left;
+    match next {
+        Some(ray) => {
+            st.origin.set(k, ray.origin);
+            st.dir.set(k, ray.dir);
+            true
+        }
+        None => false,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -647,9 +791,10 @@ mod tests {
     use crate::scene::Scene;
     use spectral::SampledWavelengths;
 
-    /// A diffuse room: coloured walls (RGB uplifts), a grey constant, a smooth sphere (its
-    /// normals ignored: geometric shading) and two lamps, one a coloured uplift, one a
-    /// constant; walls seen edge-on, so that grazing hits and adapted normals occur.
+    /// A room: coloured diffuse walls (RGB uplifts), a grey constant, a smooth diffuse
+    /// sphere, two lamps (one a coloured uplift, one a constant) and what the lanes shade
+    /// one lane at a time: a glass sphere, a mirror and a rough (Oren–Nayar) panel. Walls
+    /// are seen edge-on, so that grazing hits and adapted normals occur.
     fn room() -> Scene {
         let mut scene = Scene::default();
         let wall = |rgb: [f32; 3]| Material::diffuse("wall", Colour::reflectance_rgb(rgb).unwrap()).unwrap();
@@ -658,14 +803,20 @@ mod tests {
         scene.add(&quad(Vec3::new(1.0, 1.0, 0.0), -Vec3::X, 1.0), wall([0.1, 0.6, 0.1]));
         scene.add(&quad(Vec3::new(0.0, 1.0, -1.0), Vec3::Z, 1.0), wall([0.2, 0.3, 0.8]));
         scene.add(&uv_sphere(Vec3::new(0.2, 0.4, 0.0), 0.4, 12, 24, false), wall([0.9, 0.8, 0.2]));
+        scene.add(
+            &uv_sphere(Vec3::new(-0.55, 0.3, 0.45), 0.25, 10, 20, false),
+            Material::dielectric("glass", 1.5).unwrap(),
+        );
+        let mirror = Material::builtin("mirror", brdf::ModelId::Mirror, &[]).unwrap();
+        scene.add(&quad(Vec3::new(0.99, 0.8, -0.4), -Vec3::X, 0.25), mirror);
+        let rough = Material::builtin("rough", brdf::ModelId::OrenNayar, &[]).unwrap();
+        scene.add(&quad(Vec3::new(0.4, 1.3, -0.99), Vec3::Z, 0.25), rough);
         let lamp = |c: Colour| Material::diffuse("lamp", Colour::constant(0.0)).unwrap().with_emission(c);
         scene.add(
             &quad(Vec3::new(0.0, 1.99, 0.0), -Vec3::Y, 0.3),
             lamp(Colour::illuminant_rgb([4.0, 3.0, 2.0]).unwrap()),
         );
         scene.add(&quad(Vec3::new(-0.6, 1.0, -0.99), Vec3::Z, 0.1), lamp(Colour::constant(2.0)));
-        // Tangents would orient the BSDF's frame: the lanes take scenes without (OBJ files).
-        scene.tangents.clear();
         scene
     }
 
@@ -685,11 +836,14 @@ mod tests {
 
     /// Every sample's estimate from the general loop, from the lanes compiled for the
     /// baseline and (where the machine has them) for AVX2 and AVX-512, compared bit for bit.
-    fn lanes_equal_the_general_loop<const N: usize>(wl: impl Fn(f32) -> SampledWavelengths<N>, settings: PathSettings) {
-        let scene = room();
-        let geometry = Geometry::build(&scene, &SceneOptions::default()).unwrap();
-        let lights = Lights::new(&scene);
-        let view = SceneView::new(&scene, &geometry, &lights);
+    fn lanes_equal_the_general_loop<const N: usize>(
+        scene: &Scene,
+        wl: impl Fn(f32) -> SampledWavelengths<N>,
+        settings: PathSettings,
+    ) {
+        let geometry = Geometry::build(scene, &SceneOptions::default()).unwrap();
+        let lights = Lights::new(scene);
+        let view = SceneView::new(scene, &geometry, &lights);
         let lanes = view.lane_scene(&settings).expect("a scene for the lanes");
         let mut general = block(&wl);
         let mut rays = PathCounters::default();
@@ -727,17 +881,25 @@ mod tests {
 
     #[test]
     fn lanes_compute_the_general_loops_estimate_bit_for_bit() {
-        let base = PathSettings { rr_depth: 2, shading_normals: ShadingNormals::Geometric, ..Default::default() };
-        lanes_equal_the_general_loop(SampledWavelengths::<4>::sample_hero, base);
-        lanes_equal_the_general_loop(|_| SampledWavelengths::<3>::rgb(), base);
-        lanes_equal_the_general_loop(|_| SampledWavelengths::<40>::fixed_bins(380.0, 10.0), base);
-        lanes_equal_the_general_loop(SampledWavelengths::<4>::sample_hero, PathSettings { max_depth: 2, ..base });
-        let ff = PathSettings { shading_normals: ShadingNormals::FaceForward, ..base };
-        let mut scene = room();
-        scene.normals.clear();
-        let geometry = Geometry::build(&scene, &SceneOptions::default()).unwrap();
-        let lights = Lights::new(&scene);
-        assert!(SceneView::new(&scene, &geometry, &lights).lane_scene(&ff).is_some());
+        let base = PathSettings { rr_depth: 2, ..Default::default() };
+        let scene = room();
+        assert!(!scene.normals.is_empty() && !scene.tangents.is_empty());
+        lanes_equal_the_general_loop(&scene, SampledWavelengths::<4>::sample_hero, base);
+        lanes_equal_the_general_loop(&scene, |_| SampledWavelengths::<3>::rgb(), base);
+        lanes_equal_the_general_loop(&scene, |_| SampledWavelengths::<40>::fixed_bins(380.0, 10.0), base);
+        // Past a depth limit only the specular surfaces (one lane at a time) go on.
+        let limited = PathSettings { max_depth: 2, specular_extension: 3, ..base };
+        lanes_equal_the_general_loop(&scene, SampledWavelengths::<4>::sample_hero, limited);
+        for shading_normals in [ShadingNormals::FaceForward, ShadingNormals::Geometric] {
+            let settings = PathSettings { shading_normals, ..base };
+            lanes_equal_the_general_loop(&scene, SampledWavelengths::<4>::sample_hero, settings);
+        }
+        // Without tangents (the frame from the normal alone), and without normals.
+        let mut plain = room();
+        plain.tangents.clear();
+        lanes_equal_the_general_loop(&plain, SampledWavelengths::<4>::sample_hero, base);
+        plain.normals.clear();
+        lanes_equal_the_general_loop(&plain, SampledWavelengths::<4>::sample_hero, base);
     }
 
     #[test]
@@ -760,22 +922,30 @@ mod tests {
     }
 
     #[test]
-    fn only_scenes_of_diffuse_triangles_run_in_lanes() {
+    fn only_scenes_of_triangles_with_diffuse_surfaces_run_in_lanes() {
+        let runs = super::super::PathTracer::runs_in_lanes;
         let scene = room();
         let geometry = Geometry::build(&scene, &SceneOptions::default()).unwrap();
         let lights = Lights::new(&scene);
         let view = SceneView::new(&scene, &geometry, &lights);
-        let geometric = PathSettings { shading_normals: ShadingNormals::Geometric, ..Default::default() };
-        assert!(super::super::PathTracer::runs_in_lanes(&view, &geometric));
-        // Smooth normals that the BSDF would see, a diffuse-depth limit, or the switch off.
-        assert!(!super::super::PathTracer::runs_in_lanes(&view, &PathSettings::default()));
-        assert!(!super::super::PathTracer::runs_in_lanes(&view, &PathSettings { max_diffuse_depth: 2, ..geometric }));
-        assert!(!super::super::PathTracer::runs_in_lanes(&view, &PathSettings { lanes: false, ..geometric }));
-        // Another model, a spectrum the lanes do not evaluate, an environment, tangents.
-        for change in 0..4 {
+        for shading_normals in [ShadingNormals::Adapted, ShadingNormals::FaceForward, ShadingNormals::Geometric] {
+            assert!(runs(&view, &PathSettings { shading_normals, ..Default::default() }), "{shading_normals:?}");
+        }
+        // A diffuse-depth limit, or the switch off.
+        assert!(!runs(&view, &PathSettings { max_diffuse_depth: 2, ..Default::default() }));
+        assert!(!runs(&view, &PathSettings { lanes: false, ..Default::default() }));
+        // No surface for the lanes, a spectrum they do not evaluate, an environment,
+        // a point light, dispersive glass, absorbing glass.
+        for change in 0..6 {
             let mut other = room();
             match change {
-                0 => other.materials[0] = Material::builtin("mirror", brdf::ModelId::Mirror, &[]).unwrap(),
+                0 => {
+                    for m in &mut other.materials {
+                        let emission = m.emission.take();
+                        *m = Material::builtin("mirror", brdf::ModelId::Mirror, &[]).unwrap();
+                        m.emission = emission;
+                    }
+                }
                 1 => {
                     let sun = Spectrum::Blackbody { kelvin: 5800.0, scale: 1.0 };
                     let lamp = other.materials.len() - 1;
@@ -783,12 +953,24 @@ mod tests {
                         Some(Colour::from_spectrum(sun, spectral::spectrum::ColourRole::Illuminant));
                 }
                 2 => other.environment = Some(crate::scene::Environment::uniform(Colour::constant(0.1))),
-                _ => other.tangents = vec![[1.0, 0.0, 0.0]; other.positions.len()],
+                3 => other.punctual_lights.push(crate::punctual::PunctualLight::Point {
+                    position: Vec3::new(0.0, 1.5, 0.0),
+                    intensity: Colour::constant(1.0),
+                }),
+                _ => {
+                    use brdf::params::ParamValue;
+                    let param = if change == 4 {
+                        ("dispersion", ParamValue::Name("bk7".into()))
+                    } else {
+                        ("absorption", ParamValue::Rgb([0.5, 0.2, 0.1]))
+                    };
+                    other.materials[0] = Material::builtin("glass", brdf::ModelId::Dielectric, &[param]).unwrap();
+                }
             }
             let geometry = Geometry::build(&other, &SceneOptions::default()).unwrap();
             let lights = Lights::new(&other);
             let view = SceneView::new(&other, &geometry, &lights);
-            assert!(!super::super::PathTracer::runs_in_lanes(&view, &geometric), "change {change}");
+            assert!(!runs(&view, &PathSettings::default()), "change {change}");
         }
     }
 }
