@@ -41,7 +41,7 @@ use crate::sampler::Sampler;
 use crate::shading::MIN_SHADING_COSINE;
 use brdf::sampling::sin_cos_quarter;
 use bvh::Ray;
-use glam::{Vec2, Vec3};
+use glam::Vec3;
 use shapes::offset::{OFFSET_FLOAT_SCALE, OFFSET_INT_SCALE, OFFSET_ORIGIN};
 use spectral::spectrum::{Colour, Spectrum};
 use spectral::uplift::d65_normalised;
@@ -385,7 +385,9 @@ fn run<const N: usize, S: Sampler>(
     let mut light_colour = Gathered::default();
     let mut weight: F = [0.0; LANES];
     let mut origin = V3::default();
-    let mut u2 = [Vec2::ZERO; LANES];
+    // The direction samples, one array per coordinate (interleaved pairs kept the loop
+    // that uses them scalar).
+    let (mut ux, mut uy): (F, F) = ([0.0; LANES], [0.0; LANES]);
     let mut next = 0;
     // Ends lane k's path: its estimate goes to its camera sample, the lane is free.
     let finish = |st: &mut Lanes<N>, block: &mut [CameraSample<N, S>], k: usize| {
@@ -657,42 +659,48 @@ fn run<const N: usize, S: Sampler>(
             if let Some(b) = st.slot[k].filter(|_| live[k]) {
                 let sampler = &mut block[b].sampler;
                 let _ = sampler.next_1d(); // the lobe choice, which a Lambertian BSDF ignores
-                u2[k] = sampler.next_2d();
+                let u = sampler.next_2d();
+                (ux[k], uy[k]) = (u.x, u.y);
             }
         }
+        // The direction and whether the path takes it, then the path's state: two loops,
+        // each of which vectorises (as one, the loop stayed scalar).
         let mut go: M = [false; LANES];
+        let (mut pdf, mut k_beta, mut side): (F, F, F) = ([0.0; LANES], [0.0; LANES], [0.0; LANES]);
+        let mut wi = V3::default();
         for k in 0..LANES {
-            let (ox, oy) = (2.0 * u2[k].x - 1.0, 2.0 * u2[k].y - 1.0);
+            let (ox, oy) = (2.0 * ux[k] - 1.0, 2.0 * uy[k] - 1.0);
             let x_major = ox.abs() > oy.abs();
             let (r, minor) = if x_major { (ox, oy) } else { (oy, ox) };
             let (s, c) = sin_cos_quarter(FRAC_PI_4 * (minor / r));
             let (cos_t, sin_t) = if x_major { (c, s) } else { (s, c) };
-            let centre = ox == 0.0 && oy == 0.0;
+            let centre = (ox == 0.0) & (oy == 0.0);
             let (dx, dy) = if centre { (0.0, 0.0) } else { (r * cos_t, r * sin_t) };
             let z = (1.0 - ((dx * dx) + (dy * dy))).max(0.0).sqrt();
             let z = if wol.z[k] < 0.0 { -z } else { z };
-            let pdf = z.abs().max(0.0) * FRAC_1_PI;
-            let wi = (
-                fs.x[k] * dx + ft.x[k] * dy + nf.x[k] * z,
-                fs.y[k] * dx + ft.y[k] * dy + nf.y[k] * z,
-                fs.z[k] * dx + ft.z[k] * dy + nf.z[k] * z,
-            );
-            let cos_ng = (wi.0 * ng.x[k]) + (wi.1 * ng.y[k]) + (wi.2 * ng.z[k]);
+            pdf[k] = z.abs().max(0.0) * FRAC_1_PI;
+            wi.x[k] = fs.x[k] * dx + ft.x[k] * dy + nf.x[k] * z;
+            wi.y[k] = fs.y[k] * dx + ft.y[k] * dy + nf.y[k] * z;
+            wi.z[k] = fs.z[k] * dx + ft.z[k] * dy + nf.z[k] * z;
+            let cos_ng = dot(&wi, &ng, k);
             let crosses = cos_ng * cos_o[k] <= 0.0;
-            go[k] = live[k] && wol.z[k] != 0.0 && pdf > 0.0 && !black(&fr, k) && !crosses;
-            let k_beta = z.abs() / pdf;
+            go[k] = live[k] & (wol.z[k] != 0.0) & (pdf[k] > 0.0) & !black(&fr, k) & !crosses;
+            k_beta[k] = z.abs() / pdf[k];
+            side[k] = if cos_ng > 0.0 { 1.0 } else { -1.0 };
+        }
+        for k in 0..LANES {
+            let g = go[k];
             for i in 0..N {
-                let b = st.beta[i][k] * (fr[i][k] * k_beta);
-                st.beta[i][k] = if go[k] { b } else { st.beta[i][k] };
+                let b = st.beta[i][k] * (fr[i][k] * k_beta[k]);
+                st.beta[i][k] = if g { b } else { st.beta[i][k] };
             }
-            let s = if cos_ng > 0.0 { 1.0 } else { -1.0 };
+            let s = side[k];
             let o = (
                 offset_coordinate(p.x[k], s * ng.x[k]),
                 offset_coordinate(p.y[k], s * ng.y[k]),
                 offset_coordinate(p.z[k], s * ng.z[k]),
             );
-            let g = go[k];
-            st.prev_pdf[k] = if g { pdf } else { st.prev_pdf[k] };
+            st.prev_pdf[k] = if g { pdf[k] } else { st.prev_pdf[k] };
             st.prev_specular[k] &= !g;
             st.prev_p.x[k] = if g { p.x[k] } else { st.prev_p.x[k] };
             st.prev_p.y[k] = if g { p.y[k] } else { st.prev_p.y[k] };
@@ -700,9 +708,9 @@ fn run<const N: usize, S: Sampler>(
             st.origin.x[k] = if g { o.0 } else { st.origin.x[k] };
             st.origin.y[k] = if g { o.1 } else { st.origin.y[k] };
             st.origin.z[k] = if g { o.2 } else { st.origin.z[k] };
-            st.dir.x[k] = if g { wi.0 } else { st.dir.x[k] };
-            st.dir.y[k] = if g { wi.1 } else { st.dir.y[k] };
-            st.dir.z[k] = if g { wi.2 } else { st.dir.z[k] };
+            st.dir.x[k] = if g { wi.x[k] } else { st.dir.x[k] };
+            st.dir.y[k] = if g { wi.y[k] } else { st.dir.y[k] };
+            st.dir.z[k] = if g { wi.z[k] } else { st.dir.z[k] };
             st.bounce[k] += g as u32;
         }
 
