@@ -926,6 +926,14 @@ mod tests {
         lanes_equal_the_general_loop(&plain, SampledWavelengths::<4>::sample_hero, base);
         plain.normals.clear();
         lanes_equal_the_general_loop(&plain, SampledWavelengths::<4>::sample_hero, base);
+        // A see-through sphere (stochastic transparency): the scene's queries go through
+        // the cut-outs' code, and the sphere is shaded one lane at a time.
+        use crate::texture::{Alpha, AlphaMode, MaterialTextures};
+        let mut cut = room();
+        let alpha = Alpha { mode: AlphaMode::Blend, factor: 0.5, map: None };
+        cut.materials[4] =
+            cut.materials[4].clone().with_textures(MaterialTextures { alpha: Some(alpha), ..Default::default() });
+        lanes_equal_the_general_loop(&cut, SampledWavelengths::<4>::sample_hero, base);
     }
 
     #[test]
