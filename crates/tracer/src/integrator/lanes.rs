@@ -237,6 +237,19 @@ impl V3 {
     }
 }
 
+/// Lane `k` of the vertex values `at` interpolated at barycentrics (u, v): glam's
+/// `(1 − u − v)·a + u·b + v·c`, as `SceneView::surface_at` computes it.
+#[inline(always)]
+fn interpolate(u: f32, v: f32, at: [&V3; 3], k: usize) -> (f32, f32, f32) {
+    let b0 = 1.0 - u - v;
+    let [a, b, c] = at;
+    (
+        b0 * a.x[k] + u * b.x[k] + v * c.x[k],
+        b0 * a.y[k] + u * b.y[k] + v * c.y[k],
+        b0 * a.z[k] + u * b.z[k] + v * c.z[k],
+    )
+}
+
 /// glam's `Vec3::dot`, per lane.
 #[inline(always)]
 fn dot(a: &V3, b: &V3, k: usize) -> f32 {
@@ -472,11 +485,7 @@ fn run<const N: usize, S: Sampler>(
         // The surface at the hits (`SceneView::surface_at`), the emission the paths see
         // with its MIS weight, and the shading frame.
         for k in 0..LANES {
-            let (u, v) = (bu[k], bv[k]);
-            let b0 = 1.0 - u - v;
-            p.x[k] = b0 * v0.x[k] + u * v1.x[k] + v * v2.x[k];
-            p.y[k] = b0 * v0.y[k] + u * v1.y[k] + v * v2.y[k];
-            p.z[k] = b0 * v0.z[k] + u * v1.z[k] + v * v2.z[k];
+            (p.x[k], p.y[k], p.z[k]) = interpolate(bu[k], bv[k], [&v0, &v1, &v2], k);
             let e1 = (v1.x[k] - v0.x[k], v1.y[k] - v0.y[k], v1.z[k] - v0.z[k]);
             let e2 = (v2.x[k] - v0.x[k], v2.y[k] - v0.y[k], v2.z[k] - v0.z[k]);
             let c = (e1.1 * e2.2 - e2.1 * e1.2, e1.2 * e2.0 - e2.2 * e1.0, e1.0 * e2.1 - e2.0 * e1.1);
@@ -492,13 +501,7 @@ fn run<const N: usize, S: Sampler>(
         let mut ns = ng;
         if smooth {
             for k in 0..LANES {
-                let (u, v) = (bu[k], bv[k]);
-                let b0 = 1.0 - u - v;
-                let n = (
-                    b0 * n0.x[k] + u * n1.x[k] + v * n2.x[k],
-                    b0 * n0.y[k] + u * n1.y[k] + v * n2.y[k],
-                    b0 * n0.z[k] + u * n1.z[k] + v * n2.z[k],
-                );
+                let n = interpolate(bu[k], bv[k], [&n0, &n1, &n2], k);
                 let len2 = (n.0 * n.0) + (n.1 * n.1) + (n.2 * n.2);
                 let r = 1.0 / len2.sqrt();
                 let n = (n.0 * r, n.1 * r, n.2 * r);
@@ -563,13 +566,7 @@ fn run<const N: usize, S: Sampler>(
             // `Frame::from_normal_tangent`: the interpolated tangent made orthogonal to the
             // normal (Gram–Schmidt), where it is not (nearly) parallel to it.
             for k in 0..LANES {
-                let (u, v) = (bu[k], bv[k]);
-                let b0 = 1.0 - u - v;
-                let t = (
-                    b0 * t0.x[k] + u * t1.x[k] + v * t2.x[k],
-                    b0 * t0.y[k] + u * t1.y[k] + v * t2.y[k],
-                    b0 * t0.z[k] + u * t1.z[k] + v * t2.z[k],
-                );
+                let t = interpolate(bu[k], bv[k], [&t0, &t1, &t2], k);
                 let n = (nf.x[k], nf.y[k], nf.z[k]);
                 let d = (n.0 * t.0) + (n.1 * t.1) + (n.2 * t.2);
                 let s = (t.0 - n.0 * d, t.1 - n.1 * d, t.2 - n.2 * d);
