@@ -31,6 +31,124 @@ pub trait Sampler: Clone + Send + std::fmt::Debug {
         let u = if wavelength { self.next_1d() } else { 0.0 };
         (u, self.next_2d())
     }
+
+    /// The next 2-D point, or what computing it needs, for the lanes to compute many
+    /// samplers' points at once ([`SobolLanes::values_2d`]): the same point
+    /// [`Sampler::next_2d`] would return, the sampler advanced alike. The default draws
+    /// the point.
+    #[inline]
+    fn lane_draw_2d(&mut self) -> LaneDraw {
+        LaneDraw::Value(self.next_2d())
+    }
+
+    /// As [`Sampler::lane_draw_2d`] for [`Sampler::next_1d`]'s value (a drawn value in
+    /// x, y 0; the values computed by [`SobolLanes::values_1d`]).
+    #[inline]
+    fn lane_draw_1d(&mut self) -> LaneDraw {
+        LaneDraw::Value(Vec2::new(self.next_1d(), 0.0))
+    }
+}
+
+/// One 2-D draw as [`Sampler::lane_draw_2d`] hands it out.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum LaneDraw {
+    /// The point, drawn already.
+    Value(Vec2),
+    /// A scrambled Sobol point still to be computed, with all it depends on.
+    Sobol(SobolLane),
+}
+
+/// What one scrambled Sobol 2-D point depends on, in 32 bits: the sample's bit-reversed
+/// index, its scramble's seeds, and the seeds that scramble the two values. Exact where
+/// the sample indices have at most 32 bits (every render up to 65,536² pixels at one
+/// sample, or 4,096² at 256): the index scramble (`laine_karras_64`) only carries upwards,
+/// so the low 32 bits of its result, the only ones a 32-bit index keeps, depend only on
+/// the low 32 bits of its operands.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct SobolLane {
+    reversed: u32,
+    index_add: u32,
+    index_mul: u32,
+    /// The index's right shift after the reversal; 32 or more: no index bits (index 0).
+    shift: u32,
+    value_seeds: u64,
+}
+
+/// [`SobolLane`]s side by side, one array per field, so that [`SobolLanes::values_2d`]
+/// computes `L` points with vector instructions where its caller is compiled for them
+/// (32-bit multiplies and byte shuffles for the bit reversals; the 64-bit multiplies of
+/// the one-at-a-time draw have no AVX2 instruction).
+#[derive(Clone, Debug)]
+pub struct SobolLanes<const L: usize> {
+    reversed: [u32; L],
+    index_add: [u32; L],
+    index_mul: [u32; L],
+    shift: [u32; L],
+    seed_x: [u32; L],
+    seed_y: [u32; L],
+}
+
+impl<const L: usize> Default for SobolLanes<L> {
+    fn default() -> Self {
+        Self { reversed: [0; L], index_add: [0; L], index_mul: [0; L], shift: [32; L], seed_x: [0; L], seed_y: [0; L] }
+    }
+}
+
+impl<const L: usize> SobolLanes<L> {
+    /// Puts `d` in lane `k`.
+    #[inline(always)]
+    pub fn set(&mut self, k: usize, d: &SobolLane) {
+        self.reversed[k] = d.reversed;
+        self.index_add[k] = d.index_add;
+        self.index_mul[k] = d.index_mul;
+        self.shift[k] = d.shift;
+        self.seed_x[k] = d.value_seeds as u32;
+        self.seed_y[k] = (d.value_seeds >> 32) as u32;
+    }
+
+    /// Every lane's 1-D value, the same bits as [`Sampler::next_1d`]'s (see
+    /// [`SobolLanes::values_2d`]).
+    #[inline(always)]
+    pub fn values_1d(&self, x: &mut [f32; L]) {
+        let mut index = [0u32; L];
+        self.indices_and_x(&mut index, x);
+    }
+
+    /// Every lane's 2-D point, the same bits as [`Sampler::next_2d`]'s (lanes never set
+    /// hold index 0's point of seed 0). Inlined, so that it is compiled for the vector
+    /// instructions of the function that calls it.
+    #[inline(always)]
+    pub fn values_2d(&self, x: &mut [f32; L], y: &mut [f32; L]) {
+        let mut index = [0u32; L];
+        self.indices_and_x(&mut index, x);
+        // The table lookups apart: as gathers they would keep the loops scalar.
+        let mut table = [0u32; L];
+        for k in 0..L {
+            table[k] = sobol_1_reversed(index[k]);
+        }
+        for k in 0..L {
+            y[k] = to_unit(laine_karras(table[k], self.seed_y[k]).reverse_bits());
+        }
+    }
+
+    /// Every lane's scrambled Sobol index and first value.
+    #[inline(always)]
+    fn indices_and_x(&self, index: &mut [u32; L], x: &mut [f32; L]) {
+        let [m0, m1, m2] = LAINE_KARRAS_64_MULS.map(|m| m as u32);
+        for k in 0..L {
+            // `laine_karras_64` on the low 32 bits.
+            let mut v = self.reversed[k];
+            v ^= v.wrapping_mul(m0);
+            v = v.wrapping_add(self.index_add[k]);
+            v = v.wrapping_mul(self.index_mul[k]);
+            v ^= v.wrapping_mul(m1);
+            v ^= v.wrapping_mul(m2);
+            let shift = self.shift[k];
+            let i = v.reverse_bits() >> shift.min(31);
+            index[k] = if shift >= 32 { 0 } else { i };
+            x[k] = to_unit(scrambled_sobol_0(index[k] as u64, self.seed_x[k]));
+        }
+    }
 }
 
 impl Sampler for Pcg32 {
@@ -106,46 +224,102 @@ impl PaddedSobol {
 }
 
 impl SobolDraw for PaddedSobol {
-    /// The shuffled index and two scrambling seeds for the current dimension.
+    /// The index and the two scrambling seeds for the current dimension. The index gets
+    /// a nested (Owen) scramble, as ZSobol's: every bit flipped by a hash of the bits
+    /// above it, so each dimension visits the spp indices in its own order (an aligned
+    /// block of 2ᵏ indices stays one). An xor-and-odd-multiply shuffle (the first version)
+    /// keeps the index's low bit up to a constant, which ties the halves [0, ½) / [½, 1)
+    /// of every dimension together: the error of such a render stopped falling at 256 spp
+    /// (docs/compare.md).
     #[inline]
-    fn draw(&mut self, dims: u32) -> (u64, u64) {
+    fn draw(&mut self, dims: u32) -> SobolParts {
         let h = mix64(self.pixel ^ (self.dimension as u64).wrapping_mul(DIMENSION_MUL));
         self.dimension += dims;
-        // A nested (Owen) scramble of the index, as ZSobol's: every bit flipped by a hash
-        // of the bits above it, so each dimension visits the spp indices in its own order
-        // (an aligned block of 2ᵏ indices stays one). An xor-and-odd-multiply shuffle
-        // (the first version) keeps the index's low bit up to a constant, which ties the
-        // halves [0, ½) / [½, 1) of every dimension together: the error of such a render
-        // stopped falling at 256 spp (docs/compare.md).
-        let index = if self.unused_bits == 64 {
-            0
-        } else {
-            laine_karras_64(self.reversed, h).reverse_bits() >> self.unused_bits
-        };
-        (index, mix64(h))
+        SobolParts { reversed: self.reversed, index_seed: h, value_seeds: mix64(h), unused_bits: self.unused_bits }
     }
 }
 
-/// A scrambled Sobol sampler: per draw, the sample's Sobol index and the seeds that
-/// scramble its values in the current dimension (which the draw advances by `dims`).
+/// One draw of a scrambled Sobol sampler: the sample's bit-reversed index (at the top of
+/// 64 bits before the reversal), the seed of the index's scramble, the seeds that
+/// scramble the values, and the bits of 64 the index leaves unused.
+#[derive(Clone, Copy, Debug)]
+struct SobolParts {
+    reversed: u64,
+    index_seed: u64,
+    value_seeds: u64,
+    unused_bits: u32,
+}
+
+impl SobolParts {
+    /// The scrambled Sobol index of the draw.
+    #[inline]
+    fn index(&self) -> u64 {
+        if self.unused_bits == 64 {
+            0
+        } else {
+            laine_karras_64(self.reversed, self.index_seed).reverse_bits() >> self.unused_bits
+        }
+    }
+
+    /// The 1-D value of the draw.
+    #[inline]
+    fn point_1d(&self) -> f32 {
+        to_unit(scrambled_sobol_0(self.index(), self.value_seeds as u32))
+    }
+
+    /// The draw in 32 bits, where its index has at most 32 bits (see [`SobolLane`]).
+    #[inline]
+    fn lane(&self) -> Option<SobolLane> {
+        (self.unused_bits >= 32).then(|| SobolLane {
+            reversed: self.reversed as u32,
+            index_add: self.index_seed as u32,
+            index_mul: ((self.index_seed >> 32) | 1) as u32,
+            shift: self.unused_bits - 32,
+            value_seeds: self.value_seeds,
+        })
+    }
+
+    /// The 2-D point of the draw.
+    #[inline]
+    fn point_2d(&self) -> Vec2 {
+        let (index, seeds) = (self.index(), self.value_seeds);
+        Vec2::new(
+            to_unit(scrambled_sobol_0(index, seeds as u32)),
+            to_unit(scrambled_sobol_1(index, (seeds >> 32) as u32)),
+        )
+    }
+}
+
+/// A scrambled Sobol sampler: per draw, what the sample's Sobol index and values depend on
+/// in the current dimension (which the draw advances by `dims`).
 trait SobolDraw: Clone + Send + std::fmt::Debug {
-    fn draw(&mut self, dims: u32) -> (u64, u64);
+    fn draw(&mut self, dims: u32) -> SobolParts;
 }
 
 impl<T: SobolDraw> Sampler for T {
     #[inline]
     fn next_1d(&mut self) -> f32 {
-        let (index, hash) = self.draw(1);
-        to_unit(scrambled_sobol_0(index, hash as u32))
+        self.draw(1).point_1d()
     }
 
     #[inline]
     fn next_2d(&mut self) -> Vec2 {
-        let (index, hash) = self.draw(2);
-        Vec2::new(
-            to_unit(scrambled_sobol_0(index, hash as u32)),
-            to_unit(scrambled_sobol_1(index, (hash >> 32) as u32)),
-        )
+        self.draw(2).point_2d()
+    }
+
+    /// The parts of the draw where the index has at most 32 bits (see [`SobolLane`]), else
+    /// the point.
+    #[inline]
+    fn lane_draw_2d(&mut self) -> LaneDraw {
+        let d = self.draw(2);
+        d.lane().map_or_else(|| LaneDraw::Value(d.point_2d()), LaneDraw::Sobol)
+    }
+
+    /// As [`Sampler::lane_draw_2d`].
+    #[inline]
+    fn lane_draw_1d(&mut self) -> LaneDraw {
+        let d = self.draw(1);
+        d.lane().map_or_else(|| LaneDraw::Value(Vec2::new(d.point_1d(), 0.0)), LaneDraw::Sobol)
     }
 
     /// The jitter first: the first dimension pair is the best stratified.
@@ -248,15 +422,10 @@ impl SobolDraw for ZSobol<'_> {
     /// stratification needs, in O(1) instead of a hash per digit, which cost a third of
     /// the render time.)
     #[inline]
-    fn draw(&mut self, dims: u32) -> (u64, u64) {
-        let (index_seed, value_seed) = self.layout.seeds(self.dimension);
+    fn draw(&mut self, dims: u32) -> SobolParts {
+        let (index_seed, value_seeds) = self.layout.seeds(self.dimension);
         self.dimension += dims;
-        let index = if self.layout.unused_bits == 64 {
-            0
-        } else {
-            laine_karras_64(self.reversed, index_seed).reverse_bits() >> self.layout.unused_bits
-        };
-        (index, value_seed)
+        SobolParts { reversed: self.reversed, index_seed, value_seeds, unused_bits: self.layout.unused_bits }
     }
 }
 
@@ -274,7 +443,7 @@ fn laine_karras_64(mut v: u64, seed: u64) -> u64 {
     v
 }
 /// A 32-bit fixed-point fraction as an f32 in [0, 1) (24 bits, never 1).
-#[inline]
+#[inline(always)]
 fn to_unit(v: u32) -> f32 {
     (v >> 8) as f32 * (1.0 / 16_777_216.0)
 }
@@ -351,7 +520,7 @@ fn owen_scramble(v: u32, seed: u32) -> u32 {
 
 /// The Laine–Karras hash on bit-reversed values: each bit is flipped by a hash of the
 /// bits below it (multiplications by even constants only carry upwards).
-#[inline]
+#[inline(always)]
 fn laine_karras(mut v: u32, seed: u32) -> u32 {
     let [m0, m1, m2] = LAINE_KARRAS_MULS;
     v ^= v.wrapping_mul(m0);
@@ -364,7 +533,7 @@ fn laine_karras(mut v: u32, seed: u32) -> u32 {
 
 /// `owen_scramble(sobol_0(index), seed)` in one reversal: van der Corput's reversal and
 /// the scramble's first one cancel.
-#[inline]
+#[inline(always)]
 fn scrambled_sobol_0(index: u64, seed: u32) -> u32 {
     laine_karras(index as u32, seed).reverse_bits()
 }
@@ -372,13 +541,17 @@ fn scrambled_sobol_0(index: u64, seed: u32) -> u32 {
 /// `owen_scramble(sobol_1(index), seed)` in one reversal, from the bit-reversed tables.
 #[inline]
 fn scrambled_sobol_1(index: u64, seed: u32) -> u32 {
-    let i = index as u32;
+    laine_karras(sobol_1_reversed(index as u32), seed).reverse_bits()
+}
+
+/// `sobol_1(i)` bit-reversed, from [`SOBOL_1_REVERSED`].
+#[inline(always)]
+fn sobol_1_reversed(i: u32) -> u32 {
     let t = &SOBOL_1_REVERSED;
-    let v = t[0][(i & 0xff) as usize]
+    t[0][(i & 0xff) as usize]
         ^ t[1][((i >> 8) & 0xff) as usize]
         ^ t[2][((i >> 16) & 0xff) as usize]
-        ^ t[3][(i >> 24) as usize];
-    laine_karras(v, seed).reverse_bits()
+        ^ t[3][(i >> 24) as usize]
 }
 
 /// The Morton (Z-order) code of (x, y): their bits interleaved, x in the even bits.

@@ -37,11 +37,11 @@ use super::{
 use crate::geometry::{HitSurface, SceneHit};
 use crate::lights::LightSource;
 use crate::material::{ModelParams, Surface};
-use crate::sampler::Sampler;
+use crate::sampler::{LaneDraw, Sampler, SobolLanes};
 use crate::shading::MIN_SHADING_COSINE;
 use brdf::sampling::sin_cos_quarter;
 use bvh::{Accelerator, Ray};
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 use shapes::offset::{OFFSET_FLOAT_SCALE, OFFSET_INT_SCALE, OFFSET_ORIGIN};
 use spectral::spectrum::{Colour, Spectrum};
 use spectral::uplift::d65_normalised;
@@ -401,6 +401,10 @@ fn run<const N: usize, S: Sampler>(
     // The direction samples, one array per coordinate (interleaved pairs kept the loop
     // that uses them scalar).
     let (mut ux, mut uy): (F, F) = ([0.0; LANES], [0.0; LANES]);
+    // The Sobol draws' parts, computed across the lanes, and which lanes' points their
+    // sampler drew itself.
+    let mut sobol = SobolLanes::<LANES>::default();
+    let mut drawn: M = [false; LANES];
     let mut next = 0;
     // Ends lane k's path: its estimate goes to its camera sample, the lane is free.
     let finish = |st: &mut Lanes<N>, block: &mut [CameraSample<N, S>], k: usize| {
@@ -594,11 +598,13 @@ fn run<const N: usize, S: Sampler>(
 
         // Next-event estimation: the light samples (one query each into the lights'
         // distribution), then their geometry, MIS weight and BSDF across the lanes.
+        draw(2, &st, &live, block, &mut sobol, &mut drawn, &mut ux, &mut uy);
         let mut lemissive: M = [false; LANES];
         for k in 0..LANES {
-            let Some(b) = st.slot[k].filter(|_| live[k]) else { continue };
-            let u = block[b].sampler.next_2d();
-            let Some(s) = lights.sample(scene, u) else { continue };
+            if !live[k] {
+                continue;
+            }
+            let Some(s) = lights.sample(scene, Vec2::new(ux[k], uy[k])) else { continue };
             let LightSource::Primitive(t) = s.source else { continue };
             lp.set(k, s.point);
             ln.set(k, s.normal);
@@ -654,12 +660,10 @@ fn run<const N: usize, S: Sampler>(
         // The next direction: cosine-weighted on ω_o's side (`Lambert::sample`).
         for k in 0..LANES {
             if let Some(b) = st.slot[k].filter(|_| live[k]) {
-                let sampler = &mut block[b].sampler;
-                let _ = sampler.next_1d(); // the lobe choice, which a Lambertian BSDF ignores
-                let u = sampler.next_2d();
-                (ux[k], uy[k]) = (u.x, u.y);
+                let _ = block[b].sampler.next_1d(); // the lobe choice, which a Lambertian BSDF ignores
             }
         }
+        draw(2, &st, &live, block, &mut sobol, &mut drawn, &mut ux, &mut uy);
         // The direction and whether the path takes it, then the path's state: two loops,
         // each of which vectorises (as one, the loop stayed scalar).
         let mut go: M = [false; LANES];
@@ -711,15 +715,22 @@ fn run<const N: usize, S: Sampler>(
             st.bounce[k] += g as u32;
         }
 
-        // Russian roulette (`survives_roulette`).
+        // Russian roulette (`survives_roulette`): the sample values first.
+        let mut roulette: M = [false; LANES];
+        for k in 0..LANES {
+            roulette[k] = live[k] && go[k] && st.bounce[k] >= settings.rr_depth;
+        }
+        draw(1, &st, &roulette, block, &mut sobol, &mut drawn, &mut ux, &mut uy);
         for k in 0..LANES {
             if live[k] && !go[k] {
                 finish(&mut st, block, k);
                 continue;
             }
-            let Some(b) = st.slot[k].filter(|_| live[k]) else { continue };
-            if st.bounce[k] >= settings.rr_depth {
-                let u = block[b].sampler.next_1d();
+            if !live[k] {
+                continue;
+            }
+            if roulette[k] {
+                let u = ux[k];
                 let max = (0..N).map(|i| st.beta[i][k]).fold(f32::NEG_INFINITY, f32::max);
                 let q = (1.0 - max * st.eta_scale[k]).max(RR_MIN_TERMINATION);
                 if u < q {
@@ -733,6 +744,52 @@ fn run<const N: usize, S: Sampler>(
             if black(&st.beta, k) {
                 finish(&mut st, block, k);
             }
+        }
+    }
+}
+
+/// The next sample value (`dims` 1, in `ux`) or 2-D point (`dims` 2, in `ux`, `uy`) of
+/// each lane where `which` is set: drawn from its sample's sampler in the order the general loop
+/// draws it, the scrambled Sobol points computed across the lanes
+/// ([`SobolLanes::values_2d`]) from the parts the samplers hand out.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn draw<const N: usize, S: Sampler>(
+    dims: u32,
+    st: &Lanes<N>,
+    which: &M,
+    block: &mut [CameraSample<N, S>],
+    sobol: &mut SobolLanes<LANES>,
+    drawn: &mut M,
+    ux: &mut F,
+    uy: &mut F,
+) {
+    let mut any_sobol = false;
+    for k in 0..LANES {
+        let Some(b) = st.slot[k].filter(|_| which[k]) else { continue };
+        let sampler = &mut block[b].sampler;
+        match if dims == 1 { sampler.lane_draw_1d() } else { sampler.lane_draw_2d() } {
+            LaneDraw::Value(u) => {
+                drawn[k] = true;
+                (ux[k], uy[k]) = (u.x, u.y);
+            }
+            LaneDraw::Sobol(d) => {
+                drawn[k] = false;
+                any_sobol = true;
+                sobol.set(k, &d);
+            }
+        }
+    }
+    if any_sobol {
+        let (mut x, mut y): (F, F) = ([0.0; LANES], [0.0; LANES]);
+        if dims == 1 {
+            sobol.values_1d(&mut x);
+        } else {
+            sobol.values_2d(&mut x, &mut y);
+        }
+        for k in 0..LANES {
+            ux[k] = if drawn[k] { ux[k] } else { x[k] };
+            uy[k] = if drawn[k] { uy[k] } else { y[k] };
         }
     }
 }
@@ -848,11 +905,15 @@ mod tests {
         scene
     }
 
-    /// Camera samples of a pinhole at (0, 1, 3) over the room, each with its own stream.
-    fn block<const N: usize>(wl: impl Fn(f32) -> SampledWavelengths<N>) -> Vec<CameraSample<N, Pcg32>> {
+    /// Camera samples of a pinhole at (0, 1, 3) over the room, each with its own stream
+    /// (`sampler(i)` for sample i).
+    fn block<const N: usize, S: Sampler>(
+        wl: impl Fn(f32) -> SampledWavelengths<N>,
+        sampler: &impl Fn(u32) -> S,
+    ) -> Vec<CameraSample<N, S>> {
         (0..600)
             .map(|i| {
-                let mut sampler = Pcg32::for_sample(7, i, 0);
+                let mut sampler = sampler(i);
                 let (u_wl, jitter) = sampler.camera(true);
                 let target = Vec3::new(2.4 * jitter.x - 1.2, 2.2 * jitter.y - 0.1, 0.0);
                 let origin = Vec3::new(0.0, 1.0, 3.0);
@@ -869,29 +930,39 @@ mod tests {
         wl: impl Fn(f32) -> SampledWavelengths<N>,
         settings: PathSettings,
     ) {
+        lanes_equal_the_general_loop_with(scene, wl, settings, &|i| Pcg32::for_sample(7, i, 0));
+    }
+
+    /// As `lanes_equal_the_general_loop`, every sample drawing from `sampler(i)`.
+    fn lanes_equal_the_general_loop_with<const N: usize, S: Sampler>(
+        scene: &Scene,
+        wl: impl Fn(f32) -> SampledWavelengths<N>,
+        settings: PathSettings,
+        sampler: &impl Fn(u32) -> S,
+    ) {
         let geometry = Geometry::build(scene, &SceneOptions::default()).unwrap();
         let lights = Lights::new(scene);
         let view = SceneView::new(scene, &geometry, &lights);
         let lanes = view.lane_scene(&settings).expect("a scene for the lanes");
-        let mut general = block(&wl);
+        let mut general = block(&wl, sampler);
         let mut rays = PathCounters::default();
         for s in &mut general {
             s.radiance = super::super::path_radiance(&view, s.ray, &mut s.wl, &settings, &mut s.sampler, &mut rays);
         }
         assert!(general.iter().filter(|s| !s.radiance.is_black()).count() > 300, "the room is lit");
-        let (mut b, mut c) = (block(&wl), PathCounters::default());
+        let (mut b, mut c) = (block(&wl, sampler), PathCounters::default());
         run(lanes, &view, &settings, &mut b, &mut c);
         let mut variants = vec![("baseline", b, c)];
         #[cfg(target_arch = "x86_64")]
         if std::arch::is_x86_feature_detected!("avx2") {
-            let (mut b, mut c) = (block(&wl), PathCounters::default());
+            let (mut b, mut c) = (block(&wl, sampler), PathCounters::default());
             // SAFETY: the features were just detected.
             unsafe { radiance_block_avx2(lanes, &view, &settings, &mut b, &mut c) };
             variants.push(("avx2", b, c));
         }
         #[cfg(target_arch = "x86_64")]
         if has_avx512() {
-            let (mut b, mut c) = (block(&wl), PathCounters::default());
+            let (mut b, mut c) = (block(&wl, sampler), PathCounters::default());
             // SAFETY: the features were just detected.
             unsafe { radiance_block_avx512(lanes, &view, &settings, &mut b, &mut c) };
             variants.push(("avx512", b, c));
@@ -936,6 +1007,26 @@ mod tests {
         cut.materials[4] =
             cut.materials[4].clone().with_textures(MaterialTextures { alpha: Some(alpha), ..Default::default() });
         lanes_equal_the_general_loop(&cut, SampledWavelengths::<4>::sample_hero, base);
+    }
+
+    /// The Sobol samplers' points are computed across the lanes (`SobolLanes`), from
+    /// draws that interleave 1-D values and 2-D points: the same bits as one at a time.
+    #[test]
+    fn lanes_draw_the_sobol_samplers_values_bit_for_bit() {
+        use crate::sampler::{PaddedSobol, ZSobolLayout};
+        let base = PathSettings { rr_depth: 2, ..Default::default() };
+        let scene = room();
+        let hero = SampledWavelengths::<4>::sample_hero;
+        // 32×32 pixels at 16 spp (14 index bits), and 65,536² at 2 spp (33 bits: the
+        // samplers hand out drawn points, the 32-bit form not being exact).
+        for (size, spp) in [(32, 16), (65_536, 2)] {
+            let layout = ZSobolLayout::new(size, size, spp, 5);
+            let zsobol = |i: u32| layout.sampler(i % 32, (i / 32) % 32, (i / 1024) % spp);
+            lanes_equal_the_general_loop_with(&scene, hero, base, &zsobol);
+        }
+        let padded = |i: u32| PaddedSobol::new(i % 32, i / 32, i % 4, 4, 9);
+        lanes_equal_the_general_loop_with(&scene, hero, base, &padded);
+        lanes_equal_the_general_loop_with(&scene, |_| SampledWavelengths::<3>::rgb(), base, &padded);
     }
 
     #[test]

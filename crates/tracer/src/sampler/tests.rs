@@ -188,3 +188,66 @@ fn a_one_pixel_one_sample_zsobol_render_draws_index_zero() {
     let mut padded = PaddedSobol::new(0, 0, 0, 1, 3);
     assert!((0.0..1.0).contains(&padded.next_1d()));
 }
+
+/// Draws the next value (`two`: point) of each of `a` one at a time and of `b` (the same
+/// samplers) through `lane_draw_*` and `SobolLanes`, and checks the bits agree; returns
+/// how many lanes the 32-bit form computed.
+fn lane_round<S: Sampler>(a: &mut [S], b: &mut [S], two: bool) -> usize {
+    const L: usize = 16;
+    let mut lanes = SobolLanes::<L>::default();
+    let mut drawn = [None; L];
+    let mut want = [Vec2::ZERO; L];
+    for k in 0..L {
+        want[k] = if two { a[k].next_2d() } else { Vec2::new(a[k].next_1d(), 0.0) };
+        match if two { b[k].lane_draw_2d() } else { b[k].lane_draw_1d() } {
+            LaneDraw::Value(v) => drawn[k] = Some(v),
+            LaneDraw::Sobol(d) => lanes.set(k, &d),
+        }
+    }
+    let (mut x, mut y) = ([0.0; L], [0.0; L]);
+    if two {
+        lanes.values_2d(&mut x, &mut y);
+    } else {
+        lanes.values_1d(&mut x);
+    }
+    for k in 0..L {
+        let got = drawn[k].unwrap_or(Vec2::new(x[k], if two { y[k] } else { 0.0 }));
+        assert_eq!(got.to_array().map(f32::to_bits), want[k].to_array().map(f32::to_bits), "lane {k}, 2-D {two}");
+    }
+    drawn.iter().filter(|d| d.is_none()).count()
+}
+
+/// The lanes' Sobol draws (`lane_draw_1d`/`_2d`, then `SobolLanes::values_*`, 32-bit
+/// arithmetic that vectorises) give the bits of the one-at-a-time draws wherever the
+/// sample index has at most 32 bits — none (1×1 at 1 spp), few, exactly 32 — and hand
+/// out the drawn point where it has more.
+#[test]
+fn lane_draws_give_the_one_at_a_time_values() {
+    // (image side, spp, index bits)
+    for (side, spp, bits) in [(1, 1, 0), (32, 16, 14), (256, 64, 22), (4096, 256, 32), (65_536, 2, 33)] {
+        let layout = ZSobolLayout::new(side, side, spp, 11);
+        let make = |k: u32| layout.sampler((k * 7919) % side, (k * 104_729) % side, (k * 13) % spp);
+        let mut a: Vec<_> = (0..16).map(make).collect();
+        let mut b: Vec<_> = (0..16).map(make).collect();
+        // The lanes at different dimensions, as paths at different depths are.
+        for k in 0..16 {
+            for _ in 0..k % 5 {
+                a[k].next_1d();
+                b[k].next_1d();
+            }
+        }
+        let mut computed = 0;
+        // Past the precomputed dimensions' seeds too.
+        for round in 0..PRECOMPUTED_DIMENSIONS / 2 + 20 {
+            computed += lane_round(&mut a, &mut b, round % 3 != 0);
+        }
+        assert_eq!(computed > 0, bits <= 32, "{side}² at {spp} spp");
+    }
+    for spp in [1, 4, 1 << 20] {
+        let make = |k: u32| PaddedSobol::new(k, 3 * k, k % spp, spp, 5);
+        let mut a: Vec<_> = (0..16).map(make).collect();
+        let mut b: Vec<_> = (0..16).map(make).collect();
+        let computed: usize = (0..40).map(|round| lane_round(&mut a, &mut b, round % 2 == 0)).sum();
+        assert_eq!(computed, 40 * 16, "padded Sobol at {spp} spp");
+    }
+}
