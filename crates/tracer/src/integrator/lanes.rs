@@ -404,7 +404,7 @@ fn run<const N: usize, S: Sampler>(
     // The Sobol draws' parts, computed across the lanes, and which lanes' points their
     // sampler drew itself.
     let mut sobol = SobolLanes::<LANES>::default();
-    let mut drawn: M = [false; LANES];
+    let mut drawn = Vec::with_capacity(LANES);
     let mut next = 0;
     // Ends lane k's path: its estimate goes to its camera sample, the lane is free.
     let finish = |st: &mut Lanes<N>, block: &mut [CameraSample<N, S>], k: usize| {
@@ -749,9 +749,10 @@ fn run<const N: usize, S: Sampler>(
 }
 
 /// The next sample value (`dims` 1, in `ux`) or 2-D point (`dims` 2, in `ux`, `uy`) of
-/// each lane where `which` is set: drawn from its sample's sampler in the order the general loop
-/// draws it, the scrambled Sobol points computed across the lanes
-/// ([`SobolLanes::values_2d`]) from the parts the samplers hand out.
+/// each lane where `which` is set (the other lanes get values never used): drawn from its
+/// sample's sampler in the order the general loop draws it, the scrambled Sobol points
+/// computed across the lanes ([`SobolLanes::values_2d`]) from the parts the samplers hand
+/// out, the points a sampler drew itself (`drawn`, lane and point) put in after.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
 fn draw<const N: usize, S: Sampler>(
@@ -760,37 +761,28 @@ fn draw<const N: usize, S: Sampler>(
     which: &M,
     block: &mut [CameraSample<N, S>],
     sobol: &mut SobolLanes<LANES>,
-    drawn: &mut M,
+    drawn: &mut Vec<(usize, Vec2)>,
     ux: &mut F,
     uy: &mut F,
 ) {
-    let mut any_sobol = false;
+    drawn.clear();
     for k in 0..LANES {
         let Some(b) = st.slot[k].filter(|_| which[k]) else { continue };
         let sampler = &mut block[b].sampler;
         match if dims == 1 { sampler.lane_draw_1d() } else { sampler.lane_draw_2d() } {
-            LaneDraw::Value(u) => {
-                drawn[k] = true;
-                (ux[k], uy[k]) = (u.x, u.y);
-            }
-            LaneDraw::Sobol(d) => {
-                drawn[k] = false;
-                any_sobol = true;
-                sobol.set(k, &d);
-            }
+            LaneDraw::Value(u) => drawn.push((k, u)),
+            LaneDraw::Sobol(d) => sobol.set(k, &d),
         }
     }
-    if any_sobol {
-        let (mut x, mut y): (F, F) = ([0.0; LANES], [0.0; LANES]);
+    if drawn.len() < LANES {
         if dims == 1 {
-            sobol.values_1d(&mut x);
+            sobol.values_1d(ux);
         } else {
-            sobol.values_2d(&mut x, &mut y);
+            sobol.values_2d(ux, uy);
         }
-        for k in 0..LANES {
-            ux[k] = if drawn[k] { ux[k] } else { x[k] };
-            uy[k] = if drawn[k] { uy[k] } else { y[k] };
-        }
+    }
+    for &(k, u) in drawn.iter() {
+        (ux[k], uy[k]) = (u.x, u.y);
     }
 }
 
