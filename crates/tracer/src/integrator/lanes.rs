@@ -2,8 +2,9 @@
 //! structure-of-arrays form, so that everything between the ray queries on diffuse
 //! surfaces — surface data and shading normals, emission and its MIS weight, the shading
 //! frame, the light sample's geometry, the Lambertian sample, the spectra at the paths'
-//! wavelengths, Russian roulette — runs as vector instructions across the paths (AVX-512
-//! or AVX2 where the machine has it, chosen at run time), while the rays go through the
+//! wavelengths, Russian roulette, the Sobol samplers' values — runs as vector
+//! instructions across the paths (AVX-512 or AVX2 where the machine has it, chosen at run
+//! time), while the rays go through the
 //! same BVH queries one at a time. A path at any other surface (glass, a mirror, a
 //! textured or rough material) is shaded there by the general loop's own code
 //! ([`path_vertex`]), one lane at a time, and goes on in its lane. A path that ends hands
@@ -401,10 +402,7 @@ fn run<const N: usize, S: Sampler>(
     // The direction samples, one array per coordinate (interleaved pairs kept the loop
     // that uses them scalar).
     let (mut ux, mut uy): (F, F) = ([0.0; LANES], [0.0; LANES]);
-    // The Sobol draws' parts, computed across the lanes, and which lanes' points their
-    // sampler drew itself.
-    let mut sobol = SobolLanes::<LANES>::default();
-    let mut drawn = Vec::with_capacity(LANES);
+    let mut draws = Draws::new();
     let mut next = 0;
     // Ends lane k's path: its estimate goes to its camera sample, the lane is free.
     let finish = |st: &mut Lanes<N>, block: &mut [CameraSample<N, S>], k: usize| {
@@ -598,7 +596,7 @@ fn run<const N: usize, S: Sampler>(
 
         // Next-event estimation: the light samples (one query each into the lights'
         // distribution), then their geometry, MIS weight and BSDF across the lanes.
-        draw(2, &st, &live, block, &mut sobol, &mut drawn, &mut ux, &mut uy);
+        draws.draw(2, &st, &live, block, &mut ux, &mut uy);
         let mut lemissive: M = [false; LANES];
         for k in 0..LANES {
             if !live[k] {
@@ -663,7 +661,7 @@ fn run<const N: usize, S: Sampler>(
                 let _ = block[b].sampler.next_1d(); // the lobe choice, which a Lambertian BSDF ignores
             }
         }
-        draw(2, &st, &live, block, &mut sobol, &mut drawn, &mut ux, &mut uy);
+        draws.draw(2, &st, &live, block, &mut ux, &mut uy);
         // The direction and whether the path takes it, then the path's state: two loops,
         // each of which vectorises (as one, the loop stayed scalar).
         let mut go: M = [false; LANES];
@@ -720,7 +718,7 @@ fn run<const N: usize, S: Sampler>(
         for k in 0..LANES {
             roulette[k] = live[k] && go[k] && st.bounce[k] >= settings.rr_depth;
         }
-        draw(1, &st, &roulette, block, &mut sobol, &mut drawn, &mut ux, &mut uy);
+        draws.draw(1, &st, &roulette, block, &mut ux, &mut uy);
         for k in 0..LANES {
             if live[k] && !go[k] {
                 finish(&mut st, block, k);
@@ -748,41 +746,57 @@ fn run<const N: usize, S: Sampler>(
     }
 }
 
-/// The next sample value (`dims` 1, in `ux`) or 2-D point (`dims` 2, in `ux`, `uy`) of
-/// each lane where `which` is set (the other lanes get values never used): drawn from its
-/// sample's sampler in the order the general loop draws it, the scrambled Sobol points
-/// computed across the lanes ([`SobolLanes::values_2d`]) from the parts the samplers hand
-/// out, the points a sampler drew itself (`drawn`, lane and point) put in after.
-#[allow(clippy::too_many_arguments)]
-#[inline(always)]
-fn draw<const N: usize, S: Sampler>(
-    dims: u32,
-    st: &Lanes<N>,
-    which: &M,
-    block: &mut [CameraSample<N, S>],
-    sobol: &mut SobolLanes<LANES>,
-    drawn: &mut Vec<(usize, Vec2)>,
-    ux: &mut F,
-    uy: &mut F,
-) {
-    drawn.clear();
-    for k in 0..LANES {
-        let Some(b) = st.slot[k].filter(|_| which[k]) else { continue };
-        let sampler = &mut block[b].sampler;
-        match if dims == 1 { sampler.lane_draw_1d() } else { sampler.lane_draw_2d() } {
-            LaneDraw::Value(u) => drawn.push((k, u)),
-            LaneDraw::Sobol(d) => sobol.set(k, &d),
-        }
+/// The lanes' sample draws: the Sobol draws' parts, computed across the lanes, and the
+/// points samplers drew themselves (lane, point), kept from turn to turn.
+struct Draws {
+    sobol: SobolLanes<LANES>,
+    drawn: Vec<(usize, Vec2)>,
+}
+
+impl Draws {
+    fn new() -> Self {
+        Self { sobol: SobolLanes::default(), drawn: Vec::with_capacity(LANES) }
     }
-    if drawn.len() < LANES {
-        if dims == 1 {
-            sobol.values_1d(ux);
-        } else {
-            sobol.values_2d(ux, uy);
+
+    /// The next sample value (`dims` 1, in `ux`) or 2-D point (`dims` 2, in `ux`, `uy`)
+    /// of each lane where `which` is set (the other lanes get values never used): drawn
+    /// from its sample's sampler in the order the general loop draws it, the scrambled
+    /// Sobol points computed across the lanes ([`SobolLanes::values_2d`]) from the parts
+    /// the samplers hand out, the points a sampler drew itself put in after.
+    #[inline(always)]
+    fn draw<const N: usize, S: Sampler>(
+        &mut self,
+        dims: u32,
+        st: &Lanes<N>,
+        which: &M,
+        block: &mut [CameraSample<N, S>],
+        ux: &mut F,
+        uy: &mut F,
+    ) {
+        self.drawn.clear();
+        let mut any_sobol = false;
+        for k in 0..LANES {
+            let Some(b) = st.slot[k].filter(|_| which[k]) else { continue };
+            let sampler = &mut block[b].sampler;
+            match if dims == 1 { sampler.lane_draw_1d() } else { sampler.lane_draw_2d() } {
+                LaneDraw::Value(u) => self.drawn.push((k, u)),
+                LaneDraw::Sobol(d) => {
+                    self.sobol.set(k, &d);
+                    any_sobol = true;
+                }
+            }
         }
-    }
-    for &(k, u) in drawn.iter() {
-        (ux[k], uy[k]) = (u.x, u.y);
+        // (Independent samplers hand out points only: nothing to compute.)
+        if any_sobol {
+            if dims == 1 {
+                self.sobol.values_1d(ux);
+            } else {
+                self.sobol.values_2d(ux, uy);
+            }
+        }
+        for &(k, u) in &self.drawn {
+            (ux[k], uy[k]) = (u.x, u.y);
+        }
     }
 }
 
