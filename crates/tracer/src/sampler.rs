@@ -127,7 +127,7 @@ impl<const L: usize> SobolLanes<L> {
             table[k] = sobol_1_reversed(index[k]);
         }
         for k in 0..L {
-            y[k] = to_unit(laine_karras(table[k], self.seed_y[k]).reverse_bits());
+            y[k] = to_unit(owen_scramble_reversed(table[k], self.seed_y[k]));
         }
     }
 
@@ -515,7 +515,7 @@ const fn sobol_1_tables(reversed: bool) -> [[u32; 256]; 4] {
 #[inline]
 #[cfg(test)]
 fn owen_scramble(v: u32, seed: u32) -> u32 {
-    laine_karras(v.reverse_bits(), seed).reverse_bits()
+    owen_scramble_reversed(v.reverse_bits(), seed)
 }
 
 /// The Laine–Karras hash on bit-reversed values: each bit is flipped by a hash of the
@@ -531,17 +531,24 @@ fn laine_karras(mut v: u32, seed: u32) -> u32 {
     v
 }
 
+/// `owen_scramble(v, seed)` of the value whose bits `reversed` holds in reverse order:
+/// the scramble's first reversal saved.
+#[inline(always)]
+fn owen_scramble_reversed(reversed: u32, seed: u32) -> u32 {
+    laine_karras(reversed, seed).reverse_bits()
+}
+
 /// `owen_scramble(sobol_0(index), seed)` in one reversal: van der Corput's reversal and
 /// the scramble's first one cancel.
 #[inline(always)]
 fn scrambled_sobol_0(index: u64, seed: u32) -> u32 {
-    laine_karras(index as u32, seed).reverse_bits()
+    owen_scramble_reversed(index as u32, seed)
 }
 
 /// `owen_scramble(sobol_1(index), seed)` in one reversal, from the bit-reversed tables.
 #[inline]
 fn scrambled_sobol_1(index: u64, seed: u32) -> u32 {
-    laine_karras(sobol_1_reversed(index as u32), seed).reverse_bits()
+    owen_scramble_reversed(sobol_1_reversed(index as u32), seed)
 }
 
 /// `sobol_1(i)` bit-reversed, from [`SOBOL_1_REVERSED`].
