@@ -82,7 +82,8 @@ impl TriangleTest {
 /// the ray direction onto +z (Woop et al. 2013, §3, steps 1–2).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct WatertightRay {
-    pub(crate) origin: Vec3,
+    /// The origin's coordinates on the new x, y and z axes (`origin[k[i]]`).
+    pub(crate) origin: [f32; 3],
     /// Permutation: the new x, y and z axes (z is the direction's largest component).
     pub(crate) k: [usize; 3],
     /// Shear constants (S_x, S_y, S_z).
@@ -92,25 +93,29 @@ pub struct WatertightRay {
 
 impl WatertightRay {
     /// Precomputes the permutation and shear for `ray`.
+    ///
+    /// Written without indexing the direction by a computed axis: the indexed form went
+    /// through the stack (a store, then loads whose addresses waited on the axis choice),
+    /// and this runs once per ray, which on small scenes is a fair part of a ray's cost.
     #[inline]
     pub fn new(ray: &Ray) -> Self {
-        let d = ray.dir.to_array();
-        let a = ray.dir.abs();
-        let kz = if a.x >= a.y && a.x >= a.z {
-            0
+        let d = ray.dir;
+        let a = d.abs();
+        // The dominant axis z' and the two that follow it cyclically (x' = z' + 1,
+        // y' = z' + 2, mod 3), with the direction's components and the origin's.
+        let o = ray.origin;
+        let ((kx, ky, kz), (dx, dy, dz), (ox, oy, oz)) = if a.x >= a.y && a.x >= a.z {
+            ((1, 2, 0), (d.y, d.z, d.x), (o.y, o.z, o.x))
         } else if a.y >= a.z {
-            1
+            ((2, 0, 1), (d.z, d.x, d.y), (o.z, o.x, o.y))
         } else {
-            2
+            ((0, 1, 2), (d.x, d.y, d.z), (o.x, o.y, o.z))
         };
-        let mut kx = (kz + 1) % 3;
-        let mut ky = (kx + 1) % 3;
         // Swapping x and y keeps the winding when the ray points along −z.
-        if d[kz] < 0.0 {
-            std::mem::swap(&mut kx, &mut ky);
-        }
-        let shear = [d[kx] / d[kz], d[ky] / d[kz], 1.0 / d[kz]];
-        Self { origin: ray.origin, k: [kx, ky, kz], shear, t_min: ray.t_min }
+        let ((kx, ky), (dx, dy), (ox, oy)) =
+            if dz < 0.0 { ((ky, kx), (dy, dx), (oy, ox)) } else { ((kx, ky), (dx, dy), (ox, oy)) };
+        let shear = [dx / dz, dy / dz, 1.0 / dz];
+        Self { origin: [ox, oy, oz], k: [kx, ky, kz], shear, t_min: ray.t_min }
     }
 }
 
@@ -124,9 +129,11 @@ impl WatertightRay {
 pub fn intersect_triangle_watertight(v: &[Vec3; 3], ray: &WatertightRay, t_max: f32) -> Option<(f32, f32, f32)> {
     let [kx, ky, kz] = ray.k;
     let [sx, sy, sz] = ray.shear;
+    let [ox, oy, oz] = ray.origin;
     let rel = |p: Vec3| {
-        let p = (p - ray.origin).to_array();
-        (p[kx] - sx * p[kz], p[ky] - sy * p[kz], sz * p[kz])
+        let p = p.to_array();
+        let (px, py, pz) = (p[kx] - ox, p[ky] - oy, p[kz] - oz);
+        (px - sx * pz, py - sy * pz, sz * pz)
     };
     let (ax, ay, az) = rel(v[0]);
     let (bx, by, bz) = rel(v[1]);

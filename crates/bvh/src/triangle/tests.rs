@@ -86,3 +86,42 @@ fn watertight_never_leaks_through_a_shared_edge() {
     // Not asserted: whether Möller–Trumbore leaks here depends on rounding.
     println!("Möller–Trumbore leaks through the diagonal: {leaks_mt} of 2010 rays");
 }
+
+/// The per-ray set-up against the paper's form (Woop et al. 2013, Fig. 1: k_z the index
+/// of the largest |d| component, ties to the lower axis; k_x, k_y the next two cyclically,
+/// swapped for a negative d[k_z]), on directions along every axis, both signs, and on ties
+/// between two and three components: the same permutation, shear and permuted origin.
+#[test]
+fn watertight_ray_set_up_follows_the_paper() {
+    let origin = Vec3::new(1.5, -2.25, 3.125);
+    let mut dirs = Vec::new();
+    for a in [-2.0f32, -1.0, -0.5, 0.0, 0.5, 1.0, 2.0] {
+        for b in [-2.0f32, -1.0, 0.0, 1.0, 2.0] {
+            for c in [-2.0f32, -1.0, 0.0, 1.0, 2.0] {
+                if a != 0.0 || b != 0.0 || c != 0.0 {
+                    dirs.push(Vec3::new(a, b, c));
+                }
+            }
+        }
+    }
+    for d in dirs {
+        let w = WatertightRay::new(&Ray::new(origin, d));
+        let (da, a) = (d.to_array(), d.abs().to_array());
+        let kz = if a[0] >= a[1] && a[0] >= a[2] {
+            0
+        } else if a[1] >= a[2] {
+            1
+        } else {
+            2
+        };
+        let (mut kx, mut ky) = ((kz + 1) % 3, (kz + 2) % 3);
+        if da[kz] < 0.0 {
+            std::mem::swap(&mut kx, &mut ky);
+        }
+        assert_eq!(w.k, [kx, ky, kz], "{d}");
+        let shear = [da[kx] / da[kz], da[ky] / da[kz], 1.0 / da[kz]];
+        assert_eq!(w.shear.map(f32::to_bits), shear.map(f32::to_bits), "{d}");
+        let o = origin.to_array();
+        assert_eq!(w.origin, [o[kx], o[ky], o[kz]], "{d}");
+    }
+}

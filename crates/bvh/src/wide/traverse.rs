@@ -96,6 +96,14 @@ fn refine_t(ray: &Ray, v: [glam::Vec3; 3], t: f32) -> f32 {
     if exact.is_finite() && exact > 0.0 { exact as f32 } else { t }
 }
 
+/// True if the ray's origin and direction are finite: the largest magnitude among the
+/// six coordinates' bit patterns below infinity's, one comparison instead of six branches.
+#[inline(always)]
+fn origin_and_direction_finite(ray: &Ray) -> bool {
+    let (o, d) = (ray.origin, ray.dir);
+    [o.x, o.y, o.z, d.x, d.y, d.z].iter().fold(0, |m, c| m.max(c.to_bits() & 0x7fff_ffff)) < f32::INFINITY.to_bits()
+}
+
 impl<const W: usize> BvhWide<W> {
     #[inline(always)]
     pub(super) fn traverse<K: RayKernel<W>, const COUNT: bool, const ANY_HIT: bool>(
@@ -108,7 +116,7 @@ impl<const W: usize> BvhWide<W> {
         }
         // Such rays hit no triangle (Möller–Trumbore's determinant is not finite), and
         // they are the only ones that could enter an unused slot's empty box.
-        if self.nodes.is_empty() || !ray.origin.is_finite() || !ray.dir.is_finite() {
+        if self.nodes.is_empty() || !origin_and_direction_finite(ray) {
             return None;
         }
         let kernel = K::new(ray);
