@@ -152,11 +152,8 @@ fn watertight_group<const ANY_HIT: bool>(
     let n = leaf.ids.len();
     let [kx, ky, kz] = ray.k;
     let lanes = 0b1111u32 >> 4usize.saturating_sub(n - j);
-    let mut t = [0.0f32; 4];
-    let mut u = [0.0f32; 4];
-    let mut v = [0.0f32; 4];
     // SAFETY: intrinsics as in `new`; loads as in `triangles`.
-    let (mask, zero_lanes) = unsafe {
+    let (mask, zero_lanes, tt, uu, vv) = unsafe {
         debug_assert!(leaf.soa.len() >= 9 * n + 3);
         // Row 3v + k starts at float (3v + k)·n: three offsets for the axes and one
         // base per vertex, rather than nine products.
@@ -193,12 +190,20 @@ fn watertight_group<const ANY_HIT: bool>(
         let ok = _mm_and_ps(ok, _mm_cmplt_ps(abs_t, _mm_set1_ps(f32::INFINITY)));
         let ok =
             _mm_and_ps(ok, _mm_and_ps(_mm_cmpgt_ps(tt, _mm_set1_ps(ray.t_min)), _mm_cmplt_ps(tt, _mm_set1_ps(*t_max))));
+        (_mm_movemask_ps(ok) as u32 & lanes, _mm_movemask_ps(any_zero) as u32 & lanes, tt, uu, vv)
+    };
+    let mut m = mask | zero_lanes;
+    if m == 0 {
+        // Most groups: nothing hit, nothing to store.
+        return false;
+    }
+    let (mut t, mut u, mut v) = ([0.0f32; 4], [0.0f32; 4], [0.0f32; 4]);
+    // SAFETY: SSE is baseline; each array holds four floats.
+    unsafe {
         _mm_storeu_ps(t.as_mut_ptr(), tt);
         _mm_storeu_ps(u.as_mut_ptr(), uu);
         _mm_storeu_ps(v.as_mut_ptr(), vv);
-        (_mm_movemask_ps(ok) as u32 & lanes, _mm_movemask_ps(any_zero) as u32 & lanes)
-    };
-    let mut m = mask | zero_lanes;
+    }
     while m != 0 {
         let i = m.trailing_zeros() as usize;
         m &= m - 1;
