@@ -106,11 +106,10 @@ impl RayKernel<4> for SseKernel {
         t_max: &mut f32,
         best: &mut Option<Hit>,
     ) -> bool {
-        let n = leaf.ids.len();
-        // Leaves of up to four triangles, the common case, as straight-line code: in a
-        // loop, the compiler computed the nine row addresses once per leaf and kept them
-        // on the stack.
-        if n <= 4 {
+        // Leaves of up to four triangles, nearly all of them, run one group without a loop
+        // (looped, the compiler kept each leaf's row addresses on the stack); larger ones
+        // go to the looped function, kept out of line.
+        if leaf.ids.len() <= 4 {
             return watertight_group::<ANY_HIT>(ray, leaf, 0, t_max, best);
         }
         watertight_groups::<ANY_HIT>(ray, leaf, t_max, best)

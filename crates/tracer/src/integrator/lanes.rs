@@ -4,11 +4,10 @@
 //! frame, the light sample's geometry, the Lambertian sample, the spectra at the paths'
 //! wavelengths, Russian roulette, the Sobol samplers' values — runs as vector
 //! instructions across the paths (AVX-512 or AVX2 where the machine has it, chosen at run
-//! time), while the rays go through the
-//! same BVH queries one at a time. A path at any other surface (glass, a mirror, a
-//! textured or rough material) is shaded there by the general loop's own code
-//! ([`path_vertex`]), one lane at a time, and goes on in its lane. A path that ends hands
-//! its lane to the block's next camera sample.
+//! time), while the rays go through the same BVH queries one at a time. A path at any
+//! other surface (glass, a mirror, a textured or rough material) is shaded there by the
+//! general loop's own code ([`path_vertex`]), one lane at a time, and goes on in its lane.
+//! A path that ends hands its lane to the block's next camera sample.
 //!
 //! Why 64 lanes, not 8 (one AVX2 register): LLVM unrolls a loop of 8 completely before
 //! its loop vectoriser runs, and the straight-line vectoriser that is left packed only
