@@ -9,9 +9,10 @@
 //! * Collapse: the children of a wide node are found greedily — starting from a binary
 //!   node's two children, the interior child with the largest surface area is replaced by
 //!   its own two children until there are `W` or only leaves are left.
-//! * Leaves: binary subtrees of at most four triangles become one leaf where an SAH that
-//!   counts one 4-wide triangle test per leaf says so. A leaf's triangles are stored in
-//!   structure-of-arrays form and tested four at a time with the operations of
+//! * Leaves: sibling leaves of at most `W` triangles together become one leaf where an
+//!   SAH that counts one `W`-wide triangle test per leaf says so. A leaf's triangles are stored in
+//!   structure-of-arrays form and tested `W` at a time (the watertight test; four at a
+//!   time for Möller–Trumbore) with the operations of
 //!   [`intersect_triangle`](crate::intersect_triangle), lane by lane, so hits are
 //!   bit-identical to it.
 //! * Traversal is ordered: the children a ray enters are visited nearest first, the
@@ -62,7 +63,7 @@ pub struct WideStats {
     pub depth: usize,
     /// Σ_nodes C_t·A/A_root + Σ_leaves C_i·n·A/A_root with the source tree's cost
     /// constants: one traversal step per wide node, as for obvhs's CWBVH, and one test per
-    /// triangle (although a leaf's triangles are tested four at a time).
+    /// triangle (although a leaf's triangles are tested several at a time).
     pub sah_cost: f32,
 }
 
@@ -71,8 +72,8 @@ pub struct WideStats {
 pub struct BvhWide<const W: usize> {
     nodes: Vec<WideNode<W>>,
     /// The triangles leaf by leaf in structure of arrays: a leaf of n triangles starting
-    /// at triangle `first` holds v0.x × n, v0.y × n, …, v2.z × n from float 9·first; three
-    /// floats of padding at the end let 4-wide loads run past the last leaf. Vertices,
+    /// at triangle `first` holds v0.x × n, v0.y × n, …, v2.z × n from float 9·first; seven
+    /// floats of padding at the end let 8-wide loads run past the last leaf. Vertices,
     /// not edges, so that the watertight test sees each shared vertex bit for bit.
     soa: Vec<f32>,
     prim_ids: Vec<u32>,
@@ -88,8 +89,8 @@ pub struct BvhWide<const W: usize> {
 /// A 4-wide BVH: SSE box and triangle tests (x86_64 baseline).
 pub type Bvh4 = BvhWide<4>;
 
-/// An 8-wide BVH: AVX box tests where the CPU has AVX2 (detected at run time), SSE
-/// triangle tests; elsewhere the portable kernel, slower than [`Bvh4`]'s.
+/// An 8-wide BVH: AVX box and watertight triangle tests where the CPU has AVX2 (detected
+/// at run time); elsewhere the portable kernel, slower than [`Bvh4`]'s.
 pub type Bvh8 = BvhWide<8>;
 
 /// True if this CPU runs [`Bvh8`]'s AVX kernel: where it does not, [`Bvh4`] is faster.

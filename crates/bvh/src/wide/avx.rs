@@ -1,5 +1,7 @@
 //! The AVX [`RayKernel`] of the 8-wide tree: eight boxes per `enter` in one 256-bit
-//! register per plane row (the box test of `lanes`); leaves are tested four triangles at a time by the SSE kernel.
+//! register per plane row (the box test of `lanes`); the watertight leaf test runs eight
+//! triangles at a time (the same generic group as the SSE kernel's four), the
+//! Möller–Trumbore one four at a time by the SSE kernel.
 //!
 //! Only called from functions compiled with `#[target_feature(enable = "avx2")]` after a
 //! run-time check ([`avx2_available`]), into which these `#[inline(always)]` methods are
@@ -7,7 +9,7 @@
 
 use super::Bvh8Node;
 use super::kernel::{Leaf, RayKernel};
-use super::lanes::BoxRay;
+use super::lanes::{BoxRay, watertight_group, watertight_groups};
 use super::sse::SseKernel;
 use crate::{Hit, Ray, WatertightRay};
 use std::arch::x86_64::__m256;
@@ -53,6 +55,32 @@ impl RayKernel<8> for AvxKernel {
         t_max: &mut f32,
         best: &mut Option<Hit>,
     ) -> bool {
-        <SseKernel as RayKernel<4>>::watertight::<ANY_HIT>(&self.leaves, ray, leaf, t_max, best)
+        // Leaves of up to eight triangles (all that the default build makes) run one
+        // group without a loop; larger ones go to the looped function, out of line as
+        // the SSE kernel's.
+        if leaf.ids.len() <= 8 {
+            // SAFETY: AVX is available (see `new`); the tree pads its arrays for 8-wide
+            // loads.
+            return unsafe { watertight_group::<__m256, ANY_HIT>(ray, leaf, 0, t_max, best) };
+        }
+        // SAFETY: as above.
+        unsafe { watertight_groups_avx::<ANY_HIT>(ray, leaf, t_max, best) }
     }
+}
+
+/// The looped leaf test for leaves of more than eight triangles.
+///
+/// # Safety
+///
+/// The CPU must have AVX2.
+#[inline(never)]
+#[target_feature(enable = "avx2")]
+unsafe fn watertight_groups_avx<const ANY_HIT: bool>(
+    ray: &WatertightRay,
+    leaf: Leaf,
+    t_max: &mut f32,
+    best: &mut Option<Hit>,
+) -> bool {
+    // SAFETY: the caller's guarantee; the tree pads its arrays for 8-wide loads.
+    unsafe { watertight_groups::<__m256, ANY_HIT>(ray, leaf, t_max, best) }
 }

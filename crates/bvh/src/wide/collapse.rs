@@ -1,5 +1,5 @@
 //! The collapse of a binary [`Bvh`] into a [`BvhWide`]: greedy by surface area, with small
-//! subtrees merged into one leaf where an SAH with 4-wide triangle tests says so, and the
+//! sibling leaves merged into one where an SAH with `W`-wide triangle tests says so, and the
 //! leaves' triangles copied into structure-of-arrays form.
 
 use super::{BvhWide, STACK_DEPTH, WideNode};
@@ -8,11 +8,12 @@ use glam::Vec3;
 
 impl<const W: usize> BvhWide<W> {
     /// Collapses a binary tree into a `W`-wide one (greedy by surface area), copying its
-    /// leaf-ordered triangles. A binary subtree of at most four triangles becomes a single
-    /// leaf when that lowers an SAH in which a leaf costs one 4-wide triangle test and a
-    /// binary interior node 0.3 of one; trees whose leaves were split down to at most four
-    /// triangles regardless of the SAH (`leaf_by_sah: false`, `max_leaf_size ≤ 4`) keep
-    /// their leaves exactly.
+    /// leaf-ordered triangles. Two sibling leaves (the binary tree's, or leaves merged so)
+    /// of at most `W` triangles together become one leaf when that lowers an SAH in which
+    /// a leaf costs one `W`-wide triangle test per `W` triangles and a binary interior node
+    /// 0.3 of one; trees whose leaves were made
+    /// regardless of the SAH (`leaf_by_sah: false`) with `max_leaf_size ≥ W` keep their
+    /// leaves exactly, as each of their interior nodes holds more than `W` triangles.
     ///
     /// # Panics
     ///
@@ -40,7 +41,7 @@ impl<const W: usize> BvhWide<W> {
         let (nodes, depth, count_at) = (collapse.out, collapse.depth, collapse.count_at);
         let config = bvh.config();
         let triangles = bvh.prim_ids().len();
-        let mut soa = vec![0.0; 9 * triangles + 3];
+        let mut soa = vec![0.0; 9 * triangles + 7];
         let mut slivers = vec![false; triangles];
         // The leaves cover the triangles in contiguous ranges (`count_at`, made by the
         // collapse: a sort or a list of the leaves cost more, mostly in page faults;
@@ -121,11 +122,7 @@ fn is_sliver(v: &[Vec3; 3]) -> bool {
     longest > SLIVER * a.cross(c).length()
 }
 
-/// Subtrees of at most this many triangles may become one leaf: the SIMD triangle test
-/// costs about the same for one to four triangles.
-const MERGE: u32 = 4;
-
-/// Cost of a binary interior node, relative to one 4-wide triangle test, in the SAH that
+/// Cost of a binary interior node, relative to one `W`-wide triangle test, in the SAH that
 /// decides whether to merge a small subtree into one leaf (a wide node tests up to three
 /// binary nodes' children at once).
 const MERGE_NODE_COST: f32 = 0.3;
@@ -156,7 +153,11 @@ impl<'a, const W: usize> Collapse<'a, W> {
         let mut range = vec![(0u32, 0u32); src.len()];
         let mut leaf = vec![false; src.len()];
         let mut areas = vec![0.0f32; src.len()];
-        // SAH cost (times the root's area) of each subtree with leaves tested 4 at a time.
+        // Two sibling leaves of at most `W` triangles together may become one leaf, its
+        // triangles tested `W` at a time (the node's width is the leaf test's: 4 with SSE,
+        // 8 with AVX2), which costs about the same for one to `W` triangles. SAH cost
+        // (times the root's area) of each subtree with its leaves tested so.
+        let group = W as u32;
         let mut cost = vec![0.0f32; src.len()];
         for (i, n) in src.iter().enumerate().rev() {
             let area = binary_bounds(n).surface_area();
@@ -164,13 +165,18 @@ impl<'a, const W: usize> Collapse<'a, W> {
             if n.count > 0 {
                 range[i] = (n.index, n.count);
                 leaf[i] = true;
-                cost[i] = area * n.count.div_ceil(4) as f32;
+                cost[i] = area * n.count.div_ceil(group) as f32;
             } else {
                 let (l, r) = (i + 1, n.index as usize);
                 let contiguous = range[l].0 + range[l].1 == range[r].0;
                 range[i] = (range[l].0, range[l].1 + range[r].1);
                 let split = MERGE_NODE_COST * area + cost[l] + cost[r];
-                leaf[i] = contiguous && range[i].1 <= MERGE && area <= split;
+                // Only two leaves merge: a subtree with interior nodes merged into one
+                // leaf looks cheaper to the SAH, which counts rays from outside its box,
+                // but rays from inside enter it every time (on the Cornell box, four
+                // walls became one leaf of the room's size, for 17 % more traversal
+                // instructions).
+                leaf[i] = contiguous && leaf[l] && leaf[r] && range[i].1 <= group && area <= split;
                 cost[i] = if leaf[i] { area } else { split };
             }
         }

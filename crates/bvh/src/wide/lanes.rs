@@ -4,8 +4,8 @@
 //! a ray prepared for testing a node's boxes with them.
 
 use super::WideNode;
-use super::kernel::plane_rows;
-use crate::Ray;
+use super::kernel::{Leaf, plane_rows, record_hit};
+use crate::{Hit, Ray, WatertightRay, intersect_triangle_watertight};
 use std::arch::x86_64::*;
 
 /// A register of f32 lanes.
@@ -29,6 +29,24 @@ pub(super) trait Lanes: Copy {
     unsafe fn min(self, o: Self) -> Self;
     /// Bit `i` set where lane `i` of `self` ≤ `o` (ordered: false for NaN).
     unsafe fn le_mask(self, o: Self) -> u32;
+    /// An unaligned load of `WIDTH` floats.
+    unsafe fn load_unaligned(p: *const f32) -> Self;
+    unsafe fn add(self, o: Self) -> Self;
+    unsafe fn div(self, o: Self) -> Self;
+    unsafe fn or(self, o: Self) -> Self;
+    unsafe fn and(self, o: Self) -> Self;
+    /// `!self & o`, bit by bit.
+    unsafe fn and_not(self, o: Self) -> Self;
+    /// All bits set where `self == o` (ordered), else clear.
+    unsafe fn eq(self, o: Self) -> Self;
+    /// All bits set where `self != o` or either is NaN (unordered), else clear.
+    unsafe fn ne(self, o: Self) -> Self;
+    /// All bits set where `self < o` (ordered), else clear.
+    unsafe fn lt(self, o: Self) -> Self;
+    /// All bits set where `self > o` (ordered), else clear.
+    unsafe fn gt(self, o: Self) -> Self;
+    /// The lanes' sign bits, lane `i` in bit `i`.
+    unsafe fn sign_mask(self) -> u32;
 }
 
 impl Lanes for __m128 {
@@ -65,6 +83,50 @@ impl Lanes for __m128 {
     unsafe fn le_mask(self, o: Self) -> u32 {
         unsafe { _mm_movemask_ps(_mm_cmple_ps(self, o)) as u32 }
     }
+    #[inline(always)]
+    unsafe fn load_unaligned(p: *const f32) -> Self {
+        unsafe { _mm_loadu_ps(p) }
+    }
+    #[inline(always)]
+    unsafe fn add(self, o: Self) -> Self {
+        unsafe { _mm_add_ps(self, o) }
+    }
+    #[inline(always)]
+    unsafe fn div(self, o: Self) -> Self {
+        unsafe { _mm_div_ps(self, o) }
+    }
+    #[inline(always)]
+    unsafe fn or(self, o: Self) -> Self {
+        unsafe { _mm_or_ps(self, o) }
+    }
+    #[inline(always)]
+    unsafe fn and(self, o: Self) -> Self {
+        unsafe { _mm_and_ps(self, o) }
+    }
+    #[inline(always)]
+    unsafe fn and_not(self, o: Self) -> Self {
+        unsafe { _mm_andnot_ps(self, o) }
+    }
+    #[inline(always)]
+    unsafe fn eq(self, o: Self) -> Self {
+        unsafe { _mm_cmpeq_ps(self, o) }
+    }
+    #[inline(always)]
+    unsafe fn ne(self, o: Self) -> Self {
+        unsafe { _mm_cmpneq_ps(self, o) }
+    }
+    #[inline(always)]
+    unsafe fn lt(self, o: Self) -> Self {
+        unsafe { _mm_cmplt_ps(self, o) }
+    }
+    #[inline(always)]
+    unsafe fn gt(self, o: Self) -> Self {
+        unsafe { _mm_cmpgt_ps(self, o) }
+    }
+    #[inline(always)]
+    unsafe fn sign_mask(self) -> u32 {
+        unsafe { _mm_movemask_ps(self) as u32 }
+    }
 }
 
 impl Lanes for __m256 {
@@ -100,6 +162,50 @@ impl Lanes for __m256 {
     #[inline(always)]
     unsafe fn le_mask(self, o: Self) -> u32 {
         unsafe { _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(self, o)) as u32 }
+    }
+    #[inline(always)]
+    unsafe fn load_unaligned(p: *const f32) -> Self {
+        unsafe { _mm256_loadu_ps(p) }
+    }
+    #[inline(always)]
+    unsafe fn add(self, o: Self) -> Self {
+        unsafe { _mm256_add_ps(self, o) }
+    }
+    #[inline(always)]
+    unsafe fn div(self, o: Self) -> Self {
+        unsafe { _mm256_div_ps(self, o) }
+    }
+    #[inline(always)]
+    unsafe fn or(self, o: Self) -> Self {
+        unsafe { _mm256_or_ps(self, o) }
+    }
+    #[inline(always)]
+    unsafe fn and(self, o: Self) -> Self {
+        unsafe { _mm256_and_ps(self, o) }
+    }
+    #[inline(always)]
+    unsafe fn and_not(self, o: Self) -> Self {
+        unsafe { _mm256_andnot_ps(self, o) }
+    }
+    #[inline(always)]
+    unsafe fn eq(self, o: Self) -> Self {
+        unsafe { _mm256_cmp_ps::<_CMP_EQ_OQ>(self, o) }
+    }
+    #[inline(always)]
+    unsafe fn ne(self, o: Self) -> Self {
+        unsafe { _mm256_cmp_ps::<_CMP_NEQ_UQ>(self, o) }
+    }
+    #[inline(always)]
+    unsafe fn lt(self, o: Self) -> Self {
+        unsafe { _mm256_cmp_ps::<_CMP_LT_OQ>(self, o) }
+    }
+    #[inline(always)]
+    unsafe fn gt(self, o: Self) -> Self {
+        unsafe { _mm256_cmp_ps::<_CMP_GT_OQ>(self, o) }
+    }
+    #[inline(always)]
+    unsafe fn sign_mask(self) -> u32 {
+        unsafe { _mm256_movemask_ps(self) as u32 }
     }
 }
 
@@ -160,4 +266,129 @@ impl<L: Lanes> BoxRay<L> {
             (enter.le_mask(exit), t)
         }
     }
+}
+
+/// Tests triangles `j..j + L::WIDTH` (those of them in the leaf) of `leaf` at once, lane
+/// by lane the operations of `intersect_triangle_watertight` (bit-identical: no fused
+/// multiply-adds), lowering `t_max` and setting `best` at each closer hit in lane order;
+/// with `ANY_HIT`, returns true at the first hit. A lane with an edge function of exactly
+/// zero is redone by the scalar test, which falls back to double precision. A function,
+/// not a closure, so that it is inlined into the AVX2 traversal (a closure was compiled
+/// apart, without AVX).
+///
+/// # Safety
+///
+/// The CPU must run `L`'s instructions, and `leaf.soa` must hold `L::WIDTH − 1` floats
+/// past the leaf's last row (the tree's padding).
+#[inline(always)]
+pub(super) unsafe fn watertight_group<L: Lanes, const ANY_HIT: bool>(
+    ray: &WatertightRay,
+    leaf: Leaf,
+    j: usize,
+    t_max: &mut f32,
+    best: &mut Option<Hit>,
+) -> bool {
+    let n = leaf.ids.len();
+    let [kx, ky, kz] = ray.k;
+    let lanes = (u32::MAX >> (32 - L::WIDTH)) >> L::WIDTH.saturating_sub(n - j);
+    // SAFETY: the caller's guarantees; row k of this group starts at float k·n + j ≤
+    // 9n − 1 of `leaf.soa`, so every load ends inside the padding.
+    let (mask, zero_lanes, tt, uu, vv) = unsafe {
+        debug_assert!(leaf.soa.len() >= 9 * n + L::WIDTH - 1);
+        // Row 3v + k starts at float (3v + k)·n: three offsets for the axes and one
+        // base per vertex, rather than nine products. (No closures: those would be
+        // compiled apart from the AVX2 traversal, without AVX.)
+        let rows = [kx * n, ky * n, kz * n];
+        let shear = [L::splat(ray.shear[0]), L::splat(ray.shear[1]), L::splat(ray.shear[2])];
+        let origin = [L::splat(ray.origin[0]), L::splat(ray.origin[1]), L::splat(ray.origin[2])];
+        let first = leaf.soa.as_ptr().add(j);
+        let (ax, ay, az) = sheared_vertex(first, rows, origin, shear);
+        let (bx, by, bz) = sheared_vertex(first.add(3 * n), rows, origin, shear);
+        let (cx, cy, cz) = sheared_vertex(first.add(6 * n), rows, origin, shear);
+        let e0 = cx.mul(by).sub(cy.mul(bx));
+        let e1 = ax.mul(cy).sub(ay.mul(cx));
+        let e2 = bx.mul(ay).sub(by.mul(ax));
+        let zero = L::splat(0.0);
+        let any_zero = e0.eq(zero).or(e1.eq(zero)).or(e2.eq(zero));
+        let neg = e0.lt(zero).or(e1.lt(zero)).or(e2.lt(zero));
+        let pos = e0.gt(zero).or(e1.gt(zero)).or(e2.gt(zero));
+        let det = e0.add(e1).add(e2);
+        let inv_det = L::splat(1.0).div(det);
+        let tt = e0.mul(az).add(e1.mul(bz)).add(e2.mul(cz)).mul(inv_det);
+        let uu = e1.mul(inv_det);
+        let vv = e2.mul(inv_det);
+        let abs_t = L::splat(-0.0).and_not(tt);
+        let ok = neg.and(pos).and_not(det.ne(zero));
+        let ok = ok.and(abs_t.lt(L::splat(f32::INFINITY)));
+        let ok = ok.and(tt.gt(L::splat(ray.t_min)).and(tt.lt(L::splat(*t_max))));
+        (ok.sign_mask() & lanes, any_zero.sign_mask() & lanes, tt, uu, vv)
+    };
+    let mut m = mask | zero_lanes;
+    if m == 0 {
+        // Most groups: nothing hit, nothing to store.
+        return false;
+    }
+    let (mut t, mut u, mut v) = ([0.0f32; 8], [0.0f32; 8], [0.0f32; 8]);
+    // SAFETY: the caller's guarantee; each array holds at least `L::WIDTH` floats.
+    unsafe {
+        debug_assert!(L::WIDTH <= 8);
+        tt.store(t.as_mut_ptr());
+        uu.store(u.as_mut_ptr());
+        vv.store(v.as_mut_ptr());
+    }
+    while m != 0 {
+        let i = m.trailing_zeros() as usize;
+        m &= m - 1;
+        let hit = if zero_lanes & (1 << i) != 0 {
+            intersect_triangle_watertight(&leaf.vertices(j + i), ray, *t_max)
+        } else {
+            (t[i] < *t_max).then_some((t[i], u[i], v[i]))
+        };
+        if let Some((t, u, v)) = hit
+            && record_hit::<ANY_HIT>(Hit { prim: leaf.ids[j + i], t, u, v }, t_max, best)
+        {
+            return true;
+        }
+    }
+    false
+}
+
+/// A group's vertex (its rows starting at `base`, the permuted axes' rows `rows` floats
+/// further) relative to the ray origin, permuted and sheared as in
+/// `intersect_triangle_watertight`.
+///
+/// # Safety
+///
+/// The CPU must run `L`'s instructions, and `L::WIDTH` floats must be readable at each
+/// row.
+#[inline(always)]
+unsafe fn sheared_vertex<L: Lanes>(base: *const f32, rows: [usize; 3], origin: [L; 3], shear: [L; 3]) -> (L, L, L) {
+    // SAFETY: the caller's guarantees.
+    unsafe {
+        let px = L::load_unaligned(base.add(rows[0])).sub(origin[0]);
+        let py = L::load_unaligned(base.add(rows[1])).sub(origin[1]);
+        let pz = L::load_unaligned(base.add(rows[2])).sub(origin[2]);
+        (px.sub(shear[0].mul(pz)), py.sub(shear[1].mul(pz)), shear[2].mul(pz))
+    }
+}
+
+/// [`watertight_group`] over every group of a leaf, in order.
+///
+/// # Safety
+///
+/// As [`watertight_group`].
+#[inline(always)]
+pub(super) unsafe fn watertight_groups<L: Lanes, const ANY_HIT: bool>(
+    ray: &WatertightRay,
+    leaf: Leaf,
+    t_max: &mut f32,
+    best: &mut Option<Hit>,
+) -> bool {
+    for j in (0..leaf.ids.len()).step_by(L::WIDTH) {
+        // SAFETY: the caller's guarantees.
+        if unsafe { watertight_group::<L, ANY_HIT>(ray, leaf, j, t_max, best) } {
+            return true;
+        }
+    }
+    false
 }
