@@ -1,7 +1,8 @@
-//! The SIMD box test, written once for both register widths: [`Lanes`] is the handful of
-//! operations it needs, implemented for SSE's `__m128` (4 lanes, the [`Bvh4`](super::Bvh4)
-//! kernel) and AVX's `__m256` (8 lanes, the [`Bvh8`](super::Bvh8) kernel), and [`BoxRay`]
-//! a ray prepared for testing a node's boxes with them.
+//! The SIMD box test and watertight leaf test, written once for both register widths:
+//! [`Lanes`] is the handful of operations they need, implemented for SSE's `__m128` (4
+//! lanes, the [`Bvh4`](super::Bvh4) kernel) and AVX's `__m256` (8 lanes, the
+//! [`Bvh8`](super::Bvh8) kernel); [`BoxRay`] is a ray prepared for testing a node's boxes
+//! with them, [`watertight_group`] the test of a leaf's triangles `L::WIDTH` at a time.
 
 use super::WideNode;
 use super::kernel::{Leaf, plane_rows, record_hit};
