@@ -53,7 +53,11 @@ pub struct Lights {
     prims: Vec<u32>,
     /// For each entry of `prims` that is a triangle (they come first), its geometry.
     triangles: Vec<LightTriangle>,
-    cdf: Vec<f32>,
+    /// The environment's share of the unit interval, then [`Lights::cdf`]: entry k and
+    /// k + 1 bound entry k's stretch, with no special case for the first (a branch that
+    /// the Cornell box's two equal lights mispredicted half the time). Empty without
+    /// lights.
+    bounds: Vec<f32>,
     /// Probability of choosing each primitive (0 for non-emitters), for MIS when a
     /// BSDF-sampled ray hits an emitter.
     prim_pmf: Vec<f32>,
@@ -169,13 +173,12 @@ impl Lights {
         // The environment owns [0, pmf_env) of the unit interval, primitives the next
         // stretch, punctual lights the rest.
         let mut acc = env_power;
-        let cdf = power
-            .iter()
-            .chain(&punctual_power)
-            .map(|p| {
+        let bounds = std::iter::once(env_power)
+            .chain(power.iter().chain(&punctual_power).map(|p| {
                 acc += p;
-                (acc / total) as f32
-            })
+                acc
+            }))
+            .map(|a| (a / total) as f32)
             .collect();
         let punctual_pmf: Vec<f32> = punctual_power.iter().map(|p| (p / total) as f32).collect();
         for (&t, p) in prims.iter().zip(&power) {
@@ -194,7 +197,7 @@ impl Lights {
             .collect();
         let environment_map = scene.environment.as_ref().and_then(|e| e.map.clone());
         let environment_pmf = (env_power / total) as f32;
-        Self { prims, triangles, cdf, prim_pmf, punctual_pmf, environment_pmf, environment_map, suns }
+        Self { prims, triangles, bounds, prim_pmf, punctual_pmf, environment_pmf, environment_map, suns }
     }
 
     /// The sun disks (directional lights with an angular size), which escaping rays see.
@@ -225,7 +228,7 @@ impl Lights {
 
     /// True if there is nothing to sample.
     pub fn is_empty(&self) -> bool {
-        self.cdf.is_empty() && self.environment_pmf == 0.0
+        self.cdf().is_empty() && self.environment_pmf == 0.0
     }
 
     /// The probability that [`Lights::sample`] picks punctual light `index`.
@@ -249,7 +252,7 @@ impl Lights {
     /// 0..=k (the environment owns [0, [`Lights::environment_pmf`])). [`Lights::sample`]
     /// picks the first k with `cdf[k] > u` (clamped to the last).
     pub fn cdf(&self) -> &[f32] {
-        &self.cdf
+        self.bounds.get(1..).unwrap_or_default()
     }
 
     /// The probability of picking each primitive, indexed by primitive id (0 for
@@ -287,7 +290,8 @@ impl Lights {
         if self.is_empty() {
             return None;
         }
-        if u.x < self.environment_pmf || self.cdf.is_empty() {
+        let cdf = self.cdf();
+        if u.x < self.environment_pmf || cdf.is_empty() {
             // Without other lights the environment's share is the whole interval (pmf 1).
             let u = Vec2::new(rescale(u.x, 0.0, self.environment_pmf), u.y);
             let (point, pdf) = match &self.environment_map {
@@ -301,9 +305,8 @@ impl Lights {
                 source: LightSource::Environment,
             });
         }
-        let k = self.cdf.partition_point(|&c| c <= u.x).min(self.cdf.len() - 1);
-        let below = if k == 0 { self.environment_pmf } else { self.cdf[k - 1] };
-        let u = Vec2::new(rescale(u.x, below, self.cdf[k]), u.y);
+        let k = cdf.partition_point(|&c| c <= u.x).min(cdf.len() - 1);
+        let u = Vec2::new(rescale(u.x, self.bounds[k], cdf[k]), u.y);
         if k >= self.prims.len() {
             let index = k - self.prims.len();
             let ls = Self::sample_punctual(scene, index, u);
