@@ -123,7 +123,7 @@ fn is_sliver(v: &[Vec3; 3]) -> bool {
 }
 
 /// Cost of a binary interior node, relative to one `W`-wide triangle test, in the SAH that
-/// decides whether to merge a small subtree into one leaf (a wide node tests up to three
+/// decides whether to merge two sibling leaves into one (a wide node tests up to three
 /// binary nodes' children at once).
 const MERGE_NODE_COST: f32 = 0.3;
 
