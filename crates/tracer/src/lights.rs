@@ -64,7 +64,6 @@ pub struct Lights {
     /// Probability of choosing each of the scene's punctual lights (their entries follow
     /// the primitives' in `cdf`).
     punctual_pmf: Vec<f32>,
-    environment_pmf: f32,
     /// The environment's map, sampled by luminance (uniform directions without one).
     environment_map: Option<std::sync::Arc<EnvironmentMap>>,
     /// The sun disks among the punctual lights, which escaping rays can see.
@@ -196,8 +195,7 @@ impl Lights {
             })
             .collect();
         let environment_map = scene.environment.as_ref().and_then(|e| e.map.clone());
-        let environment_pmf = (env_power / total) as f32;
-        Self { prims, triangles, bounds, prim_pmf, punctual_pmf, environment_pmf, environment_map, suns }
+        Self { prims, triangles, bounds, prim_pmf, punctual_pmf, environment_map, suns }
     }
 
     /// The sun disks (directional lights with an angular size), which escaping rays see.
@@ -228,7 +226,8 @@ impl Lights {
 
     /// True if there is nothing to sample.
     pub fn is_empty(&self) -> bool {
-        self.cdf().is_empty() && self.environment_pmf == 0.0
+        // With any light, the environment's share (possibly 0) leads the bounds.
+        self.bounds.is_empty()
     }
 
     /// The probability that [`Lights::sample`] picks punctual light `index`.
@@ -270,14 +269,14 @@ impl Lights {
     /// The probability that [`Lights::sample`] picks the environment.
     #[inline]
     pub fn environment_pmf(&self) -> f32 {
-        self.environment_pmf
+        self.bounds.first().copied().unwrap_or(0.0)
     }
 
     /// Solid-angle pdf with which [`Lights::sample`] draws environment direction `dir`
     /// (choice of the environment included): uniform, or by the map's luminance.
     #[inline]
     pub fn environment_pdf(&self, dir: Vec3) -> f32 {
-        self.environment_pmf * self.environment_map.as_ref().map_or(UNIFORM_SPHERE_PDF, |m| m.pdf(dir))
+        self.environment_pmf() * self.environment_map.as_ref().map_or(UNIFORM_SPHERE_PDF, |m| m.pdf(dir))
     }
 
     /// Picks a light with `u.x`, then a point on it with `u`, `u.x` rescaled to [0, 1)
@@ -291,9 +290,10 @@ impl Lights {
             return None;
         }
         let cdf = self.cdf();
-        if u.x < self.environment_pmf || cdf.is_empty() {
+        let environment_pmf = self.environment_pmf();
+        if u.x < environment_pmf || cdf.is_empty() {
             // Without other lights the environment's share is the whole interval (pmf 1).
-            let u = Vec2::new(rescale(u.x, 0.0, self.environment_pmf), u.y);
+            let u = Vec2::new(rescale(u.x, 0.0, environment_pmf), u.y);
             let (point, pdf) = match &self.environment_map {
                 None => (uniform_sphere(u), UNIFORM_SPHERE_PDF),
                 Some(map) => map.sample(u)?,
@@ -301,7 +301,7 @@ impl Lights {
             return Some(LightSample {
                 point,
                 normal: Vec3::ZERO,
-                pdf: self.environment_pmf * pdf,
+                pdf: environment_pmf * pdf,
                 source: LightSource::Environment,
             });
         }
