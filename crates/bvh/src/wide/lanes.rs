@@ -329,10 +329,10 @@ pub(super) unsafe fn watertight_group<L: Lanes, const ANY_HIT: bool>(
         // Most groups: nothing hit, nothing to store.
         return false;
     }
+    const { assert!(L::WIDTH <= 8, "the stores below hold eight lanes") };
     let (mut t, mut u, mut v) = ([0.0f32; 8], [0.0f32; 8], [0.0f32; 8]);
     // SAFETY: the caller's guarantee; each array holds at least `L::WIDTH` floats.
     unsafe {
-        debug_assert!(L::WIDTH <= 8);
         tt.store(t.as_mut_ptr());
         uu.store(u.as_mut_ptr());
         vv.store(v.as_mut_ptr());
