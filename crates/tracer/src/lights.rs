@@ -305,25 +305,66 @@ impl Lights {
                 source: LightSource::Environment,
             });
         }
-        let k = cdf.partition_point(|&c| c <= u.x).min(cdf.len() - 1);
-        let u = Vec2::new(rescale(u.x, self.bounds[k], cdf[k]), u.y);
+        let (k, x) = self.choose(u.x);
+        let u = Vec2::new(x, u.y);
         if k >= self.prims.len() {
             let index = k - self.prims.len();
             let ls = Self::sample_punctual(scene, index, u);
             return Some(LightSample { pdf: ls.pdf * self.punctual_pmf[index], ..ls });
         }
+        if let Some(t) = self.triangle_light(k) {
+            let v = t.vertices;
+            let (b0, b1) = uniform_triangle(u);
+            let point = b0 * v[0] + b1 * v[1] + (1.0 - b0 - b1) * v[2];
+            return Some(LightSample { point, normal: t.normal, pdf: t.pdf, source: LightSource::Primitive(t.prim) });
+        }
         let prim = self.prims[k];
         let pmf = self.prim_pmf[prim as usize];
         let source = LightSource::Primitive(prim);
-        if let Some(t) = self.triangles.get(k) {
-            let v = &t.vertices;
-            let (b0, b1) = uniform_triangle(u);
-            let point = b0 * v[0] + b1 * v[1] + (1.0 - b0 - b1) * v[2];
-            return Some(LightSample { point, normal: t.normal, pdf: pmf / t.area, source });
-        }
         let shape = scene.shapes[prim as usize - scene.triangles.len()].shape.shape();
         let (point, normal) = shape.sample_area(u)?;
         Some(LightSample { point, normal, pdf: pmf / shape.area(), source })
+    }
+}
+
+/// A triangle light as [`Lights::sample`] samples it: the lanes' next-event estimation
+/// gathers these one lane at a time and places the points across the lanes.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct TriangleLight<'a> {
+    /// Its corners; the point is `b0·v0 + b1·v1 + (1 − b0 − b1)·v2` with
+    /// `uniform_triangle`'s barycentrics.
+    pub(crate) vertices: &'a [Vec3; 3],
+    /// Unit front-face normal.
+    pub(crate) normal: Vec3,
+    /// Density per unit area of its points, the choice of the light included.
+    pub(crate) pdf: f32,
+    /// The primitive.
+    pub(crate) prim: u32,
+}
+
+impl Lights {
+    /// The light whose stretch of the unit interval holds `x` (the first coordinate of
+    /// [`Lights::sample`]'s sample: index k into the primitives, then the punctual
+    /// lights), and `x` rescaled to [0, 1) within that stretch. The caller checks that
+    /// there is a light and that `x` is past the environment's share.
+    #[inline(always)]
+    pub(crate) fn choose(&self, x: f32) -> (usize, f32) {
+        let cdf = self.cdf();
+        let k = cdf.partition_point(|&c| c <= x).min(cdf.len() - 1);
+        (k, rescale(x, self.bounds[k], cdf[k]))
+    }
+
+    /// Light `k` of [`Lights::choose`] if it is one of the scene's emissive triangles.
+    #[inline(always)]
+    pub(crate) fn triangle_light(&self, k: usize) -> Option<TriangleLight<'_>> {
+        let t = self.triangles.get(k)?;
+        let prim = self.prims[k];
+        Some(TriangleLight {
+            vertices: &t.vertices,
+            normal: t.normal,
+            pdf: self.prim_pmf[prim as usize] / t.area,
+            prim,
+        })
     }
 }
 

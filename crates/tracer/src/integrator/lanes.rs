@@ -35,11 +35,10 @@ use super::{
     path_vertex, power_heuristic,
 };
 use crate::geometry::{HitSurface, SceneHit};
-use crate::lights::LightSource;
 use crate::material::{ModelParams, Surface};
 use crate::sampler::{LaneDraw, Sampler, SobolLanes};
 use crate::shading::MIN_SHADING_COSINE;
-use brdf::sampling::sin_cos_quarter;
+use brdf::sampling::{sin_cos_quarter, uniform_triangle};
 use bvh::{Accelerator, Ray};
 use glam::{Vec2, Vec3};
 use shapes::offset::{OFFSET_FLOAT_SCALE, OFFSET_INT_SCALE, OFFSET_ORIGIN};
@@ -47,6 +46,7 @@ use spectral::spectrum::{Colour, Spectrum};
 use spectral::uplift::d65_normalised;
 use spectral::{SampledSpectrum, SigmoidPolynomial};
 use std::f32::consts::{FRAC_1_PI, FRAC_PI_4};
+use std::hint::select_unpredictable;
 
 /// Paths side by side (eight to an AVX2 instruction; see the module documentation).
 pub const LANES: usize = 64;
@@ -394,6 +394,8 @@ fn run<const N: usize, S: Sampler>(
     let (mut nf, mut fs, mut ft) = (V3::default(), V3::default(), V3::default());
     let mut wol = V3::default();
     let (mut lp, mut ln) = (V3::default(), V3::default());
+    // The chosen light triangles' corners.
+    let (mut lv0, mut lv1, mut lv2) = (V3::default(), V3::default(), V3::default());
     let mut lpdf: F = [0.0; LANES];
     let mut light_colour = Gathered::default();
     let mut weight: F = [0.0; LANES];
@@ -596,20 +598,36 @@ fn run<const N: usize, S: Sampler>(
         // Next-event estimation: the light samples (one query each into the lights'
         // distribution), then their geometry, MIS weight and BSDF across the lanes.
         draws.draw(2, &st, &live, block, &mut ux, &mut uy);
+        // `Lights::sample` in two steps: the choice of a light and its data, one lane at
+        // a time, then the points across the lanes. A lane scene's lights are all
+        // triangles (no environment, shapes or punctual lights); a lane without a light
+        // keeps `lemissive` false and its stale values are never used.
         let mut lemissive: M = [false; LANES];
+        if !lights.is_empty() {
+            for k in 0..LANES {
+                if !live[k] {
+                    continue;
+                }
+                let (i, x) = lights.choose(ux[k]);
+                let Some(t) = lights.triangle_light(i) else { continue };
+                ux[k] = x;
+                lv0.set(k, t.vertices[0]);
+                lv1.set(k, t.vertices[1]);
+                lv2.set(k, t.vertices[2]);
+                ln.set(k, t.normal);
+                lpdf[k] = t.pdf;
+                if let Some(e) = &ls.emission[scene.material_ids[t.prim as usize] as usize] {
+                    lemissive[k] = true;
+                    light_colour.set(k, e);
+                }
+            }
+        }
         for k in 0..LANES {
-            if !live[k] {
-                continue;
-            }
-            let Some(s) = lights.sample(scene, Vec2::new(ux[k], uy[k])) else { continue };
-            let LightSource::Primitive(t) = s.source else { continue };
-            lp.set(k, s.point);
-            ln.set(k, s.normal);
-            lpdf[k] = s.pdf;
-            if let Some(e) = &ls.emission[scene.material_ids[t as usize] as usize] {
-                lemissive[k] = true;
-                light_colour.set(k, e);
-            }
+            let (b0, b1) = uniform_triangle(Vec2::new(ux[k], uy[k]));
+            let b2 = 1.0 - b0 - b1;
+            lp.x[k] = (b0 * lv0.x[k] + b1 * lv1.x[k]) + b2 * lv2.x[k];
+            lp.y[k] = (b0 * lv0.y[k] + b1 * lv1.y[k]) + b2 * lv2.y[k];
+            lp.z[k] = (b0 * lv0.z[k] + b1 * lv1.z[k]) + b2 * lv2.z[k];
         }
         let lle = light_colour.eval(&st.lambda, &st.d65, rgb);
         let mut shadow: M = [false; LANES];
@@ -661,8 +679,12 @@ fn run<const N: usize, S: Sampler>(
             }
         }
         draws.draw(2, &st, &live, block, &mut ux, &mut uy);
-        // The direction and whether the path takes it, then the path's state: two loops,
-        // each of which vectorises (as one, the loop stayed scalar).
+        // The direction and whether the path takes it, the next origins, then the path's
+        // state: three loops, each of which vectorises (as one, the loop stayed scalar).
+        // The state's updates are `select_unpredictable`: written as `if`, the compiler
+        // turned each select of two loads into a load through a selected pointer and the
+        // loop into scalar code with a branch per lane (5 % of a Cornell-box render's
+        // instructions).
         let mut go: M = [false; LANES];
         let (mut pdf, mut k_beta, mut side): (F, F, F) = ([0.0; LANES], [0.0; LANES], [0.0; LANES]);
         let mut wi = V3::default();
@@ -687,28 +709,28 @@ fn run<const N: usize, S: Sampler>(
             side[k] = if cos_ng > 0.0 { 1.0 } else { -1.0 };
         }
         for k in 0..LANES {
+            let s = side[k];
+            origin.x[k] = offset_coordinate(p.x[k], s * ng.x[k]);
+            origin.y[k] = offset_coordinate(p.y[k], s * ng.y[k]);
+            origin.z[k] = offset_coordinate(p.z[k], s * ng.z[k]);
+        }
+        for k in 0..LANES {
             let g = go[k];
             for i in 0..N {
                 let b = st.beta[i][k] * (fr[i][k] * k_beta[k]);
-                st.beta[i][k] = if g { b } else { st.beta[i][k] };
+                st.beta[i][k] = select_unpredictable(g, b, st.beta[i][k]);
             }
-            let s = side[k];
-            let o = (
-                offset_coordinate(p.x[k], s * ng.x[k]),
-                offset_coordinate(p.y[k], s * ng.y[k]),
-                offset_coordinate(p.z[k], s * ng.z[k]),
-            );
-            st.prev_pdf[k] = if g { pdf[k] } else { st.prev_pdf[k] };
+            st.prev_pdf[k] = select_unpredictable(g, pdf[k], st.prev_pdf[k]);
             st.prev_specular[k] &= !g;
-            st.prev_p.x[k] = if g { p.x[k] } else { st.prev_p.x[k] };
-            st.prev_p.y[k] = if g { p.y[k] } else { st.prev_p.y[k] };
-            st.prev_p.z[k] = if g { p.z[k] } else { st.prev_p.z[k] };
-            st.origin.x[k] = if g { o.0 } else { st.origin.x[k] };
-            st.origin.y[k] = if g { o.1 } else { st.origin.y[k] };
-            st.origin.z[k] = if g { o.2 } else { st.origin.z[k] };
-            st.dir.x[k] = if g { wi.x[k] } else { st.dir.x[k] };
-            st.dir.y[k] = if g { wi.y[k] } else { st.dir.y[k] };
-            st.dir.z[k] = if g { wi.z[k] } else { st.dir.z[k] };
+            st.prev_p.x[k] = select_unpredictable(g, p.x[k], st.prev_p.x[k]);
+            st.prev_p.y[k] = select_unpredictable(g, p.y[k], st.prev_p.y[k]);
+            st.prev_p.z[k] = select_unpredictable(g, p.z[k], st.prev_p.z[k]);
+            st.origin.x[k] = select_unpredictable(g, origin.x[k], st.origin.x[k]);
+            st.origin.y[k] = select_unpredictable(g, origin.y[k], st.origin.y[k]);
+            st.origin.z[k] = select_unpredictable(g, origin.z[k], st.origin.z[k]);
+            st.dir.x[k] = select_unpredictable(g, wi.x[k], st.dir.x[k]);
+            st.dir.y[k] = select_unpredictable(g, wi.y[k], st.dir.y[k]);
+            st.dir.z[k] = select_unpredictable(g, wi.z[k], st.dir.z[k]);
             st.bounce[k] += g as u32;
         }
 
