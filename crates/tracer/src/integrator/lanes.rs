@@ -43,7 +43,7 @@ use bvh::{Accelerator, Ray};
 use glam::{Vec2, Vec3};
 use shapes::offset::{OFFSET_FLOAT_SCALE, OFFSET_INT_SCALE, OFFSET_ORIGIN};
 use spectral::spectrum::{Colour, Spectrum};
-use spectral::uplift::d65_normalised;
+use spectral::uplift::d65_normalised_each;
 use spectral::{SampledSpectrum, SigmoidPolynomial};
 use std::f32::consts::{FRAC_1_PI, FRAC_PI_4};
 use std::hint::select_unpredictable;
@@ -413,16 +413,17 @@ fn run<const N: usize, S: Sampler>(
     };
     loop {
         // Free lanes take the block's next camera samples.
+        let mut fresh: M = [false; LANES];
         for k in 0..LANES {
             if st.slot[k].is_none() && next < block.len() {
                 let s = &block[next];
+                fresh[k] = true;
                 st.slot[k] = Some(next);
                 st.origin.set(k, s.ray.origin);
                 st.dir.set(k, s.ray.dir);
                 st.prev_p.set(k, s.ray.origin);
                 for i in 0..N {
                     st.lambda[i][k] = s.wl.lambda[i];
-                    st.d65[i][k] = if rgb { 0.0 } else { d65_normalised(s.wl.lambda[i]) };
                     st.beta[i][k] = 1.0;
                     st.radiance[i][k] = 0.0;
                 }
@@ -432,6 +433,16 @@ fn run<const N: usize, S: Sampler>(
                 st.eta_scale[k] = 1.0;
                 st.extension_left[k] = settings.specular_extension;
                 next += 1;
+            }
+        }
+        // The new paths' D65 at their wavelengths (zero in RGB mode), across the lanes.
+        if !rgb && fresh.iter().any(|&f| f) {
+            let mut d65: F = [0.0; LANES];
+            for i in 0..N {
+                d65_normalised_each(&st.lambda[i], &mut d65);
+                for k in 0..LANES {
+                    st.d65[i][k] = select_unpredictable(fresh[k], d65[k], st.d65[i][k]);
+                }
             }
         }
         if st.slot.iter().all(Option::is_none) {
