@@ -266,7 +266,7 @@ fn d65_normalised_each_equals_d65_normalised() {
         lambdas.extend([edge, f32::from_bits(edge.to_bits() - 1), f32::from_bits(edge.to_bits() + 1)]);
     }
     lambdas.extend([0.0, -0.0, -400.0, 1e30, -1e30, f32::INFINITY, f32::NEG_INFINITY, f32::NAN]);
-    while lambdas.len() % 8 != 0 {
+    while !lambdas.len().is_multiple_of(8) {
         lambdas.push(f32::NAN);
     }
     let mut checked = 0;
