@@ -8,7 +8,8 @@ reference in ../shared/refs/cornell-box-original/ (spectral reference for spectr
 RGB for RGB), for the other scenes each renderer's own (see --scene below); its time is the wall time of the sampling alone (Mitsuba: the timed `mi.render`
 after a warm-up render that JIT-compiles the kernels; ours: the sampling time `spt
 render` prints, after loading and BVH build). Configurations run alternately, R rounds
-with a different seed each, so that machine noise hits them all alike.
+with a different seed each, each round starting one configuration later (the place in a
+round matters by a few percent), so that machine noise hits them all alike.
 
     efficiency = 1 / (relMSE x time)
 
@@ -285,7 +286,12 @@ def main():
     results = {c: {"walls": [], "errors": []} for c, _, _ in runners}
     tmp = tempfile.mkdtemp(prefix="time_to_error_")
     for r in range(a.rounds):
-        for c, runner, ref in runners:
+        # Each round starts one configuration later: where a configuration runs in the
+        # round changes its speed by a few percent on a shared machine (the one run second
+        # after Mitsuba gained 3-5 % over the third, stop 41), so every place is taken
+        # in turn (rounds a multiple of the configurations' count share them evenly).
+        shift = r % len(runners)
+        for c, runner, ref in runners[shift:] + runners[:shift]:
             wall, img = runner.run(a.spp, 17 + r, os.path.join(tmp, "ours.exr"))
             results[c]["walls"].append(wall)
             results[c]["errors"].append(rel_mse(img, refs[ref]))
