@@ -37,13 +37,29 @@ pub struct LightSample {
 }
 
 /// An emissive triangle as light sampling needs it, computed once per scene instead of
-/// per shadow ray (vertex lookups, a cross product and two square roots per sample).
+/// per shadow ray (vertex lookups, a cross product, two square roots and a division per
+/// sample). The lanes' next-event estimation gathers these one lane at a time
+/// ([`Lights::triangle_light`]) and places the points across the lanes.
 #[derive(Clone, Copy, Debug)]
-struct LightTriangle {
-    vertices: [Vec3; 3],
+pub(crate) struct LightTriangle {
+    /// Its corners: a sample's point is [`on_triangle`] of them.
+    pub(crate) vertices: [Vec3; 3],
     /// Unit front-face normal (counter-clockwise winding).
-    normal: Vec3,
-    area: f32,
+    pub(crate) normal: Vec3,
+    /// Density per unit area of its points, the choice of the light included: its
+    /// probability of being chosen over its area.
+    pub(crate) pdf: f32,
+    /// The primitive.
+    pub(crate) prim: u32,
+}
+
+/// One coordinate of the point with barycentrics `b0`, `b1` (`uniform_triangle`'s) on the
+/// triangle whose corners have coordinates `v`: `b0·v0 + b1·v1 + (1 − b0 − b1)·v2`, in
+/// this order of operations, per coordinate so that the lanes compute it across paths
+/// with the same bits as [`Lights::sample`].
+#[inline(always)]
+pub(crate) fn on_triangle(b0: f32, b1: f32, v: [f32; 3]) -> f32 {
+    (b0 * v[0] + b1 * v[1]) + (1.0 - b0 - b1) * v[2]
 }
 
 /// The scene's emitters and the discrete distribution that picks among them.
@@ -117,14 +133,13 @@ impl Lights {
             }
             false
         };
+        // Each light triangle with its area (its pdf follows once the power is summed).
         let mut triangle_light = |prim: usize, vertices: [Vec3; 3], orientation: f32, material: u32| {
             let cross = (vertices[1] - vertices[0]).cross(vertices[2] - vertices[0]);
-            if push(prim, 0.5 * cross.length(), material) {
-                light_triangles.push(LightTriangle {
-                    vertices,
-                    normal: cross.normalize() * orientation,
-                    area: 0.5 * cross.length(),
-                });
+            let area = 0.5 * cross.length();
+            if push(prim, area, material) {
+                let normal = cross.normalize() * orientation;
+                light_triangles.push((LightTriangle { vertices, normal, pdf: 0.0, prim: prim as u32 }, area));
             }
         };
         for (i, &m) in scene.material_ids.iter().enumerate() {
@@ -183,7 +198,10 @@ impl Lights {
         for (&t, p) in prims.iter().zip(&power) {
             prim_pmf[t as usize] = (p / total) as f32;
         }
-        let triangles = light_triangles;
+        let triangles = light_triangles
+            .into_iter()
+            .map(|(t, area)| LightTriangle { pdf: prim_pmf[t.prim as usize] / area, ..t })
+            .collect();
         let suns = scene
             .punctual_lights
             .iter()
@@ -279,6 +297,23 @@ impl Lights {
         self.environment_pmf() * self.environment_map.as_ref().map_or(UNIFORM_SPHERE_PDF, |m| m.pdf(dir))
     }
 
+    /// The light whose stretch of the unit interval holds `x` (the first coordinate of
+    /// [`Lights::sample`]'s sample: index k into the primitives, then the punctual
+    /// lights), and `x` rescaled to [0, 1) within that stretch. The caller checks that
+    /// there is a light and that `x` is past the environment's share.
+    #[inline(always)]
+    pub(crate) fn choose(&self, x: f32) -> (usize, f32) {
+        let cdf = self.cdf();
+        let k = cdf.partition_point(|&c| c <= x).min(cdf.len() - 1);
+        (k, rescale(x, self.bounds[k], cdf[k]))
+    }
+
+    /// Light `k` of [`Lights::choose`] if it is one of the emissive triangles.
+    #[inline(always)]
+    pub(crate) fn triangle_light(&self, k: usize) -> Option<&LightTriangle> {
+        self.triangles.get(k)
+    }
+
     /// Picks a light with `u.x`, then a point on it with `u`, `u.x` rescaled to [0, 1)
     /// within the chosen light's share of the unit interval (sample reuse, as Mitsuba 3
     /// does): one 2-D sample covers all the lights, so a stratified `u` stays stratified over
@@ -313,9 +348,13 @@ impl Lights {
             return Some(LightSample { pdf: ls.pdf * self.punctual_pmf[index], ..ls });
         }
         if let Some(t) = self.triangle_light(k) {
-            let v = t.vertices;
+            let [v0, v1, v2] = t.vertices;
             let (b0, b1) = uniform_triangle(u);
-            let point = b0 * v[0] + b1 * v[1] + (1.0 - b0 - b1) * v[2];
+            let point = Vec3::new(
+                on_triangle(b0, b1, [v0.x, v1.x, v2.x]),
+                on_triangle(b0, b1, [v0.y, v1.y, v2.y]),
+                on_triangle(b0, b1, [v0.z, v1.z, v2.z]),
+            );
             return Some(LightSample { point, normal: t.normal, pdf: t.pdf, source: LightSource::Primitive(t.prim) });
         }
         let prim = self.prims[k];
@@ -324,47 +363,6 @@ impl Lights {
         let shape = scene.shapes[prim as usize - scene.triangles.len()].shape.shape();
         let (point, normal) = shape.sample_area(u)?;
         Some(LightSample { point, normal, pdf: pmf / shape.area(), source })
-    }
-}
-
-/// A triangle light as [`Lights::sample`] samples it: the lanes' next-event estimation
-/// gathers these one lane at a time and places the points across the lanes.
-#[derive(Clone, Copy, Debug)]
-pub(crate) struct TriangleLight<'a> {
-    /// Its corners; the point is `b0·v0 + b1·v1 + (1 − b0 − b1)·v2` with
-    /// `uniform_triangle`'s barycentrics.
-    pub(crate) vertices: &'a [Vec3; 3],
-    /// Unit front-face normal.
-    pub(crate) normal: Vec3,
-    /// Density per unit area of its points, the choice of the light included.
-    pub(crate) pdf: f32,
-    /// The primitive.
-    pub(crate) prim: u32,
-}
-
-impl Lights {
-    /// The light whose stretch of the unit interval holds `x` (the first coordinate of
-    /// [`Lights::sample`]'s sample: index k into the primitives, then the punctual
-    /// lights), and `x` rescaled to [0, 1) within that stretch. The caller checks that
-    /// there is a light and that `x` is past the environment's share.
-    #[inline(always)]
-    pub(crate) fn choose(&self, x: f32) -> (usize, f32) {
-        let cdf = self.cdf();
-        let k = cdf.partition_point(|&c| c <= x).min(cdf.len() - 1);
-        (k, rescale(x, self.bounds[k], cdf[k]))
-    }
-
-    /// Light `k` of [`Lights::choose`] if it is one of the scene's emissive triangles.
-    #[inline(always)]
-    pub(crate) fn triangle_light(&self, k: usize) -> Option<TriangleLight<'_>> {
-        let t = self.triangles.get(k)?;
-        let prim = self.prims[k];
-        Some(TriangleLight {
-            vertices: &t.vertices,
-            normal: t.normal,
-            pdf: self.prim_pmf[prim as usize] / t.area,
-            prim,
-        })
     }
 }
 

@@ -35,6 +35,7 @@ use super::{
     path_vertex, power_heuristic,
 };
 use crate::geometry::{HitSurface, SceneHit};
+use crate::lights::on_triangle;
 use crate::material::{ModelParams, Surface};
 use crate::sampler::{LaneDraw, Sampler, SobolLanes};
 use crate::shading::MIN_SHADING_COSINE;
@@ -635,10 +636,9 @@ fn run<const N: usize, S: Sampler>(
         }
         for k in 0..LANES {
             let (b0, b1) = uniform_triangle(Vec2::new(ux[k], uy[k]));
-            let b2 = 1.0 - b0 - b1;
-            lp.x[k] = (b0 * lv0.x[k] + b1 * lv1.x[k]) + b2 * lv2.x[k];
-            lp.y[k] = (b0 * lv0.y[k] + b1 * lv1.y[k]) + b2 * lv2.y[k];
-            lp.z[k] = (b0 * lv0.z[k] + b1 * lv1.z[k]) + b2 * lv2.z[k];
+            lp.x[k] = on_triangle(b0, b1, [lv0.x[k], lv1.x[k], lv2.x[k]]);
+            lp.y[k] = on_triangle(b0, b1, [lv0.y[k], lv1.y[k], lv2.y[k]]);
+            lp.z[k] = on_triangle(b0, b1, [lv0.z[k], lv1.z[k], lv2.z[k]]);
         }
         let lle = light_colour.eval(&st.lambda, &st.d65, rgb);
         let mut shadow: M = [false; LANES];
