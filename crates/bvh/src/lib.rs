@@ -7,6 +7,8 @@
 //! * [`Bvh4`], [`Bvh8`]: 4- and 8-wide BVHs collapsed from a [`Bvh`], a node's child
 //!   boxes tested at once with SIMD (SSE; AVX2 detected at run time) — [`WideBvh`] picks
 //!   the width for the CPU it runs on;
+//! * [`isa`]: the vector instruction set the kernels use (detected, or capped for
+//!   measurements);
 //! * [`TwoLevel`]: the thesis's two-level structure — a top-level BVH over instances
 //!   (with transforms) of per-object accelerators;
 //! * [`BoxBvh`]: a BVH over the boxes of primitives the crate does not know (analytic
@@ -27,6 +29,7 @@ mod brute;
 mod build;
 mod builders;
 mod instance;
+pub mod isa;
 #[cfg(feature = "obvhs")]
 mod obvhs_adapter;
 mod ray;

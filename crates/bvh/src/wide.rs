@@ -93,12 +93,10 @@ pub type Bvh4 = BvhWide<4>;
 /// at run time); elsewhere the portable kernel, slower than [`Bvh4`]'s.
 pub type Bvh8 = BvhWide<8>;
 
-/// True if this CPU runs [`Bvh8`]'s AVX kernel: where it does not, [`Bvh4`] is faster.
+/// True if [`Bvh8`]'s AVX kernel runs here (the CPU has AVX2 and [`crate::isa::limit_to`]
+/// did not rule it out): where it does not, [`Bvh4`] is faster.
 pub fn wide8_accelerated() -> bool {
-    #[cfg(target_arch = "x86_64")]
-    return avx::avx2_available();
-    #[cfg(not(target_arch = "x86_64"))]
-    false
+    cfg!(target_arch = "x86_64") && crate::isa::active() >= crate::isa::Isa::Avx2
 }
 
 impl<const W: usize> BvhWide<W> {

@@ -33,6 +33,36 @@ use tracer::{Backend, CpuBackend, PathTracer, RenderSettings, Scene};
 struct Cli {
     #[command(subcommand)]
     command: Command,
+    /// Vector instructions the kernels may use: `auto`, the widest this CPU has, or at
+    /// most `avx512`, `avx2` or `baseline` (SSE2: 4-wide trees), to measure the widths
+    /// against each other on one machine. A level the CPU lacks is an error.
+    #[arg(long, global = true, value_enum, default_value_t = SimdChoice::Auto, value_name = "ISA")]
+    simd: SimdChoice,
+}
+
+/// `--simd`'s values.
+#[derive(Clone, Copy, PartialEq, Eq, Debug, clap::ValueEnum)]
+enum SimdChoice {
+    Auto,
+    Avx512,
+    Avx2,
+    Baseline,
+}
+
+/// Applies `--simd` (before any accelerator is built: the tree's width depends on it).
+fn apply_simd(choice: SimdChoice) -> Result<()> {
+    use bvh::isa::{Isa, detected, limit_to};
+    let wanted = match choice {
+        SimdChoice::Auto => return Ok(()),
+        SimdChoice::Avx512 => Isa::Avx512,
+        SimdChoice::Avx2 => Isa::Avx2,
+        SimdChoice::Baseline => Isa::Baseline,
+    };
+    if wanted > detected() {
+        bail!("--simd {wanted}: this CPU runs at most {}", detected());
+    }
+    limit_to(wanted);
+    Ok(())
 }
 
 #[derive(Subcommand)]
@@ -1315,10 +1345,17 @@ fn parse_command_line() -> Result<Cli> {
     if extra.is_empty() {
         return Ok(cli);
     }
-    // argv[1] is the subcommand (the CLI has no global options).
-    let mut with_defaults = argv[..2].to_vec();
+    // The scene file's options go right after the subcommand's name (global options such
+    // as `--simd avx2` may come before it; the name is never one of their values).
+    let name = match &cli.command {
+        Command::Render(_) => "render",
+        Command::Bench(_) => "bench",
+        _ => "view",
+    };
+    let at = argv.iter().skip(1).position(|a| a == name).map_or(2, |i| i + 2);
+    let mut with_defaults = argv[..at].to_vec();
     with_defaults.extend(extra.into_iter().map(Into::into));
-    with_defaults.extend(argv[2..].iter().cloned());
+    with_defaults.extend(argv[at..].iter().cloned());
     Cli::try_parse_from(&with_defaults).map_err(|e| {
         let message = e.to_string();
         let first = message.lines().next().unwrap_or_default().trim_start_matches("error: ").to_string();
@@ -1342,6 +1379,10 @@ fn main() -> ExitCode {
             return ExitCode::FAILURE;
         }
     };
+    if let Err(e) = apply_simd(cli.simd) {
+        eprintln!("error: {e:#}");
+        return ExitCode::FAILURE;
+    }
     let result = match cli.command {
         Command::Render(a) => run_render(a).context("render failed"),
         Command::Bench(a) => run_bench(a).context("bench failed"),

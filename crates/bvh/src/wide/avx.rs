@@ -4,7 +4,7 @@
 //! Möller–Trumbore one four at a time by the SSE kernel.
 //!
 //! Only called from functions compiled with `#[target_feature(enable = "avx2")]` after a
-//! run-time check ([`avx2_available`]), into which these `#[inline(always)]` methods are
+//! run-time check ([`crate::isa::active`]), into which these `#[inline(always)]` methods are
 //! inlined, so that the intrinsics compile to single instructions.
 
 use super::Bvh8Node;
@@ -13,12 +13,6 @@ use super::lanes::{BoxRay, watertight_group, watertight_groups};
 use super::sse::SseKernel;
 use crate::{Hit, Ray, WatertightRay};
 use std::arch::x86_64::__m256;
-
-/// True if this CPU runs AVX2 (checked once by the standard library, then cached).
-#[inline]
-pub(super) fn avx2_available() -> bool {
-    is_x86_feature_detected!("avx2")
-}
 
 /// The AVX [`RayKernel`] for 8-wide nodes.
 pub(super) struct AvxKernel {

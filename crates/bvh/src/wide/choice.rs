@@ -79,6 +79,7 @@ impl WideBvh {
     /// The tree and the kernel that traverses it on this CPU, for messages.
     pub fn description(&self) -> &'static str {
         match self {
+            Self::Eight(_) if crate::isa::active() == crate::isa::Isa::Avx512 => "8-wide BVH (AVX-512)",
             Self::Eight(_) if wide8_accelerated() => "8-wide BVH (AVX2)",
             Self::Eight(_) => "8-wide BVH (portable kernel)",
             Self::Four(_) if cfg!(target_arch = "x86_64") => "4-wide BVH (SSE)",

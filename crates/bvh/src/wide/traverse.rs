@@ -271,11 +271,30 @@ impl Bvh8 {
     #[inline(always)]
     fn traverse_best<const COUNT: bool, const ANY_HIT: bool>(&self, ray: &Ray, stats: &mut RayStats) -> Option<Hit> {
         #[cfg(target_arch = "x86_64")]
-        if super::avx::avx2_available() {
-            // SAFETY: the CPU has AVX2 (the standard library's detection, cached).
-            return unsafe { self.traverse_avx2::<COUNT, ANY_HIT>(ray, stats) };
+        match crate::isa::active() {
+            // SAFETY: `active` is at most what the CPU has (detected).
+            crate::isa::Isa::Avx512 => return unsafe { self.traverse_avx512::<COUNT, ANY_HIT>(ray, stats) },
+            // SAFETY: as above.
+            crate::isa::Isa::Avx2 => return unsafe { self.traverse_avx2::<COUNT, ANY_HIT>(ray, stats) },
+            crate::isa::Isa::Baseline => {}
         }
         self.traverse::<ScalarKernel, COUNT, ANY_HIT>(ray, stats)
+    }
+
+    /// The AVX kernel's traversal compiled for AVX-512 (VL): the same 256-bit
+    /// operations, with compares into mask registers and 32 vector registers.
+    ///
+    /// # Safety
+    ///
+    /// The CPU must have AVX-512 F, VL, BW and DQ.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,avx512f,avx512vl,avx512bw,avx512dq")]
+    unsafe fn traverse_avx512<const COUNT: bool, const ANY_HIT: bool>(
+        &self,
+        ray: &Ray,
+        stats: &mut RayStats,
+    ) -> Option<Hit> {
+        self.traverse::<super::avx::AvxKernel, COUNT, ANY_HIT>(ray, stats)
     }
 
     /// The traversal compiled with AVX2 enabled, the AVX kernel inlined into it.

@@ -40,6 +40,7 @@ use crate::material::{ModelParams, Surface};
 use crate::sampler::{LaneDraw, Sampler, SobolLanes};
 use crate::shading::MIN_SHADING_COSINE;
 use brdf::sampling::{sin_cos_quarter, uniform_triangle};
+use bvh::isa::Isa;
 use bvh::{Accelerator, Ray};
 use glam::{Vec2, Vec3};
 use shapes::offset::{OFFSET_FLOAT_SCALE, OFFSET_INT_SCALE, OFFSET_ORIGIN};
@@ -301,24 +302,15 @@ pub(crate) fn radiance_block<const N: usize, S: Sampler>(
     counters: &mut PathCounters,
 ) {
     #[cfg(target_arch = "x86_64")]
-    {
-        if has_avx512() {
-            // SAFETY: the CPU has the features the function is compiled for (just detected).
-            return unsafe { radiance_block_avx512(lanes, view, settings, block, counters) };
-        }
-        if std::arch::is_x86_feature_detected!("avx2") {
-            // SAFETY: as above.
-            return unsafe { radiance_block_avx2(lanes, view, settings, block, counters) };
-        }
+    match bvh::isa::active() {
+        // SAFETY: `active` is at most what the CPU has (detected), and each level has the
+        // features its function is compiled for.
+        Isa::Avx512 => return unsafe { radiance_block_avx512(lanes, view, settings, block, counters) },
+        // SAFETY: as above.
+        Isa::Avx2 => return unsafe { radiance_block_avx2(lanes, view, settings, block, counters) },
+        Isa::Baseline => {}
     }
     run(lanes, view, settings, block, counters);
-}
-
-/// Whether the CPU has what `radiance_block_avx512` is compiled for.
-#[cfg(target_arch = "x86_64")]
-fn has_avx512() -> bool {
-    use std::arch::is_x86_feature_detected as has;
-    has!("avx512f") && has!("avx512vl") && has!("avx512bw") && has!("avx512dq")
 }
 
 /// [`run`] compiled for more vector instructions than the baseline: one function per
@@ -992,14 +984,14 @@ mod tests {
         run(lanes, &view, &settings, &mut b, &mut c);
         let mut variants = vec![("baseline", b, c)];
         #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx2") {
+        if bvh::isa::detected() >= Isa::Avx2 {
             let (mut b, mut c) = (block(&wl, sampler), PathCounters::default());
             // SAFETY: the features were just detected.
             unsafe { radiance_block_avx2(lanes, &view, &settings, &mut b, &mut c) };
             variants.push(("avx2", b, c));
         }
         #[cfg(target_arch = "x86_64")]
-        if has_avx512() {
+        if bvh::isa::detected() >= Isa::Avx512 {
             let (mut b, mut c) = (block(&wl, sampler), PathCounters::default());
             // SAFETY: the features were just detected.
             unsafe { radiance_block_avx512(lanes, &view, &settings, &mut b, &mut c) };
