@@ -23,7 +23,8 @@ Usage (from the repository root, on an otherwise idle machine)
   python3 bench/embree_rays.py [--scenes bunny,sponza,bunny-sub2] [--threads 1,2]
         [--rounds 3] [--passes 5] [--spt target/release/spt] [--ours auto | bvh4,bvh8]
         (an --ours entry may be ACCEL:ARGS@SPT, e.g. "bvh8:--presplit 0.3", or
-        "embree:--quality high" for Embree's spatial-split build as one more column)
+        "embree:--quality high" for Embree's spatial-split build as one more column,
+        "embree:--packet 16" for Embree called with packets of 16 rays)
         [--width 1024 --height 1024] [--seed 1] [--json out.json]
         [--raysets NAME=DIR ...] [--reuse-rays] [--no-compare] [--eps 1e-6]
         [--embree-args '--build-threads 0']

@@ -42,6 +42,11 @@ sampler in passes of 64 spp; delete them after a change that alters a renderer's
 and the script prints how far the two references differ (their means per channel and their relMSE), which says whether the two
 renderers draw the same image.
 
+The vector width on both sides: `--simd avx2` in our flags, `--mitsuba-target znver3::8`
+for Mitsuba (Dr.Jit's LLVM target for the whole run: CPU, features, lanes), e.g. on an
+AVX-512 machine `--mitsuba-target znver3::8 mitsuba:llvm_ad_spectral:multijitter
+"ours:hero:zsobol:--simd avx2"`.
+
 Measuring one change against the commit before it, e.g.:
 
     git worktree add /tmp/before HEAD~1 && cargo build --release -p cli --manifest-path /tmp/before/Cargo.toml
@@ -161,6 +166,23 @@ class Scene:
         return d
 
 
+def set_llvm_target(dr, target):
+    """--mitsuba-target CPU:FEATURES:WIDTH: Dr.Jit's `jit_llvm_set_target` (exported by
+    libdrjit-core.so, called through ctypes), for every LLVM kernel compiled after it in
+    this process, e.g. znver3::8 for AVX2 code eight lanes wide on an AVX-512 machine
+    (Embree still picks its own kernels, but is called with packets of the new width)."""
+    import ctypes
+    cpu, features, width = target.split(":")
+    core = ctypes.CDLL(os.path.join(os.path.dirname(dr.__file__), "libdrjit-core.so"))
+    set_target = getattr(core, "_Z19jit_llvm_set_targetPKcS0_j")
+    set_target.argtypes = [ctypes.c_char_p, ctypes.c_char_p, ctypes.c_uint32]
+    set_target(cpu.encode(), features.encode(), int(width))
+    get_width = getattr(core, "_Z21jit_llvm_vector_widthv")
+    get_width.restype = ctypes.c_uint32
+    if get_width() != int(width):
+        sys.exit(f"--mitsuba-target {target}: Dr.Jit kept vector width {get_width()}")
+
+
 class Mitsuba:
     """One Mitsuba configuration: the scene loaded once, kernels warmed up."""
 
@@ -177,6 +199,8 @@ class Mitsuba:
             dr.set_thread_count(a.threads)
         self.mi, self.dr, self.variant = mi, dr, variant
         mi.set_variant(variant)
+        if a.mitsuba_target and variant.startswith("llvm"):
+            set_llvm_target(dr, a.mitsuba_target)
         self.tools = tools
         d = scene.mitsuba_dict(mi, a.res, tools)
         d["sensor"]["sampler"] = {"type": sampler, "sample_count": spp or a.spp}
@@ -247,6 +271,9 @@ def main():
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("configs", nargs="*", default=DEFAULT_CONFIGS)
     ap.add_argument("--res", type=int, default=256)
+    ap.add_argument("--mitsuba-target", metavar="CPU:FEATURES:WIDTH",
+                    help="Dr.Jit's LLVM target for every Mitsuba configuration of the run, e.g. "
+                         "znver3::8 (AVX2, 8 lanes) on an AVX-512 machine")
     ap.add_argument("--spp", type=int, default=64)
     ap.add_argument("--threads", type=int, default=2)
     ap.add_argument("--rounds", type=int, default=3)

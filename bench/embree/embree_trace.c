@@ -4,7 +4,7 @@
  *
  *   embree_trace DIR --lib PATH [--threads T] [--passes P] [--no-write]
  *                    [--sets primary,diffuse,shadow] [--build-threads N]
- *                    [--name embree] [--device-config STR]
+ *                    [--name embree] [--device-config STR] [--quality Q] [--packet W]
  *
  * DIR/triangles.f32             f32 LE, 9 per triangle (v0.xyz v1.xyz v2.xyz)
  * DIR/{primary,diffuse}.rays    f32 LE, 8 per ray (ox oy oz dx dy dz tmin tmax): closest hit
@@ -20,6 +20,10 @@
  * (the main thread + T-1 pthreads created once, parked on a barrier between passes) take
  * chunks of 1024 rays from an atomic counter; each ray's record is stored in an in-memory
  * array in every pass; the file is written after the last pass (not timed).
+ *
+ * --packet W (4, 8 or 16) traces W consecutive rays at once (rtcIntersectW/rtcOccludedW,
+ * structure-of-arrays packets, the last one masked): the calls Mitsuba 3's LLVM variants
+ * make, W being their vector width (16 with AVX-512, 8 with AVX2). Default 1: single rays.
  *
  * Build: gcc -O2 -std=c11 -Wall -Wextra -pthread -o build/embree_trace embree_trace.c -ldl -lm
  */
@@ -88,6 +92,31 @@ _Static_assert(offsetof(RTCRayHit, hit) == 48, "RTCRayHit.hit at 48");
 _Static_assert(offsetof(RTCHit, primID) == 20, "RTCHit.primID at 20");
 _Static_assert(offsetof(RTCHit, instID) == 28, "RTCHit.instID at 28");
 
+/* Packets of W rays (RTCRayW, RTCHitW, RTCRayHitW of rtcore_ray.h): each field an array
+ * of W; aligned to 4 W bytes. The hit's spare words play the same part as RTCHit's. */
+#define DEFINE_PACKET(W)                                                                    \
+    typedef struct __attribute__((aligned(4 * W))) {                                        \
+        float org_x[W], org_y[W], org_z[W], tnear[W];                                        \
+        float dir_x[W], dir_y[W], dir_z[W], time[W];                                         \
+        float tfar[W];                                                                       \
+        unsigned int mask[W], id[W], flags[W];                                               \
+    } RTCRay##W;                                                                             \
+    typedef struct __attribute__((aligned(4 * W))) {                                        \
+        float Ng_x[W], Ng_y[W], Ng_z[W];                                                     \
+        float u[W], v[W];                                                                    \
+        unsigned int primID[W], geomID[W];                                                   \
+        unsigned int instID[1][W];                                                           \
+        unsigned int spare[24][W];                                                           \
+    } RTCHit##W;                                                                             \
+    typedef struct {                                                                         \
+        RTCRay##W ray;                                                                       \
+        RTCHit##W hit;                                                                       \
+    } RTCRayHit##W;
+DEFINE_PACKET(4)
+DEFINE_PACKET(8)
+DEFINE_PACKET(16)
+_Static_assert(offsetof(RTCRayHit16, hit) == 12 * 64, "RTCRayHit16.hit after 12 arrays of 16");
+
 typedef void (*RTCErrorFunction)(void *userPtr, int code, const char *str);
 
 static struct {
@@ -108,6 +137,13 @@ static struct {
                                   size_t byteStride, size_t itemCount);
     void (*Intersect1)(RTCScene, RTCRayHit *, void *args);
     void (*Occluded1)(RTCScene, RTCRay *, void *args);
+    /* rtcIntersectW / rtcOccludedW (const int *valid, scene, packet, args), W = 4, 8, 16 */
+    void (*Intersect4)(const int *, RTCScene, RTCRayHit4 *, void *args);
+    void (*Occluded4)(const int *, RTCScene, RTCRay4 *, void *args);
+    void (*Intersect8)(const int *, RTCScene, RTCRayHit8 *, void *args);
+    void (*Occluded8)(const int *, RTCScene, RTCRay8 *, void *args);
+    void (*Intersect16)(const int *, RTCScene, RTCRayHit16 *, void *args);
+    void (*Occluded16)(const int *, RTCScene, RTCRay16 *, void *args);
     /* enum RTCBuildQuality: 0 low, 1 medium (the default), 2 high (spatial splits) */
     void (*SetSceneBuildQuality)(RTCScene, int quality);
     void (*SetGeometryBuildQuality)(RTCGeometry, int quality);
@@ -115,6 +151,8 @@ static struct {
 
 /* The build quality asked for by --quality (1: Embree's default, medium). */
 static int g_quality = 1;
+/* Rays per call (--packet): 1, 4, 8 or 16. */
+static int g_packet = 1;
 
 /* ------------------------------------------------------------------------------------- */
 
@@ -238,6 +276,43 @@ static struct {
     pthread_barrier_t start, end;
 } job;
 
+/* Rays begin..stop (a chunk) in packets of W: fill the packet, call, read it back. */
+#define DEFINE_TRACE_PACKETS(W)                                                             \
+    static void trace_packets##W(size_t begin, size_t stop) {                                \
+        const float qnan = NAN;                                                              \
+        for (size_t p = begin; p < stop; p += W) {                                           \
+            int valid[W];                                                                    \
+            RTCRayHit##W rh;                                                                 \
+            RTCRay##W *ray = &rh.ray;                                                        \
+            for (int k = 0; k < W; k++) {                                                    \
+                size_t i = p + (size_t)k < stop ? p + (size_t)k : stop - 1;                  \
+                const float *r = job.rays + 8 * i;                                           \
+                valid[k] = p + (size_t)k < stop ? -1 : 0;                                    \
+                ray->org_x[k] = r[0], ray->org_y[k] = r[1], ray->org_z[k] = r[2];            \
+                ray->dir_x[k] = r[3], ray->dir_y[k] = r[4], ray->dir_z[k] = r[5];            \
+                ray->tnear[k] = r[6], ray->tfar[k] = r[7], ray->time[k] = 0.0f;              \
+                ray->mask[k] = 0xFFFFFFFFu, ray->id[k] = (unsigned)i, ray->flags[k] = 0;     \
+                rh.hit.geomID[k] = rh.hit.primID[k] = RTC_INVALID_GEOMETRY_ID;               \
+                rh.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;                               \
+            }                                                                                \
+            if (job.occlusion) rtc.Occluded##W(valid, job.scene, ray, NULL);                 \
+            else rtc.Intersect##W(valid, job.scene, &rh, NULL);                              \
+            for (int k = 0; k < W && p + (size_t)k < stop; k++) {                            \
+                HitRec h = {0xFFFFFFFFu, qnan, qnan, qnan};                                  \
+                if (job.occlusion) {                                                         \
+                    if (ray->tfar[k] < 0.0f) h.prim = 0;                                     \
+                } else if (rh.hit.geomID[k] != RTC_INVALID_GEOMETRY_ID) {                    \
+                    h.prim = rh.hit.primID[k], h.t = ray->tfar[k];                           \
+                    h.u = rh.hit.u[k], h.v = rh.hit.v[k];                                    \
+                }                                                                            \
+                job.out[p + (size_t)k] = h;                                                  \
+            }                                                                                \
+        }                                                                                    \
+    }
+DEFINE_TRACE_PACKETS(4)
+DEFINE_TRACE_PACKETS(8)
+DEFINE_TRACE_PACKETS(16)
+
 static void trace_chunks(void) {
     const float qnan = NAN;
     const RTCScene scene = job.scene;
@@ -248,7 +323,10 @@ static void trace_chunks(void) {
         size_t begin = atomic_fetch_add_explicit(&job.next, CHUNK, memory_order_relaxed);
         if (begin >= n) break;
         size_t stop = begin + CHUNK < n ? begin + CHUNK : n;
-        if (!job.occlusion) {
+        if (g_packet == 16) trace_packets16(begin, stop);
+        else if (g_packet == 8) trace_packets8(begin, stop);
+        else if (g_packet == 4) trace_packets4(begin, stop);
+        else if (!job.occlusion) {
             for (size_t i = begin; i < stop; i++) {
                 const float *r = rays + 8 * i;
                 RTCRayHit rh;
@@ -319,6 +397,8 @@ static void usage(FILE *f) {
           "                     (default: T; 0 = Embree's default, all cores)\n"
           "  --quality Q        build quality: low, medium (Embree's default) or high\n"
           "                     (spatial splits)\n"
+          "  --packet W         rays per call: 1 (rtcIntersect1, default), 4, 8 or 16\n"
+          "                     (rtcIntersectW, as Mitsuba 3's LLVM variants call it)\n"
           "  --no-write         do not write DIR/<set>.<name>.hits\n",
           f);
 }
@@ -353,6 +433,11 @@ int main(int argc, char **argv) {
             else if (!strcmp(q, "medium")) g_quality = 1;
             else if (!strcmp(q, "high")) g_quality = 2;
             else die("bad value for --quality: '%s' (low, medium or high)", q);
+        }
+        else if (!strcmp(a, "--packet")) {
+            g_packet = (int)parse_long(a, NEXT(), 1);
+            if (g_packet != 1 && g_packet != 4 && g_packet != 8 && g_packet != 16)
+                die("bad value for --packet: %d (1, 4, 8 or 16)", g_packet);
         }
         else if (!strcmp(a, "-h") || !strcmp(a, "--help")) { usage(stdout); return 0; }
         else if (a[0] == '-' && a[1] == '-') { usage(stderr); die("unknown option %s", a); }
@@ -408,6 +493,12 @@ int main(int argc, char **argv) {
     rtc.SetNewGeometryBuffer = load_sym(h, "rtcSetNewGeometryBuffer", 1);
     rtc.Intersect1 = load_sym(h, "rtcIntersect1", 1);
     rtc.Occluded1 = load_sym(h, "rtcOccluded1", 1);
+    rtc.Intersect4 = load_sym(h, "rtcIntersect4", g_packet == 4);
+    rtc.Occluded4 = load_sym(h, "rtcOccluded4", g_packet == 4);
+    rtc.Intersect8 = load_sym(h, "rtcIntersect8", g_packet == 8);
+    rtc.Occluded8 = load_sym(h, "rtcOccluded8", g_packet == 8);
+    rtc.Intersect16 = load_sym(h, "rtcIntersect16", g_packet == 16);
+    rtc.Occluded16 = load_sym(h, "rtcOccluded16", g_packet == 16);
     rtc.SetSceneBuildQuality = load_sym(h, "rtcSetSceneBuildQuality", 1);
     rtc.SetGeometryBuildQuality = load_sym(h, "rtcSetGeometryBuildQuality", 1);
 
@@ -500,9 +591,9 @@ int main(int argc, char **argv) {
 
     /* ---- report ---- */
     printf("{\"tracer\": \"%s\", \"threads\": %ld, \"triangles\": %zu, \"build_ms\": %.4f, "
-           "\"build\": \"default\", \"build_threads\": %ld, \"passes\": %ld, "
+           "\"build\": \"default\", \"build_threads\": %ld, \"passes\": %ld, \"packet\": %d, "
            "\"embree_version\": \"%ld.%ld.%ld\", \"tasking_system\": %ld, \"sets\": {",
-           name, threads, ntri, build_ms, build_threads, passes, version / 10000,
+           name, threads, ntri, build_ms, build_threads, passes, g_packet, version / 10000,
            version / 100 % 100, version % 100, tasking);
     for (int s = 0; s < nsets; s++) {
         double mrays = best_ms[s] > 0 ? (double)nrays[s] / (best_ms[s] * 1e3) : 0.0;
