@@ -49,7 +49,9 @@ pub use obvhs_adapter::{ObvhsBvh2, ObvhsCwBvh, ObvhsQuality};
 pub use ray::{Hit, Ray};
 pub use raysets::{RaySets, make_ray_sets, make_ray_sets_from};
 pub use triangle::{Triangle, TriangleTest, WatertightRay, intersect_triangle, intersect_triangle_watertight};
-pub use wide::{Bvh4, Bvh4Node, Bvh8, Bvh8Node, BvhWide, BvhWidth, WideBvh, WideNode, WideStats, wide8_accelerated};
+pub use wide::{
+    Bvh4, Bvh4Node, Bvh8, Bvh8Node, BvhWide, BvhWidth, PACKET, WideBvh, WideNode, WideStats, wide8_accelerated,
+};
 
 use glam::Vec3;
 

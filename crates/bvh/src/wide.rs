@@ -32,6 +32,7 @@ mod kernel;
 #[cfg(target_arch = "x86_64")]
 mod lanes;
 mod node;
+mod packet;
 #[cfg(target_arch = "x86_64")]
 mod sse;
 #[cfg(test)]
@@ -40,6 +41,7 @@ mod traverse;
 
 pub use choice::{BvhWidth, WideBvh};
 pub use node::{Bvh4Node, Bvh8Node, WideNode};
+pub use packet::PACKET;
 
 use crate::{BuildConfig, BuildError, Bvh, TriangleTest};
 use glam::Vec3;

@@ -76,6 +76,15 @@ impl WideBvh {
         }
     }
 
+    /// [`Bvh8::occluded_packet`] of the tree: up to [`super::PACKET`] shadow rays at
+    /// once, the same answers as [`Accelerator::occluded`] ray by ray.
+    pub fn occluded_packet(&self, rays: &[Ray], occluded: &mut [bool]) {
+        match self {
+            Self::Four(b) => b.occluded_packet(rays, occluded),
+            Self::Eight(b) => b.occluded_packet(rays, occluded),
+        }
+    }
+
     /// The tree and the kernel that traverses it on this CPU, for messages.
     pub fn description(&self) -> &'static str {
         match self {

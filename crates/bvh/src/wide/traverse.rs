@@ -111,6 +111,18 @@ impl<const W: usize> BvhWide<W> {
         ray: &Ray,
         stats: &mut RayStats,
     ) -> Option<Hit> {
+        self.traverse_from::<K, COUNT, ANY_HIT>(ray, stats, (0, 0))
+    }
+
+    /// [`Self::traverse`] from the child `start` (its index or first triangle, and its
+    /// triangle count: `(0, 0)` is the root): a packet's ray that goes on alone.
+    #[inline(always)]
+    pub(super) fn traverse_from<K: RayKernel<W>, const COUNT: bool, const ANY_HIT: bool>(
+        &self,
+        ray: &Ray,
+        stats: &mut RayStats,
+        start: (u32, u32),
+    ) -> Option<Hit> {
         if COUNT {
             stats.rays += 1;
         }
@@ -129,7 +141,7 @@ impl<const W: usize> BvhWide<W> {
         // Uninitialised: zeroing 2 KiB would cost more than a short traversal.
         let mut stack = [MaybeUninit::<Entry>::uninit(); STACK_DEPTH];
         let mut sp = 0usize;
-        let mut current = Entry::default();
+        let mut current = Entry { child: start.0, count: start.1, t: 0.0 };
         loop {
             if current.count == 0 {
                 let node = &self.nodes[current.child as usize];
