@@ -13,6 +13,7 @@ mod sheet;
 mod stability;
 
 use anyhow::{Context, Result, bail};
+use bvh::isa::Isa;
 use bvh::{BvhWidth, TriangleTest};
 use clap::{Args, Parser, Subcommand};
 use glam::Vec3;
@@ -36,32 +37,25 @@ struct Cli {
     /// Vector instructions the kernels may use: `auto`, the widest this CPU has, or at
     /// most `avx512`, `avx2` or `baseline` (SSE2: 4-wide trees), to measure the widths
     /// against each other on one machine. A level the CPU lacks is an error.
-    #[arg(long, global = true, value_enum, default_value_t = SimdChoice::Auto, value_name = "ISA")]
-    simd: SimdChoice,
+    #[arg(long, global = true, default_value = "auto", value_name = "ISA", value_parser = simd_parser())]
+    simd: Isa,
 }
 
-/// `--simd`'s values.
-#[derive(Clone, Copy, PartialEq, Eq, Debug, clap::ValueEnum)]
-enum SimdChoice {
-    Auto,
-    Avx512,
-    Avx2,
-    Baseline,
+/// `--simd`'s values: `auto` (the detected level) or a level's name.
+fn simd_parser() -> impl clap::builder::TypedValueParser<Value = Isa> {
+    use clap::builder::TypedValueParser;
+    let names = std::iter::once("auto").chain(Isa::ALL.iter().rev().map(|i| i.name()));
+    clap::builder::PossibleValuesParser::new(names)
+        .map(|name| Isa::ALL.into_iter().find(|i| i.name() == name).unwrap_or_else(bvh::isa::detected))
 }
 
 /// Applies `--simd` (before any accelerator is built: the tree's width depends on it).
-fn apply_simd(choice: SimdChoice) -> Result<()> {
-    use bvh::isa::{Isa, detected, limit_to};
-    let wanted = match choice {
-        SimdChoice::Auto => return Ok(()),
-        SimdChoice::Avx512 => Isa::Avx512,
-        SimdChoice::Avx2 => Isa::Avx2,
-        SimdChoice::Baseline => Isa::Baseline,
-    };
-    if wanted > detected() {
-        bail!("--simd {wanted}: this CPU runs at most {}", detected());
+fn apply_simd(wanted: Isa) -> Result<()> {
+    let detected = bvh::isa::detected();
+    if wanted > detected {
+        bail!("--simd {wanted}: this CPU runs at most {detected}");
     }
-    limit_to(wanted);
+    bvh::isa::limit_to(wanted);
     Ok(())
 }
 
@@ -1301,16 +1295,17 @@ fn bench_frames(
 }
 
 /// The options a scene file's `[render]` table stands for, for `command` (render, bench
-/// or view: each takes those it has), or an error in the file.
-fn scene_file_options(command: &Command) -> Result<Vec<String>> {
-    let (scene, spp, spectral) = match command {
-        Command::Render(a) => (&a.scene.scene, true, true),
-        Command::Bench(a) => (&a.scene.scene, true, false),
-        Command::View(a) => (&a.scene.scene, false, true),
-        _ => return Ok(Vec::new()),
+/// or view: each takes those it has), with the subcommand's name they follow, or an error
+/// in the file.
+fn scene_file_options(command: &Command) -> Result<(&'static str, Vec<String>)> {
+    let (name, scene, spp, spectral) = match command {
+        Command::Render(a) => ("render", &a.scene.scene, true, true),
+        Command::Bench(a) => ("bench", &a.scene.scene, true, false),
+        Command::View(a) => ("view", &a.scene.scene, false, true),
+        _ => return Ok(("", Vec::new())),
     };
     if scene_format(scene).as_deref() != Some("toml") {
-        return Ok(Vec::new());
+        return Ok((name, Vec::new()));
     }
     let d = tracer::scene_file::render_defaults(scene)?;
     let mut out = Vec::new();
@@ -1332,7 +1327,7 @@ fn scene_file_options(command: &Command) -> Result<Vec<String>> {
     if spectral {
         push("--spectral", d.spectral);
     }
-    Ok(out)
+    Ok((name, out))
 }
 
 /// The command line, with a scene file's `[render]` settings put in front of the user's
@@ -1341,17 +1336,12 @@ fn scene_file_options(command: &Command) -> Result<Vec<String>> {
 fn parse_command_line() -> Result<Cli> {
     let argv: Vec<std::ffi::OsString> = std::env::args_os().collect();
     let cli = Cli::parse_from(&argv);
-    let extra = scene_file_options(&cli.command)?;
+    let (name, extra) = scene_file_options(&cli.command)?;
     if extra.is_empty() {
         return Ok(cli);
     }
     // The scene file's options go right after the subcommand's name (global options such
     // as `--simd avx2` may come before it; the name is never one of their values).
-    let name = match &cli.command {
-        Command::Render(_) => "render",
-        Command::Bench(_) => "bench",
-        _ => "view",
-    };
     let at = argv.iter().skip(1).position(|a| a == name).map_or(2, |i| i + 2);
     let mut with_defaults = argv[..at].to_vec();
     with_defaults.extend(extra.into_iter().map(Into::into));

@@ -356,17 +356,8 @@ fn bvh_width_is_chosen_or_refused_with_the_way_out() {
 fn simd_levels_render_the_same_image_and_a_level_the_cpu_lacks_is_refused() {
     let dir = temp_dir("simd");
     let scene = write_scene(&dir, OBJ);
-    #[cfg(target_arch = "x86_64")]
-    let has = |level: &str| match level {
-        "avx2" => std::arch::is_x86_feature_detected!("avx2"),
-        "avx512" => {
-            use std::arch::is_x86_feature_detected as has;
-            has!("avx2") && has!("avx512f") && has!("avx512vl") && has!("avx512bw") && has!("avx512dq")
-        }
-        _ => true,
-    };
-    #[cfg(not(target_arch = "x86_64"))]
-    let has = |level: &str| level == "baseline" || level == "auto";
+    // The same detection as the binary's (the cli crate's own dependency).
+    let has = |level: &str| bvh::isa::Isa::ALL.iter().any(|i| i.name() == level && *i <= bvh::isa::detected());
     let mut images = Vec::new();
     for (level, tree) in [("baseline", "4-wide BVH"), ("avx2", "8-wide BVH (AVX2)"), ("avx512", "8-wide BVH (AVX-512)")]
     {

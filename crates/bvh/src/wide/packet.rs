@@ -19,8 +19,10 @@
 //! a time, since there packets only broke even on the box.
 
 use super::kernel::{Leaf, RayKernel, ScalarKernel};
+use super::traverse::origin_and_direction_finite;
 use super::{BvhWide, MAX_WIDTH};
 use crate::{Accelerator, Ray, TriangleTest, WatertightRay, intersect_triangle_watertight};
+use glam::Vec3;
 use std::mem::MaybeUninit;
 
 /// Rays per packet: sixteen, AVX-512's lanes (two AVX2 registers).
@@ -28,7 +30,8 @@ pub const PACKET: usize = 16;
 
 type Lanes = [f32; PACKET];
 
-/// The packet's rays in structure of arrays, with what the box and triangle tests need.
+/// The packet's rays in structure of arrays for the box test, and each ray prepared for
+/// the watertight test, whose per-lane fields the triangle test reads across the lanes.
 struct Packet {
     origin: [Lanes; 3],
     inv_dir: [Lanes; 3],
@@ -37,7 +40,9 @@ struct Packet {
     negative: [[bool; PACKET]; 3],
     t_min: Lanes,
     t_max: Lanes,
-    /// The watertight test's permutation, shear and permuted origin, per lane.
+    /// Each lane's [`WatertightRay`] (for a lane an edge function leaves to the scalar
+    /// test), and its permutation, shear and permuted origin in structure of arrays.
+    watertight: [WatertightRay; PACKET],
     k: [[u8; PACKET]; 3],
     shear: [Lanes; 3],
     w_origin: [Lanes; 3],
@@ -56,87 +61,42 @@ fn min_ps(a: f32, acc: f32) -> f32 {
 
 /// One coordinate of each lane's permuted axis `k`: x, y or z by lane.
 #[inline(always)]
-fn pick(k: u8, x: f32, y: f32, z: f32) -> f32 {
-    let xy = if k == 0 { x } else { y };
-    if k == 2 { z } else { xy }
+fn pick(k: u8, v: Vec3) -> f32 {
+    let xy = if k == 0 { v.x } else { v.y };
+    if k == 2 { v.z } else { xy }
 }
 
 impl Packet {
     /// The packet of `rays`; lanes past their count hold a ray along z from the origin
-    /// (never tested: every test is masked by the lanes in use). Lane by lane the
-    /// permutation and shear of [`WatertightRay::new`], computed across the lanes.
+    /// (never tested: every test is masked by the lanes in use).
     #[inline(always)]
     fn new(rays: &[Ray]) -> Self {
-        let mut origin = [[0.0; PACKET]; 3];
-        let mut dir = [[0.0; PACKET]; 3];
-        dir[2] = [1.0; PACKET];
-        let mut inv_dir = [[f32::INFINITY; PACKET]; 3];
-        inv_dir[2] = [1.0; PACKET];
-        let mut t_min = [0.0; PACKET];
-        let mut t_max = [0.0; PACKET];
-        for (i, ray) in rays.iter().enumerate() {
-            let (o, d, inv) = (ray.origin.to_array(), ray.dir.to_array(), ray.inv_dir.to_array());
-            for a in 0..3 {
-                origin[a][i] = o[a];
-                dir[a][i] = d[a];
-                inv_dir[a][i] = inv[a];
-            }
-            t_min[i] = ray.t_min;
-            t_max[i] = ray.t_max;
-        }
+        let unused = Ray::new(Vec3::ZERO, Vec3::Z);
         let mut p = Packet {
-            origin,
-            inv_dir,
+            origin: [[0.0; PACKET]; 3],
+            inv_dir: [[0.0; PACKET]; 3],
             negative: [[false; PACKET]; 3],
-            t_min,
-            t_max,
+            t_min: [0.0; PACKET],
+            t_max: [0.0; PACKET],
+            watertight: [WatertightRay::new(&unused); PACKET],
             k: [[0; PACKET]; 3],
             shear: [[0.0; PACKET]; 3],
             w_origin: [[0.0; PACKET]; 3],
         };
-        for i in 0..PACKET {
+        for (i, ray) in rays.iter().chain(std::iter::repeat(&unused)).take(PACKET).enumerate() {
+            let w = if i < rays.len() { WatertightRay::new(ray) } else { p.watertight[i] };
+            let (o, inv) = (ray.origin.to_array(), ray.inv_dir.to_array());
             for a in 0..3 {
-                p.negative[a][i] = inv_dir[a][i].is_sign_negative();
+                p.origin[a][i] = o[a];
+                p.inv_dir[a][i] = inv[a];
+                p.negative[a][i] = inv[a].is_sign_negative();
+                p.k[a][i] = w.k[a] as u8;
+                p.shear[a][i] = w.shear[a];
+                p.w_origin[a][i] = w.origin[a];
             }
-            let (x, y, z) = (dir[0][i], dir[1][i], dir[2][i]);
-            let (ax, ay, az) = (x.abs(), y.abs(), z.abs());
-            // The dominant axis z' and the two after it cyclically, as `WatertightRay::new`.
-            let x_dominant = ax >= ay && ax >= az;
-            let y_dominant = !x_dominant && ay >= az;
-            let kz: u8 = if x_dominant {
-                0
-            } else if y_dominant {
-                1
-            } else {
-                2
-            };
-            let kx: u8 = if x_dominant {
-                1
-            } else if y_dominant {
-                2
-            } else {
-                0
-            };
-            let ky: u8 = if x_dominant {
-                2
-            } else if y_dominant {
-                0
-            } else {
-                1
-            };
-            let dz = pick(kz, x, y, z);
-            let (kx, ky) = if dz < 0.0 { (ky, kx) } else { (kx, ky) };
-            let (dx, dy) = (pick(kx, x, y, z), pick(ky, x, y, z));
-            p.k[0][i] = kx;
-            p.k[1][i] = ky;
-            p.k[2][i] = kz;
-            p.shear[0][i] = dx / dz;
-            p.shear[1][i] = dy / dz;
-            p.shear[2][i] = 1.0 / dz;
-            let (ox, oy, oz) = (origin[0][i], origin[1][i], origin[2][i]);
-            p.w_origin[0][i] = pick(kx, ox, oy, oz);
-            p.w_origin[1][i] = pick(ky, ox, oy, oz);
-            p.w_origin[2][i] = pick(kz, ox, oy, oz);
+            p.t_min[i] = ray.t_min;
+            p.t_max[i] = ray.t_max;
+            p.watertight[i] = w;
         }
         p
     }
@@ -162,22 +122,22 @@ impl Packet {
 
     /// The lanes of `lanes` whose ray hits triangle `v` within (t_min, t_max).
     #[inline(always)]
-    fn hits(&self, v: &[[f32; 3]; 3], lanes: u32) -> u32 {
+    fn hits(&self, v: &[Vec3; 3], lanes: u32) -> u32 {
         let mut hit = 0u32;
         let mut zero = 0u32;
         for i in 0..PACKET {
             let [kx, ky, kz] = [self.k[0][i], self.k[1][i], self.k[2][i]];
             let [sx, sy, sz] = [self.shear[0][i], self.shear[1][i], self.shear[2][i]];
             let [ox, oy, oz] = [self.w_origin[0][i], self.w_origin[1][i], self.w_origin[2][i]];
-            let rel = |p: &[f32; 3]| {
-                let px = pick(kx, p[0], p[1], p[2]) - ox;
-                let py = pick(ky, p[0], p[1], p[2]) - oy;
-                let pz = pick(kz, p[0], p[1], p[2]) - oz;
+            let rel = |p: Vec3| {
+                let px = pick(kx, p) - ox;
+                let py = pick(ky, p) - oy;
+                let pz = pick(kz, p) - oz;
                 (px - sx * pz, py - sy * pz, sz * pz)
             };
-            let (ax, ay, az) = rel(&v[0]);
-            let (bx, by, bz) = rel(&v[1]);
-            let (cx, cy, cz) = rel(&v[2]);
+            let (ax, ay, az) = rel(v[0]);
+            let (bx, by, bz) = rel(v[1]);
+            let (cx, cy, cz) = rel(v[2]);
             let e0 = cx * by - cy * bx;
             let e1 = ax * cy - ay * cx;
             let e2 = bx * ay - by * ax;
@@ -195,24 +155,12 @@ impl Packet {
         while redo != 0 {
             let i = redo.trailing_zeros() as usize;
             redo &= redo - 1;
-            let ray = WatertightRay {
-                origin: [self.w_origin[0][i], self.w_origin[1][i], self.w_origin[2][i]],
-                k: [self.k[0][i] as usize, self.k[1][i] as usize, self.k[2][i] as usize],
-                shear: [self.shear[0][i], self.shear[1][i], self.shear[2][i]],
-                t_min: self.t_min[i],
-            };
-            let tri = v.map(glam::Vec3::from_array);
-            if intersect_triangle_watertight(&tri, &ray, self.t_max[i]).is_some() {
+            if intersect_triangle_watertight(v, &self.watertight[i], self.t_max[i]).is_some() {
                 hit |= 1 << i;
             }
         }
         hit
     }
-}
-
-/// True if the ray's origin and direction are finite (the single-ray traversal's guard).
-fn finite(ray: &Ray) -> bool {
-    ray.origin.is_finite() && ray.dir.is_finite()
 }
 
 /// `occluded_packet` for a tree type, with the kernels its rays continue with alone.
@@ -296,7 +244,7 @@ impl<const W: usize> BvhWide<W> {
     fn occluded_lanes<K: RayKernel<W>>(&self, rays: &[Ray]) -> u32 {
         let mut live = 0u32;
         for (i, r) in rays.iter().enumerate() {
-            live |= (finite(r) as u32) << i;
+            live |= (origin_and_direction_finite(r) as u32) << i;
         }
         if self.nodes.is_empty() || live == 0 {
             return 0;
@@ -330,12 +278,7 @@ impl<const W: usize> BvhWide<W> {
                         blocked |= 1 << i;
                     }
                 }
-                if blocked == live {
-                    break;
-                }
-                continue;
-            }
-            if count == 0 {
+            } else if count == 0 {
                 let node = &self.nodes[child as usize];
                 for c in 0..W {
                     let m = p.enter(node, c, lanes);
@@ -349,17 +292,16 @@ impl<const W: usize> BvhWide<W> {
                 let leaf = Leaf { soa: &self.soa[9 * first..], ids: &self.prim_ids[first..first + n] };
                 let mut left = lanes;
                 for i in 0..n {
-                    let v = leaf.vertices(i).map(|v| v.to_array());
-                    let h = p.hits(&v, left);
+                    let h = p.hits(&leaf.vertices(i), left);
                     blocked |= h;
                     left &= !h;
                     if left == 0 {
                         break;
                     }
                 }
-                if blocked == live {
-                    break;
-                }
+            }
+            if blocked == live {
+                break;
             }
         }
         blocked
@@ -371,7 +313,6 @@ mod tests {
     use super::*;
     use crate::test_util::{rays, soup};
     use crate::{BuildConfig, Bvh4, Bvh8};
-    use glam::Vec3;
 
     /// Every packet size from 1 to 16 over `rays`, against the single-ray answers, through
     /// the dispatched build and the portable one; returns how many rays are blocked.

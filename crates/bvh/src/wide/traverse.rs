@@ -99,7 +99,7 @@ fn refine_t(ray: &Ray, v: [glam::Vec3; 3], t: f32) -> f32 {
 /// True if the ray's origin and direction are finite: the largest magnitude among the
 /// six coordinates' bit patterns below infinity's, one comparison instead of six branches.
 #[inline(always)]
-fn origin_and_direction_finite(ray: &Ray) -> bool {
+pub(super) fn origin_and_direction_finite(ray: &Ray) -> bool {
     let (o, d) = (ray.origin, ray.dir);
     [o.x, o.y, o.z, d.x, d.y, d.z].iter().fold(0, |m, c| m.max(c.to_bits() & 0x7fff_ffff)) < f32::INFINITY.to_bits()
 }
