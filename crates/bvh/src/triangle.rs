@@ -1,5 +1,6 @@
 use crate::{Aabb, Ray};
 use glam::Vec3;
+use std::hint::select_unpredictable;
 
 /// A triangle stored for Möller–Trumbore: vertex 0 and the two edges from it.
 #[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
@@ -104,16 +105,25 @@ impl WatertightRay {
         // The dominant axis z' and the two that follow it cyclically (x' = z' + 1,
         // y' = z' + 2, mod 3), with the direction's components and the origin's.
         let o = ray.origin;
-        let ((kx, ky, kz), (dx, dy, dz), (ox, oy, oz)) = if a.x >= a.y && a.x >= a.z {
-            ((1, 2, 0), (d.y, d.z, d.x), (o.y, o.z, o.x))
-        } else if a.y >= a.z {
-            ((2, 0, 1), (d.z, d.x, d.y), (o.z, o.x, o.y))
-        } else {
-            ((0, 1, 2), (d.x, d.y, d.z), (o.x, o.y, o.z))
+        // Chosen by selects, not branches: the axis is as good as random for diffuse rays,
+        // and the branches LLVM made of `if`s here were mispredicted that often.
+        let x_dominant = a.x >= a.y && a.x >= a.z;
+        let y_dominant = !x_dominant && a.y >= a.z;
+        let pick = |x: (f32, f32, f32), y: (f32, f32, f32), z: (f32, f32, f32)| {
+            let c = |i: fn(&(f32, f32, f32)) -> f32| {
+                select_unpredictable(x_dominant, i(&x), select_unpredictable(y_dominant, i(&y), i(&z)))
+            };
+            (c(|v| v.0), c(|v| v.1), c(|v| v.2))
         };
+        let (dx, dy, dz) = pick((d.y, d.z, d.x), (d.z, d.x, d.y), (d.x, d.y, d.z));
+        let (ox, oy, oz) = pick((o.y, o.z, o.x), (o.z, o.x, o.y), (o.x, o.y, o.z));
+        let kz = select_unpredictable(x_dominant, 0, select_unpredictable(y_dominant, 1, 2));
+        let (kx, ky) = ((kz + 1) % 3, (kz + 2) % 3);
         // Swapping x and y keeps the winding when the ray points along −z.
-        let ((kx, ky), (dx, dy), (ox, oy)) =
-            if dz < 0.0 { ((ky, kx), (dy, dx), (oy, ox)) } else { ((kx, ky), (dx, dy), (ox, oy)) };
+        let flip = dz < 0.0;
+        let (kx, ky) = (select_unpredictable(flip, ky, kx), select_unpredictable(flip, kx, ky));
+        let (dx, dy) = (select_unpredictable(flip, dy, dx), select_unpredictable(flip, dx, dy));
+        let (ox, oy) = (select_unpredictable(flip, oy, ox), select_unpredictable(flip, ox, oy));
         let shear = [dx / dz, dy / dz, 1.0 / dz];
         Self { origin: [ox, oy, oz], k: [kx, ky, kz], shear, t_min: ray.t_min }
     }
