@@ -1,5 +1,5 @@
 use crate::{Aabb, Ray};
-use glam::Vec3;
+use glam::{BVec3A, Vec3, Vec3A, Vec3Swizzles};
 use std::hint::select_unpredictable;
 
 /// A triangle stored for Möller–Trumbore: vertex 0 and the two edges from it.
@@ -105,26 +105,23 @@ impl WatertightRay {
         // The dominant axis z' and the two that follow it cyclically (x' = z' + 1,
         // y' = z' + 2, mod 3), with the direction's components and the origin's.
         let o = ray.origin;
-        // Chosen by selects, not branches: the axis is as good as random for diffuse rays,
-        // and the branches LLVM made of `if`s here were mispredicted that often.
-        let x_dominant = a.x >= a.y && a.x >= a.z;
-        let y_dominant = !x_dominant && a.y >= a.z;
-        let pick = |x: (f32, f32, f32), y: (f32, f32, f32), z: (f32, f32, f32)| {
-            let c = |i: fn(&(f32, f32, f32)) -> f32| {
-                select_unpredictable(x_dominant, i(&x), select_unpredictable(y_dominant, i(&y), i(&z)))
-            };
-            (c(|v| v.0), c(|v| v.1), c(|v| v.2))
+        // Chosen by vector selects, not branches: the axis is as good as random for
+        // diffuse rays, and the branches LLVM made of `if`s here (and of scalar float
+        // selects, without AVX-512's masked moves) were mispredicted that often.
+        let x_dominant = (a.x >= a.y) & (a.x >= a.z);
+        let y_dominant = !x_dominant & (a.y >= a.z);
+        let permute = |v: Vec3A| {
+            Vec3A::select(BVec3A::splat(x_dominant), v.yzx(), Vec3A::select(BVec3A::splat(y_dominant), v.zxy(), v))
         };
-        let (dx, dy, dz) = pick((d.y, d.z, d.x), (d.z, d.x, d.y), (d.x, d.y, d.z));
-        let (ox, oy, oz) = pick((o.y, o.z, o.x), (o.z, o.x, o.y), (o.x, o.y, o.z));
+        let (d, o) = (permute(d.into()), permute(o.into()));
+        // Swapping x and y keeps the winding when the ray points along −z.
+        let flip = BVec3A::splat(d.z < 0.0);
+        let (d, o) = (Vec3A::select(flip, d.yxz(), d), Vec3A::select(flip, o.yxz(), o));
         let kz = select_unpredictable(x_dominant, 0, select_unpredictable(y_dominant, 1, 2));
         let (kx, ky) = ((kz + 1) % 3, (kz + 2) % 3);
-        // Swapping x and y keeps the winding when the ray points along −z.
-        let flip = dz < 0.0;
-        let (kx, ky) = (select_unpredictable(flip, ky, kx), select_unpredictable(flip, kx, ky));
-        let (dx, dy) = (select_unpredictable(flip, dy, dx), select_unpredictable(flip, dx, dy));
-        let (ox, oy) = (select_unpredictable(flip, oy, ox), select_unpredictable(flip, ox, oy));
-        let shear = [dx / dz, dy / dz, 1.0 / dz];
+        let (kx, ky) = (select_unpredictable(flip.any(), ky, kx), select_unpredictable(flip.any(), kx, ky));
+        let shear = [d.x / d.z, d.y / d.z, 1.0 / d.z];
+        let [ox, oy, oz] = o.to_array();
         Self { origin: [ox, oy, oz], k: [kx, ky, kz], shear, t_min: ray.t_min }
     }
 }
