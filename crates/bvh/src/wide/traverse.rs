@@ -7,6 +7,7 @@
 use super::kernel::{Leaf, RayKernel, ScalarKernel};
 use super::{Bvh4, Bvh8, BvhWide, STACK_DEPTH, WideNode};
 use crate::{Aabb, Accelerator, Hit, Ray, RayStats, TriangleTest, WatertightRay};
+use std::hint::select_unpredictable;
 use std::mem::MaybeUninit;
 
 /// A child to visit: a node (`count == 0`) or a leaf's triangle range, with the ray's
@@ -18,15 +19,26 @@ struct Entry {
     t: f32,
 }
 
+/// `a` if `c`, else `b`, field by field by conditional moves: the entries' order is as
+/// good as random, and branches on it were mispredicted that often.
+#[inline(always)]
+fn select_entry(c: bool, a: Entry, b: Entry) -> Entry {
+    Entry {
+        child: select_unpredictable(c, a.child, b.child),
+        count: select_unpredictable(c, a.count, b.count),
+        t: f32::from_bits(select_unpredictable(c, a.t.to_bits(), b.t.to_bits())),
+    }
+}
+
 /// Sorts the first `k` (≤ W) entries by entry distance, nearest first (a sorting
 /// network up to four, else insertion).
 #[inline(always)]
 fn sort_by_entry<const W: usize>(e: &mut [Entry; W], k: usize) {
     #[inline(always)]
     fn order<const W: usize>(e: &mut [Entry; W], a: usize, b: usize) {
-        if e[b].t < e[a].t {
-            e.swap(a, b);
-        }
+        let (x, y) = (e[a], e[b]);
+        let swap = y.t < x.t;
+        (e[a], e[b]) = (select_entry(swap, y, x), select_entry(swap, x, y));
     }
     match k {
         0 | 1 => {}
@@ -160,7 +172,8 @@ impl<const W: usize> BvhWide<W> {
                         // Two children, the commonest case after one: the nearer next, the
                         // other pushed, without the general sort.
                         let (a, b) = (entry(mask.trailing_zeros() as usize), entry(rest.trailing_zeros() as usize));
-                        let (near, far) = if b.t < a.t { (b, a) } else { (a, b) };
+                        let b_first = b.t < a.t;
+                        let (near, far) = (select_entry(b_first, b, a), select_entry(b_first, a, b));
                         self.prefetch(&far);
                         stack[sp] = MaybeUninit::new(far);
                         sp += 1;
@@ -233,13 +246,14 @@ impl<const W: usize> BvhWide<W> {
         #[cfg(target_arch = "x86_64")]
         {
             use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
-            let (first, last) = if e.count == 0 {
-                let p = self.nodes.as_ptr().wrapping_add(e.child as usize).cast::<i8>();
-                (p, p.wrapping_add(size_of::<WideNode<W>>() - 1))
-            } else {
-                let p = self.soa.as_ptr().wrapping_add(9 * e.child as usize).cast::<i8>();
-                (p, p.wrapping_add(e.count as usize * 9 * size_of::<f32>() - 1))
-            };
+            // Both candidates computed and one selected: a branch on node or leaf here
+            // was mispredicted as often as the children's kinds mix.
+            let node = self.nodes.as_ptr().wrapping_add(e.child as usize).cast::<i8>();
+            let leaf = self.soa.as_ptr().wrapping_add(9 * e.child as usize).cast::<i8>();
+            let is_node = e.count == 0;
+            let first = select_unpredictable(is_node, node, leaf);
+            let len = select_unpredictable(is_node, size_of::<WideNode<W>>(), e.count as usize * 9 * size_of::<f32>());
+            let last = first.wrapping_add(len.wrapping_sub(1));
             // SAFETY: SSE is baseline on x86_64, and a prefetch never faults.
             unsafe {
                 _mm_prefetch::<_MM_HINT_T0>(first);
