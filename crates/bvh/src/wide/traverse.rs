@@ -19,26 +19,15 @@ struct Entry {
     t: f32,
 }
 
-/// `a` if `c`, else `b`, field by field by conditional moves: the entries' order is as
-/// good as random, and branches on it were mispredicted that often.
-#[inline(always)]
-fn select_entry(c: bool, a: Entry, b: Entry) -> Entry {
-    Entry {
-        child: select_unpredictable(c, a.child, b.child),
-        count: select_unpredictable(c, a.count, b.count),
-        t: f32::from_bits(select_unpredictable(c, a.t.to_bits(), b.t.to_bits())),
-    }
-}
-
 /// Sorts the first `k` (≤ W) entries by entry distance, nearest first (a sorting
 /// network up to four, else insertion).
 #[inline(always)]
 fn sort_by_entry<const W: usize>(e: &mut [Entry; W], k: usize) {
     #[inline(always)]
     fn order<const W: usize>(e: &mut [Entry; W], a: usize, b: usize) {
-        let (x, y) = (e[a], e[b]);
-        let swap = y.t < x.t;
-        (e[a], e[b]) = (select_entry(swap, y, x), select_entry(swap, x, y));
+        if e[b].t < e[a].t {
+            e.swap(a, b);
+        }
     }
     match k {
         0 | 1 => {}
@@ -172,8 +161,7 @@ impl<const W: usize> BvhWide<W> {
                         // Two children, the commonest case after one: the nearer next, the
                         // other pushed, without the general sort.
                         let (a, b) = (entry(mask.trailing_zeros() as usize), entry(rest.trailing_zeros() as usize));
-                        let b_first = b.t < a.t;
-                        let (near, far) = (select_entry(b_first, b, a), select_entry(b_first, a, b));
+                        let (near, far) = if b.t < a.t { (b, a) } else { (a, b) };
                         self.prefetch(&far);
                         stack[sp] = MaybeUninit::new(far);
                         sp += 1;
