@@ -7,7 +7,6 @@
 use super::kernel::{Leaf, RayKernel, ScalarKernel};
 use super::{Bvh4, Bvh8, BvhWide, STACK_DEPTH, WideNode};
 use crate::{Aabb, Accelerator, Hit, Ray, RayStats, TriangleTest, WatertightRay};
-use std::hint::select_unpredictable;
 use std::mem::MaybeUninit;
 
 /// A child to visit: a node (`count == 0`) or a leaf's triangle range, with the ray's
@@ -234,14 +233,13 @@ impl<const W: usize> BvhWide<W> {
         #[cfg(target_arch = "x86_64")]
         {
             use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
-            // Both candidates computed and one selected: a branch on node or leaf here
-            // was mispredicted as often as the children's kinds mix.
-            let node = self.nodes.as_ptr().wrapping_add(e.child as usize).cast::<i8>();
-            let leaf = self.soa.as_ptr().wrapping_add(9 * e.child as usize).cast::<i8>();
-            let is_node = e.count == 0;
-            let first = select_unpredictable(is_node, node, leaf);
-            let len = select_unpredictable(is_node, size_of::<WideNode<W>>(), e.count as usize * 9 * size_of::<f32>());
-            let last = first.wrapping_add(len.wrapping_sub(1));
+            let (first, last) = if e.count == 0 {
+                let p = self.nodes.as_ptr().wrapping_add(e.child as usize).cast::<i8>();
+                (p, p.wrapping_add(size_of::<WideNode<W>>() - 1))
+            } else {
+                let p = self.soa.as_ptr().wrapping_add(9 * e.child as usize).cast::<i8>();
+                (p, p.wrapping_add(e.count as usize * 9 * size_of::<f32>() - 1))
+            };
             // SAFETY: SSE is baseline on x86_64, and a prefetch never faults.
             unsafe {
                 _mm_prefetch::<_MM_HINT_T0>(first);
