@@ -115,11 +115,12 @@ impl WatertightRay {
         };
         let (d, o) = (permute(d.into()), permute(o.into()));
         // Swapping x and y keeps the winding when the ray points along −z.
-        let flip = BVec3A::splat(d.z < 0.0);
-        let (d, o) = (Vec3A::select(flip, d.yxz(), d), Vec3A::select(flip, o.yxz(), o));
+        let flip = d.z < 0.0;
+        let swap = BVec3A::splat(flip);
+        let (d, o) = (Vec3A::select(swap, d.yxz(), d), Vec3A::select(swap, o.yxz(), o));
         let kz = select_unpredictable(x_dominant, 0, select_unpredictable(y_dominant, 1, 2));
         let (kx, ky) = ((kz + 1) % 3, (kz + 2) % 3);
-        let (kx, ky) = (select_unpredictable(flip.any(), ky, kx), select_unpredictable(flip.any(), kx, ky));
+        let (kx, ky) = (select_unpredictable(flip, ky, kx), select_unpredictable(flip, kx, ky));
         let shear = [d.x / d.z, d.y / d.z, 1.0 / d.z];
         let [ox, oy, oz] = o.to_array();
         Self { origin: [ox, oy, oz], k: [kx, ky, kz], shear, t_min: ray.t_min }

@@ -84,7 +84,7 @@ impl Packet {
             w_origin: [[0.0; PACKET]; 3],
         };
         for (i, ray) in rays.iter().chain(std::iter::repeat(&unused)).take(PACKET).enumerate() {
-            let w = if i < rays.len() { WatertightRay::new(ray) } else { p.watertight[i] };
+            let w = WatertightRay::new(ray);
             let (o, inv) = (ray.origin.to_array(), ray.inv_dir.to_array());
             for a in 0..3 {
                 p.origin[a][i] = o[a];

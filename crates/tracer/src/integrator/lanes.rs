@@ -811,8 +811,7 @@ impl Draws {
     ) {
         self.drawn.clear();
         let mut any_sobol = false;
-        let drawing: M = std::array::from_fn(|k| which[k] & st.slot[k].is_some());
-        let n = lanes_where(&drawing, &mut self.list);
+        let n = lanes_where(which, &mut self.list);
         for &k in &self.list[..n] {
             let k = k as usize;
             let Some(b) = st.slot[k] else { continue };
