@@ -96,9 +96,9 @@ pub struct TraceArgs {
     /// sliver (a long thin triangle) are.
     #[arg(long)]
     pub exact_t: bool,
-    /// Shadow rays in packets of 16 consecutive rays (one walk down the tree per packet,
-    /// `WideBvh::occluded_packet`; the same answers), as Embree's `rtcOccluded16`
-    /// (`embree_trace --packet 16`). Closest hits stay one ray at a time.
+    /// Rays in packets of 16 consecutive rays (one walk down the tree per packet,
+    /// `WideBvh::occluded_packet` and `WideBvh::intersect_packet`; the same answers), as
+    /// Embree's `rtcOccluded16`/`rtcIntersect16` (`embree_trace --packet 16`).
     #[arg(long)]
     pub packet: bool,
     /// Do not write the hits files.
@@ -222,8 +222,7 @@ fn trace(args: TraceArgs) -> Result<()> {
     let build = start.elapsed();
     let tracer = format!("bvh{}", bvh.width());
     let bvh = bvh.with_triangle_test(args.triangle_test).with_exact_t(args.exact_t);
-    let packets = |rays: &[Ray], blocked: &mut [bool]| bvh.occluded_packet(rays, blocked);
-    let sets = trace_sets(&bvh, args.packet.then_some(&packets), &pool, &args, &tracer)?;
+    let sets = trace_sets(&bvh, args.packet.then_some(&bvh), &pool, &args, &tracer)?;
     println!(
         r#"{{"tracer": "{tracer}", "threads": {}, "triangles": {}, "references": {}, "nodes": {}, "build_ms": {:.3}, "sets": {{{}}}}}"#,
         args.threads,
@@ -236,10 +235,10 @@ fn trace(args: TraceArgs) -> Result<()> {
     Ok(())
 }
 
-/// Answers for a packet of shadow rays (see `--packet`).
-type PacketQuery<'a> = &'a (dyn Fn(&[Ray], &mut [bool]) + Sync);
+/// The tree whose packet walks answer (see `--packet`).
+type PacketQuery<'a> = &'a WideBvh;
 
-/// Traces every set of `args.dir` with `accel` (shadow rays by `packets` where given): a
+/// Traces every set of `args.dir` with `accel` (in packets by `packets` where given): a
 /// JSON member per set.
 fn trace_sets<A: Accelerator + Sync>(
     accel: &A,
@@ -300,10 +299,15 @@ fn trace_set<A: Accelerator + Sync>(
 ) {
     let blocked = Hit { prim: 0, t: f32::NAN, u: f32::NAN, v: f32::NAN };
     hits.par_chunks_mut(CHUNK).zip(rays.par_chunks(CHUNK)).for_each(|(out, rays)| match (query, packets) {
+        (Query::Closest, Some(packets)) => {
+            for (out, rays) in out.chunks_mut(bvh::PACKET).zip(rays.chunks(bvh::PACKET)) {
+                packets.intersect_packet(rays, out);
+            }
+        }
         (Query::Occluded, Some(packets)) => {
             let mut answers = [false; bvh::PACKET];
             for (out, rays) in out.chunks_mut(bvh::PACKET).zip(rays.chunks(bvh::PACKET)) {
-                packets(rays, &mut answers[..rays.len()]);
+                packets.occluded_packet(rays, &mut answers[..rays.len()]);
                 for (h, &b) in out.iter_mut().zip(&answers) {
                     *h = b.then_some(blocked);
                 }

@@ -275,11 +275,12 @@ fn ray_sets_export_and_trace_with_both_widths_alike() {
         hits.push((primary, diffuse, shadow));
     }
     assert!(hits[0] == hits[1], "4- and 8-wide trees find the same hits");
-    // Shadow rays in packets of 16: the same answers.
+    // Every set in packets of 16: the same answers.
     for (width, accel) in [("4", "bvh4"), ("8", "bvh8")] {
         let o = spt(&["rays", "trace", sets.to_str().unwrap(), "--bvh-width", width, "--passes", "1", "--packet"]);
         assert!(o.status.success(), "{}", stderr(&o));
-        assert!(read_hits(&sets.join(format!("shadow.{accel}.hits"))) == hits[0].2, "{width}-wide packets");
+        let set = |name: &str| read_hits(&sets.join(format!("{name}.{accel}.hits")));
+        assert!((set("primary"), set("diffuse"), set("shadow")) == hits[0], "{width}-wide packets");
     }
     // Counted: work per ray in each set's JSON.
     let o = spt(&["rays", "trace", sets.to_str().unwrap(), "--passes", "1", "--no-write", "--count"]);

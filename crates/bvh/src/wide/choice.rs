@@ -85,6 +85,15 @@ impl WideBvh {
         }
     }
 
+    /// [`Bvh8::intersect_packet`] of the tree: the closest hits of up to
+    /// [`super::PACKET`] rays at once, the same as [`Accelerator::intersect`] ray by ray.
+    pub fn intersect_packet(&self, rays: &[Ray], hits: &mut [Option<Hit>]) {
+        match self {
+            Self::Four(b) => b.intersect_packet(rays, hits),
+            Self::Eight(b) => b.intersect_packet(rays, hits),
+        }
+    }
+
     /// The tree and the kernel that traverses it on this CPU, for messages.
     pub fn description(&self) -> &'static str {
         match self {

@@ -52,7 +52,8 @@ pub(super) trait RayKernel<const W: usize> {
         best: &mut Option<Hit>,
     ) -> bool {
         for (i, &prim) in leaf.ids.iter().enumerate() {
-            if let Some((t, u, v)) = intersect_triangle_watertight(&leaf.vertices(i), ray, *t_max)
+            if let Some((t, u, v)) = intersect_triangle_watertight(&leaf.vertices(i), ray, tie_bound(*t_max, best))
+                && closer(t, prim, *t_max, best)
                 && record_hit::<ANY_HIT>(Hit { prim, t, u, v }, t_max, best)
             {
                 return true;
@@ -60,6 +61,23 @@ pub(super) trait RayKernel<const W: usize> {
         }
         false
     }
+}
+
+/// Whether a hit at `t` on triangle `prim` replaces the closest so far: nearer than
+/// `t_max`, or — with a closest hit `best` at `t_max` — as near and of a lower triangle
+/// index. The tie rule makes the closest hit independent of the order in which a
+/// traversal meets the triangles (a packet's walk and a single ray's differ), so that
+/// both return the same triangle where two share a t (a shared edge, coplanar copies).
+#[inline(always)]
+pub(super) fn closer(t: f32, prim: u32, t_max: f32, best: &Option<Hit>) -> bool {
+    t < t_max || best.as_ref().is_some_and(|b| t == t_max && prim < b.prim)
+}
+
+/// The strict upper bound to hand a triangle test so that it also reports a tie with the
+/// closest hit so far (one ulp above `t_max` where there is one; [`closer`] decides).
+#[inline(always)]
+pub(super) fn tie_bound(t_max: f32, best: &Option<Hit>) -> f32 {
+    if best.is_some() { t_max.next_up() } else { t_max }
 }
 
 /// Makes `hit` the closest so far (its t the new `t_max`); true if that ends the query

@@ -5,7 +5,7 @@
 //! with them, [`watertight_group`] the test of a leaf's triangles `L::WIDTH` at a time.
 
 use super::WideNode;
-use super::kernel::{Leaf, plane_rows, record_hit};
+use super::kernel::{Leaf, closer, plane_rows, record_hit, tie_bound};
 use crate::{Hit, Ray, WatertightRay, intersect_triangle_watertight};
 use std::arch::x86_64::*;
 
@@ -44,6 +44,8 @@ pub(super) trait Lanes: Copy {
     unsafe fn ne(self, o: Self) -> Self;
     /// All bits set where `self < o` (ordered), else clear.
     unsafe fn lt(self, o: Self) -> Self;
+    /// All bits set where `self <= o` (ordered), else clear.
+    unsafe fn le(self, o: Self) -> Self;
     /// All bits set where `self > o` (ordered), else clear.
     unsafe fn gt(self, o: Self) -> Self;
     /// The lanes' sign bits, lane `i` in bit `i`.
@@ -119,6 +121,10 @@ impl Lanes for __m128 {
     #[inline(always)]
     unsafe fn lt(self, o: Self) -> Self {
         unsafe { _mm_cmplt_ps(self, o) }
+    }
+    #[inline(always)]
+    unsafe fn le(self, o: Self) -> Self {
+        unsafe { _mm_cmple_ps(self, o) }
     }
     #[inline(always)]
     unsafe fn gt(self, o: Self) -> Self {
@@ -199,6 +205,10 @@ impl Lanes for __m256 {
     #[inline(always)]
     unsafe fn lt(self, o: Self) -> Self {
         unsafe { _mm256_cmp_ps::<_CMP_LT_OQ>(self, o) }
+    }
+    #[inline(always)]
+    unsafe fn le(self, o: Self) -> Self {
+        unsafe { _mm256_cmp_ps::<_CMP_LE_OQ>(self, o) }
     }
     #[inline(always)]
     unsafe fn gt(self, o: Self) -> Self {
@@ -321,7 +331,8 @@ pub(super) unsafe fn watertight_group<L: Lanes, const ANY_HIT: bool>(
         let abs_t = L::splat(-0.0).and_not(tt);
         let ok = neg.and(pos).and_not(det.ne(zero));
         let ok = ok.and(abs_t.lt(L::splat(f32::INFINITY)));
-        let ok = ok.and(tt.gt(L::splat(ray.t_min)).and(tt.lt(L::splat(*t_max))));
+        // t ≤ t_max (not <): a tie with the closest hit so far goes to `closer`.
+        let ok = ok.and(tt.gt(L::splat(ray.t_min)).and(tt.le(L::splat(*t_max))));
         (ok.sign_mask() & lanes, any_zero.sign_mask() & lanes, tt, uu, vv)
     };
     let mut m = mask | zero_lanes;
@@ -341,12 +352,14 @@ pub(super) unsafe fn watertight_group<L: Lanes, const ANY_HIT: bool>(
         let i = m.trailing_zeros() as usize;
         m &= m - 1;
         let hit = if zero_lanes & (1 << i) != 0 {
-            intersect_triangle_watertight(&leaf.vertices(j + i), ray, *t_max)
+            intersect_triangle_watertight(&leaf.vertices(j + i), ray, tie_bound(*t_max, best))
         } else {
-            (t[i] < *t_max).then_some((t[i], u[i], v[i]))
+            Some((t[i], u[i], v[i]))
         };
+        let prim = leaf.ids[j + i];
         if let Some((t, u, v)) = hit
-            && record_hit::<ANY_HIT>(Hit { prim: leaf.ids[j + i], t, u, v }, t_max, best)
+            && closer(t, prim, *t_max, best)
+            && record_hit::<ANY_HIT>(Hit { prim, t, u, v }, t_max, best)
         {
             return true;
         }

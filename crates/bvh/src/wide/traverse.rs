@@ -74,7 +74,7 @@ const REFINE_BELOW: f32 = 0.125;
 /// [`REFINE_BELOW`] times the origin's largest coordinate, or if it lies in a leaf that
 /// holds a sliver (`leaf`: the leaf that holds it, `sliver`: whether that leaf does).
 #[inline(always)]
-fn refine(ray: &Ray, mut best: Option<Hit>, leaf: Leaf, sliver: bool, always: bool) -> Option<Hit> {
+pub(super) fn refine(ray: &Ray, mut best: Option<Hit>, leaf: Leaf, sliver: bool, always: bool) -> Option<Hit> {
     if let Some(hit) = &mut best
         && (always || sliver || hit.t < REFINE_BELOW * ray.origin.abs().max_element())
         && let Some(i) = leaf.ids.iter().position(|&p| p == hit.prim)
