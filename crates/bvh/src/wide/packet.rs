@@ -133,34 +133,45 @@ impl Packet {
         (mask, t)
     }
 
+    /// Lane `i`'s watertight test of triangle `v` up to its t (`intersect_triangle_watertight`'s
+    /// operations in its order): whether an edge function is exactly zero, whether the
+    /// edge functions' signs and the determinant admit a hit with a finite t above t_min,
+    /// and t, u and v.
+    #[inline(always)]
+    fn lane_test(&self, i: usize, v: &[Vec3; 3]) -> (bool, bool, f32, f32, f32) {
+        let [kx, ky, kz] = [self.k[0][i], self.k[1][i], self.k[2][i]];
+        let [sx, sy, sz] = [self.shear[0][i], self.shear[1][i], self.shear[2][i]];
+        let [ox, oy, oz] = [self.w_origin[0][i], self.w_origin[1][i], self.w_origin[2][i]];
+        let rel = |p: Vec3| {
+            let px = pick(kx, p) - ox;
+            let py = pick(ky, p) - oy;
+            let pz = pick(kz, p) - oz;
+            (px - sx * pz, py - sy * pz, sz * pz)
+        };
+        let (ax, ay, az) = rel(v[0]);
+        let (bx, by, bz) = rel(v[1]);
+        let (cx, cy, cz) = rel(v[2]);
+        let e0 = cx * by - cy * bx;
+        let e1 = ax * cy - ay * cx;
+        let e2 = bx * ay - by * ax;
+        let any_zero = e0 == 0.0 || e1 == 0.0 || e2 == 0.0;
+        let neg = e0 < 0.0 || e1 < 0.0 || e2 < 0.0;
+        let pos = e0 > 0.0 || e1 > 0.0 || e2 > 0.0;
+        let det = e0 + e1 + e2;
+        let inv_det = 1.0 / det;
+        let t = (e0 * az + e1 * bz + e2 * cz) * inv_det;
+        let ok = !(neg && pos) && det != 0.0 && t.abs() < f32::INFINITY && t > self.t_min[i];
+        (any_zero, ok, t, e1 * inv_det, e2 * inv_det)
+    }
+
     /// The lanes of `lanes` whose ray hits triangle `v` within (t_min, t_max).
     #[inline(always)]
     fn hits(&self, v: &[Vec3; 3], lanes: u32) -> u32 {
         let mut hit = 0u32;
         let mut zero = 0u32;
         for i in 0..PACKET {
-            let [kx, ky, kz] = [self.k[0][i], self.k[1][i], self.k[2][i]];
-            let [sx, sy, sz] = [self.shear[0][i], self.shear[1][i], self.shear[2][i]];
-            let [ox, oy, oz] = [self.w_origin[0][i], self.w_origin[1][i], self.w_origin[2][i]];
-            let rel = |p: Vec3| {
-                let px = pick(kx, p) - ox;
-                let py = pick(ky, p) - oy;
-                let pz = pick(kz, p) - oz;
-                (px - sx * pz, py - sy * pz, sz * pz)
-            };
-            let (ax, ay, az) = rel(v[0]);
-            let (bx, by, bz) = rel(v[1]);
-            let (cx, cy, cz) = rel(v[2]);
-            let e0 = cx * by - cy * bx;
-            let e1 = ax * cy - ay * cx;
-            let e2 = bx * ay - by * ax;
-            let any_zero = e0 == 0.0 || e1 == 0.0 || e2 == 0.0;
-            let neg = e0 < 0.0 || e1 < 0.0 || e2 < 0.0;
-            let pos = e0 > 0.0 || e1 > 0.0 || e2 > 0.0;
-            let det = e0 + e1 + e2;
-            let t = (e0 * az + e1 * bz + e2 * cz) * (1.0 / det);
-            let ok = !(neg && pos) && det != 0.0 && t.abs() < f32::INFINITY && t > self.t_min[i] && t < self.t_max[i];
-            hit |= (ok as u32) << i;
+            let (any_zero, ok, t, _, _) = self.lane_test(i, v);
+            hit |= ((ok && t < self.t_max[i]) as u32) << i;
             zero |= (any_zero as u32) << i;
         }
         let mut redo = zero & lanes;
@@ -174,46 +185,23 @@ impl Packet {
         }
         hit
     }
-}
 
-impl Packet {
     /// Tests triangle `v` (index `prim`, in `leaf`) for the lanes of `lanes` and takes it
     /// as a lane's closest hit where it is nearer than the lane's closest so far (its
-    /// `t_max`), or as near and of a lower index ([`closer`]'s tie rule). Returns the lanes
+    /// `t_max`), or as near and of a lower index (`kernel::closer`'s tie rule). Returns the lanes
     /// with an edge function of exactly zero, which the caller redoes by the scalar test.
     #[inline(always)]
     fn take_closest(&mut self, best: &mut Closest, v: &[Vec3; 3], prim: u32, leaf: (u32, u32), lanes: u32) -> u32 {
         let mut zero = [false; PACKET];
         for i in 0..PACKET {
-            let [kx, ky, kz] = [self.k[0][i], self.k[1][i], self.k[2][i]];
-            let [sx, sy, sz] = [self.shear[0][i], self.shear[1][i], self.shear[2][i]];
-            let [ox, oy, oz] = [self.w_origin[0][i], self.w_origin[1][i], self.w_origin[2][i]];
-            let rel = |p: Vec3| {
-                let px = pick(kx, p) - ox;
-                let py = pick(ky, p) - oy;
-                let pz = pick(kz, p) - oz;
-                (px - sx * pz, py - sy * pz, sz * pz)
-            };
-            let (ax, ay, az) = rel(v[0]);
-            let (bx, by, bz) = rel(v[1]);
-            let (cx, cy, cz) = rel(v[2]);
-            let e0 = cx * by - cy * bx;
-            let e1 = ax * cy - ay * cx;
-            let e2 = bx * ay - by * ax;
+            let (any_zero, ok, t, u, w) = self.lane_test(i, v);
             let live = lanes & (1 << i) != 0;
-            let any_zero = e0 == 0.0 || e1 == 0.0 || e2 == 0.0;
-            let neg = e0 < 0.0 || e1 < 0.0 || e2 < 0.0;
-            let pos = e0 > 0.0 || e1 > 0.0 || e2 > 0.0;
-            let det = e0 + e1 + e2;
-            let inv_det = 1.0 / det;
-            let t = (e0 * az + e1 * bz + e2 * cz) * inv_det;
             let t_max = self.t_max[i];
             let closer = t < t_max || (best.found[i] && t == t_max && prim < best.prim[i]);
-            let ok = !(neg && pos) && det != 0.0 && t.abs() < f32::INFINITY && t > self.t_min[i];
             let take = live && !any_zero && ok && closer;
             self.t_max[i] = if take { t } else { t_max };
-            best.u[i] = if take { e1 * inv_det } else { best.u[i] };
-            best.v[i] = if take { e2 * inv_det } else { best.v[i] };
+            best.u[i] = if take { u } else { best.u[i] };
+            best.v[i] = if take { w } else { best.v[i] };
             best.prim[i] = if take { prim } else { best.prim[i] };
             best.leaf[i] = if take { leaf } else { best.leaf[i] };
             best.found[i] |= take;
