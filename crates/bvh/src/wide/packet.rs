@@ -22,7 +22,7 @@
 //! the walk has no near-to-far order; the renderer's lanes trace theirs one at a time,
 //! since there packets only broke even on the box (shadow rays and camera rays alike).
 
-use super::kernel::{Leaf, RayKernel, ScalarKernel};
+use super::kernel::{RayKernel, ScalarKernel};
 use super::traverse::origin_and_direction_finite;
 use super::{BvhWide, MAX_WIDTH};
 use crate::{Accelerator, Hit, Ray, TriangleTest, WatertightRay, intersect_triangle_watertight};
@@ -350,6 +350,26 @@ packets_for!(super::Bvh4, ScalarKernel, ScalarKernel);
 const ALONE: u32 = 3;
 
 impl<const W: usize> BvhWide<W> {
+    /// Pushes each child of node `node` that lanes of `lanes` enter, with those lanes.
+    #[inline(always)]
+    fn push_entered(
+        &self,
+        p: &Packet,
+        node: u32,
+        lanes: u32,
+        stack: &mut [MaybeUninit<(u32, u32, u32)>],
+        sp: &mut usize,
+    ) {
+        let node = &self.nodes[node as usize];
+        for c in 0..W {
+            let m = p.enter(node, c, lanes);
+            if m != 0 {
+                stack[*sp] = MaybeUninit::new((node.child[c], node.count[c], m));
+                *sp += 1;
+            }
+        }
+    }
+
     /// Bit i set if ray i is blocked.
     #[inline(always)]
     fn occluded_lanes<K: RayKernel<W>>(&self, rays: &[Ray]) -> u32 {
@@ -390,17 +410,10 @@ impl<const W: usize> BvhWide<W> {
                     }
                 }
             } else if count == 0 {
-                let node = &self.nodes[child as usize];
-                for c in 0..W {
-                    let m = p.enter(node, c, lanes);
-                    if m != 0 {
-                        stack[sp] = MaybeUninit::new((node.child[c], node.count[c], m));
-                        sp += 1;
-                    }
-                }
+                self.push_entered(&p, child, lanes, &mut stack, &mut sp);
             } else {
                 let (first, n) = (child as usize, count as usize);
-                let leaf = Leaf { soa: &self.soa[9 * first..], ids: &self.prim_ids[first..first + n] };
+                let leaf = self.leaf(first, n);
                 let mut left = lanes;
                 for i in 0..n {
                     let h = p.hits(&leaf.vertices(i), left);
@@ -460,17 +473,10 @@ impl<const W: usize> BvhWide<W> {
             // SAFETY: entries below `sp` were all written by the pushes.
             let (child, count, lanes) = unsafe { stack[sp].assume_init() };
             if count == 0 {
-                let node = &self.nodes[child as usize];
-                for c in 0..W {
-                    let m = p.enter(node, c, lanes);
-                    if m != 0 {
-                        stack[sp] = MaybeUninit::new((node.child[c], node.count[c], m));
-                        sp += 1;
-                    }
-                }
+                self.push_entered(&p, child, lanes, &mut stack, &mut sp);
             } else {
                 let (first, n) = (child as usize, count as usize);
-                let leaf = Leaf { soa: &self.soa[9 * first..], ids: &self.prim_ids[first..first + n] };
+                let leaf = self.leaf(first, n);
                 for i in 0..n {
                     let v = leaf.vertices(i);
                     let mut zero = p.take_closest(&mut best, &v, leaf.ids[i], (child, count), lanes);
@@ -484,7 +490,7 @@ impl<const W: usize> BvhWide<W> {
         }
         for i in (0..rays.len()).filter(|&i| best.found[i]) {
             let (first, n) = (best.leaf[i].0 as usize, best.leaf[i].1 as usize);
-            let leaf = Leaf { soa: &self.soa[9 * first..], ids: &self.prim_ids[first..first + n] };
+            let leaf = self.leaf(first, n);
             let hit = Hit { prim: best.prim[i], t: p.t_max[i], u: best.u[i], v: best.v[i] };
             let sliver = self.slivers.get(first).is_some_and(|&s| s);
             hits[i] = super::traverse::refine(&rays[i], Some(hit), leaf, sliver, self.exact_t);

@@ -191,7 +191,7 @@ impl<const W: usize> BvhWide<W> {
                 if COUNT {
                     stats.triangles_tested += count as u64;
                 }
-                let leaf = Leaf { soa: &self.soa[9 * first..], ids: &self.prim_ids[first..first + count] };
+                let leaf = self.leaf(first, count);
                 let before = t_max;
                 let done = match &watertight {
                     Some(w) => kernel.watertight::<ANY_HIT>(w, leaf, &mut t_max, &mut best),
@@ -225,6 +225,12 @@ impl<const W: usize> BvhWide<W> {
                 }
             }
         }
+    }
+
+    /// The leaf of `count` triangles from `first`.
+    #[inline(always)]
+    pub(super) fn leaf(&self, first: usize, count: usize) -> Leaf<'_> {
+        Leaf { soa: &self.soa[9 * first..], ids: &self.prim_ids[first..first + count] }
     }
 
     /// Starts loading a child's node or triangles into the cache, ahead of its visit.
