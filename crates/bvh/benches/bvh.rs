@@ -3,7 +3,9 @@
 //! * `bvh_build/<builder>/<scene>`: one full build (throughput in triangles);
 //! * `bvh_traverse/<builder>/<ray kind>/<scene>`: one batch of rays from
 //!   [`bvh::make_ray_sets`] for a 64×64 image (throughput in rays, so criterion prints
-//!   rays/s), single-threaded; `shadow` rays use `occluded`, the others `intersect`.
+//!   rays/s), single-threaded; `shadow` rays use `occluded`, the others `intersect`;
+//!   `bvh_traverse/bvh8_packets/<ray kind>/<scene>`: the same with the renderer's 8-wide
+//!   tree, its rays in packets of 16 (`intersect_packet`, `occluded_packet`).
 //!
 //! Builders: ours (`sweep_sah`, `binned_sah`, `midpoint`, `hybrid` with the thesis's
 //! threshold of 1000 faces; leaves of at most 4 triangles chosen by the SAH), the binned and
@@ -152,6 +154,24 @@ fn occluded(accel: &dyn Accelerator, rays: &[Ray]) -> usize {
     rays.iter().filter(|r| accel.occluded(r)).count()
 }
 
+/// The 8-wide tree's packet walks ([`bvh::PACKET`] consecutive rays per walk): closest hits
+/// or, with `shadow`, occlusion; returns the number of hits.
+fn packets(bvh: &Bvh8, shadow: bool, rays: &[Ray]) -> usize {
+    let mut count = 0;
+    for chunk in rays.chunks(bvh::PACKET) {
+        if shadow {
+            let mut blocked = [false; bvh::PACKET];
+            bvh.occluded_packet(chunk, &mut blocked[..chunk.len()]);
+            count += blocked.iter().filter(|&&b| b).count();
+        } else {
+            let mut hits = [None; bvh::PACKET];
+            bvh.intersect_packet(chunk, &mut hits[..chunk.len()]);
+            count += black_box(hits).iter().filter(|h| h.is_some()).count();
+        }
+    }
+    count
+}
+
 fn bvh_build(c: &mut Criterion) {
     let mut group = c.benchmark_group("bvh_build");
     group.sample_size(10).warm_up_time(Duration::from_secs(1)).measurement_time(Duration::from_secs(3));
@@ -188,6 +208,18 @@ fn bvh_traverse(c: &mut Criterion) {
                     b.iter(|| trace(accel.as_ref(), black_box(rays)))
                 });
             }
+        }
+        // The renderer's 8-wide tree, its rays in packets (docs/figures.md: faster on the
+        // Cornell box's camera and shadow rays, slower elsewhere).
+        let bvh8 = Bvh8::build(&tris, BuildConfig::default()).expect("finite scene");
+        for (kind, rays) in [("primary", &sets.primary), ("diffuse", &sets.diffuse), ("shadow", &sets.shadow)] {
+            if rays.is_empty() {
+                continue;
+            }
+            group.throughput(Throughput::Elements(rays.len() as u64));
+            group.bench_function(BenchmarkId::new(format!("bvh8_packets/{kind}"), scene), |b| {
+                b.iter(|| packets(&bvh8, kind == "shadow", black_box(rays)))
+            });
         }
     }
     group.finish();
