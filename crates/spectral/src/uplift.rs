@@ -193,28 +193,6 @@ pub fn d65_normalised(lambda_nm: f32) -> f32 {
     (D65[i] + f * (D65[i + 1] - D65[i])) * *D65_INV_NORM
 }
 
-/// [`d65_normalised`] of each of `lambda_nm`'s entries, the same values, written without
-/// a branch so that the loop vectorises: for the path tracer's lanes, which need it at
-/// every new path's wavelengths.
-#[inline(always)]
-pub fn d65_normalised_each<const L: usize>(lambda_nm: &[f32; L], out: &mut [f32; L]) {
-    let inv_norm = *D65_INV_NORM;
-    let last = D65.len() - 1;
-    for k in 0..L {
-        let x = (lambda_nm[k] - D65_LAMBDA_MIN) / D65_LAMBDA_STEP;
-        let inside = (0.0..=last as f32).contains(&x);
-        // Outside the range (NaN too) the lane reads entry 0 and yields 0.
-        let clamped = if inside { x } else { 0.0 };
-        // SAFETY: 0 ≤ clamped ≤ 106, which an i32 holds: the unchecked conversion is one
-        // vector instruction (the saturating `as` is a branch per lane) and truncates as
-        // `as usize` does.
-        let i = (unsafe { clamped.to_int_unchecked::<i32>() } as usize).min(last - 1);
-        let f = x - i as f32;
-        let v = (D65[i] + f * (D65[i + 1] - D65[i])) * inv_norm;
-        out[k] = if inside { v } else { 0.0 };
-    }
-}
-
 /// Precomputed integration weights and colour transforms for the fit.
 struct FitTables {
     /// Normalised wavelength t = (λ − 360)/470 of each 1 nm sample.

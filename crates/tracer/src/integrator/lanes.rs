@@ -45,7 +45,7 @@ use bvh::{Accelerator, Ray};
 use glam::{Vec2, Vec3};
 use shapes::offset::{OFFSET_FLOAT_SCALE, OFFSET_INT_SCALE, OFFSET_ORIGIN};
 use spectral::spectrum::{Colour, Spectrum};
-use spectral::uplift::d65_normalised_each;
+use spectral::uplift::d65_normalised;
 use spectral::{SampledSpectrum, SigmoidPolynomial};
 use std::f32::consts::{FRAC_1_PI, FRAC_PI_4};
 use std::hint::select_unpredictable;
@@ -439,6 +439,10 @@ fn run<const N: usize, S: Sampler>(
                 st.lambda[i][k] = s.wl.lambda[i];
                 st.beta[i][k] = 1.0;
                 st.radiance[i][k] = 0.0;
+                // The new path's D65 at its wavelengths (zero in RGB mode), here for
+                // the new paths alone: a pass over all the lanes with gathers, every turn,
+                // was 3 % slower (Cornell box and bunny, one thread, docs/figures.md).
+                st.d65[i][k] = if rgb { 0.0 } else { d65_normalised(s.wl.lambda[i]) };
             }
             st.prev_pdf[k] = 0.0;
             st.prev_specular[k] = true;
@@ -446,16 +450,6 @@ fn run<const N: usize, S: Sampler>(
             st.eta_scale[k] = 1.0;
             st.extension_left[k] = settings.specular_extension;
             next += 1;
-        }
-        // The new paths' D65 at their wavelengths (zero in RGB mode), across the lanes.
-        if !rgb && fresh.iter().any(|&f| f) {
-            let mut d65: F = [0.0; LANES];
-            for i in 0..N {
-                d65_normalised_each(&st.lambda[i], &mut d65);
-                for k in 0..LANES {
-                    st.d65[i][k] = select_unpredictable(fresh[k], d65[k], st.d65[i][k]);
-                }
-            }
         }
         if st.slot.iter().all(Option::is_none) {
             break;
