@@ -108,17 +108,9 @@ impl Packet {
     /// The lanes of `lanes` that enter child `c` of `node` within (t_min, t_max].
     #[inline(always)]
     fn enter<const W: usize>(&self, node: &super::WideNode<W>, c: usize, lanes: u32) -> u32 {
-        self.entries(node, c).0 & lanes
-    }
-
-    /// The lanes that enter child `c` of `node` within (t_min, t_max], and each lane's
-    /// entry distance.
-    #[inline(always)]
-    fn entries<const W: usize>(&self, node: &super::WideNode<W>, c: usize) -> (u32, Lanes) {
         let lo = [node.min_x[c], node.min_y[c], node.min_z[c]];
         let hi = [node.max_x[c], node.max_y[c], node.max_z[c]];
         let mut mask = 0u32;
-        let mut t = [0.0; PACKET];
         for i in 0..PACKET {
             let (mut enter, mut exit) = (self.t_min[i], self.t_max[i]);
             for a in (0..3).rev() {
@@ -128,9 +120,8 @@ impl Packet {
                 exit = min_ps((far - self.origin[a][i]) * self.inv_dir[a][i], exit);
             }
             mask |= ((enter <= exit) as u32) << i;
-            t[i] = enter;
         }
-        (mask, t)
+        mask & lanes
     }
 
     /// Lane `i`'s watertight test of triangle `v` up to its t (`intersect_triangle_watertight`'s
