@@ -52,7 +52,8 @@ pub(super) trait RayKernel<const W: usize> {
         best: &mut Option<Hit>,
     ) -> bool {
         for (i, &prim) in leaf.ids.iter().enumerate() {
-            if let Some((t, u, v)) = intersect_triangle_watertight(&leaf.vertices(i), ray, tie_bound(*t_max, best))
+            if let Some((t, u, v)) =
+                intersect_triangle_watertight(&leaf.vertices(i), ray, tie_bound(*t_max, best.is_some()))
                 && closer(t, prim, *t_max, best)
                 && record_hit::<ANY_HIT>(Hit { prim, t, u, v }, t_max, best)
             {
@@ -70,14 +71,22 @@ pub(super) trait RayKernel<const W: usize> {
 /// both return the same triangle where two share a t (a shared edge, coplanar copies).
 #[inline(always)]
 pub(super) fn closer(t: f32, prim: u32, t_max: f32, best: &Option<Hit>) -> bool {
-    t < t_max || best.as_ref().is_some_and(|b| t == t_max && prim < b.prim)
+    closer_than(t, prim, t_max, best.is_some(), best.map_or(u32::MAX, |b| b.prim))
+}
+
+/// [`closer`] with the closest hit so far given as whether there is one (`found`) and its
+/// triangle (`best_prim`): the form a packet's lanes keep.
+#[inline(always)]
+pub(super) fn closer_than(t: f32, prim: u32, t_max: f32, found: bool, best_prim: u32) -> bool {
+    t < t_max || (found && t == t_max && prim < best_prim)
 }
 
 /// The strict upper bound to hand a triangle test so that it also reports a tie with the
-/// closest hit so far (one ulp above `t_max` where there is one; [`closer`] decides).
+/// closest hit so far (one ulp above `t_max` where there is one, `found`; [`closer`]
+/// decides).
 #[inline(always)]
-pub(super) fn tie_bound(t_max: f32, best: &Option<Hit>) -> f32 {
-    if best.is_some() { t_max.next_up() } else { t_max }
+pub(super) fn tie_bound(t_max: f32, found: bool) -> f32 {
+    if found { t_max.next_up() } else { t_max }
 }
 
 /// Makes `hit` the closest so far (its t the new `t_max`); true if that ends the query

@@ -352,7 +352,7 @@ pub(super) unsafe fn watertight_group<L: Lanes, const ANY_HIT: bool>(
         let i = m.trailing_zeros() as usize;
         m &= m - 1;
         let hit = if zero_lanes & (1 << i) != 0 {
-            intersect_triangle_watertight(&leaf.vertices(j + i), ray, tie_bound(*t_max, best))
+            intersect_triangle_watertight(&leaf.vertices(j + i), ray, tie_bound(*t_max, best.is_some()))
         } else {
             Some((t[i], u[i], v[i]))
         };

@@ -22,7 +22,7 @@
 //! the walk has no near-to-far order; the renderer's lanes trace theirs one at a time,
 //! since there packets only broke even on the box (shadow rays and camera rays alike).
 
-use super::kernel::{RayKernel, ScalarKernel};
+use super::kernel::{RayKernel, ScalarKernel, closer_than, tie_bound};
 use super::traverse::origin_and_direction_finite;
 use super::{BvhWide, MAX_WIDTH};
 use crate::{Accelerator, Hit, Ray, TriangleTest, WatertightRay, intersect_triangle_watertight};
@@ -188,7 +188,7 @@ impl Packet {
             let (any_zero, ok, t, u, w) = self.lane_test(i, v);
             let live = lanes & (1 << i) != 0;
             let t_max = self.t_max[i];
-            let closer = t < t_max || (best.found[i] && t == t_max && prim < best.prim[i]);
+            let closer = closer_than(t, prim, t_max, best.found[i], best.prim[i]);
             let take = live && !any_zero && ok && closer;
             self.t_max[i] = if take { t } else { t_max };
             best.u[i] = if take { u } else { best.u[i] };
@@ -210,10 +210,8 @@ impl Packet {
     #[inline(never)]
     fn take_closest_scalar(&mut self, best: &mut Closest, v: &[Vec3; 3], prim: u32, leaf: (u32, u32), i: usize) {
         let t_max = self.t_max[i];
-        // The scalar test's bound is strict: one ulp up admits a tie.
-        let bound = if best.found[i] { t_max.next_up() } else { t_max };
-        if let Some((t, u, w)) = intersect_triangle_watertight(v, &self.watertight[i], bound)
-            && (t < t_max || (best.found[i] && t == t_max && prim < best.prim[i]))
+        if let Some((t, u, w)) = intersect_triangle_watertight(v, &self.watertight[i], tie_bound(t_max, best.found[i]))
+            && closer_than(t, prim, t_max, best.found[i], best.prim[i])
         {
             self.t_max[i] = t;
             (best.u[i], best.v[i], best.prim[i], best.leaf[i], best.found[i]) = (u, w, prim, leaf, true);
