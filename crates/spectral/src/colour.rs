@@ -66,16 +66,18 @@ pub fn srgb_to_u8(linear: f32) -> u8 {
 }
 
 /// The CIE 1931 colour-matching functions at `lambda` (nm), linearly interpolated
-/// from the 1 nm tables; zero outside 360–830 nm.
+/// from the 1 nm tables; zero outside 360–830 nm. Branch-free (the tables are read at
+/// index 0 outside them, and the result replaced by zeros), so that a loop over many
+/// wavelengths vectorises.
 #[inline]
 pub fn cie_xyz(lambda: f32) -> [f32; 3] {
     let x = lambda - CIE_LAMBDA_MIN;
-    if !(0.0..=(CIE_SAMPLES - 1) as f32).contains(&x) {
-        return [0.0; 3];
-    }
-    let i = (x as usize).min(CIE_SAMPLES - 2);
+    let inside = (0.0..=(CIE_SAMPLES - 1) as f32).contains(&x);
+    let x_in = if inside { x } else { 0.0 };
+    // SAFETY: x_in lies in [0, CIE_SAMPLES − 1], which an i32 holds.
+    let i = (unsafe { x_in.to_int_unchecked::<i32>() } as usize).min(CIE_SAMPLES - 2);
     let f = x - i as f32;
-    let lerp = |t: &[f32; CIE_SAMPLES]| t[i] + (t[i + 1] - t[i]) * f;
+    let lerp = |t: &[f32; CIE_SAMPLES]| if inside { t[i] + (t[i + 1] - t[i]) * f } else { 0.0 };
     [lerp(&CIE_X), lerp(&CIE_Y), lerp(&CIE_Z)]
 }
 

@@ -281,21 +281,47 @@ fn ln_positive(x: f32) -> f32 {
     e as f32 * std::f32::consts::LN_2 + s * series
 }
 
+/// Entry `i` of N hero wavelengths from the sample value `u`: (λ, weight 1 / (N·pdf(λ))).
+#[inline(always)]
+fn hero_entry<const N: usize>(u: f32, i: usize) -> (f32, f32) {
+    // (u + i/N) mod 1 by one subtraction: `fract` calls libm's `truncf` where
+    // the baseline x86-64 target has no rounding instruction (0.7 % of a render).
+    let ui = u + i as f32 / N as f32;
+    let ui = if ui >= 1.0 { ui - 1.0 } else { ui };
+    let (l, pdf) = sample_visible(ui);
+    (l, 1.0 / (N as f32 * pdf))
+}
+
 impl<const N: usize> SampledWavelengths<N> {
     /// Hero sampling: N wavelengths from u, u + 1/N, … (mod 1) through the visible pdf.
     pub fn sample_hero(u: f32) -> Self {
         let mut lambda = [0.0; N];
         let mut weight = [0.0; N];
         for i in 0..N {
-            // (u + i/N) mod 1 by one subtraction: `fract` calls libm's `truncf` where
-            // the baseline x86-64 target has no rounding instruction (0.7 % of a render).
-            let ui = u + i as f32 / N as f32;
-            let ui = if ui >= 1.0 { ui - 1.0 } else { ui };
-            let (l, pdf) = sample_visible(ui);
-            lambda[i] = l;
-            weight[i] = 1.0 / (N as f32 * pdf);
+            (lambda[i], weight[i]) = hero_entry::<N>(u, i);
         }
         Self { lambda, weight, rgb: false }
+    }
+
+    /// [`Self::sample_hero`] of each of `L` sample values, by the same operations (so to
+    /// the bit the same wavelengths and weights), one wavelength at a time across the
+    /// samples: the loops vectorise across them where the caller is compiled for wide
+    /// vectors. One sample's four wavelengths are a chain of dependent divisions, which
+    /// one at a time cost 4.4 % of a Cornell-box render (docs/figures.md).
+    #[inline(always)]
+    pub fn sample_hero_each<const L: usize>(u: &[f32; L]) -> [Self; L] {
+        let mut lambda = [[0.0; L]; N];
+        let mut weight = [[0.0; L]; N];
+        for i in 0..N {
+            for k in 0..L {
+                (lambda[i][k], weight[i][k]) = hero_entry::<N>(u[k], i);
+            }
+        }
+        std::array::from_fn(|k| Self {
+            lambda: std::array::from_fn(|i| lambda[i][k]),
+            weight: std::array::from_fn(|i| weight[i][k]),
+            rgb: false,
+        })
     }
 
     /// Equally spaced wavelengths `first`, `first + step`, … with Riemann weights `step`.
@@ -354,16 +380,45 @@ impl<const N: usize> SampledWavelengths<N> {
         }
         let mut xyz = [0.0f32; 3];
         for i in 0..N {
-            let l = radiance.0[i] * self.weight[i];
-            if l != 0.0 {
-                let c = cie_xyz(self.lambda[i]);
-                xyz[0] += l * c[0];
-                xyz[1] += l * c[1];
-                xyz[2] += l * c[2];
+            let term = xyz_term(radiance.0[i] * self.weight[i], self.lambda[i]);
+            for c in 0..3 {
+                xyz[c] += term[c];
             }
         }
         xyz_to_linear_srgb(xyz.map(|v| v / CIE_Y_INTEGRAL))
     }
+
+    /// [`Self::to_linear_srgb`] of `L` samples (wavelengths `wl[k]`, radiance
+    /// `radiance[k]`), by the same operations (the same bits), one wavelength at a time
+    /// across the samples, so that the loops vectorise across them where the caller is
+    /// compiled for wide vectors.
+    #[inline(always)]
+    pub fn to_linear_srgb_each<const L: usize>(wl: &[Self; L], radiance: &[SampledSpectrum<N>; L]) -> [[f32; 3]; L] {
+        if wl.iter().any(|w| w.rgb) {
+            return std::array::from_fn(|k| wl[k].to_linear_srgb(&radiance[k]));
+        }
+        let mut xyz = [[0.0f32; L]; 3];
+        for i in 0..N {
+            for k in 0..L {
+                let term = xyz_term(radiance[k].0[i] * wl[k].weight[i], wl[k].lambda[i]);
+                for c in 0..3 {
+                    xyz[c][k] += term[c];
+                }
+            }
+        }
+        std::array::from_fn(|k| xyz_to_linear_srgb([0, 1, 2].map(|c| xyz[c][k] / CIE_Y_INTEGRAL)))
+    }
+}
+
+/// One wavelength's term of a radiance's XYZ: `l` (radiance times the wavelength's
+/// weight) times the colour-matching functions at `lambda`, and zeros where `l` is zero
+/// (so that a zero radiance adds nothing even outside the tables; adding `+0` to sums
+/// that start at `+0` leaves them as skipping would).
+#[inline(always)]
+fn xyz_term(l: f32, lambda: f32) -> [f32; 3] {
+    let c = cie_xyz(lambda);
+    let nonzero = l != 0.0;
+    c.map(|c| if nonzero { l * c } else { 0.0 })
 }
 
 #[cfg(test)]

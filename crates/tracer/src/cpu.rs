@@ -20,6 +20,8 @@ use spectral::{SampledSpectrum, SampledWavelengths, SpectralMode};
 use std::sync::Arc;
 use std::time::Instant;
 
+mod per_sample;
+
 /// Splats a tile holds before it adds them to the pass's shared splat image.
 const SPLAT_FLUSH: usize = 1 << 14;
 
@@ -250,10 +252,11 @@ struct Pass<'a, I: Integrator> {
     progress: &'a (dyn Fn(u64) + Sync),
 }
 
-/// A pass's wavelengths: drawn per sample from one sample value, or the same for all.
+/// A pass's wavelengths: hero wavelengths drawn per sample from one sample value
+/// ([`SampledWavelengths::sample_hero`], a block at a time), or the same for all.
 #[derive(Clone, Copy)]
-enum Wavelengths<'a, const N: usize> {
-    Sampled(&'a (dyn Fn(f32) -> SampledWavelengths<N> + Sync)),
+enum Wavelengths<const N: usize> {
+    Hero,
     Fixed(SampledWavelengths<N>),
 }
 
@@ -270,9 +273,7 @@ impl<I: Integrator> Pass<'_, I> {
     /// Renders in the settings' spectral mode with samplers made by `sampler(x, y, s)`.
     fn modes<S: Sampler>(&self, film: &mut Film, sampler: &(dyn Fn(u32, u32, u32) -> S + Sync)) -> PathCounters {
         match self.settings.mode {
-            SpectralMode::Hero => {
-                self.tiles::<4, S>(film, sampler, Wavelengths::Sampled(&SampledWavelengths::sample_hero))
-            }
+            SpectralMode::Hero => self.tiles::<4, S>(film, sampler, Wavelengths::Hero),
             SpectralMode::Bins40 => {
                 self.tiles::<40, S>(film, sampler, Wavelengths::Fixed(SampledWavelengths::fixed_bins(380.0, 10.0)))
             }
@@ -285,7 +286,7 @@ impl<I: Integrator> Pass<'_, I> {
         &self,
         film: &mut Film,
         sampler: &(dyn Fn(u32, u32, u32) -> S + Sync),
-        wavelengths: Wavelengths<'_, N>,
+        wavelengths: Wavelengths<N>,
     ) -> PathCounters {
         let width = film.width();
         let tiles = tiles_of(self.settings.region());
@@ -321,7 +322,7 @@ impl<I: Integrator> Pass<'_, I> {
         film: &Film,
         tile: &PixelRect,
         sampler: &(dyn Fn(u32, u32, u32) -> S + Sync),
-        wavelengths: &Wavelengths<'_, N>,
+        wavelengths: &Wavelengths<N>,
         splat_image: Option<&std::sync::Mutex<SplatImage>>,
     ) -> TileResult {
         let (x0, y0, w, h) = (tile.x, tile.y, tile.width, tile.height);
@@ -335,21 +336,33 @@ impl<I: Integrator> Pass<'_, I> {
         // The block's samples and, for each, its pixel's index in the tile.
         let mut block: Vec<CameraSample<N, S>> = Vec::with_capacity(BLOCK);
         let mut owners: Vec<u32> = Vec::with_capacity(BLOCK);
+        // The hero wavelengths' sample values, and the samples' colours.
+        let mut u_wavelengths: Vec<f32> = Vec::with_capacity(BLOCK);
+        let mut colours: Vec<[f32; 3]> = Vec::with_capacity(BLOCK);
+        let hero = matches!(wavelengths, Wavelengths::Hero);
         let mut samples = samples.peekable();
         while samples.peek().is_some() {
             block.clear();
             owners.clear();
+            u_wavelengths.clear();
             for (i, s) in samples.by_ref().take(BLOCK) {
                 let (x, y) = (x0 + i % w, y0 + i / w);
                 let mut sampler = sampler(x, y, s);
-                let (u_wavelength, jitter) = sampler.camera(matches!(wavelengths, Wavelengths::Sampled(_)));
+                let (u_wavelength, jitter) = sampler.camera(hero);
                 let wl = match wavelengths {
-                    Wavelengths::Sampled(f) => f(u_wavelength),
+                    // A stand-in, overwritten for the whole block below.
+                    Wavelengths::Hero => {
+                        u_wavelengths.push(u_wavelength);
+                        SampledWavelengths::fixed_bins(0.0, 0.0)
+                    }
                     Wavelengths::Fixed(wl) => *wl,
                 };
                 let ray = self.camera.ray(Vec2::new(x as f32, y as f32) + jitter);
                 block.push(CameraSample { ray, wl, sampler, radiance: SampledSpectrum::zero() });
                 owners.push(i);
+            }
+            if hero {
+                per_sample::hero_wavelengths(&u_wavelengths, &mut block);
             }
             self.scene.integrator.radiance_block_splatting(
                 &view,
@@ -358,8 +371,9 @@ impl<I: Integrator> Pass<'_, I> {
                 &mut counters,
                 &mut splats,
             );
-            for (&i, s) in owners.iter().zip(&block) {
-                if !pixels[i as usize].add(s.wl.to_linear_srgb(&s.radiance)) {
+            per_sample::linear_srgb(&block, &mut colours);
+            for (&i, rgb) in owners.iter().zip(&colours) {
+                if !pixels[i as usize].add(*rgb) {
                     non_finite += 1;
                 }
             }

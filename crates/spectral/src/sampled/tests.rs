@@ -140,3 +140,48 @@ fn fast_atanh_matches_f64() {
         assert!((ln_positive(x) as f64 - exact).abs() <= 1e-7 * exact.abs().max(1.0), "ln({x})");
     }
 }
+
+/// The many-sample forms are the one-sample ones to the bit: hero wavelengths from sample
+/// values across [0, 1) (with its ends), and colours of radiances that are zero, tiny,
+/// large, NaN or infinite at wavelengths inside and outside the tables.
+#[test]
+fn many_sample_forms_equal_the_one_sample_forms_bit_for_bit() {
+    const L: usize = 16;
+    let mut rng = rng::Pcg32::new(5, 9);
+    // (A NaN's payload may differ with the order of operations; the film drops NaNs.)
+    let same = |a: f32, b: f32| a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan());
+    let specials = [0.0, -0.0, 1e-30, 3.5e4, f32::NAN, f32::INFINITY, -2.0];
+    for round in 0..2_000 {
+        let mut u: [f32; L] = std::array::from_fn(|_| rng.next_f32());
+        if round == 0 {
+            u[0] = 0.0;
+            u[1] = f32::from_bits(1.0f32.to_bits() - 1);
+        }
+        let each = SampledWavelengths::<4>::sample_hero_each(&u);
+        for k in 0..L {
+            let one = SampledWavelengths::<4>::sample_hero(u[k]);
+            assert!(each[k].lambda.iter().zip(&one.lambda).all(|(a, b)| same(*a, *b)), "λ of u = {}", u[k]);
+            assert!(each[k].weight.iter().zip(&one.weight).all(|(a, b)| same(*a, *b)), "weight of u = {}", u[k]);
+        }
+        // Some wavelengths beyond the tables, as a collapsed or fixed set may hold.
+        let mut wl = each;
+        wl[3].lambda[1] = 200.0;
+        wl[4].lambda[2] = 900.0;
+        wl[5].lambda[0] = f32::NAN;
+        let radiance: [SampledSpectrum<4>; L] = std::array::from_fn(|_| {
+            SampledSpectrum(std::array::from_fn(|_| {
+                let r = rng.next_u32();
+                if r.is_multiple_of(5) { specials[(r / 5) as usize % specials.len()] } else { 10.0 * rng.next_f32() }
+            }))
+        });
+        let rgb = SampledWavelengths::to_linear_srgb_each(&wl, &radiance);
+        for k in 0..L {
+            let one = wl[k].to_linear_srgb(&radiance[k]);
+            assert!(rgb[k].iter().zip(&one).all(|(a, b)| same(*a, *b)), "{:?} {:?}", rgb[k], one);
+        }
+    }
+    // RGB mode passes the channels through, as one sample at a time.
+    let rgb = [SampledWavelengths::<3>::rgb(); 2];
+    let radiance = [SampledSpectrum([1.0, 2.0, 3.0]), SampledSpectrum([0.5, 0.0, -1.0])];
+    assert_eq!(SampledWavelengths::to_linear_srgb_each(&rgb, &radiance), [[1.0, 2.0, 3.0], [0.5, 0.0, -1.0]]);
+}
