@@ -129,6 +129,28 @@ fn morton_and_sobol_helpers() {
     assert_eq!(eighths, (0..8).collect::<Vec<u32>>());
 }
 
+/// The closed form of the reversed second dimension equals the tables (which the GPU
+/// uses) for every index: both are linear over GF(2) in the index's bits, so agreeing on
+/// the 32 one-bit indices is agreeing everywhere; some mixed indices checked as well.
+#[test]
+fn sobol_1_reversed_equals_its_tables() {
+    let table = |i: u32| {
+        let t = &SOBOL_1_REVERSED;
+        t[0][(i & 0xff) as usize]
+            ^ t[1][((i >> 8) & 0xff) as usize]
+            ^ t[2][((i >> 16) & 0xff) as usize]
+            ^ t[3][(i >> 24) as usize]
+    };
+    for bit in 0..32 {
+        assert_eq!(sobol_1_reversed(1 << bit), table(1 << bit), "index bit {bit}");
+    }
+    let mut rng = rng::Pcg32::new(3, 7);
+    for i in [0u32, u32::MAX, 0x8000_0001].into_iter().chain((0..10_000).map(|_| rng.next_u32())) {
+        assert_eq!(sobol_1_reversed(i), table(i), "index {i:#x}");
+        assert_eq!(sobol_1_reversed(i), sobol_1(i as u64).reverse_bits(), "index {i:#x}");
+    }
+}
+
 #[test]
 fn padded_sobol_pixels_are_stratified_and_dimensions_shuffled() {
     for spp in [4u32, 16, 64] {
