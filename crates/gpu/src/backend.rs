@@ -632,7 +632,6 @@ fn instance_tables(
 struct SceneConstants {
     integrator: GpuIntegrator,
     white_offset: u32,
-    sobol_offset: u32,
     node_count: u32,
     light_count: u32,
     punctual_first: u32,
@@ -821,9 +820,6 @@ impl SceneData {
         if let GpuIntegrator::AmbientOcclusion { .. } = options.integrator {
             tables.extend(colour_entry(&tracer::AmbientOcclusion::white()));
         }
-        // The Sobol samplers' second dimension: the CPU's bit-reversed byte tables.
-        let sobol_offset = tables.len() as u32;
-        tables.extend(tracer::sampler::SOBOL_1_REVERSED.iter().flatten().map(|&v| f32::from_bits(v)));
         // The analytic shapes: their records, the slot table in the BVH's leaf order, and
         // the BVH's nodes.
         let mut shape_records = vec![0u32; scene.shapes.len()];
@@ -995,7 +991,6 @@ impl SceneData {
         let constants = SceneConstants {
             integrator: options.integrator,
             white_offset,
-            sobol_offset,
             node_count: node_count as u32,
             light_count: lights.cdf().len() as u32,
             punctual_first: lights.prims().len() as u32,
@@ -1727,7 +1722,6 @@ impl GpuScene {
                 GpuIntegrator::AmbientOcclusion { max_distance } => max_distance.min(3.0e38),
                 _ => 0.0,
             },
-            sobol_offset: self.constants.sobol_offset,
             log2_spp: sobol_bits(settings.spp),
             unused_bits: match settings.sampler {
                 // `ZSobolLayout::new`: Morton bits of the image's power-of-two square, then the

@@ -470,10 +470,12 @@ fn sobol_1(index: u64) -> u32 {
 #[cfg(test)]
 static SOBOL_1_TABLES: [[u32; 256]; 4] = sobol_1_tables(false);
 
-/// The tables of `sobol_1` bit-reversed, which the GPU's draws look up (the CPU computes
-/// the same values without them: `sobol_1_reversed`).
-pub static SOBOL_1_REVERSED: [[u32; 256]; 4] = sobol_1_tables(true);
+/// The tables of `sobol_1` bit-reversed: what `sobol_1_reversed` computes without them
+/// (its test's oracle).
+#[cfg(test)]
+static SOBOL_1_REVERSED: [[u32; 256]; 4] = sobol_1_tables(true);
 
+#[cfg(test)]
 const fn sobol_1_tables(reversed: bool) -> [[u32; 256]; 4] {
     let mut v = [0u32; 32];
     v[0] = 1 << 31;

@@ -66,11 +66,15 @@ fn pt_to_unit(v: u32) -> f32 {
     return f32(v >> 8u) * (1.0 / 16777216.0);
 }
 
-// `scrambled_sobol_1`: the second Sobol dimension from the bit-reversed byte tables.
+// `scrambled_sobol_1`: the second Sobol dimension, bit-reversed by `sobol_1_reversed`'s
+// Taylor shift over GF(2) (five shift-and-XORs, no tables).
 fn pt_scrambled_sobol_1(i: u32, seed: u32) -> u32 {
-    let t = pt_params.sobol_offset;
-    let v = bitcast<u32>(pt_tables[t + (i & 0xffu)]) ^ bitcast<u32>(pt_tables[t + 256u + ((i >> 8u) & 0xffu)])
-        ^ bitcast<u32>(pt_tables[t + 512u + ((i >> 16u) & 0xffu)]) ^ bitcast<u32>(pt_tables[t + 768u + (i >> 24u)]);
+    var v = i;
+    v ^= (v >> 16u) & 0x0000ffffu;
+    v ^= (v >> 8u) & 0x00ff00ffu;
+    v ^= (v >> 4u) & 0x0f0f0f0fu;
+    v ^= (v >> 2u) & 0x33333333u;
+    v ^= (v >> 1u) & 0x55555555u;
     return reverseBits(pt_laine_karras(v, seed));
 }
 
