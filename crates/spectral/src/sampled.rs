@@ -411,9 +411,9 @@ impl<const N: usize> SampledWavelengths<N> {
 }
 
 /// One wavelength's term of a radiance's XYZ: `l` (radiance times the wavelength's
-/// weight) times the colour-matching functions at `lambda`, and zeros where `l` is zero
-/// (so that a zero radiance adds nothing even outside the tables; adding `+0` to sums
-/// that start at `+0` leaves them as skipping would).
+/// weight) times the colour-matching functions at `lambda`, and `+0` where `l` is zero,
+/// where the one-at-a-time form skipped the term (adding `+0` to sums that start at `+0`
+/// leaves them as skipping does).
 #[inline(always)]
 fn xyz_term(l: f32, lambda: f32) -> [f32; 3] {
     let c = cie_xyz(lambda);
