@@ -450,59 +450,21 @@ fn sobol_0(index: u64) -> u32 {
     (index as u32).reverse_bits()
 }
 
-/// The second Sobol dimension (primitive polynomial x + 1, m₁ = 1): direction numbers
-/// v₁ = 2³¹, vₖ = vₖ₋₁ ⊕ (vₖ₋₁ ≫ 1); the point is the XOR of the vₖ of the index's set bits
-/// (four lookups in [`SOBOL_1_TABLES`], one per byte of the index). With [`sobol_0`] it
-/// forms a (0, 2)-sequence in base 2.
-#[inline]
+/// The second Sobol dimension (primitive polynomial x + 1, m₁ = 1) by its definition:
+/// direction numbers v₁ = 2³¹, vₖ = vₖ₋₁ ⊕ (vₖ₋₁ ≫ 1); the point is the XOR of the vₖ of
+/// the index's set bits. With [`sobol_0`] it forms a (0, 2)-sequence in base 2. The
+/// oracle of `sobol_1_reversed`, which computes it without a loop.
 #[cfg(test)]
 fn sobol_1(index: u64) -> u32 {
-    let i = index as u32;
-    let t = &SOBOL_1_TABLES;
-    t[0][(i & 0xff) as usize]
-        ^ t[1][((i >> 8) & 0xff) as usize]
-        ^ t[2][((i >> 16) & 0xff) as usize]
-        ^ t[3][(i >> 24) as usize]
-}
-
-/// For each byte k of a 32-bit index and each value b of it: the XOR of the direction
-/// numbers v₈ₖ₊ₜ of [`sobol_1`] over the set bits t of b.
-#[cfg(test)]
-static SOBOL_1_TABLES: [[u32; 256]; 4] = sobol_1_tables(false);
-
-/// The tables of `sobol_1` bit-reversed: what `sobol_1_reversed` computes without them
-/// (its test's oracle).
-#[cfg(test)]
-static SOBOL_1_REVERSED: [[u32; 256]; 4] = sobol_1_tables(true);
-
-#[cfg(test)]
-const fn sobol_1_tables(reversed: bool) -> [[u32; 256]; 4] {
-    let mut v = [0u32; 32];
-    v[0] = 1 << 31;
-    let mut j = 1;
-    while j < 32 {
-        v[j] = v[j - 1] ^ (v[j - 1] >> 1);
-        j += 1;
-    }
-    let mut t = [[0u32; 256]; 4];
-    let mut k = 0;
-    while k < 4 {
-        let mut b = 0;
-        while b < 256 {
-            let mut x = 0u32;
-            let mut bit = 0;
-            while bit < 8 {
-                if b & (1 << bit) != 0 {
-                    x ^= v[8 * k + bit];
-                }
-                bit += 1;
-            }
-            t[k][b] = if reversed { x.reverse_bits() } else { x };
-            b += 1;
+    let (mut v, mut out, mut i) = (1u32 << 31, 0u32, index as u32);
+    while i != 0 {
+        if i & 1 != 0 {
+            out ^= v;
         }
-        k += 1;
+        v ^= v >> 1;
+        i >>= 1;
     }
-    t
+    out
 }
 
 /// Owen scrambling by hashing (pbrt-v4's `FastOwenScrambler`, after Laine & Karras 2011
@@ -542,7 +504,7 @@ fn scrambled_sobol_0(index: u64, seed: u32) -> u32 {
     owen_scramble_reversed(index as u32, seed)
 }
 
-/// `owen_scramble(sobol_1(index), seed)` in one reversal, from the bit-reversed tables.
+/// `owen_scramble(sobol_1(index), seed)` in one reversal, from [`sobol_1_reversed`].
 #[inline]
 fn scrambled_sobol_1(index: u64, seed: u32) -> u32 {
     owen_scramble_reversed(sobol_1_reversed(index as u32), seed)
@@ -556,7 +518,7 @@ fn scrambled_sobol_1(index: u64, seed: u32) -> u32 {
 /// power of two, then the same within each half). Five shift-and-XORs instead of four
 /// table lookups: they vectorise across the lanes, where lookups would be gathers (the
 /// lookups, one lane at a time, were 2 % of a Cornell-box render's instructions). Equal to
-/// the tables' value for every index (`sobol_1_reversed_equals_its_tables`).
+/// the definition's value for every index (`sobol_1_reversed_is_the_definition_reversed`).
 #[inline(always)]
 fn sobol_1_reversed(i: u32) -> u32 {
     let mut x = i;
