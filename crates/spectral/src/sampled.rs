@@ -411,14 +411,12 @@ impl<const N: usize> SampledWavelengths<N> {
 }
 
 /// One wavelength's term of a radiance's XYZ: `l` (radiance times the wavelength's
-/// weight) times the colour-matching functions at `lambda`, and `+0` where `l` is zero,
-/// where the one-at-a-time form skipped the term (adding `+0` to sums that start at `+0`
-/// leaves them as skipping does).
+/// weight) times the colour-matching functions at `lambda`. A zero `l` adds ±0, which
+/// leaves the sums as they were (they start at +0 and can never become −0), so no term
+/// needs skipping.
 #[inline(always)]
 fn xyz_term(l: f32, lambda: f32) -> [f32; 3] {
-    let c = cie_xyz(lambda);
-    let nonzero = l != 0.0;
-    c.map(|c| if nonzero { l * c } else { 0.0 })
+    cie_xyz(lambda).map(|c| l * c)
 }
 
 #[cfg(test)]
