@@ -96,6 +96,15 @@ fn refine_t(ray: &Ray, v: [glam::Vec3; 3], t: f32) -> f32 {
     if exact.is_finite() && exact > 0.0 { exact as f32 } else { t }
 }
 
+/// A copy of `ray` read one float at a time.
+#[inline(always)]
+fn fieldwise(ray: &Ray) -> Ray {
+    // SAFETY: reads of the fields of a valid reference.
+    let f = |p: &f32| unsafe { std::ptr::read_volatile(p) };
+    let v = |p: &glam::Vec3| glam::Vec3::new(f(&p.x), f(&p.y), f(&p.z));
+    Ray { origin: v(&ray.origin), dir: v(&ray.dir), inv_dir: v(&ray.inv_dir), t_min: f(&ray.t_min), t_max: f(&ray.t_max) }
+}
+
 /// True if the ray's origin and direction are finite: the largest magnitude among the
 /// six coordinates' bit patterns below infinity's, one comparison instead of six branches.
 #[inline(always)]
@@ -126,6 +135,7 @@ impl<const W: usize> BvhWide<W> {
         if COUNT {
             stats.rays += 1;
         }
+        let ray = &fieldwise(ray);
         // Such rays hit no triangle (Möller–Trumbore's determinant is not finite), and
         // they are the only ones that could enter an unused slot's empty box.
         if self.nodes.is_empty() || !origin_and_direction_finite(ray) {
