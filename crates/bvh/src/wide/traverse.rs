@@ -18,42 +18,19 @@ struct Entry {
     t: f32,
 }
 
-/// Sorts the first `k` (≤ W) entries by entry distance, nearest first (a sorting
-/// network up to four, else insertion).
+/// Sorts the first `k` (≤ W) slots by their entry distance `t[slot]`, nearest first
+/// (insertion: a few steps for the three or four children most nodes enter).
 #[inline(always)]
-fn sort_by_entry<const W: usize>(e: &mut [Entry; W], k: usize) {
-    #[inline(always)]
-    fn order<const W: usize>(e: &mut [Entry; W], a: usize, b: usize) {
-        if e[b].t < e[a].t {
-            e.swap(a, b);
+fn sort_slots<const W: usize>(slots: &mut [u8; W], k: usize, t: &[f32; W]) {
+    for i in 1..k {
+        let x = slots[i];
+        let key = t[x as usize];
+        let mut j = i;
+        while j > 0 && key < t[slots[j - 1] as usize] {
+            slots[j] = slots[j - 1];
+            j -= 1;
         }
-    }
-    match k {
-        0 | 1 => {}
-        2 => order(e, 0, 1),
-        3 => {
-            order(e, 0, 1);
-            order(e, 1, 2);
-            order(e, 0, 1);
-        }
-        4 => {
-            order(e, 0, 1);
-            order(e, 2, 3);
-            order(e, 0, 2);
-            order(e, 1, 3);
-            order(e, 1, 2);
-        }
-        _ => {
-            for i in 1..k {
-                let x = e[i];
-                let mut j = i;
-                while j > 0 && x.t < e[j - 1].t {
-                    e[j] = e[j - 1];
-                    j -= 1;
-                }
-                e[j] = x;
-            }
-        }
+        slots[j] = x;
     }
 }
 
@@ -177,22 +154,27 @@ impl<const W: usize> BvhWide<W> {
                         current = near;
                         continue;
                     }
-                    // Two or more children: nearest first, the others pushed far to near.
-                    let mut hits = [Entry::default(); W];
+                    // Three or more children: nearest first, the others pushed far to
+                    // near. The slots are sorted, not entries: an entry written field by
+                    // field and then moved whole (the sort's swaps, the pushes) would be
+                    // loaded across several of its stores, which store forwarding cannot
+                    // serve.
+                    let mut slots = [0u8; W];
                     let mut k = 0;
                     let mut m = mask;
                     while m != 0 {
-                        hits[k] = entry(m.trailing_zeros() as usize);
-                        self.prefetch(&hits[k]);
+                        let i = m.trailing_zeros() as usize;
+                        slots[k] = i as u8;
+                        self.prefetch(&entry(i));
                         k += 1;
                         m &= m - 1;
                     }
-                    sort_by_entry(&mut hits, k);
-                    for e in hits[1..k].iter().rev() {
-                        stack[sp] = MaybeUninit::new(*e);
+                    sort_slots(&mut slots, k, &t);
+                    for &i in slots[1..k].iter().rev() {
+                        stack[sp] = MaybeUninit::new(entry(i as usize));
                         sp += 1;
                     }
-                    current = hits[0];
+                    current = entry(slots[0] as usize);
                     continue;
                 }
             } else {
