@@ -98,9 +98,17 @@ impl WatertightRay {
     /// Written without indexing the direction by a computed axis: the indexed form went
     /// through the stack (a store, then loads whose addresses waited on the axis choice),
     /// and this runs once per ray, which on small scenes is a fair part of a ray's cost.
+    ///
+    /// The shear's three quotients are those of every possible dominant axis, divided
+    /// before the axis is known and then selected: the same divisions of the same
+    /// operands, so the same bits, but the divider no longer waits for the axis choice
+    /// (a ray's first triangle test waits for the shear).
     #[inline]
     pub fn new(ray: &Ray) -> Self {
         let d = ray.dir;
+        let dv = Vec3A::from(d);
+        // Lane i: the quotients with d[i] as denominator, for z' = i (x' = i + 1, y' = i + 2).
+        let (over_x, over_y, over_z) = (dv.yzx() / dv, dv.zxy() / dv, Vec3A::ONE / dv);
         let a = d.abs();
         // The dominant axis z' and the two that follow it cyclically (x' = z' + 1,
         // y' = z' + 2, mod 3), with the direction's components and the origin's.
@@ -114,14 +122,16 @@ impl WatertightRay {
             Vec3A::select(BVec3A::splat(x_dominant), v.yzx(), Vec3A::select(BVec3A::splat(y_dominant), v.zxy(), v))
         };
         let (d, o) = (permute(d.into()), permute(o.into()));
+        // Lane z' of each: d[x'] / d[z'], d[y'] / d[z'] and 1 / d[z'].
+        let shear = Vec3A::new(permute(over_x).z, permute(over_y).z, permute(over_z).z);
         // Swapping x and y keeps the winding when the ray points along −z.
         let flip = d.z < 0.0;
         let swap = BVec3A::splat(flip);
-        let (d, o) = (Vec3A::select(swap, d.yxz(), d), Vec3A::select(swap, o.yxz(), o));
+        let (shear, o) = (Vec3A::select(swap, shear.yxz(), shear), Vec3A::select(swap, o.yxz(), o));
         let kz = select_unpredictable(x_dominant, 0, select_unpredictable(y_dominant, 1, 2));
         let (kx, ky) = ((kz + 1) % 3, (kz + 2) % 3);
         let (kx, ky) = (select_unpredictable(flip, ky, kx), select_unpredictable(flip, kx, ky));
-        let shear = [d.x / d.z, d.y / d.z, 1.0 / d.z];
+        let shear = shear.to_array();
         let [ox, oy, oz] = o.to_array();
         Self { origin: [ox, oy, oz], k: [kx, ky, kz], shear, t_min: ray.t_min }
     }
