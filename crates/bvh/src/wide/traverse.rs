@@ -73,13 +73,24 @@ fn refine_t(ray: &Ray, v: [glam::Vec3; 3], t: f32) -> f32 {
     if exact.is_finite() && exact > 0.0 { exact as f32 } else { t }
 }
 
-/// A copy of `ray` read one float at a time.
+/// A copy of `ray` read one float at a time. Callers often store a ray piecewise (the
+/// renderer's lanes build it from structure-of-arrays state), and a wider load that spans
+/// several stores cannot be forwarded from them: it waits until they reach the cache, at
+/// the start of every ray (+3 % on the Cornell box's render, docs/figures.md). Each 4-byte
+/// load lies inside one store whatever the caller's pattern; volatile keeps the compiler
+/// from merging them.
 #[inline(always)]
 fn fieldwise(ray: &Ray) -> Ray {
     // SAFETY: reads of the fields of a valid reference.
     let f = |p: &f32| unsafe { std::ptr::read_volatile(p) };
     let v = |p: &glam::Vec3| glam::Vec3::new(f(&p.x), f(&p.y), f(&p.z));
-    Ray { origin: v(&ray.origin), dir: v(&ray.dir), inv_dir: v(&ray.inv_dir), t_min: f(&ray.t_min), t_max: f(&ray.t_max) }
+    Ray {
+        origin: v(&ray.origin),
+        dir: v(&ray.dir),
+        inv_dir: v(&ray.inv_dir),
+        t_min: f(&ray.t_min),
+        t_max: f(&ray.t_max),
+    }
 }
 
 /// True if the ray's origin and direction are finite: the largest magnitude among the
