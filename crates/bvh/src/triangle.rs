@@ -102,7 +102,9 @@ impl WatertightRay {
     /// The shear's three quotients are those of every possible dominant axis, divided
     /// before the axis is known and then selected: the same divisions of the same
     /// operands, so the same bits, but the divider no longer waits for the axis choice
-    /// (a ray's first triangle test waits for the shear).
+    /// (a ray's first triangle test waits for the shear). The reciprocals are divided here
+    /// too rather than taken from `ray.inv_dir`, so that the test's bits never depend on a
+    /// caller's `inv_dir` matching its `dir`.
     #[inline]
     pub fn new(ray: &Ray) -> Self {
         let d = ray.dir;

@@ -97,13 +97,9 @@ fn watertight_never_leaks_through_a_shared_edge() {
 fn watertight_ray_set_up_follows_the_paper() {
     let origin = Vec3::new(1.5, -2.25, 3.125);
     let mut dirs = Vec::new();
-    let mut state = 0x9e37_79b9_7f4a_7c15u64;
-    let mut uniform = || {
-        state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-        (state >> 40) as f32 / (1u64 << 24) as f32 * 2.0 - 1.0
-    };
+    let mut rng = rng::Pcg32::seed_from_u64(11);
     for _ in 0..20_000 {
-        dirs.push(Vec3::new(uniform(), uniform(), uniform()));
+        dirs.push(Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 2.0 - 1.0);
     }
     for a in [-2.0f32, -1.0, -0.5, 0.0, 0.5, 1.0, 2.0] {
         for b in [-2.0f32, -1.0, 0.0, 1.0, 2.0] {

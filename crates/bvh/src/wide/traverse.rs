@@ -11,7 +11,7 @@ use std::mem::MaybeUninit;
 
 /// A child to visit: a node (`count == 0`) or a leaf's triangle range, with the ray's
 /// entry distance into its box.
-#[derive(Clone, Copy, Default)]
+#[derive(Clone, Copy)]
 struct Entry {
     child: u32,
     count: u32,
