@@ -35,6 +35,8 @@ bench() { # NAME SCENE [ARGS...]: one scene on both backends
         local gpu=(--backend gpu --bvh-width "$width")
         # Viewer frames (statistics stay on the device; only display pixels come back).
         "$SPT" bench "$scene" "${common[@]}" "${gpu[@]}" --spp 1 --frames "$FRAMES"
+        # The same frames drawn into a device buffer (the viewer's wgpu surface path), no read-back.
+        "$SPT" bench "$scene" "${common[@]}" "${gpu[@]}" --spp 1 --frames "$FRAMES" --frames-on-device
         "$SPT" bench "$scene" "${common[@]}" "${gpu[@]}" --spp 16 --frames 10
         # Whole renders (read-back and merge into the exact film included).
         "$SPT" bench "$scene" "${common[@]}" "${gpu[@]}" --spp 1 --repeats "$REPEATS"

@@ -471,6 +471,12 @@ struct SceneArgs {
     /// triangles, sweep below); on the GPU it builds the binary tree the kernel traverses.
     #[arg(long, value_parser = parse_bvh_builder)]
     bvh_builder: Option<bvh::SplitMethod>,
+    /// GPU path tracer only: trace paths as a wavefront (one kernel per stage — camera
+    /// rays, closest hits, shading, shadow rays — the paths' state in device memory)
+    /// instead of the megakernel's one loop per camera ray; the same image statistics, to
+    /// measure the two designs against each other (docs/gpu.md).
+    #[arg(long)]
+    wavefront: bool,
     /// Where to trace: cpu (rayon, every feature) or gpu (wgpu compute; hero mode, triangle
     /// meshes, registered BSDFs). A request outside a backend's capabilities is refused
     /// before any work, with the way out.
@@ -926,6 +932,7 @@ fn scene_options(args: &SceneArgs) -> SceneOptions {
         bvh_width: args.bvh_width,
         bvh_builder: args.bvh_builder,
         first_render: None,
+        wavefront: args.wavefront,
     }
 }
 

@@ -105,6 +105,8 @@ struct Buffers {
     params: wgpu::Buffer,
     accum: wgpu::Buffer,
     accum_readback: wgpu::Buffer,
+    /// A wavefront kernel's paths and queues, one path per pixel (in `path_bind`).
+    wavefront: Option<crate::wavefront::Buffers>,
     path_bind: wgpu::BindGroup,
     /// Per pixel: the folded samples' mean (xyz) and count (w), for the display.
     folded: wgpu::Buffer,
@@ -197,7 +199,8 @@ impl DeviceAccumulation {
             mapped_at_creation: false,
         });
         ctx.queue.write_buffer(&display_params, 0, bytemuck::cast_slice(&[width, height, 0, 0]));
-        let path_bind = scene.bind_group(&params, &accum, None);
+        let wavefront = scene.wavefront_buffers(pixels)?;
+        let path_bind = scene.bind_group(&params, &accum, None, wavefront.as_ref());
         let display_bind = display.bind_group(ctx, [&display_params, &accum, &folded, &display_out]);
         if let Some(e) = pollster::block_on(scope.pop()) {
             return Err(GpuError::Shader(format!("out of GPU memory for a {width}×{height} accumulation: {e}")));
@@ -212,6 +215,7 @@ impl DeviceAccumulation {
             params,
             accum,
             accum_readback,
+            wavefront,
             path_bind,
             folded,
             display_params,
@@ -262,7 +266,7 @@ impl DeviceAccumulation {
         let pixels = width as u64 * height as u64;
         let per_dispatch = (DISPATCH_BUDGET / pixels.max(1)).clamp(1, scene.max_samples_per_dispatch() as u64) as u32;
         let mut params = scene.kernel_params(&self.settings);
-        let pipeline = scene.pipeline(&self.settings)?;
+        let kernel = scene.kernel_for(&self.settings)?;
         scene.write_seeds(&self.buffers.params, &self.settings);
         params.band_y0 = 0;
         params.band_rows = height;
@@ -273,9 +277,9 @@ impl DeviceAccumulation {
             params.first_sample = self.samples;
             params.samples = n;
             ctx.queue.write_buffer(&self.buffers.params, 0, bytemuck::bytes_of(&params));
-            let mut encoder = ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
-            scene.encode_dispatch(&mut encoder, &pipeline, &self.buffers.path_bind, width, height);
-            ctx.queue.submit([encoder.finish()]);
+            let encoder = ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
+            let b = &self.buffers;
+            scene.submit_samples(encoder, &kernel, &b.path_bind, b.wavefront.as_ref(), width, height, &params)?;
             self.samples += n;
             left -= n;
             if self.samples.is_multiple_of(SAMPLES_PER_READBACK) {

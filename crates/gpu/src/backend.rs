@@ -119,6 +119,7 @@ use crate::kernel::{
     Params, PixelAccum, SEEDS_OFFSET, SPLAT_HEADER_WORDS, ShapeCode, UNIFORM_BYTES, WideNode,
 };
 use crate::materials::colour_entry;
+use crate::wavefront;
 use crate::wide::WideBvh;
 use crate::{GpuContext, GpuError};
 use bvh::{Aabb, BuildConfig, Bvh, BvhNode, BvhWidth, SplitMethod, TriangleTest};
@@ -460,6 +461,8 @@ fn capabilities_with(integrator: GpuIntegrator, shader_f64: bool) -> Capabilitie
         diffuse_depth: integrator == GpuIntegrator::Path,
         bvh_builders: true,
         sample_block: SAMPLES_PER_READBACK,
+        // The path tracer's loop body is the wavefront's shading stage (wgsl/wavefront.wgsl).
+        wavefront: integrator == GpuIntegrator::Path,
     }
 }
 
@@ -1113,8 +1116,18 @@ struct FilmBuffers {
     pixels: u64,
     accum: wgpu::Buffer,
     readback: wgpu::Buffer,
+    /// A wavefront kernel's paths and queues (in the bind group).
+    wavefront: Option<wavefront::Buffers>,
     /// `None` for bdpt (see [`GpuScene::render_gpu`]).
     bind_group: Option<wgpu::BindGroup>,
+}
+
+/// A compiled kernel: its main pipeline (the megakernel's `pt_main`, or the wavefront's
+/// shading stage) and, for a wavefront, its other stages.
+#[derive(Clone)]
+pub(crate) struct Kernel {
+    main: wgpu::ComputePipeline,
+    stages: Option<Arc<wavefront::Stages>>,
 }
 
 /// bdpt's buffers: its splat image (`wgsl/bdpt.wgsl`: [`SPLAT_HEADER_WORDS`], then nine
@@ -1144,6 +1157,19 @@ fn splat_sum(words: &[u32]) -> i128 {
     (((v << 32) as i128) >> 32) << 32
 }
 
+/// The wavefront follows one path per camera ray, as hero wavelengths and RGB do; the
+/// 40-bin mode's ten paths per sample are the megakernel's.
+fn check_wavefront_mode(options: &KernelOptions) -> Result<(), GpuError> {
+    if options.wavefront && options.mode == SpectralMode::Bins40 {
+        return Err(GpuError::Unsupported(
+            "the 40-bin spectral mode in the wavefront (its ten paths per sample run in the megakernel: drop \
+             --wavefront, or use --spectral hero or rgb)"
+                .into(),
+        ));
+    }
+    Ok(())
+}
+
 /// A scene on the device, made by [`GpuBackend::prepare`]: its buffers, the compiled
 /// pipeline and the scene itself (for the camera and for messages).
 pub struct GpuScene {
@@ -1151,8 +1177,10 @@ pub struct GpuScene {
     scene: Scene,
     bounds: Aabb,
     /// The kernels compiled so far, by (sampler, spectral mode) (both are compiled in).
-    pipelines: Mutex<Vec<((SamplerKind, SpectralMode), wgpu::ComputePipeline)>>,
+    pipelines: Mutex<Vec<((SamplerKind, SpectralMode), Kernel)>>,
     pipeline_layout: wgpu::PipelineLayout,
+    /// A wavefront kernel's group 1 (its dispatch sizes) and the control stages' layout.
+    wavefront_layouts: Option<(wgpu::BindGroupLayout, wgpu::PipelineLayout)>,
     /// The entries of `layout` (with the source, what a compiled kernel is found by).
     layout_entries: Vec<wgpu::BindGroupLayoutEntry>,
     /// What another sampler's kernel is generated from.
@@ -1203,23 +1231,31 @@ pub(crate) fn buffer_entry(binding: u32, ty: wgpu::BufferBindingType) -> wgpu::B
     }
 }
 
-/// The path kernel `source` as a pipeline with `layout` (made of `entries`) and its shader
-/// module (for the kernel's other entry points): the one the device keeps from the same
-/// source and entries, else compiled.
+/// The path kernel `source` as a pipeline of its `entry` point with `layout` (made of
+/// `entries`) and its shader module (for the kernel's other entry points): the one the
+/// device keeps from the same source and entries, else compiled.
 fn kernel(
     ctx: &GpuContext,
     layout: &wgpu::PipelineLayout,
     entries: &[wgpu::BindGroupLayoutEntry],
     source: &str,
+    entry: &str,
 ) -> Result<(wgpu::ComputePipeline, wgpu::ShaderModule), GpuError> {
-    ctx.kernels.get_or_compile(source, entries, || compile_kernel(ctx, layout, source))
+    ctx.kernels.get_or_compile(source, entries, || compile_kernel(ctx, layout, source, entry))
 }
 
-/// Compiles `source`'s `pt_main` with `layout` (what [`kernel`] keeps).
+/// The entry point a kernel's main pipeline runs: `pt_main` (the megakernel), or the
+/// wavefront's shading stage (its other stages are pipelines of the same module).
+fn main_entry(options: &KernelOptions) -> &'static str {
+    if options.wavefront { "pt_wf_shade" } else { "pt_main" }
+}
+
+/// Compiles `source`'s `entry` with `layout` (what [`kernel`] keeps).
 fn compile_kernel(
     ctx: &GpuContext,
     layout: &wgpu::PipelineLayout,
     source: &str,
+    entry: &str,
 ) -> Result<(wgpu::ComputePipeline, wgpu::ShaderModule), GpuError> {
     let device = &ctx.device;
     // (Out of memory caught here too: a pipeline that failed must not be kept.)
@@ -1233,7 +1269,7 @@ fn compile_kernel(
         label: Some("spt path tracer"),
         layout: Some(layout),
         module: &module,
-        entry_point: Some("pt_main"),
+        entry_point: Some(entry),
         compilation_options: Default::default(),
         cache: None,
     });
@@ -1293,6 +1329,7 @@ impl GpuBackend {
             sampler,
             mode,
             bvh_builder: options.bvh_builder.unwrap_or(KernelOptions::default().bvh_builder),
+            wavefront: options.wavefront,
             ..KernelOptions::default()
         }
     }
@@ -1367,6 +1404,7 @@ impl GpuBackend {
             .chain(data.options.integrator.splats().then_some([(13, write), (14, write)]).into_iter().flatten())
             .chain([(6, write)])
             .map(|(b, ty)| buffer_entry(b, ty))
+            .chain(data.options.wavefront.then(wavefront::group_zero_entries).into_iter().flatten())
             .collect();
         let layout =
             device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: Some("spt"), entries: &entries });
@@ -1375,13 +1413,31 @@ impl GpuBackend {
             bind_group_layouts: &[Some(&layout)],
             immediate_size: 0,
         });
+        let wavefront_layouts = data.options.wavefront.then(|| {
+            let group_one = wavefront::group_one_layout(device);
+            let control = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some("spt wavefront control"),
+                bind_group_layouts: &[Some(&layout), Some(&group_one)],
+                immediate_size: 0,
+            });
+            (group_one, control)
+        });
 
+        check_wavefront_mode(&data.options)?;
         let compile_start = Instant::now();
-        let shader_result = kernel(&self.ctx, &pipeline_layout, &entries, &data.shader_source());
+        let shader_result =
+            kernel(&self.ctx, &pipeline_layout, &entries, &data.shader_source(), main_entry(&data.options));
+        let stages = match (&shader_result, &wavefront_layouts) {
+            (Ok((_, module)), Some((_, control))) => {
+                Some(wavefront::Stages::new(&self.ctx, module, &pipeline_layout, control))
+            }
+            _ => None,
+        };
         let compile_time = compile_start.elapsed();
         let memory_result = pop_scope(memory, "out of GPU memory uploading the scene");
         let validation_result = pop_scope(validation, "uploading the scene");
         let (pipeline, module) = shader_result?;
+        let stages = stages.transpose()?;
         memory_result?;
         validation_result?;
 
@@ -1401,8 +1457,9 @@ impl GpuBackend {
             ctx: Arc::clone(&self.ctx),
             bounds: scene.bounds(),
             scene,
-            pipelines: Mutex::new(vec![((data.options.sampler, data.options.mode), pipeline)]),
+            pipelines: Mutex::new(vec![((data.options.sampler, data.options.mode), Kernel { main: pipeline, stages })]),
             pipeline_layout,
+            wavefront_layouts,
             layout_entries: entries,
             material_wgsl: data.material_wgsl,
             kernel_options: data.options,
@@ -1531,7 +1588,7 @@ impl GpuScene {
             usage: wgpu::BufferUsages::STORAGE,
             mapped_at_creation: false,
         });
-        let scene_group = self.bind_group(&self.params, &accum, None);
+        let scene_group = self.bind_group(&self.params, &accum, None, None);
         let texels: Vec<GatherRecord> = problem.texels.iter().map(gather_record).collect();
         let texel_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("atlas gather texels"),
@@ -1769,16 +1826,22 @@ impl GpuScene {
             let scratch_cap = limits.max_storage_buffer_binding_size.min(limits.max_buffer_size).min(BDPT_SCRATCH_CAP);
             band_rows_max = band_rows_max.min((scratch_cap / scratch_row).max(1) as u32);
         }
+        if self.kernel_options.wavefront {
+            // A wave holds the band's paths.
+            let slots = wavefront::max_slots(limits);
+            check_size("one image row of the wavefront's paths", wavefront::PATH_BYTES * width as u64, limits)?;
+            band_rows_max = band_rows_max.min((slots / width as u64).max(1) as u32);
+        }
         let band_pixels_max = band_rows_max as u64 * width as u64;
 
         let mut film_slot = lock(&self.film);
         if film_slot.as_ref().is_none_or(|f| f.pixels < band_pixels_max) {
-            *film_slot = Some(self.film_buffers(band_pixels_max));
+            *film_slot = Some(self.film_buffers(band_pixels_max)?);
         }
         let fb = film_slot.as_ref().expect("just made");
 
         let mut params = self.kernel_params(settings);
-        let pipeline = self.pipeline(settings)?;
+        let kernel = self.kernel_for(settings)?;
         self.write_seeds(&self.params, settings);
 
         // bdpt: the whole image's splat image, cleared, in a bind group of its own.
@@ -1794,7 +1857,7 @@ impl GpuScene {
             let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
             encoder.clear_buffer(&sb.sums, 0, None);
             queue.submit([encoder.finish()]);
-            Some(self.bind_group(&self.params, &fb.accum, Some(sb)))
+            Some(self.bind_group(&self.params, &fb.accum, Some(sb), None))
         } else {
             None
         };
@@ -1827,8 +1890,8 @@ impl GpuScene {
                 if done == 0 || absolute(done) == 0 {
                     encoder.clear_buffer(&fb.accum, 0, Some(band_bytes));
                 }
-                self.encode_dispatch(&mut encoder, &pipeline, bind_group, width, rows);
-                let index = queue.submit([encoder.finish()]);
+                let index =
+                    self.submit_samples(encoder, &kernel, bind_group, fb.wavefront.as_ref(), width, rows, &params)?;
                 device
                     .poll(wgpu::PollType::Wait { submission_index: Some(index), timeout: None })
                     .map_err(|e| GpuError::Shader(format!("waiting for the GPU: {e}")))?;
@@ -1898,6 +1961,7 @@ impl GpuScene {
         params: &wgpu::Buffer,
         accum: &wgpu::Buffer,
         bdpt: Option<&BdptBuffers>,
+        wavefront: Option<&wavefront::Buffers>,
     ) -> wgpu::BindGroup {
         let b = &self.buffers;
         let range = |offset: u64, size: u64| {
@@ -1920,6 +1984,10 @@ impl GpuScene {
             bindings.push((13, &bdpt.sums));
             bindings.push((14, &bdpt.scratch));
         }
+        if let Some(w) = wavefront {
+            bindings.push((15, &w.paths));
+            bindings.push((16, &w.control));
+        }
         let entries: Vec<_> = uniforms
             .into_iter()
             .chain(
@@ -1935,13 +2003,24 @@ impl GpuScene {
         })
     }
 
-    /// Accumulator and read-back buffers for `pixels` pixels, with their bind group.
-    fn film_buffers(&self, pixels: u64) -> FilmBuffers {
+    /// Accumulator and read-back buffers for `pixels` pixels (with a wavefront's paths),
+    /// with their bind group.
+    fn film_buffers(&self, pixels: u64) -> Result<FilmBuffers, GpuError> {
         let device = &self.ctx.device;
         let (accum, readback) = read_back_pair(device, "accumulators", FILM_HEADER_BYTES + pixels * PIXEL_BYTES);
+        let wavefront = self.wavefront_buffers(pixels)?;
         // bdpt's bind group also holds the splat image: made per pass (`render_gpu`).
-        let bind_group = (!self.splatting()).then(|| self.bind_group(&self.params, &accum, None));
-        FilmBuffers { pixels, accum, readback, bind_group }
+        let bind_group = (!self.splatting()).then(|| self.bind_group(&self.params, &accum, None, wavefront.as_ref()));
+        Ok(FilmBuffers { pixels, accum, readback, wavefront, bind_group })
+    }
+
+    /// A wavefront kernel's paths and queues for waves of `slots` paths (`None` for a
+    /// megakernel).
+    pub(crate) fn wavefront_buffers(&self, slots: u64) -> Result<Option<wavefront::Buffers>, GpuError> {
+        self.wavefront_layouts
+            .as_ref()
+            .map(|(group_one, _)| wavefront::Buffers::new(&self.ctx, slots, group_one))
+            .transpose()
     }
 
     /// The most samples per pixel one dispatch may trace on this device
@@ -1962,34 +2041,58 @@ impl GpuScene {
 
     /// The kernel for the settings' sampler and spectral mode, compiled on first use (the
     /// scene's buffers and layout stay; only those constants differ).
-    pub(crate) fn pipeline(&self, settings: &RenderSettings) -> Result<wgpu::ComputePipeline, GpuError> {
+    pub(crate) fn kernel_for(&self, settings: &RenderSettings) -> Result<Kernel, GpuError> {
         let key = (settings.sampler, settings.mode);
         let mut pipelines = lock(&self.pipelines);
         if let Some((_, p)) = pipelines.iter().find(|(k, _)| *k == key) {
             return Ok(p.clone());
         }
         let options = KernelOptions { sampler: key.0, mode: key.1, ..self.kernel_options };
+        check_wavefront_mode(&options)?;
         let source = crate::kernel::source(&self.material_wgsl, &options);
-        let (pipeline, _) = kernel(&self.ctx, &self.pipeline_layout, &self.layout_entries, &source)?;
-        pipelines.push((key, pipeline.clone()));
-        Ok(pipeline)
+        let (main, module) =
+            kernel(&self.ctx, &self.pipeline_layout, &self.layout_entries, &source, main_entry(&options))?;
+        let stages = match &self.wavefront_layouts {
+            Some((_, control)) => Some(wavefront::Stages::new(&self.ctx, &module, &self.pipeline_layout, control)?),
+            None => None,
+        };
+        let compiled = Kernel { main, stages };
+        pipelines.push((key, compiled.clone()));
+        Ok(compiled)
     }
 
-    /// Records one dispatch of `pipeline` (the path kernel) over `rows` rows of `width`
-    /// pixels.
-    pub(crate) fn encode_dispatch(
+    /// Records `params.samples` samples of every pixel of the band (`rows` rows of `width`
+    /// pixels) into `encoder` and submits it: one dispatch of the megakernel, or the
+    /// wavefront's stages with `wavefront`'s paths (which `bind_group` binds).
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn submit_samples(
         &self,
-        encoder: &mut wgpu::CommandEncoder,
-        pipeline: &wgpu::ComputePipeline,
+        mut encoder: wgpu::CommandEncoder,
+        kernel: &Kernel,
         bind_group: &wgpu::BindGroup,
+        wavefront: Option<&wavefront::Buffers>,
         width: u32,
         rows: u32,
-    ) {
-        let mut pass =
-            encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("spt"), timestamp_writes: None });
-        pass.set_pipeline(pipeline);
-        pass.set_bind_group(0, bind_group, &[]);
-        pass.dispatch_workgroups(width.div_ceil(WORKGROUP), rows.div_ceil(WORKGROUP), 1);
+        params: &Params,
+    ) -> Result<wgpu::SubmissionIndex, GpuError> {
+        if let (Some(stages), Some(buffers)) = (&kernel.stages, wavefront) {
+            let slots = width as u64 * rows as u64;
+            if slots > buffers.slots() {
+                return Err(GpuError::Shader(format!(
+                    "a band of {slots} paths for a wavefront of {} (an internal sizing error)",
+                    buffers.slots()
+                )));
+            }
+            return wavefront::submit(&self.ctx, stages, &kernel.main, bind_group, buffers, encoder, slots, params);
+        }
+        {
+            let mut pass =
+                encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("spt"), timestamp_writes: None });
+            pass.set_pipeline(&kernel.main);
+            pass.set_bind_group(0, bind_group, &[]);
+            pass.dispatch_workgroups(width.div_ceil(WORKGROUP), rows.div_ceil(WORKGROUP), 1);
+        }
+        Ok(self.ctx.queue.submit([encoder.finish()]))
     }
 
     /// Copies `bytes` of the accumulators `accum` (a band of `rows` rows from `y0`) back
@@ -2123,7 +2226,7 @@ impl PreparedScene for GpuScene {
 
     /// Compiles the kernel for the settings' sampler and mode (one per pair, kept).
     fn warm_up(&self, settings: &RenderSettings) -> tracer::Result<()> {
-        self.pipeline(settings)?;
+        self.kernel_for(settings)?;
         Ok(())
     }
 

@@ -499,6 +499,10 @@ pub struct KernelOptions {
     /// How the triangle BVH's nodes are split (`SceneOptions::bvh_builder`; the scene
     /// data's, not the kernel source's).
     pub bvh_builder: bvh::SplitMethod,
+    /// Whether the path tracer runs as a wavefront (`wgsl/wavefront.wgsl`: its stages'
+    /// entry points and their buffers, bindings 15 and 16 and group 1) rather than as
+    /// `pt_main`'s megakernel alone.
+    pub wavefront: bool,
 }
 
 /// A default kernel: the watertight test, the binary tree, the path tracer, ZSobol, hero
@@ -522,6 +526,7 @@ impl Default for KernelOptions {
             cutouts: false,
             env_map: false,
             bvh_builder: crate::backend::triangle_build_config().method,
+            wavefront: false,
         }
     }
 }
@@ -659,6 +664,7 @@ pub fn header(options: &KernelOptions) -> String {
     let _ = writeln!(out, "const PT_HAS_TEXTURES: bool = {};", options.textures);
     let _ = writeln!(out, "const PT_HAS_CUTOUTS: bool = {};", options.cutouts);
     let _ = writeln!(out, "const PT_HAS_ENV_MAP: bool = {};", options.env_map);
+    let _ = writeln!(out, "const PT_WAVEFRONT: bool = {};", options.wavefront);
     let [r, g, b] = brdf::models::metal::RGB_LAMBDA;
     // RGB mode's "wavelengths": where metals take their (n, k) per channel (`RGB_LAMBDA`).
     let _ = writeln!(out, "const PT_RGB_LAMBDA: vec4f = vec4f({}, {}, {}, {});", f(r), f(g), f(b), f(b));
@@ -819,6 +825,9 @@ pub fn source(material_wgsl: &str, options: &KernelOptions) -> String {
     }
     out.push_str(&implicit_source(options.implicit_coeffs));
     let _ = write!(out, "\n// ---- triangle test\n{triangle}\n// ---- main.wgsl\n{MAIN}");
+    if options.wavefront {
+        let _ = write!(out, "\n// ---- wavefront.wgsl\n{}", include_str!("wgsl/wavefront.wgsl"));
+    }
     if matches!(options.integrator, GpuIntegrator::Atlas(_)) {
         let _ = write!(out, "\n// ---- atlas_gather.wgsl\n{}", include_str!("wgsl/atlas_gather.wgsl"));
     }

@@ -21,6 +21,7 @@ pub mod context;
 pub mod kernel;
 pub mod materials;
 pub mod present;
+pub mod wavefront;
 pub mod wide;
 
 pub use backend::{GpuBackend, GpuScene};

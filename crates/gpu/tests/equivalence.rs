@@ -1752,3 +1752,59 @@ fn instances_match_the_cpu() {
         "the 8-wide trees' image differs from the binary trees'"
     );
 }
+
+/// The wavefront (`SceneOptions::wavefront`: one kernel per stage, the paths' state in
+/// device memory) runs the megakernel's loop body with the same random numbers and adds
+/// each pixel's samples in the same order, so it gives the megakernel's film bit for bit,
+/// and the same ray and truncation counts: on the Cornell box at unbounded depth with
+/// Russian roulette (bounces followed in chunks, the host reading the live count between
+/// them) and on dispersive, absorbing glass beside a mirror ball at a depth limit, in RGB
+/// mode (every bounce dispatched up front). The viewer's device-side accumulation runs the
+/// wavefront too. The 40-bin mode and the CPU refuse it by name.
+#[test]
+fn the_wavefront_gives_the_megakernels_image() {
+    let Some(ctx) = gpu::require_gpu() else { return };
+    let gpu = GpuBackend::with_context(ctx);
+    let mut cases = Vec::new();
+    if let Some(scene) = cornell() {
+        let path = PathSettings { max_depth: 0, rr_depth: 3, ..PathSettings::default() };
+        cases.push(("Cornell box", scene, RenderSettings { path, ..settings(40, 40, 8) }));
+    }
+    let rgb = RenderSettings { mode: SpectralMode::Rgb, ..settings(32, 32, 8) };
+    cases.push(("glass and mirror (RGB)", glass_and_mirror_scene(), rgb));
+    for (name, scene, s) in cases {
+        let first_render = Some((s.sampler, s.mode));
+        let mega = SceneOptions { first_render, ..SceneOptions::default() };
+        let megakernel = gpu.prepare_gpu(scene.clone(), &mega).unwrap();
+        let wavefront = gpu.prepare_gpu(scene, &SceneOptions { wavefront: true, ..mega }).unwrap();
+        let (want, want_stats) = tracer::render(&megakernel, &s, &|_| {}).unwrap();
+        let (got, got_stats) = tracer::render(&wavefront, &s, &|_| {}).unwrap();
+        println!(
+            "{name}: megakernel compiled in {:?}, wavefront in {:?}; {} rays, {} truncated",
+            megakernel.compile_time(),
+            wavefront.compile_time(),
+            want_stats.rays,
+            want_stats.truncated
+        );
+        assert!(want_stats.rays > (s.width * s.height * s.spp) as u64, "{name}: {want_stats:?}");
+        assert_eq!((got_stats.rays, got_stats.truncated), (want_stats.rays, want_stats.truncated), "{name}");
+        assert!(got == want, "{name}: the wavefront's film differs from the megakernel's");
+        // Frames as the viewer adds them (statistics on the device), same samples.
+        let mut frames = std::sync::Arc::new(wavefront).accumulate(&s).unwrap();
+        frames.add(s.spp / 2).unwrap();
+        frames.add(s.spp - s.spp / 2).unwrap();
+        assert!(frames.film().unwrap() == want, "{name}: the wavefront's frames differ from the megakernel's render");
+    }
+
+    let bins = SceneOptions {
+        wavefront: true,
+        first_render: Some((Default::default(), SpectralMode::Bins40)),
+        ..SceneOptions::default()
+    };
+    let err = gpu.prepare_gpu(glass_and_mirror_scene(), &bins).err().expect("bins40 refused").to_string();
+    assert!(err.contains("40-bin") && err.contains("--wavefront"), "{err}");
+    let cpu = CpuBackend::new(1).unwrap();
+    let wavefront = SceneOptions { wavefront: true, ..SceneOptions::default() };
+    let err = cpu.prepare_cpu(glass_and_mirror_scene(), &wavefront).err().expect("the CPU refuses").to_string();
+    assert!(err.contains("wavefront"), "{err}");
+}

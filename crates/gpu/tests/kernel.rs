@@ -24,6 +24,7 @@ fn options(triangle_test: bvh::TriangleTest) -> KernelOptions {
         cutouts: true,
         env_map: true,
         bvh_builder: bvh::SplitMethod::BinnedSah,
+        wavefront: false,
     }
 }
 
@@ -206,6 +207,42 @@ fn f64_coefficients_split_into_f32_parts_exactly() {
         assert_eq!(m * 2f64.powi(e), x, "{x} = 2^{e} · ({a} + {b} + {c})");
     }
     assert_eq!(gpu::backend::split_f64(0.0), (0, [0.0; 3]));
+}
+
+/// The wavefront's stages are in the kernel only where asked for, validate, and its path
+/// state has the size the host allocates per path.
+#[test]
+fn the_wavefront_kernel_validates_and_its_paths_have_the_host_size() {
+    let stages = ["pt_wf_begin", "pt_wf_camera", "pt_wf_extend", "pt_wf_shade", "pt_wf_shadow", "pt_wf_next"];
+    let with =
+        KernelOptions { wavefront: true, mode: spectral::SpectralMode::Hero, ..options(bvh::TriangleTest::Watertight) };
+    let (src, module) = kernel_module(&with);
+    let info = naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::default())
+        .validate(&module)
+        .unwrap();
+    for stage in stages.iter().chain(&["pt_wf_film", "pt_wf_end"]) {
+        assert!(module.entry_points.iter().any(|e| e.name == *stage), "{stage}");
+        // Each stage as Vulkan gets it: naga's SPIR-V writer once panicked on the shading
+        // stage (a pointer into a local struct) where validation passed.
+        let pipeline = naga::back::spv::PipelineOptions {
+            shader_stage: naga::ShaderStage::Compute,
+            entry_point: stage.to_string(),
+        };
+        let spv = naga::back::spv::write_vec(&module, &info, &Default::default(), Some(&pipeline));
+        assert!(spv.is_ok_and(|words| !words.is_empty()), "{stage}");
+    }
+    assert!(src.contains("// ---- wavefront.wgsl"));
+    let (_, size) = wgsl_layout(&module, "PtWfPath");
+    assert_eq!(size as u64, gpu::wavefront::PATH_BYTES);
+    let (members, _) = wgsl_layout(&module, "PtWfControl");
+    assert_eq!(members.last(), Some(&("queue".to_string(), 16)), "the queues follow a 16-byte header");
+    let (without, module) = kernel_module(&KernelOptions { mode: spectral::SpectralMode::Hero, ..with_off(&with) });
+    assert!(!without.contains("// ---- wavefront.wgsl"));
+    assert!(module.entry_points.iter().all(|e| !e.name.starts_with("pt_wf_")));
+}
+
+fn with_off(options: &KernelOptions) -> KernelOptions {
+    KernelOptions { wavefront: false, ..*options }
 }
 
 #[test]

@@ -132,6 +132,7 @@ fn cpu_capabilities(integrator: &'static str) -> Capabilities {
         diffuse_depth: integrator == "path",
         bvh_builders: true,
         sample_block: 1,
+        wavefront: false,
     }
 }
 

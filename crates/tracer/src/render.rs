@@ -160,6 +160,11 @@ pub struct SceneOptions {
     /// preparing; `None` means those of [`RenderSettings::default`]. Another sampler or
     /// mode still renders, after compiling its own kernel (on lavapipe tens of seconds).
     pub first_render: Option<(SamplerKind, SpectralMode)>,
+    /// Trace paths as a wavefront (one kernel per stage — camera rays, closest hits,
+    /// shading, shadow rays — with the paths' state in device memory) instead of one loop
+    /// per camera ray; only a backend whose [`Capabilities::wavefront`] says so runs it
+    /// (the GPU's path tracer), the others refuse it.
+    pub wavefront: bool,
 }
 
 /// What a backend can render. [`Capabilities::check_scene`] and
@@ -208,6 +213,8 @@ pub struct Capabilities {
     /// bit for bit, as one pass (1 on the CPU; the GPU sums up to this many samples in f32
     /// before they reach the film's exact sums).
     pub sample_block: u32,
+    /// Whether it can trace paths as a wavefront ([`SceneOptions::wavefront`]).
+    pub wavefront: bool,
 }
 
 /// Which custom BSDFs ([`crate::material::Surface::Custom`]) a backend runs.
@@ -258,6 +265,12 @@ impl Capabilities {
             feature,
             way_out: way_out.to_string(),
         };
+        if options.wavefront && !self.wavefront {
+            return Err(unsupported(
+                format!("the wavefront schedule for the {} integrator", self.integrator),
+                "it is the GPU path tracer's (--backend gpu --integrator path); drop --wavefront",
+            ));
+        }
         if !self.bvh_builders
             && let Some(m) = options.bvh_builder
         {

@@ -31,6 +31,13 @@ fn pt_trace_sample(
     return pt_to_linear_srgb(l, wl);
 }
 
+// The camera ray's direction through film position (x, y) + `jitter` (camera.rs).
+fn pt_camera_direction(x: u32, y: u32, jitter: vec2f) -> vec3f {
+    let film = vec2f(f32(x), f32(y)) + jitter;
+    let ndc = vec2f(2.0 * film.x * pt_params.inv_size.x - 1.0, 1.0 - 2.0 * film.y * pt_params.inv_size.y);
+    return normalize(pt_params.forward.xyz + ndc.x * pt_params.right.xyz + ndc.y * pt_params.up.xyz);
+}
+
 // The pixel being rendered (bdpt reads it: a crop window's other columns must not splat).
 var<private> pt_pixel: vec2u;
 
@@ -51,10 +58,7 @@ fn pt_main(@builtin(global_invocation_id) gid: vec3u) {
         var smp = pt_sampler_for(x, y, pixel, pt_params.first_sample + k);
         // Fixed wavelengths (RGB, bins40) draw no wavelength sample.
         let cam = pt_camera(&smp, !PT_RGB && !PT_BINS40);
-        let jitter = cam.yz;
-        let film = vec2f(f32(x), f32(y)) + jitter;
-        let ndc = vec2f(2.0 * film.x * pt_params.inv_size.x - 1.0, 1.0 - 2.0 * film.y * pt_params.inv_size.y);
-        let dir = normalize(pt_params.forward.xyz + ndc.x * pt_params.right.xyz + ndc.y * pt_params.up.xyz);
+        let dir = pt_camera_direction(x, y, cam.yz);
         var rgb = vec3f(0.0);
         if PT_BINS40 {
             // The 40 bins as ten paths of four, each from the same sample values: every one
@@ -69,17 +73,28 @@ fn pt_main(@builtin(global_invocation_id) gid: vec3u) {
         } else {
             rgb = pt_trace_sample(dir, pt_sample_hero(cam.x), &smp, &rays, &truncated);
         }
-        if pt_is_finite3(rgb) {
-            acc.count += 1u;
-            let delta = rgb - acc.mean;
-            acc.mean += delta / f32(acc.count);
-            acc.m2 += delta * (rgb - acc.mean);
-        } else {
-            acc.non_finite += 1u;
-        }
+        pt_film_add(&acc, rgb);
     }
     pt_film.pixels[slot] = acc;
-    // A 64-bit ray counter from two words: a carry whenever the low word wraps.
+    pt_film_count(rays, truncated);
+}
+
+// One sample's colour added to a pixel's running count / mean / M2 (Welford), or counted
+// as non-finite.
+fn pt_film_add(acc: ptr<function, PtPixel>, rgb: vec3f) {
+    if pt_is_finite3(rgb) {
+        (*acc).count += 1u;
+        let delta = rgb - (*acc).mean;
+        (*acc).mean += delta / f32((*acc).count);
+        (*acc).m2 += delta * (rgb - (*acc).mean);
+    } else {
+        (*acc).non_finite += 1u;
+    }
+}
+
+// Rays traced and paths truncated, added to the film's counters (the rays' 64-bit counter
+// from two words: a carry whenever the low word wraps).
+fn pt_film_count(rays: u32, truncated: u32) {
     let old = atomicAdd(&pt_film.rays_lo, rays);
     if old + rays < old {
         atomicAdd(&pt_film.rays_hi, 1u);
