@@ -351,6 +351,10 @@ fn bvh_width_is_chosen_or_refused_with_the_way_out() {
     let o = render_small(&scene, (16, 12, 4), &dir.join("w2.exr"), &["--bvh-width", "2"]);
     let err = stderr(&o);
     assert!(!o.status.success() && err.contains("2-wide") && err.contains("--backend gpu"), "{err}");
+    // The wavefront is the GPU path tracer's schedule: the CPU refuses it by name.
+    let o = render_small(&scene, (16, 12, 4), &dir.join("wf.exr"), &["--wavefront"]);
+    let err = stderr(&o);
+    assert!(!o.status.success() && err.contains("wavefront") && err.contains("--backend gpu"), "{err}");
 }
 
 #[test]

@@ -446,9 +446,9 @@ fn capabilities_with(integrator: GpuIntegrator, shader_f64: bool) -> Capabilitie
         textures: true,
         environment_maps: true,
         triangle_tests: vec![TriangleTest::Watertight, TriangleTest::MollerTrumbore],
-        // Auto is the binary tree: on an H100 the 4-wide one (`crate::wide`) renders 1.2–1.8×
-        // slower in this megakernel (the 8-wide one is untimed there); both stay selectable
-        // for comparisons.
+        // Auto is the binary tree: in this megakernel the 4-wide one (`crate::wide`) renders
+        // 1.2–1.8× slower on an H100 and the 8-wide one 3–8× slower on an H200 (docs/gpu.md);
+        // both stay selectable for comparisons (the 4-wide pays in the wavefront).
         bvh_widths: vec![BvhWidth::Auto, BvhWidth::Two, BvhWidth::Four, BvhWidth::Eight],
         integrator: integrator.name(),
         // bdpt has no backend cap: its subpaths' own (`BDPT_MAX_VERTICES`), as on the CPU.

@@ -664,7 +664,6 @@ pub fn header(options: &KernelOptions) -> String {
     let _ = writeln!(out, "const PT_HAS_TEXTURES: bool = {};", options.textures);
     let _ = writeln!(out, "const PT_HAS_CUTOUTS: bool = {};", options.cutouts);
     let _ = writeln!(out, "const PT_HAS_ENV_MAP: bool = {};", options.env_map);
-    let _ = writeln!(out, "const PT_WAVEFRONT: bool = {};", options.wavefront);
     let [r, g, b] = brdf::models::metal::RGB_LAMBDA;
     // RGB mode's "wavelengths": where metals take their (n, k) per channel (`RGB_LAMBDA`).
     let _ = writeln!(out, "const PT_RGB_LAMBDA: vec4f = vec4f({}, {}, {}, {});", f(r), f(g), f(b), f(b));

@@ -10,10 +10,12 @@
 //! (1080p, 1 spp, depth 5, viewer frames, same run) the binary BVH renders Sponza at 47
 //! frames/s and the 4-wide at 30, the Cornell box at 223 and 151, a 1.1M-triangle mesh at
 //! 246 and 209 — the 128-byte nodes and the unrolled child loop cost more than the visits
-//! they save (the megakernel's occupancy is bound by its registers). The 8-wide tree has
-//! not been timed on a GPU yet. So the binary BVH is the default (`auto`); the wide
-//! layouts stay for comparisons and as the starting point for compressed nodes or a
-//! wavefront kernel (docs/gpu.md).
+//! they save (the megakernel's occupancy is bound by its registers). The 8-wide tree is
+//! slower still (an H200: 0.12–0.33× the binary tree's samples/s). So the binary BVH is
+//! the default (`auto`); the wide layouts stay for comparisons and as the starting point
+//! for compressed nodes. In the wavefront (`--wavefront`), whose extension stage holds only
+//! the traversal, the 4-wide tree does pay: +24 % on the Cornell box, +10 % on a 1.1M-triangle
+//! mesh on an H200 (docs/gpu.md).
 //!
 //! The collapse is greedy by surface area: starting from a binary node's two children,
 //! the child node with the largest box is replaced by its own two children until all

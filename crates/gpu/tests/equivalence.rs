@@ -1754,17 +1754,31 @@ fn instances_match_the_cpu() {
 }
 
 /// The wavefront (`SceneOptions::wavefront`: one kernel per stage, the paths' state in
-/// device memory) runs the megakernel's loop body with the same random numbers and adds
-/// each pixel's samples in the same order, so it gives the megakernel's film bit for bit,
-/// and the same ray and truncation counts: on the Cornell box at unbounded depth with
-/// Russian roulette (bounces followed in chunks, the host reading the live count between
-/// them) and on dispersive, absorbing glass beside a mirror ball at a depth limit, in RGB
-/// mode (every bounce dispatched up front). The viewer's device-side accumulation runs the
-/// wavefront too. The 40-bin mode and the CPU refuse it by name.
+/// device memory) restates the megakernel's loop body with the same random numbers and
+/// adds each pixel's samples in the same order, so on lavapipe (whose compiler fuses no
+/// multiply–add) it gives the megakernel's film bit for bit, and the same ray and
+/// truncation counts: on the Cornell box at unbounded depth with Russian roulette
+/// (bounces followed in chunks, the host reading the live count between them) and on
+/// dispersive, absorbing glass beside a mirror ball at a depth limit, in RGB mode (every
+/// bounce dispatched up front). A GPU's compiler may fuse differently in the two (an
+/// H200's does), so there the films must agree as same-seed renders do. The viewer's
+/// device-side accumulation runs the wavefront too. The 40-bin mode and the CPU refuse it
+/// by name.
 #[test]
 fn the_wavefront_gives_the_megakernels_image() {
     let Some(ctx) = gpu::require_gpu() else { return };
+    let exact = ctx.info.device_type == wgpu::DeviceType::Cpu;
     let gpu = GpuBackend::with_context(ctx);
+    // The same film, bit for bit where the compiler fuses no multiply–add; else the same
+    // image as a same-seed render.
+    let agree = |name: &str, got: &Film, want: &Film| {
+        if exact {
+            assert!(got == want, "{name}: the wavefront's film differs from the megakernel's");
+        } else {
+            let c = compare(want, got);
+            assert!(c.same_seed_failures().is_none(), "{name}: {}", c.summary());
+        }
+    };
     let mut cases = Vec::new();
     if let Some(scene) = cornell() {
         let path = PathSettings { max_depth: 0, rr_depth: 3, ..PathSettings::default() };
@@ -1787,13 +1801,18 @@ fn the_wavefront_gives_the_megakernels_image() {
             want_stats.truncated
         );
         assert!(want_stats.rays > (s.width * s.height * s.spp) as u64, "{name}: {want_stats:?}");
-        assert_eq!((got_stats.rays, got_stats.truncated), (want_stats.rays, want_stats.truncated), "{name}");
-        assert!(got == want, "{name}: the wavefront's film differs from the megakernel's");
+        if exact {
+            assert_eq!((got_stats.rays, got_stats.truncated), (want_stats.rays, want_stats.truncated), "{name}");
+        } else {
+            let ratio = got_stats.rays as f64 / want_stats.rays as f64;
+            assert!((ratio - 1.0).abs() < 0.01, "{name}: {} rays against {}", got_stats.rays, want_stats.rays);
+        }
+        agree(name, &got, &want);
         // Frames as the viewer adds them (statistics on the device), same samples.
         let mut frames = std::sync::Arc::new(wavefront).accumulate(&s).unwrap();
         frames.add(s.spp / 2).unwrap();
         frames.add(s.spp - s.spp / 2).unwrap();
-        assert!(frames.film().unwrap() == want, "{name}: the wavefront's frames differ from the megakernel's render");
+        agree(name, &frames.film().unwrap(), &want);
     }
 
     let bins = SceneOptions {

@@ -161,19 +161,16 @@ fn pt_next_event(at: PtShading, lambda: vec4f, u: vec2f, mis: bool, rays: ptr<fu
     return pt_light_contribution(at, lambda, ls, mis, rays);
 }
 
-// A light sample joined to a shading point (`light_contribution` up to its shadow ray):
-// f, Le and |cos θi| · w / pdf (`e`, valid only if the light can contribute), and the
-// shadow ray that decides whether it does. Apart from the trace, so that a wavefront can
-// trace the shadow rays of many paths in a kernel of their own.
-struct PtLightLink {
-    e: PtNextEvent,
-    o: vec3f,
-    d: vec3f,
-    t_max: f32,
-}
-
-fn pt_light_link(at: PtShading, lambda: vec4f, ls: PtLightSample, mis: bool) -> PtLightLink {
-    var out = PtLightLink(PtNextEvent(vec4f(0.0), vec4f(0.0), 0.0, false), vec3f(0.0), vec3f(0.0), 0.0);
+// A light sample's contribution (`light_contribution`): its shadow ray, and f, Le and
+// |cos θi| · w / pdf.
+fn pt_light_contribution(
+    at: PtShading,
+    lambda: vec4f,
+    ls: PtLightSample,
+    mis: bool,
+    rays: ptr<function, u32>,
+) -> PtNextEvent {
+    var out = PtNextEvent(vec4f(0.0), vec4f(0.0), 0.0, false);
     let sf = at.sf;
     let m = sf.m;
     let p = sf.p;
@@ -233,36 +230,19 @@ fn pt_light_link(at: PtShading, lambda: vec4f, ls: PtLightSample, mis: bool) -> 
         le *= exp(-material_absorption(m, lambda) * dist);
     }
     let off = pt_offset_ray_origin(p, select(-sf.ng, sf.ng, dot(wi_world, sf.ng) > 0.0));
-    // (One ray for both kinds of light: every trace call site is a copy of the traversal in
-    // the compiled kernel.)
-    out.o = off;
-    out.d = select(wi_world, ls.point - off, finite_light);
-    out.t_max = select(PT_FAR, PT_SHADOW_T_MAX, finite_light);
+    *rays += 1u;
+    // (One trace for both kinds of light: every call site is a copy of the traversal in the
+    // compiled kernel.)
+    let shadow_dir = select(wi_world, ls.point - off, finite_light);
+    let shadow_t_max = select(PT_FAR, PT_SHADOW_T_MAX, finite_light);
+    if pt_trace(off, shadow_dir, 0.0, shadow_t_max, true).prim != PT_NO_HIT {
+        return out;
+    }
     var w = 1.0;
     if mis && !delta {
         w = pt_power_heuristic(light_pdf, bsdf_pdf(m, at.wo, wi, lambda));
     }
-    out.e = PtNextEvent(f, le, abs(wi.z) * w / light_pdf, true);
-    return out;
-}
-
-// A light sample's contribution (`light_contribution`): its link and its shadow ray.
-fn pt_light_contribution(
-    at: PtShading,
-    lambda: vec4f,
-    ls: PtLightSample,
-    mis: bool,
-    rays: ptr<function, u32>,
-) -> PtNextEvent {
-    let link = pt_light_link(at, lambda, ls, mis);
-    if !link.e.valid {
-        return link.e;
-    }
-    *rays += 1u;
-    if pt_trace(link.o, link.d, 0.0, link.t_max, true).prim != PT_NO_HIT {
-        return PtNextEvent(vec4f(0.0), vec4f(0.0), 0.0, false);
-    }
-    return link.e;
+    return PtNextEvent(f, le, abs(wi.z) * w / light_pdf, true);
 }
 
 // `SampledWavelengths::collapse_to`: lane `k` moved to lane 0, the only one left, its
@@ -290,206 +270,6 @@ fn pt_escaped(d: vec3f, lambda: vec4f, prev_pdf: f32, prev_specular: bool) -> ve
     return l + pt_suns_seen(d, lambda, prev_pdf, !prev_specular);
 }
 
-// A camera path between two traces (the state of the CPU's `PathTracer` loop): the ray
-// to trace next, the radiance gathered and the throughput, and what Russian roulette, MIS
-// and the depth limits need of the vertices before. Plain words only (no bool), so that a
-// wavefront can keep it in device memory between its kernels.
-struct PtPath {
-    o: vec3f,
-    // η'² over the transmissions so far, which Russian roulette undoes (the CPU's
-    // `eta_scale`).
-    eta_scale: f32,
-    d: vec3f,
-    // The pdf of the previous BSDF sample.
-    prev_pdf: f32,
-    prev_p: vec3f,
-    // Whether the previous BSDF sample was a delta (no MIS then): 0 or 1.
-    prev_specular: u32,
-    l: vec4f,
-    beta: vec4f,
-    bounce: u32,
-    extension_left: u32,
-    // Non-specular hits so far, against `max_diffuse_depth` (the CPU's `diffuse_bounces`).
-    diffuse_bounces: u32,
-    // The absorbing material the last segment left its vertex into (PT_NO_HIT: none).
-    inside: u32,
-}
-
-fn pt_path_start(origin: vec3f, dir: vec3f) -> PtPath {
-    return PtPath(origin, 1.0, dir, 0.0, origin, 1u, vec4f(0.0), pt_unit_throughput(), 0u,
-        pt_params.specular_extension, 0u, PT_NO_HIT);
-}
-
-// A shadow ray that a path's vertex asked for, and what it adds to the path's radiance if
-// nothing blocks it (`valid` 0: none asked for).
-struct PtShadowRay {
-    o: vec3f,
-    t_max: f32,
-    d: vec3f,
-    valid: u32,
-    contribution: vec4f,
-}
-
-// One vertex of a path: what the trace of `(*p).o, (*p).d` found (`hit`) is shaded — the
-// emission seen, next-event estimation and the BSDF-sampled continuation with Russian
-// roulette. Returns whether the path goes on (`*p` then holds the next ray). The loop body
-// of the CPU's path tracer, so that the megakernel (`pt_radiance`) and the wavefront
-// (wgsl/wavefront.wgsl) run the same code; they differ in the shadow ray alone: the
-// megakernel traces it here, where the CPU does, the wavefront leaves it in `shadow` for
-// its shadow stage, which adds its contribution to the path's radiance if unblocked.
-fn pt_path_step(
-    p: ptr<function, PtPath>,
-    hit: PtHit,
-    wl: ptr<function, PtWavelengths>,
-    smp: ptr<function, PtSampler>,
-    shadow: ptr<function, PtShadowRay>,
-    rays: ptr<function, u32>,
-    truncated: ptr<function, u32>,
-) -> bool {
-    (*shadow).valid = 0u;
-    let o = (*p).o;
-    let d = (*p).d;
-    let prev_specular = (*p).prev_specular != 0u;
-    var beta = (*p).beta;
-    if hit.prim == PT_NO_HIT {
-        (*p).l += beta * pt_escaped(d, (*wl).lambda, (*p).prev_pdf, prev_specular);
-        return false;
-    }
-
-    var sf: PtSurface;
-    let uv = pt_hit_surface(hit, o, d, &sf);
-    let m = sf.m;
-    let wo_world = -d;
-    let front = dot(wo_world, sf.ng) > 0.0;
-    let two_sided = material_two_sided(m);
-
-    beta *= pt_segment_transmittance(m, front, two_sided, (*p).inside, hit.t, (*wl).lambda);
-    (*p).beta = beta;
-
-    // Emission seen by this path (one-sided: front face only).
-    if front {
-        let le = pt_emission_at(m, uv, (*wl).lambda);
-        if any(le != vec4f(0.0)) {
-            var w = 1.0;
-            if !prev_specular {
-                let dp = sf.p - (*p).prev_p;
-                let dist2 = dot(dp, dp);
-                let cos_l = dot(wo_world, sf.ng);
-                let light_pdf = sf.prim_pmf * dist2 / (cos_l * sf.area);
-                w = pt_power_heuristic((*p).prev_pdf, light_pdf);
-            }
-            (*p).l += beta * le * w;
-        }
-    }
-
-    if pt_params.max_depth > 0u && (*p).bounce >= pt_params.max_depth {
-        // Past the limit, continue only through purely specular surfaces, while the
-        // extension lasts.
-        let f = material_flags(m);
-        if (*p).extension_left == 0u || !pt_is_specular(f) || pt_is_non_specular(f) {
-            return false;
-        }
-        (*p).extension_left -= 1u;
-    }
-    // A non-specular hit one more than `max_diffuse_depth` allows ends the path (its
-    // emission counted), as the CPU's `diffuse_limit_reached` does.
-    if pt_params.max_diffuse_depth > 0u && pt_is_non_specular(material_flags(m)) {
-        (*p).diffuse_bounces += 1u;
-        if (*p).diffuse_bounces > pt_params.max_diffuse_depth {
-            return false;
-        }
-    }
-
-    // Dispersion: from here on the path follows one wavelength (a random lane, moved
-    // to lane 0).
-    if material_dispersive(m) && !(*wl).collapsed {
-        let k = min(u32(pt_next_1d(smp) * 4.0), 3u);
-        pt_collapse_wavelengths(wl, k);
-        let bk = beta[k];
-        beta[k] = beta[0];
-        beta[0] = bk;
-        var l = (*p).l;
-        let lk2 = l[k];
-        l[k] = l[0];
-        l[0] = lk2;
-        (*p).l = l;
-        beta = vec4f(beta[0], 0.0, 0.0, 0.0);
-    }
-    let lambda = (*wl).lambda;
-    // The texels the BSDF calls of this hit read (`Material::bsdf_at`).
-    pt_set_texels(m, uv, lambda);
-
-    let at = pt_shading(sf, wo_world, two_sided);
-    let flags = material_flags(m);
-
-    // Next-event estimation: one shadow ray to a point on a light.
-    if pt_is_non_specular(flags) {
-        let ls = pt_sample_light(pt_next_2d(smp));
-        if ls.valid {
-            let link = pt_light_link(at, lambda, ls, true);
-            if link.e.valid {
-                let contribution = beta * link.e.f * link.e.le * link.e.k;
-                if PT_WAVEFRONT {
-                    *shadow = PtShadowRay(link.o, link.t_max, link.d, 1u, contribution);
-                } else {
-                    // (Traced here rather than after the step: measured on an H200, the
-                    // megakernel keeps 2–4 % more samples/s so.)
-                    *rays += 1u;
-                    if pt_trace(link.o, link.d, 0.0, link.t_max, true).prim == PT_NO_HIT {
-                        (*p).l += contribution;
-                    }
-                }
-            }
-        }
-    }
-
-    // Continue the path by sampling the BSDF.
-    let uc = pt_next_1d(smp);
-    let u = pt_next_2d(smp);
-    let s = bsdf_sample(m, at.wo, uc, u, lambda);
-    if s.pdf <= 0.0 || all(s.f == vec4f(0.0)) {
-        return false;
-    }
-    let wi_world = pt_to_world(at.frame, s.wi);
-    // The sampled lobe must agree with the geometry.
-    if pt_lobe_leaks(sf.ng, wo_world, wi_world, s.flags, two_sided) {
-        return false;
-    }
-    beta *= s.f * (abs(s.wi.z) / s.pdf);
-    if (s.flags & SCATTER_TRANSMISSION) != 0u {
-        let eta = material_eta(m);
-        let etap = select(1.0 / eta, eta, at.wo.z > 0.0);
-        (*p).eta_scale *= etap * etap;
-    }
-    (*p).prev_pdf = s.pdf;
-    (*p).prev_specular = select(0u, 1u, pt_is_specular(s.flags));
-    (*p).prev_p = sf.p;
-    (*p).inside = select(PT_NO_HIT, m, dot(wi_world, sf.ng) < 0.0 && !two_sided && material_absorbing(m));
-    (*p).o = pt_offset_ray_origin(sf.p, select(-sf.ng, sf.ng, dot(wi_world, sf.ng) > 0.0));
-    (*p).d = wi_world;
-    (*p).bounce += 1u;
-    (*p).beta = beta;
-
-    // Russian roulette (Arvo & Kirk 1990), judged by the throughput times η'² (the CPU's).
-    if (*p).bounce >= pt_params.rr_depth {
-        let q = max(1.0 - max(max(beta.x, beta.y), max(beta.z, beta.w)) * (*p).eta_scale, PT_RR_MIN_TERMINATION);
-        if pt_next_1d(smp) < q {
-            return false;
-        }
-        (*p).beta = beta / (1.0 - q);
-    }
-    if all((*p).beta == vec4f(0.0)) {
-        return false;
-    }
-    // The hard cap (also for an unbounded max_depth): counted, so that it is never silent.
-    if (*p).bounce >= PT_MAX_BOUNCES {
-        *truncated += 1u;
-        return false;
-    }
-    return true;
-}
-
-// The path tracer as one loop per camera ray (the megakernel).
 fn pt_radiance(
     origin: vec3f,
     dir: vec3f,
@@ -498,14 +278,144 @@ fn pt_radiance(
     rays: ptr<function, u32>,
     truncated: ptr<function, u32>,
 ) -> vec4f {
-    var p = pt_path_start(origin, dir);
+    var o = origin;
+    var d = dir;
+    var l = vec4f(0.0);
+    var beta = pt_unit_throughput();
+    // η'² over the transmissions so far, which Russian roulette undoes (the CPU's
+    // `eta_scale`).
+    var eta_scale = 1.0;
+    // The pdf of the previous BSDF sample, and whether it was a delta (no MIS then).
+    var prev_pdf = 0.0;
+    var prev_specular = true;
+    var prev_p = origin;
+    var bounce = 0u;
+    var extension_left = pt_params.specular_extension;
+    // Non-specular hits so far, against `max_diffuse_depth` (the CPU's `diffuse_bounces`).
+    var diffuse_bounces = 0u;
+    // The absorbing material the last segment left its vertex into (PT_NO_HIT: none).
+    var inside = PT_NO_HIT;
     loop {
         *rays += 1u;
-        let hit = pt_trace(p.o, p.d, 0.0, PT_FAR, false);
-        var shadow: PtShadowRay;
-        if !pt_path_step(&p, hit, wl, smp, &shadow, rays, truncated) {
+        let hit = pt_trace(o, d, 0.0, PT_FAR, false);
+        if hit.prim == PT_NO_HIT {
+            l += beta * pt_escaped(d, (*wl).lambda, prev_pdf, prev_specular);
+            break;
+        }
+
+        var sf: PtSurface;
+        let uv = pt_hit_surface(hit, o, d, &sf);
+        let m = sf.m;
+        let wo_world = -d;
+        let front = dot(wo_world, sf.ng) > 0.0;
+        let two_sided = material_two_sided(m);
+
+        beta *= pt_segment_transmittance(m, front, two_sided, inside, hit.t, (*wl).lambda);
+
+        // Emission seen by this path (one-sided: front face only).
+        if front {
+            let le = pt_emission_at(m, uv, (*wl).lambda);
+            if any(le != vec4f(0.0)) {
+                var w = 1.0;
+                if !prev_specular {
+                    let dp = sf.p - prev_p;
+                    let dist2 = dot(dp, dp);
+                    let cos_l = dot(wo_world, sf.ng);
+                    let light_pdf = sf.prim_pmf * dist2 / (cos_l * sf.area);
+                    w = pt_power_heuristic(prev_pdf, light_pdf);
+                }
+                l += beta * le * w;
+            }
+        }
+
+        if pt_params.max_depth > 0u && bounce >= pt_params.max_depth {
+            // Past the limit, continue only through purely specular surfaces, while the
+            // extension lasts.
+            let f = material_flags(m);
+            if extension_left == 0u || !pt_is_specular(f) || pt_is_non_specular(f) {
+                break;
+            }
+            extension_left -= 1u;
+        }
+        // A non-specular hit one more than `max_diffuse_depth` allows ends the path (its
+        // emission counted), as the CPU's `diffuse_limit_reached` does.
+        if pt_params.max_diffuse_depth > 0u && pt_is_non_specular(material_flags(m)) {
+            diffuse_bounces += 1u;
+            if diffuse_bounces > pt_params.max_diffuse_depth {
+                break;
+            }
+        }
+
+        // Dispersion: from here on the path follows one wavelength (a random lane, moved
+        // to lane 0).
+        if material_dispersive(m) && !(*wl).collapsed {
+            let k = min(u32(pt_next_1d(smp) * 4.0), 3u);
+            pt_collapse_wavelengths(wl, k);
+            let bk = beta[k];
+            beta[k] = beta[0];
+            beta[0] = bk;
+            let lk2 = l[k];
+            l[k] = l[0];
+            l[0] = lk2;
+            beta = vec4f(beta[0], 0.0, 0.0, 0.0);
+        }
+        let lambda = (*wl).lambda;
+        // The texels the BSDF calls of this hit read (`Material::bsdf_at`).
+        pt_set_texels(m, uv, lambda);
+
+        let at = pt_shading(sf, wo_world, two_sided);
+        let flags = material_flags(m);
+
+        // Next-event estimation: one shadow ray to a point on a light.
+        if pt_is_non_specular(flags) {
+            let e = pt_next_event(at, lambda, pt_next_2d(smp), true, rays);
+            if e.valid {
+                l += beta * e.f * e.le * e.k;
+            }
+        }
+
+        // Continue the path by sampling the BSDF.
+        let uc = pt_next_1d(smp);
+        let u = pt_next_2d(smp);
+        let s = bsdf_sample(m, at.wo, uc, u, lambda);
+        if s.pdf <= 0.0 || all(s.f == vec4f(0.0)) {
+            break;
+        }
+        let wi_world = pt_to_world(at.frame, s.wi);
+        // The sampled lobe must agree with the geometry.
+        if pt_lobe_leaks(sf.ng, wo_world, wi_world, s.flags, two_sided) {
+            break;
+        }
+        beta *= s.f * (abs(s.wi.z) / s.pdf);
+        if (s.flags & SCATTER_TRANSMISSION) != 0u {
+            let eta = material_eta(m);
+            let etap = select(1.0 / eta, eta, at.wo.z > 0.0);
+            eta_scale *= etap * etap;
+        }
+        prev_pdf = s.pdf;
+        prev_specular = pt_is_specular(s.flags);
+        prev_p = sf.p;
+        inside = select(PT_NO_HIT, m, dot(wi_world, sf.ng) < 0.0 && !two_sided && material_absorbing(m));
+        o = pt_offset_ray_origin(sf.p, select(-sf.ng, sf.ng, dot(wi_world, sf.ng) > 0.0));
+        d = wi_world;
+        bounce += 1u;
+
+        // Russian roulette (Arvo & Kirk 1990), judged by the throughput times η'² (the CPU's).
+        if bounce >= pt_params.rr_depth {
+            let q = max(1.0 - max(max(beta.x, beta.y), max(beta.z, beta.w)) * eta_scale, PT_RR_MIN_TERMINATION);
+            if pt_next_1d(smp) < q {
+                break;
+            }
+            beta /= 1.0 - q;
+        }
+        if all(beta == vec4f(0.0)) {
+            break;
+        }
+        // The hard cap (also for an unbounded max_depth): counted, so that it is never silent.
+        if bounce >= PT_MAX_BOUNCES {
+            *truncated += 1u;
             break;
         }
     }
-    return p.l;
+    return l;
 }

@@ -1,16 +1,295 @@
 // The path tracer as a wavefront (Laine, Karras & Aila 2013, "Megakernels considered
 // harmful"), mirroring crates/tracer/src/integrator.rs (`PathTracer`) as path.wgsl does
 // and driven by crates/gpu/src/wavefront.rs: one kernel per stage instead of one loop per
-// camera ray, the paths' state in device memory between them. A wave is one sample of every pixel of the band (slot =
-// pixel of the band, as the megakernel's invocations): the camera kernel starts every
-// path, then per bounce the extension kernel traces the closest hits of the paths still
-// going, the shading kernel runs `pt_path_step` (the megakernel's loop body: the same
-// code, the same random numbers) and queues the paths that go on, the shadow kernel traces
-// the shadow rays that step asked for, and a one-invocation kernel swaps the queues and
-// sizes the next indirect dispatch; the film kernel then adds each pixel's sample in the
-// megakernel's order, so both give the same statistics. Each stage's kernel holds only its
-// own code (the traversal without the materials, the materials without the traversal),
-// which is what the design trades the state's memory traffic for.
+// camera ray, the paths' state in device memory between them. A wave is one sample of
+// every pixel of the band (slot = pixel of the band, as the megakernel's invocations): the
+// camera kernel starts every path, then per bounce the extension kernel traces the closest
+// hits of the paths still going, the shading kernel runs `pt_path_step` and queues the
+// paths that go on, the shadow kernel traces the shadow rays that step asked for, and a
+// one-invocation kernel swaps the queues and sizes the next indirect dispatch; the film
+// kernel then adds each pixel's sample in the megakernel's order. Each stage's kernel
+// holds only its own code (the traversal without the materials, the materials without the
+// traversal), which is what the design trades the state's memory traffic for.
+//
+// `pt_path_step` and `pt_light_link` are path.wgsl's `pt_radiance` loop body and
+// `pt_light_contribution` restated with the shadow ray deferred, not shared with them: the
+// megakernel written around them ran 3–4 % slower on an H200 on some scenes and faster on
+// others (docs/gpu.md), so the megakernel keeps its own code. The two draw the same random
+// numbers in the same order, so they give the same film bit for bit, which
+// `the_wavefront_gives_the_megakernels_image` (tests/equivalence.rs) checks: a change to
+// one that is not made to the other fails it.
+
+// A light sample joined to a shading point (path.wgsl's `pt_light_contribution` up to its
+// shadow ray, with the MIS weight taken before it): f, Le and |cos θi| · w / pdf (`e`,
+// valid only if the light can contribute), and the shadow ray that decides whether it
+// does, for the shadow stage to trace.
+struct PtLightLink {
+    e: PtNextEvent,
+    o: vec3f,
+    d: vec3f,
+    t_max: f32,
+}
+
+fn pt_light_link(at: PtShading, lambda: vec4f, ls: PtLightSample, mis: bool) -> PtLightLink {
+    var out = PtLightLink(PtNextEvent(vec4f(0.0), vec4f(0.0), 0.0, false), vec3f(0.0), vec3f(0.0), 0.0);
+    let sf = at.sf;
+    let m = sf.m;
+    let p = sf.p;
+    var wi_world: vec3f;
+    var finite_light = true;
+    var dist = 0.0;
+    var light_pdf = 0.0;
+    var le = vec4f(0.0);
+    var delta = false;
+    if ls.kind == PT_LIGHT_TRIANGLE || ls.kind == PT_LIGHT_SHAPE {
+        let dl = ls.point - p;
+        let dist2 = dot(dl, dl);
+        dist = sqrt(dist2);
+        wi_world = dl / dist;
+        let cos_l = -dot(wi_world, ls.normal);
+        if cos_l > 0.0 {
+            light_pdf = ls.pdf * dist2 / cos_l;
+            le = material_emission(ls.material, lambda);
+        }
+    } else if ls.kind == PT_LIGHT_ENVIRONMENT {
+        wi_world = ls.point;
+        finite_light = false;
+        light_pdf = ls.pdf;
+        if (pt_params.scene_flags & PT_HAS_ENVIRONMENT) != 0u {
+            le = pt_env_radiance(wi_world, lambda);
+        }
+    } else if PT_HAS_PUNCTUAL {
+        // A delta light: I·falloff/d² (or E) stands for the radiance and the pdf is the
+        // probability of choosing it.
+        let inc = pt_punctual_incidence(ls, p, lambda);
+        if !inc.valid {
+            return out;
+        }
+        wi_world = inc.wi;
+        dist = inc.dist;
+        finite_light = inc.dist < PT_FAR;
+        light_pdf = ls.pdf;
+        le = inc.le;
+        delta = inc.delta;
+    }
+    let wi = pt_to_local(at.frame, wi_world);
+    // Reflection must stay on the geometric side it came from (no light leaks).
+    let same_side = dot(wi_world, at.ng) * dot(at.wo_world, at.ng) > 0.0;
+    if !(light_pdf > 0.0 && any(le != vec4f(0.0)) && (same_side || !at.two_sided)) {
+        return out;
+    }
+    let f = bsdf_eval(m, at.wo, wi, lambda);
+    if all(f == vec4f(0.0)) {
+        return out;
+    }
+    // A shadow ray into the back of absorbing glass runs inside it (Beer–Lambert), and
+    // never reaches a light at infinity.
+    if material_absorbing(m) && !at.two_sided && dot(wi_world, sf.ng) < 0.0 {
+        if !finite_light {
+            return out;
+        }
+        le *= exp(-material_absorption(m, lambda) * dist);
+    }
+    let off = pt_offset_ray_origin(p, select(-sf.ng, sf.ng, dot(wi_world, sf.ng) > 0.0));
+    // (One ray for both kinds of light: every trace call site is a copy of the traversal in
+    // the compiled kernel.)
+    out.o = off;
+    out.d = select(wi_world, ls.point - off, finite_light);
+    out.t_max = select(PT_FAR, PT_SHADOW_T_MAX, finite_light);
+    var w = 1.0;
+    if mis && !delta {
+        w = pt_power_heuristic(light_pdf, bsdf_pdf(m, at.wo, wi, lambda));
+    }
+    out.e = PtNextEvent(f, le, abs(wi.z) * w / light_pdf, true);
+    return out;
+}
+
+// A camera path between two stages (the state of `pt_radiance`'s loop): the ray to trace
+// next, the radiance gathered and the throughput, and what Russian roulette, MIS and the
+// depth limits need of the vertices before. Plain words only (no bool), so that it can
+// stay in device memory between the kernels.
+struct PtPath {
+    o: vec3f,
+    // η'² over the transmissions so far, which Russian roulette undoes (the CPU's
+    // `eta_scale`).
+    eta_scale: f32,
+    d: vec3f,
+    // The pdf of the previous BSDF sample.
+    prev_pdf: f32,
+    prev_p: vec3f,
+    // Whether the previous BSDF sample was a delta (no MIS then): 0 or 1.
+    prev_specular: u32,
+    l: vec4f,
+    beta: vec4f,
+    bounce: u32,
+    extension_left: u32,
+    // Non-specular hits so far, against `max_diffuse_depth` (the CPU's `diffuse_bounces`).
+    diffuse_bounces: u32,
+    // The absorbing material the last segment left its vertex into (PT_NO_HIT: none).
+    inside: u32,
+}
+
+fn pt_path_start(origin: vec3f, dir: vec3f) -> PtPath {
+    return PtPath(origin, 1.0, dir, 0.0, origin, 1u, vec4f(0.0), pt_unit_throughput(), 0u,
+        pt_params.specular_extension, 0u, PT_NO_HIT);
+}
+
+// A shadow ray that a path's vertex asked for, and what it adds to the path's radiance if
+// nothing blocks it (`valid` 0: none asked for).
+struct PtShadowRay {
+    o: vec3f,
+    t_max: f32,
+    d: vec3f,
+    valid: u32,
+    contribution: vec4f,
+}
+
+// One vertex of a path: what the trace of `(*p).o, (*p).d` found (`hit`) is shaded — the
+// emission seen, next-event estimation (its shadow ray left in `shadow` for the shadow
+// stage, which adds `contribution` to the path's radiance if nothing blocks it) and the
+// BSDF-sampled continuation with Russian roulette. Returns whether the path goes on (`*p`
+// then holds the next ray). `pt_radiance`'s loop body (path.wgsl), statement for
+// statement, with its state in `PtPath` and its shadow ray deferred.
+fn pt_path_step(
+    p: ptr<function, PtPath>,
+    hit: PtHit,
+    wl: ptr<function, PtWavelengths>,
+    smp: ptr<function, PtSampler>,
+    shadow: ptr<function, PtShadowRay>,
+    truncated: ptr<function, u32>,
+) -> bool {
+    (*shadow).valid = 0u;
+    let o = (*p).o;
+    let d = (*p).d;
+    let prev_specular = (*p).prev_specular != 0u;
+    var beta = (*p).beta;
+    if hit.prim == PT_NO_HIT {
+        (*p).l += beta * pt_escaped(d, (*wl).lambda, (*p).prev_pdf, prev_specular);
+        return false;
+    }
+
+    var sf: PtSurface;
+    let uv = pt_hit_surface(hit, o, d, &sf);
+    let m = sf.m;
+    let wo_world = -d;
+    let front = dot(wo_world, sf.ng) > 0.0;
+    let two_sided = material_two_sided(m);
+
+    beta *= pt_segment_transmittance(m, front, two_sided, (*p).inside, hit.t, (*wl).lambda);
+    (*p).beta = beta;
+
+    // Emission seen by this path (one-sided: front face only).
+    if front {
+        let le = pt_emission_at(m, uv, (*wl).lambda);
+        if any(le != vec4f(0.0)) {
+            var w = 1.0;
+            if !prev_specular {
+                let dp = sf.p - (*p).prev_p;
+                let dist2 = dot(dp, dp);
+                let cos_l = dot(wo_world, sf.ng);
+                let light_pdf = sf.prim_pmf * dist2 / (cos_l * sf.area);
+                w = pt_power_heuristic((*p).prev_pdf, light_pdf);
+            }
+            (*p).l += beta * le * w;
+        }
+    }
+
+    if pt_params.max_depth > 0u && (*p).bounce >= pt_params.max_depth {
+        // Past the limit, continue only through purely specular surfaces, while the
+        // extension lasts.
+        let f = material_flags(m);
+        if (*p).extension_left == 0u || !pt_is_specular(f) || pt_is_non_specular(f) {
+            return false;
+        }
+        (*p).extension_left -= 1u;
+    }
+    // A non-specular hit one more than `max_diffuse_depth` allows ends the path (its
+    // emission counted), as the CPU's `diffuse_limit_reached` does.
+    if pt_params.max_diffuse_depth > 0u && pt_is_non_specular(material_flags(m)) {
+        (*p).diffuse_bounces += 1u;
+        if (*p).diffuse_bounces > pt_params.max_diffuse_depth {
+            return false;
+        }
+    }
+
+    // Dispersion: from here on the path follows one wavelength (a random lane, moved
+    // to lane 0).
+    if material_dispersive(m) && !(*wl).collapsed {
+        let k = min(u32(pt_next_1d(smp) * 4.0), 3u);
+        pt_collapse_wavelengths(wl, k);
+        let bk = beta[k];
+        beta[k] = beta[0];
+        beta[0] = bk;
+        var l = (*p).l;
+        let lk2 = l[k];
+        l[k] = l[0];
+        l[0] = lk2;
+        (*p).l = l;
+        beta = vec4f(beta[0], 0.0, 0.0, 0.0);
+    }
+    let lambda = (*wl).lambda;
+    // The texels the BSDF calls of this hit read (`Material::bsdf_at`).
+    pt_set_texels(m, uv, lambda);
+
+    let at = pt_shading(sf, wo_world, two_sided);
+    let flags = material_flags(m);
+
+    // Next-event estimation: one shadow ray to a point on a light.
+    if pt_is_non_specular(flags) {
+        let ls = pt_sample_light(pt_next_2d(smp));
+        if ls.valid {
+            let link = pt_light_link(at, lambda, ls, true);
+            if link.e.valid {
+                *shadow = PtShadowRay(link.o, link.t_max, link.d, 1u, beta * link.e.f * link.e.le * link.e.k);
+            }
+        }
+    }
+
+    // Continue the path by sampling the BSDF.
+    let uc = pt_next_1d(smp);
+    let u = pt_next_2d(smp);
+    let s = bsdf_sample(m, at.wo, uc, u, lambda);
+    if s.pdf <= 0.0 || all(s.f == vec4f(0.0)) {
+        return false;
+    }
+    let wi_world = pt_to_world(at.frame, s.wi);
+    // The sampled lobe must agree with the geometry.
+    if pt_lobe_leaks(sf.ng, wo_world, wi_world, s.flags, two_sided) {
+        return false;
+    }
+    beta *= s.f * (abs(s.wi.z) / s.pdf);
+    if (s.flags & SCATTER_TRANSMISSION) != 0u {
+        let eta = material_eta(m);
+        let etap = select(1.0 / eta, eta, at.wo.z > 0.0);
+        (*p).eta_scale *= etap * etap;
+    }
+    (*p).prev_pdf = s.pdf;
+    (*p).prev_specular = select(0u, 1u, pt_is_specular(s.flags));
+    (*p).prev_p = sf.p;
+    (*p).inside = select(PT_NO_HIT, m, dot(wi_world, sf.ng) < 0.0 && !two_sided && material_absorbing(m));
+    (*p).o = pt_offset_ray_origin(sf.p, select(-sf.ng, sf.ng, dot(wi_world, sf.ng) > 0.0));
+    (*p).d = wi_world;
+    (*p).bounce += 1u;
+    (*p).beta = beta;
+
+    // Russian roulette (Arvo & Kirk 1990), judged by the throughput times η'² (the CPU's).
+    if (*p).bounce >= pt_params.rr_depth {
+        let q = max(1.0 - max(max(beta.x, beta.y), max(beta.z, beta.w)) * (*p).eta_scale, PT_RR_MIN_TERMINATION);
+        if pt_next_1d(smp) < q {
+            return false;
+        }
+        (*p).beta = beta / (1.0 - q);
+    }
+    if all((*p).beta == vec4f(0.0)) {
+        return false;
+    }
+    // The hard cap (also for an unbounded max_depth): counted, so that it is never silent.
+    if (*p).bounce >= PT_MAX_BOUNCES {
+        *truncated += 1u;
+        return false;
+    }
+    return true;
+}
 
 // The paths waiting for a stage: two queues of slots (the one being traced, the one the
 // shading kernel fills for the next bounce) and their lengths.
@@ -135,9 +414,8 @@ fn pt_wf_shade(@builtin(global_invocation_id) gid: vec3u) {
     var smp = state.smp;
     var wl = PtWavelengths(state.lambda, state.weight, state.collapsed != 0u);
     var shadow: PtShadowRay;
-    var rays = 0u;
     var truncated = 0u;
-    let more = pt_path_step(&path, state.hit, &wl, &smp, &shadow, &rays, &truncated);
+    let more = pt_path_step(&path, state.hit, &wl, &smp, &shadow, &truncated);
     pt_wf_paths[slot].path = path;
     pt_wf_paths[slot].shadow = shadow;
     pt_wf_paths[slot].lambda = wl.lambda;
