@@ -711,8 +711,9 @@ struct BenchArgs {
     /// Timed renders per mode (the median is reported).
     #[arg(long, default_value_t = 3)]
     repeats: u32,
-    /// Spectral modes to time, comma-separated.
-    #[arg(long, value_delimiter = ',', default_value = "hero,bins40,rgb")]
+    /// Spectral modes to time, comma-separated [default: hero,bins40,rgb; with --wavefront
+    /// hero,rgb, as its paths follow one set of wavelengths each].
+    #[arg(long, value_delimiter = ',')]
     modes: Vec<SpectralMode>,
     /// Time N viewer frames per mode instead of whole renders: each frame adds --spp
     /// samples per pixel to a running accumulation and converts it for display (what
@@ -1183,10 +1184,16 @@ fn run_bench(args: BenchArgs) -> Result<()> {
     if args.repeats == 0 {
         bail!("--repeats must be at least 1");
     }
-    let first_mode = args.modes.first().copied().unwrap_or_default();
-    let (prepared, base) = prepare(&args.scene, args.spp, first_mode, best_sampler)?;
+    let modes = if !args.modes.is_empty() {
+        args.modes.clone()
+    } else if args.scene.wavefront {
+        vec![SpectralMode::Hero, SpectralMode::Rgb]
+    } else {
+        vec![SpectralMode::Hero, SpectralMode::Bins40, SpectralMode::Rgb]
+    };
+    let (prepared, base) = prepare(&args.scene, args.spp, modes[0], best_sampler)?;
     // Every mode is checked against the backend before anything is timed.
-    let all: Vec<RenderSettings> = args.modes.iter().map(|&mode| RenderSettings { mode, ..base.clone() }).collect();
+    let all: Vec<RenderSettings> = modes.iter().map(|&mode| RenderSettings { mode, ..base.clone() }).collect();
     for s in &all {
         prepared.capabilities().check_settings(s)?;
     }

@@ -461,7 +461,7 @@ fn capabilities_with(integrator: GpuIntegrator, shader_f64: bool) -> Capabilitie
         diffuse_depth: integrator == GpuIntegrator::Path,
         bvh_builders: true,
         sample_block: SAMPLES_PER_READBACK,
-        // The path tracer's loop body is the wavefront's shading stage (wgsl/wavefront.wgsl).
+        // The path tracer alone has a wavefront (wgsl/wavefront.wgsl).
         wavefront: integrator == GpuIntegrator::Path,
     }
 }
@@ -1072,16 +1072,20 @@ impl SceneData {
     /// both sizes.
     pub fn check_limits(&self, limits: &wgpu::Limits) -> Result<(), GpuError> {
         // One more for the texels where a material reads textures, two for bdpt's splats
-        // and scratch.
+        // and scratch, three for the wavefront's paths, queues and dispatch sizes (its
+        // control stages bind all three).
         let splats = self.options.integrator.splats();
-        let storage_buffers = STORAGE_BUFFERS + u32::from(self.options.textures) + 2 * u32::from(splats);
+        let wavefront = self.options.wavefront;
+        let storage_buffers =
+            STORAGE_BUFFERS + u32::from(self.options.textures) + 2 * u32::from(splats) + 3 * u32::from(wavefront);
         if limits.max_storage_buffers_per_shader_stage < storage_buffers {
             return Err(GpuError::Unsupported(format!(
                 "a device with {} storage buffers per shader stage (max_storage_buffers_per_shader_stage; the kernel \
-                 binds {storage_buffers}{}{})",
+                 binds {storage_buffers}{}{}{})",
                 limits.max_storage_buffers_per_shader_stage,
                 if self.options.textures { ", one of them for the textures" } else { "" },
-                if splats { ", two for bdpt's splat image and scratch" } else { "" }
+                if splats { ", two for bdpt's splat image and scratch" } else { "" },
+                if wavefront { ", three for the wavefront's paths, queues and dispatch sizes" } else { "" }
             )));
         }
         for (what, needed) in self.buffer_sizes() {
@@ -1163,7 +1167,7 @@ fn check_wavefront_mode(options: &KernelOptions) -> Result<(), GpuError> {
     if options.wavefront && options.mode == SpectralMode::Bins40 {
         return Err(GpuError::Unsupported(
             "the 40-bin spectral mode in the wavefront (its ten paths per sample run in the megakernel: drop \
-             --wavefront, or use --spectral hero or rgb)"
+             --wavefront, or render in hero or RGB mode)"
                 .into(),
         ));
     }
@@ -1353,7 +1357,9 @@ impl GpuBackend {
 
     fn upload(&self, scene: Scene, options: &SceneOptions) -> Result<GpuScene, GpuError> {
         let start = Instant::now();
-        let mut data = SceneData::new(&scene, self.kernel_options(options))?;
+        let kernel_options = self.kernel_options(options);
+        check_wavefront_mode(&kernel_options)?;
+        let mut data = SceneData::new(&scene, kernel_options)?;
         data.check_limits(&self.ctx.limits)?;
         let pending_gather = data.atlas.take();
         let device = &self.ctx.device;
@@ -1423,7 +1429,6 @@ impl GpuBackend {
             (group_one, control)
         });
 
-        check_wavefront_mode(&data.options)?;
         let compile_start = Instant::now();
         let shader_result =
             kernel(&self.ctx, &pipeline_layout, &entries, &data.shader_source(), main_entry(&data.options));
@@ -2075,6 +2080,9 @@ impl GpuScene {
         rows: u32,
         params: &Params,
     ) -> Result<wgpu::SubmissionIndex, GpuError> {
+        if kernel.stages.is_some() != wavefront.is_some() {
+            return Err(GpuError::Shader("a wavefront kernel without its paths, or paths without one".into()));
+        }
         if let (Some(stages), Some(buffers)) = (&kernel.stages, wavefront) {
             let slots = width as u64 * rows as u64;
             if slots > buffers.slots() {
@@ -2233,8 +2241,13 @@ impl PreparedScene for GpuScene {
     /// Statistics on the device ([`DeviceAccumulation`]) where the whole image's
     /// accumulators fit one buffer, else passes into a film on the CPU.
     fn accumulate(self: Arc<Self>, settings: &RenderSettings) -> tracer::Result<Box<dyn Accumulation>> {
-        // bdpt's splats land anywhere: its frames go through the film (read back each).
-        if !self.splatting() && DeviceAccumulation::fits(&self.ctx.limits, settings.width, settings.height) {
+        // bdpt's splats land anywhere: its frames go through the film (read back each); so
+        // do a wavefront's where one wave cannot hold the whole image (the film's passes
+        // go in bands).
+        let pixels = settings.width as u64 * settings.height as u64;
+        let wave_fits = !self.kernel_options.wavefront || pixels <= wavefront::max_slots(&self.ctx.limits);
+        if !self.splatting() && wave_fits && DeviceAccumulation::fits(&self.ctx.limits, settings.width, settings.height)
+        {
             Ok(Box::new(DeviceAccumulation::new(self, settings)?))
         } else {
             Ok(Box::new(FilmAccumulation::new(self, settings)?))

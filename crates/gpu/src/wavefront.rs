@@ -3,13 +3,14 @@
 //! them, and the order in which a pass dispatches them.
 //!
 //! One wave is one sample of every pixel of a band: the camera stage starts a path per
-//! pixel, then each bounce dispatches extension (closest hits), shading (the megakernel's
-//! loop body, `pt_path_step`), shadow rays and a one-invocation kernel that swaps the two
-//! queues of live paths and writes the next dispatch's size, read by indirect dispatches
-//! (so no bounce waits for the host). A depth limit bounds the bounces; an unbounded path
-//! (Russian roulette only) is followed in chunks of [`CHUNK`] bounces, the host reading the
-//! live count after each. The film stage then adds each pixel's sample to its statistics
-//! in the megakernel's order.
+//! pixel, then each bounce dispatches extension (closest hits), shading (`pt_path_step`,
+//! the megakernel's loop body restated with its shadow ray deferred), shadow rays and a
+//! one-invocation kernel that swaps the two queues of live paths and writes the next
+//! dispatch's size, read by indirect dispatches (so no bounce waits for the host). Where a
+//! depth limit keeps a path within [`CHUNK`] bounces, every bounce is recorded up front;
+//! otherwise (a deeper limit, or Russian roulette alone) the bounces go in chunks of
+//! [`CHUNK`], the host reading the live count after each. The film stage then adds each
+//! pixel's sample to its statistics in the megakernel's order.
 
 use std::sync::Arc;
 
@@ -22,8 +23,9 @@ use crate::kernel::Params;
 /// `crates/gpu/tests/kernel.rs` checks it).
 pub const PATH_BYTES: u64 = 256;
 
-/// Invocations per workgroup of the per-path stages (`PT_WF_GROUP`).
-const GROUP: u64 = 64;
+/// Invocations per workgroup of the per-path stages (`PT_WF_GROUP`, which
+/// `crates/gpu/tests/kernel.rs` checks).
+pub const GROUP: u64 = 64;
 
 /// Bounces dispatched between two reads of the live count when paths are unbounded.
 pub const CHUNK: u32 = 16;
@@ -35,8 +37,7 @@ pub fn max_slots(limits: &wgpu::Limits) -> u64 {
     (bytes / PATH_BYTES).min(limits.max_compute_workgroups_per_dimension as u64 * GROUP)
 }
 
-/// The bind group layout of the control kernels' group 1 (the indirect dispatch sizes),
-/// and the bindings the wavefront adds to group 0.
+/// The bind group layout of the control kernels' group 1 (the indirect dispatch sizes).
 pub(crate) fn group_one_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
     let write = wgpu::BufferBindingType::Storage { read_only: false };
     device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
@@ -193,7 +194,6 @@ pub(crate) fn submit(
     slots: u64,
     params: &Params,
 ) -> Result<wgpu::SubmissionIndex, GpuError> {
-    debug_assert!(slots <= buffers.slots);
     let per_slot = slots.div_ceil(GROUP) as u32;
     let bounces = bounces(params);
     encoder.clear_buffer(&buffers.control, 0, Some(CONTROL_HEADER));

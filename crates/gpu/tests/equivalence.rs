@@ -1757,13 +1757,15 @@ fn instances_match_the_cpu() {
 /// device memory) restates the megakernel's loop body with the same random numbers and
 /// adds each pixel's samples in the same order, so on lavapipe (whose compiler fuses no
 /// multiply–add) it gives the megakernel's film bit for bit, and the same ray and
-/// truncation counts: on the Cornell box at unbounded depth with Russian roulette
-/// (bounces followed in chunks, the host reading the live count between them) and on
-/// dispersive, absorbing glass beside a mirror ball at a depth limit, in RGB mode (every
-/// bounce dispatched up front). A GPU's compiler may fuse differently in the two (an
-/// H200's does), so there the films must agree as same-seed renders do. The viewer's
-/// device-side accumulation runs the wavefront too. The 40-bin mode and the CPU refuse it
-/// by name.
+/// truncation counts. The cases reach every branch of the loop body: dispersive,
+/// absorbing glass beside a mirror ball at a depth limit in RGB mode (every bounce
+/// dispatched up front) and in hero mode with a short limit and a long specular extension,
+/// a diffuse-bounce limit and Russian roulette (the wavelengths collapse; bounces followed in
+/// chunks, the host reading the live count between them); punctual lights and a sky at
+/// unbounded depth; the Cornell box at unbounded depth. A GPU's compiler may fuse
+/// differently in the two (an H200's does), so there the films must agree as same-seed
+/// renders do. The viewer's device-side accumulation runs the wavefront too. The 40-bin
+/// mode and the CPU refuse it by name.
 #[test]
 fn the_wavefront_gives_the_megakernels_image() {
     let Some(ctx) = gpu::require_gpu() else { return };
@@ -1779,13 +1781,29 @@ fn the_wavefront_gives_the_megakernels_image() {
             assert!(c.same_seed_failures().is_none(), "{name}: {}", c.summary());
         }
     };
-    let mut cases = Vec::new();
+    let unbounded = PathSettings { max_depth: 0, rr_depth: 3, ..PathSettings::default() };
+    // Through glass and mirrors past the depth limit: by one more bounce at most (which a
+    // path through the glass ball needs), and by up to 15 (more than 16 bounces in all, so
+    // the bounces go in chunks).
+    let short = PathSettings { max_depth: 2, specular_extension: 1, max_diffuse_depth: 1, rr_depth: 1, ..unbounded };
+    let deep = PathSettings { specular_extension: 15, ..short };
+    let mut cases = vec![
+        (
+            "glass and mirror (RGB)",
+            glass_and_mirror_scene(),
+            RenderSettings { mode: SpectralMode::Rgb, ..settings(32, 32, 8) },
+        ),
+        ("glass and mirror (hero)", glass_and_mirror_scene(), RenderSettings { path: short, ..settings(32, 32, 8) }),
+        (
+            "glass and mirror (hero, deep)",
+            glass_and_mirror_scene(),
+            RenderSettings { path: deep, ..settings(32, 32, 8) },
+        ),
+        ("punctual lights", punctual_scene(), RenderSettings { path: unbounded, ..settings(32, 32, 8) }),
+    ];
     if let Some(scene) = cornell() {
-        let path = PathSettings { max_depth: 0, rr_depth: 3, ..PathSettings::default() };
-        cases.push(("Cornell box", scene, RenderSettings { path, ..settings(40, 40, 8) }));
+        cases.push(("Cornell box", scene, RenderSettings { path: unbounded, ..settings(40, 40, 8) }));
     }
-    let rgb = RenderSettings { mode: SpectralMode::Rgb, ..settings(32, 32, 8) };
-    cases.push(("glass and mirror (RGB)", glass_and_mirror_scene(), rgb));
     for (name, scene, s) in cases {
         let first_render = Some((s.sampler, s.mode));
         let mega = SceneOptions { first_render, ..SceneOptions::default() };

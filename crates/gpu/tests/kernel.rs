@@ -234,6 +234,7 @@ fn the_wavefront_kernel_validates_and_its_paths_have_the_host_size() {
     assert!(src.contains("// ---- wavefront.wgsl"));
     let (_, size) = wgsl_layout(&module, "PtWfPath");
     assert_eq!(size as u64, gpu::wavefront::PATH_BYTES);
+    assert_eq!(constant(&module, "PT_WF_GROUP"), vec![gpu::wavefront::GROUP as f64]);
     let (members, _) = wgsl_layout(&module, "PtWfControl");
     assert_eq!(members.last(), Some(&("queue".to_string(), 16)), "the queues follow a 16-byte header");
     let (without, module) = kernel_module(&KernelOptions { mode: spectral::SpectralMode::Hero, ..with_off(&with) });

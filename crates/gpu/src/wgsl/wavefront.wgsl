@@ -13,14 +13,15 @@
 //
 // `pt_path_step` and `pt_light_link` are path.wgsl's `pt_radiance` loop body and
 // `pt_light_contribution` restated with the shadow ray deferred, not shared with them: the
-// megakernel written around them ran 3–4 % slower on an H200 on some scenes and faster on
-// others (docs/gpu.md), so the megakernel keeps its own code. The two draw the same random
+// megakernel written around them ran 0.6–3 % slower on an H200 on every scene timed, or,
+// with its shadow ray traced inside the step, 3 % faster on the Cornell box and 3.5–4.5 %
+// slower on Sponza and a large mesh (docs/gpu.md), so the megakernel keeps its own code. The two draw the same random
 // numbers in the same order, so they give the same film bit for bit, which
 // `the_wavefront_gives_the_megakernels_image` (tests/equivalence.rs) checks: a change to
 // one that is not made to the other fails it.
 
-// A light sample joined to a shading point (path.wgsl's `pt_light_contribution` up to its
-// shadow ray, with the MIS weight taken before it): f, Le and |cos θi| · w / pdf (`e`,
+// A light sample joined to a shading point (path.wgsl's `pt_light_contribution` with MIS,
+// up to its shadow ray, the weight taken before it): f, Le and |cos θi| · w / pdf (`e`,
 // valid only if the light can contribute), and the shadow ray that decides whether it
 // does, for the shadow stage to trace.
 struct PtLightLink {
@@ -30,7 +31,7 @@ struct PtLightLink {
     t_max: f32,
 }
 
-fn pt_light_link(at: PtShading, lambda: vec4f, ls: PtLightSample, mis: bool) -> PtLightLink {
+fn pt_light_link(at: PtShading, lambda: vec4f, ls: PtLightSample) -> PtLightLink {
     var out = PtLightLink(PtNextEvent(vec4f(0.0), vec4f(0.0), 0.0, false), vec3f(0.0), vec3f(0.0), 0.0);
     let sf = at.sf;
     let m = sf.m;
@@ -97,7 +98,7 @@ fn pt_light_link(at: PtShading, lambda: vec4f, ls: PtLightSample, mis: bool) -> 
     out.d = select(wi_world, ls.point - off, finite_light);
     out.t_max = select(PT_FAR, PT_SHADOW_T_MAX, finite_light);
     var w = 1.0;
-    if mis && !delta {
+    if !delta {
         w = pt_power_heuristic(light_pdf, bsdf_pdf(m, at.wo, wi, lambda));
     }
     out.e = PtNextEvent(f, le, abs(wi.z) * w / light_pdf, true);
@@ -176,7 +177,6 @@ fn pt_path_step(
     let two_sided = material_two_sided(m);
 
     beta *= pt_segment_transmittance(m, front, two_sided, (*p).inside, hit.t, (*wl).lambda);
-    (*p).beta = beta;
 
     // Emission seen by this path (one-sided: front face only).
     if front {
@@ -238,7 +238,7 @@ fn pt_path_step(
     if pt_is_non_specular(flags) {
         let ls = pt_sample_light(pt_next_2d(smp));
         if ls.valid {
-            let link = pt_light_link(at, lambda, ls, true);
+            let link = pt_light_link(at, lambda, ls);
             if link.e.valid {
                 *shadow = PtShadowRay(link.o, link.t_max, link.d, 1u, beta * link.e.f * link.e.le * link.e.k);
             }
@@ -355,7 +355,7 @@ fn pt_wf_begin() {
 }
 
 // The camera ray of every slot, as `pt_main` draws it.
-@compute @workgroup_size(64)
+@compute @workgroup_size(PT_WF_GROUP)
 fn pt_wf_camera(@builtin(global_invocation_id) gid: vec3u) {
     let slot = gid.x;
     if slot >= pt_wf_slots() {
@@ -388,7 +388,7 @@ fn pt_wf_camera(@builtin(global_invocation_id) gid: vec3u) {
 }
 
 // The closest hits of the queued paths.
-@compute @workgroup_size(64)
+@compute @workgroup_size(PT_WF_GROUP)
 fn pt_wf_extend(@builtin(global_invocation_id) gid: vec3u) {
     let slot = pt_wf_queued(gid.x);
     if slot == PT_NO_HIT {
@@ -402,7 +402,7 @@ fn pt_wf_extend(@builtin(global_invocation_id) gid: vec3u) {
 
 // The queued paths' vertices shaded (`pt_path_step`); those that go on are queued for the
 // next bounce.
-@compute @workgroup_size(64)
+@compute @workgroup_size(PT_WF_GROUP)
 fn pt_wf_shade(@builtin(global_invocation_id) gid: vec3u) {
     let slot = pt_wf_queued(gid.x);
     if slot == PT_NO_HIT {
@@ -432,7 +432,7 @@ fn pt_wf_shade(@builtin(global_invocation_id) gid: vec3u) {
 
 // The shadow rays the shading kernel asked for: each one's contribution added to its
 // path's radiance where nothing blocks it.
-@compute @workgroup_size(64)
+@compute @workgroup_size(PT_WF_GROUP)
 fn pt_wf_shadow(@builtin(global_invocation_id) gid: vec3u) {
     let slot = pt_wf_queued(gid.x);
     if slot == PT_NO_HIT {
@@ -459,7 +459,7 @@ fn pt_wf_next() {
 }
 
 // The wave's radiance added to the film, pixel by pixel (`pt_main`'s statistics).
-@compute @workgroup_size(64)
+@compute @workgroup_size(PT_WF_GROUP)
 fn pt_wf_film(@builtin(global_invocation_id) gid: vec3u) {
     let slot = gid.x;
     if slot >= pt_wf_slots() {
