@@ -711,8 +711,8 @@ struct BenchArgs {
     /// Timed renders per mode (the median is reported).
     #[arg(long, default_value_t = 3)]
     repeats: u32,
-    /// Spectral modes to time, comma-separated [default: hero,bins40,rgb; with --wavefront
-    /// hero,rgb, as its paths follow one set of wavelengths each].
+    /// Spectral modes to time, comma-separated [default: those of hero,bins40,rgb the
+    /// backend runs — all three, but for the GPU's --wavefront, which has no bins40].
     #[arg(long, value_delimiter = ',')]
     modes: Vec<SpectralMode>,
     /// Time N viewer frames per mode instead of whole renders: each frame adds --spp
@@ -1184,14 +1184,14 @@ fn run_bench(args: BenchArgs) -> Result<()> {
     if args.repeats == 0 {
         bail!("--repeats must be at least 1");
     }
-    let modes = if !args.modes.is_empty() {
-        args.modes.clone()
-    } else if args.scene.wavefront {
-        vec![SpectralMode::Hero, SpectralMode::Rgb]
+    let first_mode = args.modes.first().copied().unwrap_or_default();
+    let (prepared, base) = prepare(&args.scene, args.spp, first_mode, best_sampler)?;
+    let modes = if args.modes.is_empty() {
+        let runs = prepared.capabilities().spectral_modes;
+        [SpectralMode::Hero, SpectralMode::Bins40, SpectralMode::Rgb].into_iter().filter(|m| runs.contains(m)).collect()
     } else {
-        vec![SpectralMode::Hero, SpectralMode::Bins40, SpectralMode::Rgb]
+        args.modes.clone()
     };
-    let (prepared, base) = prepare(&args.scene, args.spp, modes[0], best_sampler)?;
     // Every mode is checked against the backend before anything is timed.
     let all: Vec<RenderSettings> = modes.iter().map(|&mode| RenderSettings { mode, ..base.clone() }).collect();
     for s in &all {

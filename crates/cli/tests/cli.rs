@@ -1268,4 +1268,17 @@ fn bench_times_viewer_frames_and_refuses_device_frames_on_the_cpu() {
     assert!(!o.status.success() && stderr(&o).contains("--frames-on-device needs --backend gpu"), "{}", stderr(&o));
     let o = spt(&[&args[..], &["--frames-on-device"]].concat());
     assert!(!o.status.success() && stderr(&o).contains("--frames"), "{}", stderr(&o));
+    // The GPU's wavefront has no 40-bin mode: by default bench times the modes it has, and
+    // refuses the one asked for by name.
+    if gpu::require_gpu().is_some() {
+        let args =
+            ["bench", scene.to_str().unwrap(), "--backend", "gpu", "--wavefront", "--width", "8", "--height", "6"];
+        let o = spt(&[&args[..], &["--spp", "1", "--repeats", "1"]].concat());
+        let out = String::from_utf8_lossy(&o.stdout).into_owned();
+        let modes: Vec<&str> =
+            out.lines().filter_map(|l| l.split_whitespace().next()).filter(|w| !w.starts_with('#')).collect();
+        assert!(o.status.success() && modes == ["mode", "hero", "rgb"], "{out}{}", stderr(&o));
+        let o = spt(&[&args[..], &["--spp", "1", "--repeats", "1", "--modes", "hero,bins40"]].concat());
+        assert!(!o.status.success() && stderr(&o).contains("'bins40' spectral mode"), "{}", stderr(&o));
+    }
 }

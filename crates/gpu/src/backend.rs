@@ -1162,7 +1162,8 @@ fn splat_sum(words: &[u32]) -> i128 {
 }
 
 /// The wavefront follows one path per camera ray, as hero wavelengths and RGB do; the
-/// 40-bin mode's ten paths per sample are the megakernel's.
+/// 40-bin mode's ten paths per sample are the megakernel's. (Checked when a scene is
+/// prepared for its first render; a prepared wavefront's capabilities lack the mode.)
 fn check_wavefront_mode(options: &KernelOptions) -> Result<(), GpuError> {
     if options.wavefront && options.mode == SpectralMode::Bins40 {
         return Err(GpuError::Unsupported(
@@ -1832,10 +1833,9 @@ impl GpuScene {
             band_rows_max = band_rows_max.min((scratch_cap / scratch_row).max(1) as u32);
         }
         if self.kernel_options.wavefront {
-            // A wave holds the band's paths.
-            let slots = wavefront::max_slots(limits);
-            check_size("one image row of the wavefront's paths", wavefront::PATH_BYTES * width as u64, limits)?;
-            band_rows_max = band_rows_max.min((slots / width as u64).max(1) as u32);
+            // A wave holds the band's paths (a row too wide for one is refused by
+            // `wavefront::Buffers::new`).
+            band_rows_max = band_rows_max.min((wavefront::max_slots(limits) / width as u64).max(1) as u32);
         }
         let band_pixels_max = band_rows_max as u64 * width as u64;
 
@@ -2053,7 +2053,6 @@ impl GpuScene {
             return Ok(p.clone());
         }
         let options = KernelOptions { sampler: key.0, mode: key.1, ..self.kernel_options };
-        check_wavefront_mode(&options)?;
         let source = crate::kernel::source(&self.material_wgsl, &options);
         let (main, module) =
             kernel(&self.ctx, &self.pipeline_layout, &self.layout_entries, &source, main_entry(&options))?;
@@ -2067,8 +2066,9 @@ impl GpuScene {
     }
 
     /// Records `params.samples` samples of every pixel of the band (`rows` rows of `width`
-    /// pixels) into `encoder` and submits it: one dispatch of the megakernel, or the
-    /// wavefront's stages with `wavefront`'s paths (which `bind_group` binds).
+    /// pixels, as in `params`) into `encoder` and submits it: one dispatch of the
+    /// megakernel, or the wavefront's stages with `wavefront`'s paths (which `bind_group`
+    /// binds).
     #[allow(clippy::too_many_arguments)]
     pub(crate) fn submit_samples(
         &self,
@@ -2080,18 +2080,12 @@ impl GpuScene {
         rows: u32,
         params: &Params,
     ) -> Result<wgpu::SubmissionIndex, GpuError> {
-        if kernel.stages.is_some() != wavefront.is_some() {
-            return Err(GpuError::Shader("a wavefront kernel without its paths, or paths without one".into()));
-        }
-        if let (Some(stages), Some(buffers)) = (&kernel.stages, wavefront) {
-            let slots = width as u64 * rows as u64;
-            if slots > buffers.slots() {
-                return Err(GpuError::Shader(format!(
-                    "a band of {slots} paths for a wavefront of {} (an internal sizing error)",
-                    buffers.slots()
-                )));
+        match (&kernel.stages, wavefront) {
+            (Some(stages), Some(buffers)) => {
+                return wavefront::submit(&self.ctx, stages, &kernel.main, bind_group, buffers, encoder, params);
             }
-            return wavefront::submit(&self.ctx, stages, &kernel.main, bind_group, buffers, encoder, slots, params);
+            (None, None) => {}
+            _ => return Err(GpuError::Shader("a wavefront kernel without its paths, or paths without one".into())),
         }
         {
             let mut pass =
@@ -2203,8 +2197,14 @@ impl Backend for GpuBackend {
 }
 
 impl PreparedScene for GpuScene {
+    /// The device's capabilities, less the 40-bin mode for a wavefront
+    /// (`check_wavefront_mode`): its renders are refused as any mode a backend lacks.
     fn capabilities(&self) -> Capabilities {
-        capabilities_on(self.constants.integrator, &self.ctx)
+        let mut caps = capabilities_on(self.constants.integrator, &self.ctx);
+        if self.kernel_options.wavefront {
+            caps.spectral_modes.retain(|&m| m != SpectralMode::Bins40);
+        }
+        caps
     }
 
     fn scene(&self) -> &Scene {

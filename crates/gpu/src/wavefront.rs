@@ -15,7 +15,7 @@
 use std::sync::Arc;
 
 use crate::GpuError;
-use crate::backend::{MAX_BOUNCES, buffer_entry, check_size, map_read};
+use crate::backend::{MAX_BOUNCES, buffer_entry, map_read};
 use crate::context::GpuContext;
 use crate::kernel::Params;
 
@@ -127,8 +127,6 @@ impl Buffers {
                 limit: max_slots(limits) * PATH_BYTES,
             });
         }
-        check_size("the wavefront's paths (256 bytes each)", slots * PATH_BYTES, limits)?;
-        check_size("the wavefront's queues", CONTROL_HEADER + 8 * slots, limits)?;
         let device = &ctx.device;
         let scope = device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
         let buffer = |label: &str, size: u64, usage: wgpu::BufferUsages| {
@@ -148,11 +146,6 @@ impl Buffers {
             return Err(GpuError::Shader(format!("out of GPU memory for a wavefront of {slots} paths: {e}")));
         }
         Ok(Self { slots, paths, control, groups, groups_bind, readback })
-    }
-
-    /// How many paths a wave of these buffers holds.
-    pub(crate) fn slots(&self) -> u64 {
-        self.slots
     }
 
     /// The queue being traced and its live count (after a submitted chunk).
@@ -179,11 +172,10 @@ pub fn bounces(params: &Params) -> u32 {
     }
 }
 
-/// Records `params.samples` waves of `slots` paths (the band of `params`) into `encoder`
-/// and submits them, `shade` being the shading stage and `bind` the kernel's group 0 with
+/// Records `params.samples` waves of the band of `params` (a path per pixel) into
+/// `encoder` and submits them, `shade` being the shading stage and `bind` the kernel's group 0 with
 /// `buffers`' paths and queues in it. Where a path may take more than [`CHUNK`] bounces,
 /// each wave is submitted in chunks until no path is live (the host waits for each).
-#[allow(clippy::too_many_arguments)]
 pub(crate) fn submit(
     ctx: &GpuContext,
     stages: &Stages,
@@ -191,9 +183,15 @@ pub(crate) fn submit(
     bind: &wgpu::BindGroup,
     buffers: &Buffers,
     mut encoder: wgpu::CommandEncoder,
-    slots: u64,
     params: &Params,
 ) -> Result<wgpu::SubmissionIndex, GpuError> {
+    let slots = params.band_rows as u64 * params.width as u64;
+    if slots > buffers.slots {
+        let held = buffers.slots;
+        return Err(GpuError::Shader(format!(
+            "a band of {slots} paths for a wave of {held} (an internal sizing error)"
+        )));
+    }
     let per_slot = slots.div_ceil(GROUP) as u32;
     let bounces = bounces(params);
     encoder.clear_buffer(&buffers.control, 0, Some(CONTROL_HEADER));
