@@ -27,7 +27,8 @@ CONFIG is `mitsuba:VARIANT:SAMPLER` (e.g. mitsuba:llvm_ad_spectral:multijitter) 
 spt binary, e.g. the previous commit's, so that a change is measured against it in the
 same run); the default set is Mitsuba's llvm_ad_spectral with its independent,
 multijitter and ldsampler samplers and ours in hero mode with the independent and zsobol
-samplers. Prints one JSON line per configuration and a table, with each efficiency as a
+samplers, and with zsobol and Russian roulette's scale 3 (`--rr-scale 3`: these closed,
+bright boxes pay for keeping more paths; Mitsuba has no such setting). Prints one JSON line per configuration and a table, with each efficiency as a
 ratio to Mitsuba's best (to the first configuration when no Mitsuba one runs).
 
 --scene chooses the scene: `cornell` (the default; errors against the shared references),
@@ -66,6 +67,7 @@ DEFAULT_CONFIGS = [
     "mitsuba:llvm_ad_spectral:ldsampler",
     "ours:hero:independent",
     "ours:hero:zsobol",
+    "ours:hero:zsobol:--rr-scale 3",
 ]
 
 

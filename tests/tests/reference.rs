@@ -53,7 +53,7 @@ fn load_reference(variant: &str) -> Option<Reference> {
     Some(Reference { camera, width, height, mean, se })
 }
 
-fn compare(variant: &str, mode: SpectralMode, sampler: SamplerKind, spp: u32) {
+fn compare(variant: &str, mode: SpectralMode, sampler: SamplerKind, spp: u32, rr_scale: f32) {
     let Some(reference) = load_reference(variant) else { return };
     let scene_path = shared().join("scenes/cornell-box/CornellBox-Original-fixed.obj");
     let scene = tracer::obj::load_obj(&scene_path).expect("Cornell box loads");
@@ -66,7 +66,7 @@ fn compare(variant: &str, mode: SpectralMode, sampler: SamplerKind, spp: u32) {
         mode,
         sampler,
         // Unbounded depth, as the reference (Russian roulette is unbiased).
-        path: PathSettings { max_depth: 0, rr_depth: 5, ..Default::default() },
+        path: PathSettings { max_depth: 0, rr_depth: 5, rr_scale, ..Default::default() },
         camera: Some(reference.camera),
         crop: None,
     };
@@ -96,12 +96,12 @@ fn compare(variant: &str, mode: SpectralMode, sampler: SamplerKind, spp: u32) {
 
 #[test]
 fn rgb_mode_matches_mitsuba_rgb() {
-    compare("rgb", SpectralMode::Rgb, SamplerKind::Independent, 64);
+    compare("rgb", SpectralMode::Rgb, SamplerKind::Independent, 64, 1.0);
 }
 
 #[test]
 fn hero_spectral_mode_matches_mitsuba_spectral() {
-    compare("spectral", SpectralMode::Hero, SamplerKind::Independent, 64);
+    compare("spectral", SpectralMode::Hero, SamplerKind::Independent, 64, 1.0);
 }
 
 /// The Sobol sampler is unbiased too. (Its per-pixel standard errors come from the sample
@@ -109,5 +109,12 @@ fn hero_spectral_mode_matches_mitsuba_spectral() {
 /// lenient for it, the channel means are as sharp.)
 #[test]
 fn zsobol_sampler_matches_mitsuba_spectral() {
-    compare("spectral", SpectralMode::Hero, SamplerKind::ZSobol, 64);
+    compare("spectral", SpectralMode::Hero, SamplerKind::ZSobol, 64, 1.0);
+}
+
+/// Russian roulette that keeps three times as many paths (`PathSettings::rr_scale`) is
+/// unbiased too: the survivors' weight must divide by the raised survival probability.
+#[test]
+fn a_raised_roulette_scale_matches_mitsuba_spectral() {
+    compare("spectral", SpectralMode::Hero, SamplerKind::ZSobol, 64, 3.0);
 }

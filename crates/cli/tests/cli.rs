@@ -140,6 +140,8 @@ fn absurd_settings_are_rejected() {
         (vec!["render", s, "--stderr", dir.join("se.png").to_str().unwrap(), "-o", o], "must be an .exr"),
         (vec!["render", s, "--eye", "1,2", "-o", o], "expected x,y,z"),
         (vec!["render", s, "--spectral", "cmyk", "-o", o], "unknown spectral mode"),
+        (vec!["render", s, "--rr-scale", "0", "-o", o], "Russian roulette scale 0 must be a positive number"),
+        (vec!["render", s, "--rr-scale", "inf", "-o", o], "Russian roulette scale inf must be a positive number"),
         (vec!["render", dir.join("scene.fbx").to_str().unwrap(), "-o", o], "unsupported scene format"),
     ] {
         let r = spt(&args);
@@ -1174,6 +1176,13 @@ fn a_scene_files_render_table_sets_defaults_that_options_override() {
     std::fs::write(&scene, text.replace("spp = 3", "samples = 3")).unwrap();
     let o = spt(&["render", scene.to_str().unwrap(), "-o", out.to_str().unwrap()]);
     assert!(!o.status.success() && stderr(&o).contains("unknown field `samples`"), "{}", stderr(&o));
+    // Russian roulette's scale reaches the render from the table (an absurd one is
+    // refused there); the command line's wins.
+    std::fs::write(&scene, text.replace("spp = 3", "spp = 3\nrr_scale = 0")).unwrap();
+    let o = spt(&["render", scene.to_str().unwrap(), "-o", out.to_str().unwrap()]);
+    assert!(!o.status.success() && stderr(&o).contains("Russian roulette scale 0"), "{}", stderr(&o));
+    let o = spt(&["render", scene.to_str().unwrap(), "--rr-scale", "2.5", "-o", out.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
 }
 
 #[test]

@@ -1756,6 +1756,7 @@ impl GpuScene {
             seed_hi: (settings.seed >> 32) as u32,
             max_depth: settings.path.max_depth,
             rr_depth: settings.path.rr_depth,
+            rr_scale: settings.path.rr_scale,
             specular_extension: settings.path.specular_extension,
             shading,
             scene_flags: self.constants.scene_flags,

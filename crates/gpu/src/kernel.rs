@@ -155,8 +155,9 @@ wgsl_struct! {
         /// Offset in `pt_tables` of the atlas's record (`wgsl/atlas.wgsl`; the atlas
         /// integrator only).
         atlas_offset: u32,
-        /// Unused: keeps `region` at the 16-byte offset WGSL gives a `vec4<u32>`.
-        padding: u32,
+        /// `PathSettings::rr_scale` (also keeps `region` at the 16-byte offset WGSL
+        /// gives a `vec4<u32>`).
+        rr_scale: f32,
         /// ZSobol: log₂ of the samples per pixel (rounded up to a power of two).
         log2_spp: u32,
         /// Sobol samplers: 64 minus the bits of their sample indices.

@@ -1003,6 +1003,48 @@ fn russian_roulette_inside_glass_sees_through_radiance_compression() {
     assert!(spread < 0.6, "relative spread of the samples {spread:.3}");
 }
 
+/// Russian roulette's scale (`PathSettings::rr_scale`) on the GPU, in a closed glowing
+/// room (Lambertian walls of albedo 0.8 emitting 0.5: radiance 0.5 / (1 − 0.8) = 2.5
+/// everywhere): both scales converge to it, and scale 4 keeps paths longer for a lower
+/// error per sample (the CPU's test in `tests/tests/analytic.rs`). Scale 4 also runs as a
+/// wavefront, which must give the megakernel's film (bit for bit on lavapipe).
+#[test]
+fn russian_roulette_scale_converges_in_a_glowing_room() {
+    let Some(ctx) = gpu::require_gpu() else { return };
+    let exact = ctx.info.device_type == wgpu::DeviceType::Cpu;
+    let mut scene = Scene::default();
+    let wall = Material::diffuse("wall", Colour::constant(0.8)).unwrap().with_emission(Colour::constant(0.5));
+    let mut room = uv_sphere(Vec3::ZERO, 1.0, 24, 48, true);
+    room.normals.clear();
+    scene.add(&room, wall);
+    scene.camera =
+        Some(Camera { eye: Vec3::new(0.1, 0.2, 0.3), center: Vec3::new(0.0, 0.0, -1.0), up: Vec3::Y, fov_y_deg: 90.0 });
+    let gpu = GpuBackend::with_context(ctx);
+    let megakernel = gpu.prepare_gpu(scene.clone(), &SceneOptions::default()).unwrap();
+    let wavefront = gpu.prepare_gpu(scene, &SceneOptions { wavefront: true, ..SceneOptions::default() }).unwrap();
+    let render = |prepared: &gpu::GpuScene, rr_scale: f32| {
+        let path = PathSettings { max_depth: 0, rr_depth: 3, rr_scale, ..PathSettings::default() };
+        let s = RenderSettings { mode: SpectralMode::Rgb, path, ..settings(12, 12, 512) };
+        let (film, stats) = tracer::render(prepared, &s, &|_| {}).unwrap();
+        assert_eq!(stats.non_finite, 0);
+        let n = film.pixels().len() as f64;
+        let mean = film.pixels().iter().map(|p| p.mean()[1]).sum::<f64>() / n;
+        let se_of_mean = film.pixels().iter().map(|p| p.std_error()[1].powi(2)).sum::<f64>().sqrt() / n;
+        let se = film.pixels().iter().map(|p| p.std_error()[1]).sum::<f64>() / n;
+        println!("scale {rr_scale}: mean {mean:.4} ± {se_of_mean:.4}, per-pixel se {se:.4}, {} rays", stats.rays);
+        assert!((mean - 2.5).abs() < 4.5 * se_of_mean && (mean / 2.5 - 1.0).abs() < 0.01, "scale {rr_scale}: {mean}");
+        (film, se, stats.rays)
+    };
+    let (_, se_1, rays_1) = render(&megakernel, 1.0);
+    let (film_4, se_4, rays_4) = render(&megakernel, 4.0);
+    assert!(rays_4 as f64 > 1.2 * rays_1 as f64, "longer paths: {rays_4} against {rays_1} rays");
+    assert!(se_4 < 0.8 * se_1, "a lower error per sample: {se_4} against {se_1}");
+    let (wave_4, _, wave_rays) = render(&wavefront, 4.0);
+    if exact {
+        assert!(wave_4 == film_4 && wave_rays == rays_4, "the wavefront's film differs from the megakernel's");
+    }
+}
+
 /// RGB mode (`--spectral rgb`): colours as their linear-sRGB values, metals' (n, k) at the
 /// CPU's three channel wavelengths, no dispersion, no wavelength drawn by the camera — on
 /// every model (and the dispersive, absorbing glass), the analytic shapes and the punctual

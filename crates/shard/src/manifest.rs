@@ -57,6 +57,10 @@ pub struct Job {
     pub max_depth: u32,
     /// Bounces before Russian roulette.
     pub rr_depth: u32,
+    /// Russian roulette's scale of the survival probability (1, the default, is not
+    /// written, as in partials written before it).
+    #[serde(default = "one_f32", skip_serializing_if = "is_one_f32")]
+    pub rr_scale: f32,
     /// Extra specular bounces.
     pub extension: u32,
     /// The limit on diffuse bounces (0: none, and then not written, as in partials
@@ -97,6 +101,7 @@ impl Job {
             sampler: settings.sampler.name().into(),
             max_depth: settings.path.max_depth,
             rr_depth: settings.path.rr_depth,
+            rr_scale: settings.path.rr_scale,
             extension: settings.path.specular_extension,
             max_diffuse_depth: settings.path.max_diffuse_depth,
             shading_normals: settings.path.shading_normals.name().into(),
@@ -113,7 +118,14 @@ impl Job {
         let (Ok(serde_json::Value::Object(a)), Ok(serde_json::Value::Object(b))) = (a, b) else {
             return vec!["(unreadable job)".into()];
         };
-        a.iter().filter(|(k, v)| b.get(*k) != Some(v)).map(|(k, v)| format!("{k}: {v} ≠ {}", b[k])).collect()
+        // Over the keys of both: a field left out at its default (`max_diffuse_depth`,
+        // `rr_scale`) is in one of them only.
+        let shown = |v: Option<&serde_json::Value>| v.map_or("(the default)".to_string(), |v| v.to_string());
+        a.keys()
+            .chain(b.keys().filter(|k| !a.contains_key(*k)))
+            .filter(|k| a.get(*k) != b.get(*k))
+            .map(|k| format!("{k}: {} ≠ {}", shown(a.get(k)), shown(b.get(k))))
+            .collect()
     }
 }
 
@@ -146,6 +158,14 @@ pub struct Manifest {
     /// its pixels. Absent (0) in partials of other integrators.
     #[serde(default, skip_serializing_if = "is_zero_u64")]
     pub light_paths: u64,
+}
+
+fn one_f32() -> f32 {
+    1.0
+}
+
+fn is_one_f32(v: &f32) -> bool {
+    *v == 1.0
 }
 
 fn is_zero_u32(v: &u32) -> bool {

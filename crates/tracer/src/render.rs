@@ -138,6 +138,13 @@ impl RenderSettings {
                 self.width, self.height
             )));
         }
+        let rr_scale = self.path.rr_scale;
+        if !(rr_scale.is_finite() && rr_scale > 0.0) {
+            return Err(Error::Setting(format!(
+                "Russian roulette scale {rr_scale} must be a positive number (1: keep a path with \
+                 probability min(0.95, its throughput))"
+            )));
+        }
         if let Some(c) = &self.camera {
             c.validate().map_err(Error::Setting)?;
         }

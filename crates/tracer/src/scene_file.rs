@@ -43,7 +43,7 @@
 //! # rotation = 90            # turned about +y (degrees), times radiance (default 1)
 //!
 //! [render]                   # defaults for `spt render/bench/view`; their options win
-//! width = 640                # also height, spp, seed, max_depth, rr_depth,
+//! width = 640                # also height, spp, seed, max_depth, rr_depth, rr_scale,
 //! spectral = "bins40"        # sampler, integrator
 //! ```
 //!
@@ -116,6 +116,8 @@ pub struct RenderDefaults {
     pub max_depth: Option<u32>,
     /// Bounces before Russian roulette.
     pub rr_depth: Option<u32>,
+    /// Russian roulette's scale of the survival probability (`PathSettings::rr_scale`).
+    pub rr_scale: Option<f32>,
     /// Spectral mode: hero, bins40 or rgb.
     pub spectral: Option<String>,
     /// Sampler: zsobol, sobol or independent.

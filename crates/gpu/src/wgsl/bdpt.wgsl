@@ -577,7 +577,7 @@ fn bd_scatter(
     // Russian roulette, counted in bounces as the path tracer does.
     if k >= pt_params.rr_depth {
         let b = (*w).beta;
-        let q = max(1.0 - max(max(b.x, b.y), max(b.z, b.w)) * (*w).eta_scale, PT_RR_MIN_TERMINATION);
+        let q = max(1.0 - max(max(b.x, b.y), max(b.z, b.w)) * (*w).eta_scale * pt_params.rr_scale, PT_RR_MIN_TERMINATION);
         if pt_next_1d(smp) < q {
             return out;
         }

@@ -400,9 +400,9 @@ fn pt_radiance(
         d = wi_world;
         bounce += 1u;
 
-        // Russian roulette (Arvo & Kirk 1990), judged by the throughput times η'² (the CPU's).
+        // Russian roulette (Arvo & Kirk 1990), judged by the throughput times η'² and rr_scale (the CPU's).
         if bounce >= pt_params.rr_depth {
-            let q = max(1.0 - max(max(beta.x, beta.y), max(beta.z, beta.w)) * eta_scale, PT_RR_MIN_TERMINATION);
+            let q = max(1.0 - max(max(beta.x, beta.y), max(beta.z, beta.w)) * eta_scale * pt_params.rr_scale, PT_RR_MIN_TERMINATION);
             if pt_next_1d(smp) < q {
                 break;
             }

@@ -272,9 +272,9 @@ fn pt_path_step(
     (*p).bounce += 1u;
     (*p).beta = beta;
 
-    // Russian roulette (Arvo & Kirk 1990), judged by the throughput times η'² (the CPU's).
+    // Russian roulette (Arvo & Kirk 1990), judged by the throughput times η'² and rr_scale (the CPU's).
     if (*p).bounce >= pt_params.rr_depth {
-        let q = max(1.0 - max(max(beta.x, beta.y), max(beta.z, beta.w)) * (*p).eta_scale, PT_RR_MIN_TERMINATION);
+        let q = max(1.0 - max(max(beta.x, beta.y), max(beta.z, beta.w)) * (*p).eta_scale * pt_params.rr_scale, PT_RR_MIN_TERMINATION);
         if pt_next_1d(smp) < q {
             return false;
         }

@@ -711,7 +711,9 @@ fn walk<'v, const N: usize, S: Sampler>(
         beta *= factor;
         pdf_dir = fwd;
         // Russian roulette, counted in bounces as the path tracer does.
-        if k as u32 >= settings.rr_depth && !survives_roulette(&mut beta, eta_scale, sampler.next_1d()) {
+        if k as u32 >= settings.rr_depth
+            && !survives_roulette(&mut beta, eta_scale, settings.rr_scale, sampler.next_1d())
+        {
             return None;
         }
         if beta.is_black() {

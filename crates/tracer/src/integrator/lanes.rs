@@ -759,7 +759,7 @@ fn run<const N: usize, S: Sampler>(
         let mut ends: M = [false; LANES];
         for k in 0..LANES {
             let max = (0..N).map(|i| st.beta[i][k]).fold(f32::NEG_INFINITY, f32::max);
-            let q = (1.0 - max * st.eta_scale[k]).max(RR_MIN_TERMINATION);
+            let q = (1.0 - max * st.eta_scale[k] * settings.rr_scale).max(RR_MIN_TERMINATION);
             let stopped = roulette[k] & (ux[k] < q);
             let survives = roulette[k] & !stopped;
             for i in 0..N {
