@@ -6,6 +6,8 @@
 relMSE = mean over pixel-channels of (img - ref)^2 / (ref^2 + 1e-2), the metric the
 Mitsuba references' README quotes (and Rousselle et al. use). Prints one line per image.
 """
+import re
+import subprocess
 import sys
 
 import numpy as np
@@ -19,6 +21,17 @@ def read_exr(path):
         if "RGB" in px:
             return np.asarray(px["RGB"].pixels, dtype=np.float64)
         return np.stack([np.asarray(px[c].pixels, dtype=np.float64) for c in "RGB"], axis=-1)
+
+
+def render_timed(cmd, out):
+    """Runs `spt render` (`cmd`, which writes `out`): its sampling time (the seconds `spt
+    render` prints, after loading and BVH build) and the image; exits with spt's message
+    if it fails."""
+    p = subprocess.run(cmd, capture_output=True, text=True)
+    m = re.search(r"wrote .*?: ([0-9.]+) s,", p.stderr) if p.returncode == 0 else None
+    if m is None:
+        sys.exit(f"{' '.join(cmd)}: {p.stderr}")
+    return float(m.group(1)), read_exr(out)
 
 
 def rel_mse(img, ref):

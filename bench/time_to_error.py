@@ -53,9 +53,9 @@ Measuring one change against the commit before it, e.g.:
     git worktree add /tmp/before HEAD~1 && cargo build --release -p cli --manifest-path /tmp/before/Cargo.toml
     python3 bench/time_to_error.py --rounds 4 ours@/tmp/before/target/release/spt:hero:zsobol ours:hero:zsobol
 """
-import argparse, json, os, re, subprocess, sys, tempfile, time
+import argparse, json, os, sys, tempfile, time
 
-from compare_error import read_exr, rel_mse
+from compare_error import read_exr, rel_mse, render_timed
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 REPO = os.path.normpath(os.path.join(HERE, ".."))
@@ -233,12 +233,7 @@ class Ours:
                     "--sampler", sampler, "--threads", str(a.threads)] + extra
 
     def run(self, spp, seed, out):
-        p = subprocess.run(self.cmd + ["--spp", str(spp), "--seed", str(seed), "-o", out],
-                           capture_output=True, text=True)
-        if p.returncode != 0:
-            sys.exit(f"{' '.join(self.cmd)}: {p.stderr}")
-        m = re.search(r"wrote .*?: ([0-9.]+) s,", p.stderr)
-        return float(m.group(1)), read_exr(out)
+        return render_timed(self.cmd + ["--spp", str(spp), "--seed", str(seed), "-o", out], out)
 
 
 def reference(scene, family, kind, a):

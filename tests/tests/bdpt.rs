@@ -26,6 +26,8 @@ struct Batched {
     mean: Vec<f32>,
     se: Vec<f32>,
     channels: [(f64, f64); 3],
+    /// Rays traced over all the batches.
+    rays: u64,
 }
 
 fn batched<I: Integrator>(integrator: I, scene: &Scene, settings: &RenderSettings, batches: u32) -> Batched {
@@ -33,11 +35,13 @@ fn batched<I: Integrator>(integrator: I, scene: &Scene, settings: &RenderSetting
         .unwrap()
         .prepare_cpu(scene.clone(), &SceneOptions::default())
         .unwrap();
+    let mut rays = 0;
     let images: Vec<Vec<f32>> = (0..batches)
         .map(|k| {
             let settings = RenderSettings { seed: settings.seed.wrapping_add(1000 * k as u64), ..settings.clone() };
             let (film, stats) = tracer::render(&prepared, &settings, &|_| {}).unwrap();
             assert_eq!(stats.non_finite, 0, "NaN/Inf samples");
+            rays += stats.rays;
             film.mean_rgb()
         })
         .collect();
@@ -60,7 +64,7 @@ fn batched<I: Integrator>(integrator: I, scene: &Scene, settings: &RenderSetting
         let var = per_batch.iter().map(|v| (v - m).powi(2)).sum::<f64>() / (n - 1.0);
         (m, (var / n).sqrt())
     });
-    Batched { mean, se, channels }
+    Batched { mean, se, channels, rays }
 }
 
 /// Both estimates agree: at least `min_pass` of the pixel-channels within the
@@ -165,9 +169,17 @@ fn bdpt_equals_path_tracing_under_point_spot_and_sky_light() {
 
 /// The glowing room of `analytic.rs` (every wall emits Le and reflects ρ = 0.5:
 /// radiance Le/(1 − ρ) everywhere): light subpaths start anywhere, long paths end by
-/// Russian roulette on both sides.
+/// Russian roulette on both sides; at roulette scales 1 and 4, the latter with longer
+/// subpaths.
 #[test]
 fn bdpt_matches_the_glowing_room() {
+    let (scale_1, scale_4) = (glowing_room_with_roulette_scale(1.0), glowing_room_with_roulette_scale(4.0));
+    // Russian roulette's scale reaches both subpaths' roulettes: longer subpaths.
+    assert!(scale_4.rays as f64 > 1.2 * scale_1.rays as f64, "rays: {} against {}", scale_4.rays, scale_1.rays);
+}
+
+/// [`bdpt_matches_the_glowing_room`] with `PathSettings::rr_scale` = `rr_scale`.
+fn glowing_room_with_roulette_scale(rr_scale: f32) -> Batched {
     let (albedo, le) = (0.5f32, 0.5f32);
     let mut scene = Scene::default();
     let wall = Material::diffuse("wall", Colour::constant(albedo)).unwrap().with_emission(Colour::constant(le));
@@ -181,18 +193,22 @@ fn bdpt_matches_the_glowing_room() {
         spp: 32,
         seed: 11,
         mode: SpectralMode::Rgb,
-        path: PathSettings { max_depth: 0, rr_depth: 3, ..Default::default() },
+        path: PathSettings { max_depth: 0, rr_depth: 3, rr_scale, ..Default::default() },
         ..Default::default()
     };
     let b = batched(Bdpt, &scene, &settings, 16);
     let expected = (le / (1.0 - albedo)) as f64;
     for (c, &(m, se)) in b.channels.iter().enumerate() {
-        assert!((m - expected).abs() < 4.5 * se && (m / expected - 1.0).abs() < 0.01, "channel {c}: {m} ± {se}");
+        assert!(
+            (m - expected).abs() < 4.5 * se && (m / expected - 1.0).abs() < 0.01,
+            "scale {rr_scale}, channel {c}: {m} ± {se}"
+        );
     }
     let z_max = sidak_z(0.01, b.mean.len());
     let fails =
         b.mean.iter().zip(&b.se).filter(|&(&m, &s)| ((m as f64 - expected) / s.max(1e-9) as f64).abs() > z_max).count();
-    assert!(fails as f64 <= 0.01 * b.mean.len() as f64, "{fails} pixel-channels fail");
+    assert!(fails as f64 <= 0.01 * b.mean.len() as f64, "scale {rr_scale}: {fails} pixel-channels fail");
+    b
 }
 
 /// The Cornell box against Mitsuba 3's converged spectral reference (as

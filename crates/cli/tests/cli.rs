@@ -140,8 +140,10 @@ fn absurd_settings_are_rejected() {
         (vec!["render", s, "--stderr", dir.join("se.png").to_str().unwrap(), "-o", o], "must be an .exr"),
         (vec!["render", s, "--eye", "1,2", "-o", o], "expected x,y,z"),
         (vec!["render", s, "--spectral", "cmyk", "-o", o], "unknown spectral mode"),
-        (vec!["render", s, "--rr-scale", "0", "-o", o], "Russian roulette scale 0 must be a positive number"),
-        (vec!["render", s, "--rr-scale", "inf", "-o", o], "Russian roulette scale inf must be a positive number"),
+        (vec!["render", s, "--rr-scale", "0", "-o", o], "Russian roulette scale 0 must be above 0 and at most 100"),
+        (vec!["render", s, "--rr-scale", "-1", "-o", o], "Russian roulette scale -1 must be above 0"),
+        (vec!["render", s, "--rr-scale", "inf", "-o", o], "Russian roulette scale inf must be above 0"),
+        (vec!["render", s, "--rr-scale", "NaN", "-o", o], "Russian roulette scale NaN must be above 0"),
         (vec!["render", dir.join("scene.fbx").to_str().unwrap(), "-o", o], "unsupported scene format"),
     ] {
         let r = spt(&args);
@@ -951,7 +953,8 @@ fn compare_takes_time_budgets_builders_and_scene_changes() {
     std::fs::write(
         &configs,
         r#"[{"name": "exact"}, {"name": "schlick", "set": ["materials.glass.schlick=true"]},
-            {"name": "flat", "shading_normals": "geometric", "max_depth": 3}]"#,
+            {"name": "flat", "shading_normals": "geometric", "max_depth": 3},
+            {"name": "long paths", "rr_depth": 1, "rr_scale": 3}]"#,
     )
     .unwrap();
     let out = dir.join("variants");
@@ -963,7 +966,7 @@ fn compare_takes_time_budgets_builders_and_scene_changes() {
     .concat());
     assert!(o.status.success(), "{}", stderr(&o));
     let csv = std::fs::read_to_string(out.join("compare.csv")).unwrap();
-    assert_eq!(csv.lines().count(), 1 + 3 * 2, "{csv}");
+    assert_eq!(csv.lines().count(), 1 + 4 * 2, "{csv}");
     let bad = dir.join("bad.json");
     std::fs::write(&bad, r#"[{"name": "x", "bvh_builder": "octree"}]"#).unwrap();
     let o = spt(&[
@@ -973,6 +976,15 @@ fn compare_takes_time_budgets_builders_and_scene_changes() {
     ]
     .concat());
     assert!(!o.status.success() && stderr(&o).contains("'x': bvh_builder"), "{}", stderr(&o));
+    // A configuration's roulette reaches the render's settings (and their check).
+    std::fs::write(&bad, r#"[{"name": "y", "rr_scale": 0}]"#).unwrap();
+    let o = spt(&[
+        &["compare", scene.to_str().unwrap()][..],
+        &size,
+        &["--configs", bad.to_str().unwrap(), "-o", out.to_str().unwrap()],
+    ]
+    .concat());
+    assert!(!o.status.success() && stderr(&o).contains("Russian roulette scale 0"), "{}", stderr(&o));
 }
 
 /// Every preset runs end to end at a tiny size (CI's run of the charts docs/ shows full
@@ -1178,9 +1190,9 @@ fn a_scene_files_render_table_sets_defaults_that_options_override() {
     assert!(!o.status.success() && stderr(&o).contains("unknown field `samples`"), "{}", stderr(&o));
     // Russian roulette's scale reaches the render from the table (an absurd one is
     // refused there); the command line's wins.
-    std::fs::write(&scene, text.replace("spp = 3", "spp = 3\nrr_scale = 0")).unwrap();
+    std::fs::write(&scene, text.replace("spp = 3", "spp = 3\nrr_scale = -2")).unwrap();
     let o = spt(&["render", scene.to_str().unwrap(), "-o", out.to_str().unwrap()]);
-    assert!(!o.status.success() && stderr(&o).contains("Russian roulette scale 0"), "{}", stderr(&o));
+    assert!(!o.status.success() && stderr(&o).contains("Russian roulette scale -2 must be"), "{}", stderr(&o));
     let o = spt(&["render", scene.to_str().unwrap(), "--rr-scale", "2.5", "-o", out.to_str().unwrap()]);
     assert!(o.status.success(), "{}", stderr(&o));
 }

@@ -1007,7 +1007,8 @@ fn russian_roulette_inside_glass_sees_through_radiance_compression() {
 /// room (Lambertian walls of albedo 0.8 emitting 0.5: radiance 0.5 / (1 − 0.8) = 2.5
 /// everywhere): both scales converge to it, and scale 4 keeps paths longer for a lower
 /// error per sample (the CPU's test in `tests/tests/analytic.rs`). Scale 4 also runs as a
-/// wavefront, which must give the megakernel's film (bit for bit on lavapipe).
+/// wavefront, which must trace longer paths too and give the megakernel's film (bit for
+/// bit on lavapipe), and BDPT's subpaths grow longer with it as well.
 #[test]
 fn russian_roulette_scale_converges_in_a_glowing_room() {
     let Some(ctx) = gpu::require_gpu() else { return };
@@ -1021,7 +1022,9 @@ fn russian_roulette_scale_converges_in_a_glowing_room() {
         Some(Camera { eye: Vec3::new(0.1, 0.2, 0.3), center: Vec3::new(0.0, 0.0, -1.0), up: Vec3::Y, fov_y_deg: 90.0 });
     let gpu = GpuBackend::with_context(ctx);
     let megakernel = gpu.prepare_gpu(scene.clone(), &SceneOptions::default()).unwrap();
-    let wavefront = gpu.prepare_gpu(scene, &SceneOptions { wavefront: true, ..SceneOptions::default() }).unwrap();
+    let wavefront =
+        gpu.prepare_gpu(scene.clone(), &SceneOptions { wavefront: true, ..SceneOptions::default() }).unwrap();
+    let bdpt = gpu.with_integrator(gpu::kernel::GpuIntegrator::Bdpt).prepare_gpu(scene, &SceneOptions::default());
     let render = |prepared: &gpu::GpuScene, rr_scale: f32| {
         let path = PathSettings { max_depth: 0, rr_depth: 3, rr_scale, ..PathSettings::default() };
         let s = RenderSettings { mode: SpectralMode::Rgb, path, ..settings(12, 12, 512) };
@@ -1040,9 +1043,20 @@ fn russian_roulette_scale_converges_in_a_glowing_room() {
     assert!(rays_4 as f64 > 1.2 * rays_1 as f64, "longer paths: {rays_4} against {rays_1} rays");
     assert!(se_4 < 0.8 * se_1, "a lower error per sample: {se_4} against {se_1}");
     let (wave_4, _, wave_rays) = render(&wavefront, 4.0);
+    assert!(wave_rays as f64 > 1.2 * rays_1 as f64, "the wavefront's paths: {wave_rays} against {rays_1} rays");
     if exact {
         assert!(wave_4 == film_4 && wave_rays == rays_4, "the wavefront's film differs from the megakernel's");
     }
+    // BDPT: rays only (its statistics are `bdpt_matches_the_cpu`'s, in batches: light
+    // tracing's splats are not in the pixels' standard errors), at a few samples.
+    let bdpt = bdpt.unwrap();
+    let rays = |rr_scale: f32| {
+        let path = PathSettings { max_depth: 0, rr_depth: 3, rr_scale, ..PathSettings::default() };
+        let s = RenderSettings { mode: SpectralMode::Rgb, path, ..settings(12, 12, 16) };
+        tracer::render(&bdpt, &s, &|_| {}).unwrap().1.rays
+    };
+    let (bdpt_1, bdpt_4) = (rays(1.0), rays(4.0));
+    assert!(bdpt_4 as f64 > 1.2 * bdpt_1 as f64, "BDPT's subpaths: {bdpt_4} against {bdpt_1} rays");
 }
 
 /// RGB mode (`--spectral rgb`): colours as their linear-sRGB values, metals' (n, k) at the

@@ -268,3 +268,60 @@ pub(crate) fn same_job<'a>(items: impl IntoIterator<Item = (&'a std::path::Path,
     }
     Ok(())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn job() -> Job {
+        Job {
+            tool: "spt 0.1.0".into(),
+            scene_sha256: "00".into(),
+            width: 4,
+            height: 3,
+            spp: 8,
+            seed: 0,
+            spectral: "hero".into(),
+            sampler: "zsobol".into(),
+            max_depth: 0,
+            rr_depth: 3,
+            rr_scale: 1.0,
+            extension: 0,
+            max_diffuse_depth: 0,
+            shading_normals: "adapted".into(),
+            triangle_test: "watertight".into(),
+            backend: "cpu".into(),
+            integrator: "path".into(),
+            camera: CameraRecord { eye: [0.0; 3], center: [0.0, 0.0, -1.0], up: [0.0, 1.0, 0.0], fov_y_deg: 40.0 },
+        }
+    }
+
+    /// A field left out at its default in one job and written in the other differs, in
+    /// either order (the first walk over the first job's fields alone missed one order
+    /// and panicked on the other).
+    #[test]
+    fn differences_see_fields_written_by_either_job() {
+        let a = job();
+        assert!(a.differences(&a.clone()).is_empty());
+        let b = Job { rr_scale: 2.0, max_diffuse_depth: 2, ..job() };
+        for (x, y) in [(&a, &b), (&b, &a)] {
+            let d = x.differences(y);
+            assert_eq!(d.len(), 2, "{d:?}");
+            assert!(
+                d.iter().any(|s| s.starts_with("rr_scale:")) && d.iter().any(|s| s.starts_with("max_diffuse_depth:"))
+            );
+        }
+        assert_eq!(a.differences(&b), ["max_diffuse_depth: (the default) ≠ 2", "rr_scale: (the default) ≠ 2.0"]);
+    }
+
+    /// A partial written before `rr_scale` existed reads as scale 1, and a job at scale 1
+    /// is written as before (without the field).
+    #[test]
+    fn the_default_roulette_scale_is_neither_written_nor_required() {
+        let text = serde_json::to_string(&job()).unwrap();
+        assert!(!text.contains("rr_scale"), "{text}");
+        assert_eq!(serde_json::from_str::<Job>(&text).unwrap().rr_scale, 1.0);
+        let scaled = serde_json::to_string(&Job { rr_scale: 3.0, ..job() }).unwrap();
+        assert_eq!(serde_json::from_str::<Job>(&scaled).unwrap().rr_scale, 3.0);
+    }
+}

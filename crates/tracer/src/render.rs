@@ -139,10 +139,11 @@ impl RenderSettings {
             )));
         }
         let rr_scale = self.path.rr_scale;
-        if !(rr_scale.is_finite() && rr_scale > 0.0) {
+        let max = crate::integrator::MAX_RR_SCALE;
+        if !(rr_scale > 0.0 && rr_scale <= max) {
             return Err(Error::Setting(format!(
-                "Russian roulette scale {rr_scale} must be a positive number (1: keep a path with \
-                 probability min(0.95, its throughput))"
+                "Russian roulette scale {rr_scale} must be above 0 and at most {max} (1: keep a path \
+                 with probability min(0.95, its throughput))"
             )));
         }
         if let Some(c) = &self.camera {
