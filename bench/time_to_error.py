@@ -27,9 +27,10 @@ CONFIG is `mitsuba:VARIANT:SAMPLER` (e.g. mitsuba:llvm_ad_spectral:multijitter) 
 spt binary, e.g. the previous commit's, so that a change is measured against it in the
 same run); the default set is Mitsuba's llvm_ad_spectral with its independent,
 multijitter and ldsampler samplers and ours in hero mode with the independent and zsobol
-samplers, and with zsobol and Russian roulette's scale 3 (`--rr-scale 3`: these closed,
-bright boxes pay for keeping more paths; Mitsuba has no such setting). Prints one JSON line per configuration and a table, with each efficiency as a
-ratio to Mitsuba's best (to the first configuration when no Mitsuba one runs).
+samplers, and with zsobol and Mitsuba's rule for Russian roulette (`--rr-scale 1`; ours
+keeps more paths by default). Prints one JSON line per configuration and a table, with
+each efficiency as a ratio to Mitsuba's best (to the first configuration when no Mitsuba
+one runs).
 
 --scene chooses the scene: `cornell` (the default; errors against the shared references),
 `bunny-box` (the shared 69K-triangle bunny, flat-shaded white, standing in the box) or
@@ -67,7 +68,7 @@ DEFAULT_CONFIGS = [
     "mitsuba:llvm_ad_spectral:ldsampler",
     "ours:hero:independent",
     "ours:hero:zsobol",
-    "ours:hero:zsobol:--rr-scale 3",
+    "ours:hero:zsobol:--rr-scale 1",
 ]
 
 

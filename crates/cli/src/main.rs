@@ -438,11 +438,10 @@ struct SceneArgs {
     /// Bounces before Russian roulette starts.
     #[arg(long, default_value_t = 3)]
     rr_depth: u32,
-    /// Russian roulette keeps a path with probability min(0.95, S × its throughput); 1 is
-    /// Mitsuba's rule. With --rr-depth 5, on the Cornell box and two scenes built on it,
-    /// 2–4 reaches a given error 8–23 % sooner; other scenes can lose (docs/figures.md).
-    /// Unbiased for any S in (0, 100]
-    #[arg(long, value_name = "S", default_value_t = 1.0, allow_negative_numbers = true)]
+    /// Russian roulette keeps a path with probability min(0.95, S × its throughput). 1 is
+    /// Mitsuba's rule; the default 2 reached a given error 6–30 % sooner on every scene
+    /// measured (docs/figures.md). Unbiased for any S in (0, 100]
+    #[arg(long, value_name = "S", default_value_t = 2.0, allow_negative_numbers = true)]
     rr_scale: f32,
     /// Extra bounces allowed beyond --max-depth through purely specular surfaces
     /// (mirrors, glass): the thesis's path extension.

@@ -57,8 +57,8 @@ pub struct Job {
     pub max_depth: u32,
     /// Bounces before Russian roulette.
     pub rr_depth: u32,
-    /// Russian roulette's scale of the survival probability (1, the default, is not
-    /// written, as in partials written before it).
+    /// Russian roulette's scale of the survival probability. 1 is not written: partials
+    /// written before the field existed were rendered with 1, and read so.
     #[serde(default = "one_f32", skip_serializing_if = "is_one_f32")]
     pub rr_scale: f32,
     /// Extra specular bounces.
@@ -120,7 +120,8 @@ impl Job {
         };
         // Over the keys of both: a field left out at its default (`max_diffuse_depth`,
         // `rr_scale`) is in one of them only.
-        let shown = |v: Option<&serde_json::Value>| v.map_or("(the default)".to_string(), |v| v.to_string());
+        // A field not written reads as the value its documentation names.
+        let shown = |v: Option<&serde_json::Value>| v.map_or("(not written)".to_string(), |v| v.to_string());
         a.keys()
             .chain(b.keys().filter(|k| !a.contains_key(*k)))
             .filter(|k| a.get(*k) != b.get(*k))
@@ -311,13 +312,13 @@ mod tests {
                 d.iter().any(|s| s.starts_with("rr_scale:")) && d.iter().any(|s| s.starts_with("max_diffuse_depth:"))
             );
         }
-        assert_eq!(a.differences(&b), ["max_diffuse_depth: (the default) ≠ 2", "rr_scale: (the default) ≠ 2.0"]);
+        assert_eq!(a.differences(&b), ["max_diffuse_depth: (not written) ≠ 2", "rr_scale: (not written) ≠ 2.0"]);
     }
 
-    /// A partial written before `rr_scale` existed reads as scale 1, and a job at scale 1
-    /// is written as before (without the field).
+    /// A partial written before `rr_scale` existed reads as scale 1 (what it was rendered
+    /// with), and a job at scale 1 is written as before (without the field).
     #[test]
-    fn the_default_roulette_scale_is_neither_written_nor_required() {
+    fn a_roulette_scale_of_one_is_neither_written_nor_required() {
         let text = serde_json::to_string(&job()).unwrap();
         assert!(!text.contains("rr_scale"), "{text}");
         assert_eq!(serde_json::from_str::<Job>(&text).unwrap().rr_scale, 1.0);

@@ -45,15 +45,15 @@ pub struct PathSettings {
     /// Russian roulette starts after this many bounces.
     pub rr_depth: u32,
     /// Russian roulette keeps a path with probability min(0.95, `rr_scale` × its
-    /// throughput), the throughput times the η'² of its transmissions; 1 is Mitsuba 3's
-    /// rule (pbrt-v4's but for the 0.95 cap). The rule treats a throughput of 1 as what a
-    /// fresh camera path is worth, but in a closed, bright scene a path that has bounced
-    /// five times still carries much of its pixel's light at a throughput near ρ⁵ (ρ the
-    /// walls' albedo), so most such paths are cut and the few kept weigh 1/ρ⁵: above 1
-    /// keeps more of them. With `rr_depth` 5, on the Cornell box and the two scenes built
-    /// on it, 2–4 lowers the error per sample by 11–29 % at 2–15 % fewer samples/s; on
-    /// other scenes it can lose (docs/figures.md). Unbiased for any value in
-    /// (0, [`MAX_RR_SCALE`]].
+    /// throughput), the throughput times the η'² of its transmissions. 1 is Mitsuba 3's
+    /// rule (pbrt-v4's but for the 0.95 cap), which treats a throughput of 1 as what a
+    /// fresh camera path is worth; but a path that has bounced a few times in a lit
+    /// interior still carries much of its pixel's light at a throughput near ρᵏ (ρ the
+    /// surfaces' albedo), so that rule cuts most such paths and weighs the few kept
+    /// 1/ρᵏ. The default, 2, lowered the relative error per unit time on every scene
+    /// measured: at `rr_depth` 3 by 6–30 % (the Cornell box, Sponza, glass and mirrors in
+    /// boxes, spheres under a sky), at 5 by 8–23 % (docs/figures.md). Unbiased for any
+    /// value in (0, [`MAX_RR_SCALE`]].
     pub rr_scale: f32,
     /// Path extension (thesis ch. 9, tables 9.2–9.3): up to this many extra bounces beyond
     /// `max_depth` while the path keeps hitting purely specular surfaces (mirrors,
@@ -78,7 +78,7 @@ impl Default for PathSettings {
         Self {
             max_depth: 0,
             rr_depth: 3,
-            rr_scale: 1.0,
+            rr_scale: 2.0,
             specular_extension: 0,
             shading_normals: ShadingNormals::Adapted,
             max_diffuse_depth: 0,
