@@ -50,10 +50,10 @@ pub struct PathSettings {
     /// fresh camera path is worth; but a path that has bounced a few times in a lit
     /// interior still carries much of its pixel's light at a throughput near ρᵏ (ρ the
     /// surfaces' albedo), so that rule cuts most such paths and weighs the few kept
-    /// 1/ρᵏ. The default, 2, lowered the relative error per unit time on every scene
-    /// measured: at `rr_depth` 3 by 6–30 % (the Cornell box, Sponza, glass and mirrors in
-    /// boxes, spheres under a sky), at 5 by 8–23 % (docs/figures.md). Unbiased for any
-    /// value in (0, [`MAX_RR_SCALE`]].
+    /// 1/ρᵏ. The default, 2, reached a given relative error sooner on every scene
+    /// measured: at `rr_depth` 3 by 5–30 % (the Cornell box, Sponza, glass and mirrors in
+    /// boxes, spheres under a sky), at 5 by 10–23 % (the Cornell box and two scenes built
+    /// on it; docs/figures.md). Unbiased for any value in (0, [`MAX_RR_SCALE`]].
     pub rr_scale: f32,
     /// Path extension (thesis ch. 9, tables 9.2–9.3): up to this many extra bounces beyond
     /// `max_depth` while the path keeps hitting purely specular surfaces (mirrors,
