@@ -28,8 +28,9 @@ bench() { # NAME SCENE [ARGS...]: one scene on both backends
     local name=$1 scene=$2
     shift 2
     # The independent sampler on both backends (the viewer's; the Sobol samplers' cost and
-    # gain are bench/gpu/samplers.sh's).
-    local common=(--width "$W" --height "$H" --max-depth 5 --modes hero --sampler independent "$@")
+    # gain are bench/gpu/samplers.sh's), and Russian roulette's scale 1, the default when
+    # docs/gpu.md's figures were taken (it still plays at bounces 3 and 4 of depth 5).
+    local common=(--width "$W" --height "$H" --max-depth 5 --modes hero --sampler independent --rr-scale 1 "$@")
     echo "## $name"
     for width in $GPU_WIDTHS; do
         local gpu=(--backend gpu --bvh-width "$width")

@@ -17,7 +17,8 @@ W=${W:-1920} H=${H:-1080}
 mkdir -p "$OUT"
 bunny2="$OUT/bunny-sub2.obj"
 [ -f "$bunny2" ] || python3 "$(dirname "$0")/subdivide_obj.py" "$SCENES/bunny/bunny.obj" "$bunny2" 2
-common=(--backend gpu --width "$W" --height "$H" --max-depth 5 --modes hero --sampler independent)
+# Russian roulette's scale 1: the default when docs/gpu.md's figures were taken.
+common=(--backend gpu --width "$W" --height "$H" --max-depth 5 --modes hero --sampler independent --rr-scale 1)
 scenes=(
     "cornell $SCENES/cornell-box/CornellBox-Original.obj"
     "sponza $SCENES/sponza/sponza.obj --eye=-12,3,0 --center=10,5,0"
