@@ -4,6 +4,9 @@
 # ROUNDS rounds of each scene with OLD then NEW, printing M samples/s per line.
 #
 #   bench/gpu/ab.sh OLD_SPT NEW_SPT [extra `spt bench` options…]
+#
+# Builds from 2026-11-30 on default to Russian roulette's scale 2, earlier ones had 1: pass
+# `--rr-scale 1` (or 2) when both binaries know the option, else the two differ in it.
 #   SCENES=../shared/scenes ROUNDS=2 W=1920 H=1080 SPP=16 FRAMES=10 bench/gpu/ab.sh …
 set -euo pipefail
 [ $# -ge 2 ] || { echo "usage: $0 OLD_SPT NEW_SPT [spt bench options…]" >&2; exit 2; }

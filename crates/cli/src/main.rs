@@ -439,8 +439,8 @@ struct SceneArgs {
     #[arg(long, default_value_t = 3)]
     rr_depth: u32,
     /// Russian roulette keeps a path with probability min(0.95, S × its throughput). 1 is
-    /// Mitsuba's rule; the default 2 reached a given error 5–30 % sooner on every scene
-    /// measured (docs/figures.md). Unbiased for any S in (0, 100]
+    /// Mitsuba's rule; the default 2 reached a given error as soon or sooner on every scene
+    /// measured, by up to 30 % (docs/figures.md). Unbiased for any S in (0, 100].
     #[arg(long, value_name = "S", default_value_t = 2.0, allow_negative_numbers = true)]
     rr_scale: f32,
     /// Extra bounces allowed beyond --max-depth through purely specular surfaces
