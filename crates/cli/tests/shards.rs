@@ -103,12 +103,11 @@ fn merge_refuses_gaps_duplicates_foreign_and_damaged_partials() {
     ok(render_small(&scene, SIZE, &other, &["--shard", "3/4", "--seed", "9"]));
     let msg = refused(&merge(&[parts[0].clone(), parts[1].clone(), other, parts[3].clone()], &out, &[]));
     assert!(msg.contains("different renders") && msg.contains("seed: 0 ≠ 9"), "{msg}");
-    // So is another Russian roulette scale (scale 1 is not written: a field in one job
-    // only is a difference too).
+    // So is another Russian roulette scale.
     let other = dir.join("other-roulette.partial");
     ok(render_small(&scene, SIZE, &other, &["--shard", "3/4", "--rr-scale", "1"]));
     let msg = refused(&merge(&[parts[0].clone(), parts[1].clone(), other, parts[3].clone()], &out, &[]));
-    assert!(msg.contains("different renders") && msg.contains("rr_scale: 2.0 ≠ (not written)"), "{msg}");
+    assert!(msg.contains("different renders") && msg.contains("rr_scale: 2.0 ≠ 1.0"), "{msg}");
 
     // Truncated, altered and foreign files are refused by name; nothing is written.
     let damaged = dir.join("damaged.partial");

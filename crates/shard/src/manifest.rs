@@ -33,7 +33,9 @@ impl From<Camera> for CameraRecord {
 
 /// Everything that decides the value of a pixel sample: two partials merge only if their
 /// jobs are equal. (The thread count and the BVH width are absent: they do not change a
-/// bit of the image.)
+/// bit of the image.) Every field is written, none skipped at a default, so that two
+/// jobs' JSON objects have the same keys ([`Job::differences`]); a field added later takes
+/// a serde default for the partials written before it.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Job {
     /// The program and its version (with the commit it was built from, where known):
@@ -57,15 +59,15 @@ pub struct Job {
     pub max_depth: u32,
     /// Bounces before Russian roulette.
     pub rr_depth: u32,
-    /// Russian roulette's scale of the survival probability. 1 is not written: partials
-    /// written before the field existed were rendered with 1, and read so.
-    #[serde(default = "one_f32", skip_serializing_if = "is_one_f32")]
+    /// Russian roulette's scale of the survival probability (partials written before the
+    /// field existed were rendered with 1, and read so).
+    #[serde(default = "one_f32")]
     pub rr_scale: f32,
     /// Extra specular bounces.
     pub extension: u32,
-    /// The limit on diffuse bounces (0: none, and then not written, as in partials
-    /// written before it).
-    #[serde(default, skip_serializing_if = "is_zero_u32")]
+    /// The limit on diffuse bounces (0: none; partials written before the field existed
+    /// had none, and read so).
+    #[serde(default)]
     pub max_diffuse_depth: u32,
     /// Shading-normal mode.
     pub shading_normals: String,
@@ -118,15 +120,8 @@ impl Job {
         let (Ok(serde_json::Value::Object(a)), Ok(serde_json::Value::Object(b))) = (a, b) else {
             return vec!["(unreadable job)".into()];
         };
-        // Over the keys of both: a field left out at its default (`max_diffuse_depth`,
-        // `rr_scale`) is in one of them only.
-        // A field not written reads as the value its documentation names.
-        let shown = |v: Option<&serde_json::Value>| v.map_or("(not written)".to_string(), |v| v.to_string());
-        a.keys()
-            .chain(b.keys().filter(|k| !a.contains_key(*k)))
-            .filter(|k| a.get(*k) != b.get(*k))
-            .map(|k| format!("{k}: {} ≠ {}", shown(a.get(k)), shown(b.get(k))))
-            .collect()
+        // Both serialise every field (none is skipped), so the keys are the same.
+        a.iter().filter(|(k, v)| b.get(*k) != Some(v)).map(|(k, v)| format!("{k}: {v} ≠ {}", b[k])).collect()
     }
 }
 
@@ -163,14 +158,6 @@ pub struct Manifest {
 
 fn one_f32() -> f32 {
     1.0
-}
-
-fn is_one_f32(v: &f32) -> bool {
-    *v == 1.0
-}
-
-fn is_zero_u32(v: &u32) -> bool {
-    *v == 0
 }
 
 fn is_zero_u64(v: &u64) -> bool {
@@ -297,32 +284,26 @@ mod tests {
         }
     }
 
-    /// A field left out at its default in one job and written in the other differs, in
-    /// either order (the first walk over the first job's fields alone missed one order
-    /// and panicked on the other).
+    /// Fields at their defaults in one job and not in the other differ, in either order
+    /// (they were once left out of a job's JSON: a walk over the first job's fields then
+    /// missed one order and panicked on the other).
     #[test]
-    fn differences_see_fields_written_by_either_job() {
+    fn differences_see_every_field_in_either_order() {
         let a = job();
         assert!(a.differences(&a.clone()).is_empty());
         let b = Job { rr_scale: 2.0, max_diffuse_depth: 2, ..job() };
-        for (x, y) in [(&a, &b), (&b, &a)] {
-            let d = x.differences(y);
-            assert_eq!(d.len(), 2, "{d:?}");
-            assert!(
-                d.iter().any(|s| s.starts_with("rr_scale:")) && d.iter().any(|s| s.starts_with("max_diffuse_depth:"))
-            );
-        }
-        assert_eq!(a.differences(&b), ["max_diffuse_depth: (not written) ≠ 2", "rr_scale: (not written) ≠ 2.0"]);
+        assert_eq!(a.differences(&b), ["max_diffuse_depth: 0 ≠ 2", "rr_scale: 1.0 ≠ 2.0"]);
+        assert_eq!(b.differences(&a), ["max_diffuse_depth: 2 ≠ 0", "rr_scale: 2.0 ≠ 1.0"]);
     }
 
-    /// A partial written before `rr_scale` existed reads as scale 1 (what it was rendered
-    /// with), and a job at scale 1 is written as before (without the field).
+    /// A partial written before `max_diffuse_depth` and `rr_scale` existed reads as what
+    /// it was rendered with: no diffuse limit, roulette scale 1.
     #[test]
-    fn a_roulette_scale_of_one_is_neither_written_nor_required() {
-        let text = serde_json::to_string(&job()).unwrap();
-        assert!(!text.contains("rr_scale"), "{text}");
-        assert_eq!(serde_json::from_str::<Job>(&text).unwrap().rr_scale, 1.0);
-        let scaled = serde_json::to_string(&Job { rr_scale: 3.0, ..job() }).unwrap();
-        assert_eq!(serde_json::from_str::<Job>(&scaled).unwrap().rr_scale, 3.0);
+    fn a_job_from_before_the_roulette_scale_reads_as_scale_one() {
+        let mut old = serde_json::to_value(Job { rr_scale: 3.0, max_diffuse_depth: 2, ..job() }).unwrap();
+        let fields = old.as_object_mut().unwrap();
+        assert!(fields.remove("rr_scale").is_some() && fields.remove("max_diffuse_depth").is_some());
+        let read: Job = serde_json::from_value(old).unwrap();
+        assert_eq!((read.rr_scale, read.max_diffuse_depth), (1.0, 0));
     }
 }
