@@ -10,7 +10,9 @@ direction. For checking a backend or integrator by hand from the CLI, e.g.:
 
 Usage: python3 bench/glowing_room_obj.py DIR [RHO] [LE]   (defaults 0.8 and 0.5)
 """
-import math, os, sys
+import os, sys
+
+from uv_sphere import write_uv_sphere
 
 
 def main():
@@ -19,29 +21,10 @@ def main():
     out = sys.argv[1]
     rho = float(sys.argv[2]) if len(sys.argv) > 2 else 0.8
     le = float(sys.argv[3]) if len(sys.argv) > 3 else 0.5
-    rings, segments = 24, 48
     os.makedirs(out, exist_ok=True)
-    vertices = []
-    for i in range(rings + 1):
-        theta = math.pi * i / rings
-        for j in range(segments):
-            phi = 2 * math.pi * j / segments
-            vertices.append((math.sin(theta) * math.cos(phi), math.cos(theta), math.sin(theta) * math.sin(phi)))
-    faces = []
-    for i in range(rings):
-        for j in range(segments):
-            a, b = i * segments + j, i * segments + (j + 1) % segments
-            c, d = a + segments, b + segments
-            # Wound so that the faces' normals point into the sphere (the poles' rings of
-            # degenerate quads become single triangles).
-            if i > 0:
-                faces.append((a, d, b))
-            if i < rings - 1:
-                faces.append((a, c, d))
     with open(os.path.join(out, "room.obj"), "w") as f:
         f.write("mtllib room.mtl\nusemtl wall\n")
-        f.writelines(f"v {x:.6f} {y:.6f} {z:.6f}\n" for x, y, z in vertices)
-        f.writelines(f"f {a + 1} {b + 1} {c + 1}\n" for a, b, c in faces)
+        write_uv_sphere(f, (0.0, 0.0, 0.0), 1.0, rings=24, segments=48, smooth=False, inward=True)
     with open(os.path.join(out, "room.mtl"), "w") as f:
         f.write(f"newmtl wall\nKd {rho} {rho} {rho}\nKe {le} {le} {le}\n")
     print(f"wrote {out}/room.obj: radiance {le / (1 - rho):g} everywhere")

@@ -57,6 +57,7 @@ Measuring one change against the commit before it, e.g.:
 import argparse, json, os, sys, tempfile, time
 
 from compare_error import read_exr, rel_mse, render_timed
+from uv_sphere import write_uv_sphere
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 REPO = os.path.normpath(os.path.join(HERE, ".."))
@@ -82,28 +83,6 @@ BUNNY_SCALE, BUNNY_TRANSLATE = 5.0, (-0.45, -0.165, 0.45)
 # The spheres: (name, centre, radius); the glass one on the floor in front of the tall box,
 # the mirror on top of the short box.
 SPHERES = [("glass", (-0.45, 0.3, 0.55), 0.3), ("mirror", (0.33, 0.85, 0.37), 0.25)]
-
-
-def write_uv_sphere(path, centre, radius, rings=64, segments=128):
-    """A UV sphere as an OBJ with a normal per vertex (smooth shading): 2·segments·(rings−1)
-    triangles."""
-    with open(path, "w") as f:
-        import math
-        for i in range(rings + 1):
-            theta = math.pi * i / rings
-            for j in range(segments):
-                phi = 2 * math.pi * j / segments
-                n = (math.sin(theta) * math.cos(phi), math.cos(theta), math.sin(theta) * math.sin(phi))
-                f.write("v %.7f %.7f %.7f\n" % tuple(c + radius * x for c, x in zip(centre, n)))
-                f.write("vn %.7f %.7f %.7f\n" % n)
-        vid = lambda i, j: i * segments + (j % segments) + 1
-        for i in range(rings):
-            for j in range(segments):
-                a, b, c, d = vid(i, j), vid(i, j + 1), vid(i + 1, j), vid(i + 1, j + 1)
-                if i > 0:  # the top ring's quads are triangles
-                    f.write(f"f {a}//{a} {b}//{b} {c}//{c}\n")
-                if i < rings - 1:
-                    f.write(f"f {b}//{b} {d}//{d} {c}//{c}\n")
 
 
 class Scene:
@@ -132,7 +111,8 @@ class Scene:
                 f.write(f"[[mesh]]\nfile = {json.dumps(BOX_OBJ)}\n\n")
                 for m, centre, radius in SPHERES:
                     obj = os.path.join(self.dir, f"{m}.obj")
-                    write_uv_sphere(obj, centre, radius)
+                    with open(obj, "w") as o:
+                        write_uv_sphere(o, centre, radius)
                     f.write(f"[[mesh]]\nfile = {json.dumps(obj)}\nmaterial = \"{m}\"\n\n")
             self.ours = [toml]
         else:

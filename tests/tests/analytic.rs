@@ -6,27 +6,13 @@
 mod common;
 
 use common::{channel_mean_and_se, sidak_z};
-use glam::Vec3;
-use spectral::spectrum::Colour;
 use spectral::{SampledSpectrum, SampledWavelengths, SpectralMode};
-use tracer::camera::Camera;
 use tracer::integrator::PathSettings;
-use tracer::material::Material;
-use tracer::mesh::uv_sphere;
 use tracer::sampler::SamplerKind;
-use tracer::{CpuBackend, RenderSettings, Scene};
-use tracer::{CpuScene, SceneOptions};
+use tracer::{CpuBackend, CpuScene, RenderSettings, SceneOptions};
 
 fn glowing_room(albedo: f32, le: f32) -> CpuScene {
-    let mut scene = Scene::default();
-    let material = Material::diffuse("wall", Colour::constant(albedo)).unwrap().with_emission(Colour::constant(le));
-    // Flat-shaded: the analytic answer holds for the faceted room with its true normals.
-    // (Interpolated shading normals do not conserve energy exactly; see the notes.)
-    let mut room = uv_sphere(Vec3::ZERO, 1.0, 24, 48, true);
-    room.normals.clear();
-    scene.add(&room, material);
-    scene.camera =
-        Some(Camera { eye: Vec3::new(0.1, 0.2, 0.3), center: Vec3::new(0.0, 0.0, -1.0), up: Vec3::Y, fov_y_deg: 90.0 });
+    let scene = common::room::glowing_room(albedo, le);
     CpuBackend::new(2).unwrap().prepare_cpu(scene, &SceneOptions::default()).unwrap()
 }
 
@@ -43,7 +29,7 @@ fn unit_colour(mode: SpectralMode) -> [f64; 3] {
 }
 
 fn check_room(albedo: f32, mode: SpectralMode, sampler: SamplerKind, spp: u32) {
-    check_room_with(albedo, mode, sampler, spp, 1.0);
+    check_room_with(albedo, mode, sampler, spp, PathSettings::default().rr_scale);
 }
 
 /// [`check_room`] with Russian roulette's scale `rr_scale`; returns the image's mean

@@ -181,12 +181,7 @@ fn bdpt_matches_the_glowing_room() {
 /// [`bdpt_matches_the_glowing_room`] with `PathSettings::rr_scale` = `rr_scale`.
 fn glowing_room_with_roulette_scale(rr_scale: f32) -> Batched {
     let (albedo, le) = (0.5f32, 0.5f32);
-    let mut scene = Scene::default();
-    let wall = Material::diffuse("wall", Colour::constant(albedo)).unwrap().with_emission(Colour::constant(le));
-    let mut room = uv_sphere(Vec3::ZERO, 1.0, 24, 48, true);
-    room.normals.clear();
-    scene.add(&room, wall);
-    scene.camera = camera(Vec3::new(0.1, 0.2, 0.3), Vec3::new(0.0, 0.0, -1.0));
+    let scene = common::room::glowing_room(albedo, le);
     let settings = RenderSettings {
         width: 12,
         height: 12,

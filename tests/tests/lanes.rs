@@ -2,7 +2,7 @@
 //! surfaces of triangle scenes, the others one lane at a time) against its general loop on
 //! the shared Cornell box, the bunny, and glass and mirror spheres in the box: the same
 //! image, to the bit, in every spectral mode and with every sampler, and with Russian
-//! roulette's scale raised.
+//! roulette's default scale and Mitsuba's.
 
 use glam::Vec3;
 use spectral::SpectralMode;
@@ -29,12 +29,13 @@ fn load(relative: &str) -> Option<tracer::Scene> {
 
 fn lanes_and_general_loop_agree(scene: tracer::Scene, camera: Camera, spp: u32) {
     let prepared = CpuBackend::new(2).unwrap().prepare_cpu(scene, &SceneOptions::default()).unwrap();
+    let default = PathSettings::default().rr_scale;
     for (mode, sampler, rr_scale) in [
+        (SpectralMode::Hero, SamplerKind::ZSobol, default),
+        (SpectralMode::Hero, SamplerKind::Independent, default),
+        (SpectralMode::Rgb, SamplerKind::Sobol, default),
+        (SpectralMode::Bins40, SamplerKind::ZSobol, default),
         (SpectralMode::Hero, SamplerKind::ZSobol, 1.0),
-        (SpectralMode::Hero, SamplerKind::Independent, 1.0),
-        (SpectralMode::Rgb, SamplerKind::Sobol, 1.0),
-        (SpectralMode::Bins40, SamplerKind::ZSobol, 1.0),
-        (SpectralMode::Hero, SamplerKind::ZSobol, 2.5),
     ] {
         let settings = RenderSettings {
             width: 40,

@@ -22,8 +22,8 @@ pub struct CompareArgs {
     /// The configurations: a preset (spectral, samplers, integrators, triangle-tests,
     /// bvh-widths, bvh-builders, shading-normals) or a JSON file: a list of objects with
     /// "name" and any of "integrator", "spectral", "sampler", "triangle_test",
-    /// "bvh_width", "bvh_builder", "shading_normals", "backend", "max_depth", "rr_depth",
-    /// "rr_scale" and "set" (a
+    /// "bvh_width", "bvh_builder", "shading_normals", "backend", "max_depth", "rr_scale"
+    /// and "set" (a
     /// list of KEY=VALUE changes to a .toml scene, e.g. a material's parameter: BSDF
     /// variants); unset fields take the command line's values.
     #[arg(long, default_value = "samplers")]
@@ -67,7 +67,6 @@ pub struct Config {
     shading_normals: Option<String>,
     backend: Option<String>,
     max_depth: Option<u32>,
-    rr_depth: Option<u32>,
     rr_scale: Option<f32>,
     #[serde(default)]
     set: Vec<String>,
@@ -112,9 +111,6 @@ impl Config {
         }
         if let Some(d) = self.max_depth {
             args.max_depth = d;
-        }
-        if let Some(d) = self.rr_depth {
-            args.rr_depth = d;
         }
         if let Some(s) = self.rr_scale {
             args.rr_scale = s;

@@ -954,7 +954,7 @@ fn compare_takes_time_budgets_builders_and_scene_changes() {
         &configs,
         r#"[{"name": "exact"}, {"name": "schlick", "set": ["materials.glass.schlick=true"]},
             {"name": "flat", "shading_normals": "geometric", "max_depth": 3},
-            {"name": "long paths", "rr_depth": 1, "rr_scale": 3}]"#,
+            {"name": "long paths", "rr_scale": 3}]"#,
     )
     .unwrap();
     let out = dir.join("variants");

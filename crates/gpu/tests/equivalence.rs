@@ -37,6 +37,9 @@ use tracer::scene::{Environment, Scene};
 use tracer::{Camera, SpectralMode};
 use tracer::{CpuBackend, CpuScene};
 
+#[path = "../../../tests/tests/common/room.rs"]
+mod room;
+
 #[path = "../../tracer/examples/support/phong.rs"]
 mod phong;
 
@@ -1013,13 +1016,7 @@ fn russian_roulette_inside_glass_sees_through_radiance_compression() {
 fn russian_roulette_scale_converges_in_a_glowing_room() {
     let Some(ctx) = gpu::require_gpu() else { return };
     let exact = ctx.info.device_type == wgpu::DeviceType::Cpu;
-    let mut scene = Scene::default();
-    let wall = Material::diffuse("wall", Colour::constant(0.8)).unwrap().with_emission(Colour::constant(0.5));
-    let mut room = uv_sphere(Vec3::ZERO, 1.0, 24, 48, true);
-    room.normals.clear();
-    scene.add(&room, wall);
-    scene.camera =
-        Some(Camera { eye: Vec3::new(0.1, 0.2, 0.3), center: Vec3::new(0.0, 0.0, -1.0), up: Vec3::Y, fov_y_deg: 90.0 });
+    let scene = room::glowing_room(0.8, 0.5);
     let gpu = GpuBackend::with_context(ctx);
     let megakernel = gpu.prepare_gpu(scene.clone(), &SceneOptions::default()).unwrap();
     let wavefront =

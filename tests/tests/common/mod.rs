@@ -3,6 +3,8 @@
 
 use tracer::film::Film;
 
+pub mod room;
+
 pub use brdf::validation::{erfc, sidak_z, z_threshold};
 
 /// Result of comparing an image against expected values.
