@@ -32,6 +32,9 @@ keeps more paths by default). Prints one JSON line per configuration and a table
 each efficiency as a ratio to Mitsuba's best (to the first configuration when no Mitsuba
 one runs).
 
+On the spheres, `"ours:hero:zsobol:--integrator path-caustics"` (light-traced caustics,
+docs/figures.md) is the configuration that pays; on the diffuse boxes it is `path`.
+
 --scene chooses the scene: `cornell` (the default; errors against the shared references),
 `bunny-box` (the shared 69K-triangle bunny, flat-shaded white, standing in the box) or
 `spheres-box` (a smooth-shaded glass sphere, index 1.5, and a silver mirror sphere in the

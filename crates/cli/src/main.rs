@@ -861,6 +861,7 @@ fn settings(
             shading_normals: args.shading_normals,
             max_diffuse_depth: args.max_diffuse_depth,
             lanes: !args.no_lanes,
+            ..Default::default()
         },
         camera,
         crop: None,
@@ -878,7 +879,7 @@ fn best_sampler(caps: &Capabilities) -> SamplerKind {
 const BACKENDS: [&str; 2] = ["cpu", "gpu"];
 
 /// The integrators `--integrator` accepts.
-const INTEGRATORS: [&str; 6] = ["path", "direct", "ao", "whitted", "bdpt", "atlas"];
+const INTEGRATORS: [&str; 7] = ["path", "path-caustics", "direct", "ao", "whitted", "bdpt", "atlas"];
 
 fn parse_distance(s: &str) -> Result<f32, String> {
     match s.trim().parse::<f32>() {
@@ -970,6 +971,7 @@ fn make_backend(args: &SceneArgs) -> Result<Box<dyn Backend>> {
                 "whitted" => gpu::kernel::GpuIntegrator::Whitted,
                 "atlas" => gpu::kernel::GpuIntegrator::Atlas(atlas_settings(args)?),
                 "bdpt" => gpu::kernel::GpuIntegrator::Bdpt,
+                "path-caustics" => bail!("the GPU backend has no path-caustics integrator: use --backend cpu"),
                 other => bail!("unknown integrator '{other}' (known: {})", INTEGRATORS.join(", ")),
             };
             let gpu = gpu::GpuBackend::new()?.with_integrator(integrator);
@@ -979,6 +981,7 @@ fn make_backend(args: &SceneArgs) -> Result<Box<dyn Backend>> {
         }
         _ => match args.integrator.as_str() {
             "path" => Box::new(CpuBackend::with_integrator(args.threads, PathTracer)?),
+            "path-caustics" => Box::new(CpuBackend::with_integrator(args.threads, tracer::CausticPathTracer)?),
             "direct" => Box::new(CpuBackend::with_integrator(args.threads, tracer::DirectLighting)?),
             "whitted" => Box::new(CpuBackend::with_integrator(args.threads, tracer::Whitted)?),
             "bdpt" => Box::new(CpuBackend::with_integrator(args.threads, tracer::Bdpt)?),
@@ -1035,10 +1038,12 @@ fn report(output: &Path, stats: &RenderStats, caps: &Capabilities) {
 
 fn run_render(args: RenderArgs) -> Result<()> {
     let outputs = args.pieces.outputs(&args.output)?;
-    if args.scene.integrator == "bdpt" && outputs.shard.is_some() && args.pieces.shard_by == shard::Split::Tiles {
+    let splatting = matches!(args.scene.integrator.as_str(), "bdpt" | "path-caustics");
+    if splatting && outputs.shard.is_some() && args.pieces.shard_by == shard::Split::Tiles {
         bail!(
-            "--integrator bdpt splats each light path wherever it lands on the image, so a band of rows cannot \
-             be rendered on its own: shard it by samples (--shard-by samples, the default)"
+            "--integrator {} splats each light path wherever it lands on the image, so a band of rows cannot \
+             be rendered on its own: shard it by samples (--shard-by samples, the default)",
+            args.scene.integrator
         );
     }
     if let Some(p) = &args.stderr

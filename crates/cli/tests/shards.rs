@@ -268,6 +268,41 @@ fn bdpt_shards_and_resumes_to_the_same_bytes() {
     assert!(bytes(&timed) == bytes(&whole), "the continued bdpt render differs from an uninterrupted one");
 }
 
+/// `path-caustics` splats its light paths too: on a floor lit off a mirror, sample shards
+/// merge to the unsharded bytes, tile shards are refused, and the GPU backend, which has
+/// no such integrator, says so.
+#[test]
+fn path_caustics_shards_to_the_same_bytes_and_is_refused_where_it_cannot_run() {
+    let dir = temp_dir("shards-path-caustics");
+    std::fs::write(dir.join("mirror.mtl"), format!("{MTL}newmtl mirror\nbsdf mirror\n")).unwrap();
+    // The scene's floor and lamp, and a mirror standing on the floor beside the lamp.
+    let obj = OBJ.replace("mtllib scene.mtl", "mtllib mirror.mtl")
+        + "v 0.6 0 -0.8\nv 0.6 0 0.8\nv 0.9 1.2 0.8\nv 0.9 1.2 -0.8\nusemtl mirror\nf 9 10 11 12\n";
+    let scene = dir.join("mirror.obj");
+    std::fs::write(&scene, obj).unwrap();
+    let caustics = ["--integrator", "path-caustics"];
+    let full = dir.join("full.exr");
+    ok(render_small(&scene, SIZE, &full, &caustics));
+    let parts = shards(&scene, &dir, 3, "samples", &caustics);
+    let out = dir.join("merged.exr");
+    ok(merge(&parts, &out, &[]));
+    assert!(bytes(&out) == bytes(&full), "path-caustics shards merged differ from the unsharded render");
+    // The light paths splatted: the partials carry splat sums that a path tracer's lack.
+    let path_part = dir.join("path.partial");
+    ok(render_small(&scene, SIZE, &path_part, &["--shard", "1/3"]));
+    assert!(bytes(&parts[0]).len() > bytes(&path_part).len(), "no splats in the path-caustics partial");
+    let tiles = dir.join("tiles.partial");
+    let msg = refused(&render_small(
+        &scene,
+        SIZE,
+        &tiles,
+        &[&caustics[..], &["--shard", "1/2", "--shard-by", "tiles"]].concat(),
+    ));
+    assert!(msg.contains("--integrator path-caustics splats") && msg.contains("shard it by samples"), "{msg}");
+    let msg = refused(&render_small(&scene, SIZE, &full, &[&caustics[..], &["--backend", "gpu"]].concat()));
+    assert!(msg.contains("no path-caustics integrator"), "{msg}");
+}
+
 /// The recipes in deploy/ as a scheduler would run them: the local script (N processes
 /// and the merge), and the shard entry point with each scheduler's index variable
 /// (Kubernetes' 0-based JOB_COMPLETION_INDEX, Slurm's SLURM_ARRAY_TASK_ID through the

@@ -127,9 +127,9 @@ fn cpu_capabilities(integrator: &'static str) -> Capabilities {
         bvh_widths: BvhWidth::CPU.to_vec(),
         integrator,
         max_bounces: None,
-        extension: integrator == "path",
+        extension: matches!(integrator, "path" | "path-caustics"),
         // Only the path tracer limits diffuse bounces; the others would ignore it.
-        diffuse_depth: integrator == "path",
+        diffuse_depth: matches!(integrator, "path" | "path-caustics"),
         bvh_builders: true,
         sample_block: 1,
         wavefront: false,

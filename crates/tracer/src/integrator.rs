@@ -28,11 +28,13 @@ pub use atlas::{
     SPECULAR_CHAIN as ATLAS_SPECULAR_CHAIN, SeamFix,
 };
 pub use bdpt::{BDPT_MAX_VERTICES, Bdpt};
+pub use caustics::CausticPathTracer;
 pub use simple::{AmbientOcclusion, DirectLighting};
 pub use whitted::{WHITTED_DEFAULT_DEPTH, Whitted};
 
 mod atlas;
 mod bdpt;
+mod caustics;
 mod lanes;
 mod simple;
 mod whitted;
@@ -71,6 +73,11 @@ pub struct PathSettings {
     /// image to the bit); false runs the general loop everywhere, to measure what the
     /// specialisation saves.
     pub lanes: bool,
+    /// Whether the path tracer leaves out the paths of the form E D S⁺ L that end on a
+    /// light it can sample (caustics seen on a diffuse surface): for an integrator that
+    /// adds them back by light tracing. [`CausticPathTracer`] sets it on its own copy of
+    /// the settings; set on the plain path tracer, the image lacks those caustics.
+    pub leave_caustics: bool,
 }
 
 impl Default for PathSettings {
@@ -83,6 +90,7 @@ impl Default for PathSettings {
             shading_normals: ShadingNormals::Adapted,
             max_diffuse_depth: 0,
             lanes: true,
+            leave_caustics: false,
         }
     }
 }
@@ -551,15 +559,20 @@ impl<'a> SceneView<'a> {
 
     #[inline]
     fn material(&self, prim: u32) -> &'a Material {
+        &self.scene.materials[self.material_id(prim) as usize]
+    }
+
+    /// The index of `prim`'s material in the scene's list.
+    #[inline(always)]
+    fn material_id(&self, prim: u32) -> u32 {
         let scene = self.scene;
-        let id = match scene.material_ids.get(prim as usize) {
+        match scene.material_ids.get(prim as usize) {
             Some(&m) => m,
             None => match scene.shapes.get(prim as usize - scene.triangles.len()) {
                 Some(s) => s.material,
                 None => self.instanced_material(prim),
             },
-        };
-        &scene.materials[id as usize]
+        }
     }
 
     #[cold]
@@ -938,6 +951,36 @@ pub(crate) struct PathState<'a, const N: usize> {
     pub(crate) diffuse_bounces: u32,
     /// The absorbing material the last segment left its vertex into, if any.
     pub(crate) inside: Option<&'a spectral::spectrum::Colour>,
+    /// Where the path stands in the caustic form E D S⁺ L ([`Chain`]).
+    pub(crate) chain: Chain,
+}
+
+/// How far a camera path has followed the form E D S⁺ L — its first vertex scattered by a
+/// non-specular lobe, every vertex since by a specular one — which [`CausticPathTracer`]
+/// finds by light tracing instead: a light it then hits is left out.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub(crate) enum Chain {
+    /// Not of that form (or not yet: the camera ray).
+    #[default]
+    No,
+    /// The first vertex scattered non-specularly.
+    Diffuse,
+    /// ... and one or more specular vertices followed.
+    Caustic,
+}
+
+impl Chain {
+    /// The chain after a vertex at `bounce` (0: the camera ray's hit) scattered by a
+    /// specular lobe or not.
+    #[inline(always)]
+    pub(crate) fn next(self, bounce: u32, specular: bool) -> Self {
+        match (bounce, specular, self) {
+            (0, false, _) => Self::Diffuse,
+            (0, true, _) => Self::No,
+            (_, true, Self::Diffuse | Self::Caustic) => Self::Caustic,
+            _ => Self::No,
+        }
+    }
 }
 
 impl<const N: usize> PathState<'_, N> {
@@ -955,6 +998,7 @@ impl<const N: usize> PathState<'_, N> {
             extension_left: settings.specular_extension,
             diffuse_bounces: 0,
             inside: None,
+            chain: Chain::No,
         }
     }
 }
@@ -1028,7 +1072,12 @@ pub(crate) fn path_vertex<'a, const N: usize, S: Sampler>(
             let light_pdf = lights.prim_pmf(hit.prim) * dist2 / (cos_l * it.area);
             power_heuristic(st.prev_pdf, light_pdf)
         };
-        st.l += st.beta * le * w;
+        // A light that light tracing samples, reached along E D S⁺ L: that path's light is
+        // added by the light tracer instead.
+        let left = settings.leave_caustics && st.chain == Chain::Caustic && lights.prim_pmf(hit.prim) > 0.0;
+        if !left {
+            st.l += st.beta * le * w;
+        }
     }
 
     if settings.max_depth > 0 && st.bounce >= settings.max_depth {
@@ -1085,6 +1134,7 @@ pub(crate) fn path_vertex<'a, const N: usize, S: Sampler>(
     st.eta_scale *= compression(&bsdf, wo, s.flags.contains(ScatterFlags::TRANSMISSION));
     st.prev_pdf = s.pdf;
     st.prev_specular = s.flags.is_specular();
+    st.chain = st.chain.next(st.bounce, st.prev_specular);
     st.prev_p = it.p;
     if view.absorbing {
         st.inside = entered_medium(material, it.ng, wi_world);

@@ -40,7 +40,8 @@ pub use cpu::{CpuBackend, CpuScene};
 pub use film::Film;
 pub use geometry::{Geometry, SceneShape, ShapeKind};
 pub use integrator::{
-    AmbientOcclusion, AtlasGi, AtlasSettings, Bdpt, DirectLighting, Integrator, PathTracer, SeamFix, Whitted,
+    AmbientOcclusion, AtlasGi, AtlasSettings, Bdpt, CausticPathTracer, DirectLighting, Integrator, PathTracer, SeamFix,
+    Whitted,
 };
 pub use material::Material;
 pub use punctual::PunctualLight;

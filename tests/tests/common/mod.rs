@@ -3,6 +3,7 @@
 
 use tracer::film::Film;
 
+pub mod batched;
 pub mod room;
 
 pub use brdf::validation::{erfc, sidak_z, z_threshold};

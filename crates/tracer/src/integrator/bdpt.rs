@@ -223,8 +223,21 @@ fn surface_f<const N: usize>(s: &SurfaceData<'_, N>, wo: Vec3, wi: Vec3, mode: T
 /// BSDF divided radiance by it) times Veach's shading-normal correction
 /// |ωo·n_s| |ωi·n_g| / (|ωo·n_g| |ωi·n_s|) (1997, eq. 5.17).
 fn importance_factor<const N: usize>(s: &SurfaceData<'_, N>, wo: Vec3, wi: Vec3, wo_l: Vec3, wi_l: Vec3) -> f32 {
-    let k = compression(&s.bsdf, wo_l, wo_l.z * wi_l.z < 0.0);
-    let (ng, ns) = (s.it.ng, s.frame.n);
+    adjoint_factor(&s.bsdf, s.it.ng, s.frame.n, wo, wi, wo_l, wi_l)
+}
+
+/// [`importance_factor`] from its parts: the BSDF, the geometric and shading normals, and
+/// the two directions in world and local (shading-frame) coordinates.
+pub(super) fn adjoint_factor<const N: usize>(
+    bsdf: &impl Bsdf<N>,
+    ng: Vec3,
+    ns: Vec3,
+    wo: Vec3,
+    wi: Vec3,
+    wo_l: Vec3,
+    wi_l: Vec3,
+) -> f32 {
+    let k = compression(bsdf, wo_l, wo_l.z * wi_l.z < 0.0);
     let den = wo.dot(ng).abs() * wi.dot(ns).abs();
     if den == 0.0 {
         return 0.0;

@@ -31,8 +31,8 @@
 //! everywhere, to measure the difference.
 
 use super::{
-    CameraSample, PathCounters, PathSettings, PathState, RR_MIN_TERMINATION, SHADOW_T_MAX, SceneView, ShadingNormals,
-    path_vertex, power_heuristic,
+    CameraSample, Chain, PathCounters, PathSettings, PathState, RR_MIN_TERMINATION, SHADOW_T_MAX, SceneView,
+    ShadingNormals, path_vertex, power_heuristic,
 };
 use crate::geometry::{HitSurface, SceneHit};
 use crate::lights::on_triangle;
@@ -306,6 +306,8 @@ struct Lanes<const N: usize> {
     eta_scale: F,
     /// `PathState::extension_left`, likewise.
     extension_left: [u32; LANES],
+    /// `PathState::chain`.
+    chain: [Chain; LANES],
 }
 
 /// [`super::PathTracer`]'s estimate for every sample of `block`, in lanes (see the module
@@ -382,6 +384,7 @@ fn run<const N: usize, S: Sampler>(
         bounce: [0; LANES],
         eta_scale: [1.0; LANES],
         extension_left: [0; LANES],
+        chain: [Chain::No; LANES],
     };
     let mesh = scene.mesh();
     // Whether the shading normals are interpolated (`SceneView::surface_at`).
@@ -447,6 +450,7 @@ fn run<const N: usize, S: Sampler>(
             st.prev_pdf[k] = 0.0;
             st.prev_specular[k] = true;
             st.bounce[k] = 0;
+            st.chain[k] = Chain::No;
             st.eta_scale[k] = 1.0;
             st.extension_left[k] = settings.specular_extension;
             next += 1;
@@ -543,7 +547,9 @@ fn run<const N: usize, S: Sampler>(
                     let light_pdf = pmf[k] * dist2 / (cos_o[k] * area[k]);
                     power_heuristic(st.prev_pdf[k], light_pdf)
                 };
-                let seen = live[k] && cos_o[k] > 0.0 && emissive[k];
+                // As `path_vertex`: light that light tracing finds instead is left out.
+                let left = settings.leave_caustics && st.chain[k] == Chain::Caustic && pmf[k] > 0.0;
+                let seen = live[k] && cos_o[k] > 0.0 && emissive[k] && !left;
                 for i in 0..N {
                     let add = st.beta[i][k] * le[i][k] * w;
                     st.radiance[i][k] = if seen { st.radiance[i][k] + add } else { st.radiance[i][k] };
@@ -736,6 +742,7 @@ fn run<const N: usize, S: Sampler>(
             }
             st.prev_pdf[k] = select_unpredictable(g, pdf[k], st.prev_pdf[k]);
             st.prev_specular[k] &= !g;
+            st.chain[k] = if g { st.chain[k].next(st.bounce[k], false) } else { st.chain[k] };
             st.prev_p.x[k] = select_unpredictable(g, p.x[k], st.prev_p.x[k]);
             st.prev_p.y[k] = select_unpredictable(g, p.y[k], st.prev_p.y[k]);
             st.prev_p.z[k] = select_unpredictable(g, p.z[k], st.prev_p.z[k]);
@@ -880,6 +887,7 @@ fn vertex_in_one_lane<const N: usize, S: Sampler>(
         // No diffuse-depth limit and no absorbing media in the lanes' scenes.
         diffuse_bounces: 0,
         inside: None,
+        chain: st.chain[k],
     };
     let next = path_vertex(view, hit, dir, &mut sample.wl, settings, &mut sample.sampler, counters, &mut path);
     for i in 0..N {
@@ -892,6 +900,7 @@ fn vertex_in_one_lane<const N: usize, S: Sampler>(
     st.bounce[k] = path.bounce;
     st.eta_scale[k] = path.eta_scale;
     st.extension_left[k] = path.extension_left;
+    st.chain[k] = path.chain;
     match next {
         Some(ray) => {
             st.origin.set(k, ray.origin);

@@ -1,0 +1,112 @@
+//! `path-caustics` ([`CausticPathTracer`]) is unbiased: the path tracer leaves out the
+//! caustics it sees on diffuse surfaces (E D S⁺ L) and light paths add exactly those
+//! back, so the sum must estimate what the path tracer does, pixel by pixel — under a
+//! large lamp, where the path tracer's own estimate of the caustics converges: a room lit
+//! only off a mirror (in RGB), and glass, a mirror and a rough pane (in hero mode); and
+//! the part left to the light paths must be a real share of the image (else the
+//! comparison proves nothing).
+
+mod common;
+
+use common::batched::{assert_agree, batched, diffuse_box, glass_and_mirror_box};
+use glam::Vec3;
+use spectral::SpectralMode;
+use spectral::spectrum::Colour;
+use tracer::integrator::PathSettings;
+use tracer::material::Material;
+use tracer::mesh::{quad, uv_sphere};
+use tracer::{CausticPathTracer, CpuBackend, Integrator, PathTracer, RenderSettings, Scene, SceneOptions};
+
+fn settings(mode: SpectralMode, spp: u32) -> RenderSettings {
+    RenderSettings { width: 20, height: 20, spp, seed: 5, mode, ..Default::default() }
+}
+
+#[test]
+fn light_traced_caustics_equal_path_tracing_off_a_mirror_in_rgb() {
+    let scene = mirror_lit_box(false);
+    let caustics = batched(CausticPathTracer, &scene, &settings(SpectralMode::Rgb, 32), 16);
+    let path = batched(PathTracer, &scene, &settings(SpectralMode::Rgb, 96), 16);
+    assert_agree(&caustics, &path, 0.99);
+}
+
+/// The lamp's light passes through a smooth glass ball (refractions whose radiance
+/// scaling and shading normals the light paths' adjoint must undo) before the mirror.
+#[test]
+fn light_traced_caustics_equal_path_tracing_through_glass_in_hero_mode() {
+    let scene = mirror_lit_box(true);
+    let caustics = batched(CausticPathTracer, &scene, &settings(SpectralMode::Hero, 32), 16);
+    let path = batched(PathTracer, &scene, &settings(SpectralMode::Hero, 96), 16);
+    assert_agree(&caustics, &path, 0.99);
+}
+
+/// Glass, a mirror and a rough pane under a large lamp: caustics a small share of the
+/// image, among every other kind of path.
+#[test]
+fn light_traced_caustics_equal_path_tracing_among_other_paths() {
+    let scene = glass_and_mirror_box();
+    let caustics = batched(CausticPathTracer, &scene, &settings(SpectralMode::Hero, 32), 16);
+    let path = batched(PathTracer, &scene, &settings(SpectralMode::Hero, 96), 16);
+    assert_agree(&caustics, &path, 0.99);
+}
+
+/// The path tracer with `leave_caustics` (what `path-caustics` runs for its camera
+/// paths) lacks the light of the caustics: under the mirror, most of the image — so that
+/// the comparison there tests the light paths' part.
+#[test]
+fn the_caustics_left_to_light_tracing_are_a_real_share_of_the_image() {
+    let scene = mirror_lit_box(true);
+    let full = batched(PathTracer, &scene, &settings(SpectralMode::Rgb, 96), 8);
+    let leaving = RenderSettings {
+        path: PathSettings { leave_caustics: true, ..Default::default() },
+        ..settings(SpectralMode::Rgb, 96)
+    };
+    let left = batched(PathTracer, &scene, &leaving, 8);
+    for c in 0..3 {
+        let ((a, sa), (b, sb)) = (full.channels[c], left.channels[c]);
+        let gap = a - b;
+        assert!(
+            gap > 0.02 * a && gap > 10.0 * (sa * sa + sb * sb).sqrt(),
+            "channel {c}: {a} ± {sa} against {b} ± {sb}"
+        );
+    }
+}
+
+/// Where the split does not apply — a depth limit, no film (a caller of `radiance`) — the
+/// integrator is the path tracer: the same image to the bit.
+#[test]
+fn with_a_depth_limit_light_traced_caustics_are_the_path_tracer() {
+    let scene = glass_and_mirror_box();
+    let limited =
+        RenderSettings { path: PathSettings { max_depth: 4, ..Default::default() }, ..settings(SpectralMode::Rgb, 8) };
+    let a = render(CausticPathTracer, &scene, &limited);
+    let b = render(PathTracer, &scene, &limited);
+    assert!(a.pixels() == b.pixels(), "the camera samples differ");
+    assert!(a.splat_sums().is_none(), "light paths splatted");
+}
+
+fn render<I: Integrator>(integrator: I, scene: &Scene, settings: &RenderSettings) -> tracer::film::Film {
+    let prepared = CpuBackend::with_integrator(2, integrator)
+        .unwrap()
+        .prepare_cpu(scene.clone(), &SceneOptions::default())
+        .unwrap();
+    tracer::render(&prepared, settings, &|_| {}).unwrap().0
+}
+
+/// The diffuse box with a dim lamp on its ceiling, lit by a large lamp at mid-height that
+/// faces up, onto a mirror under the ceiling: the floor and walls get their light off
+/// the mirror, paths of the form E D S L (and longer); with `glass`, through a glass ball
+/// above the lamp first.
+fn mirror_lit_box(glass: bool) -> Scene {
+    let mut scene = diffuse_box(0.05, 1.0);
+    let mirror = Material::builtin("mirror", brdf::ModelId::Mirror, &[]).unwrap();
+    scene.add(&quad(Vec3::new(0.0, 1.95, 0.0), -Vec3::Y, 0.9), mirror);
+    let lamp = Material::diffuse("up-lamp", Colour::constant(0.0))
+        .unwrap()
+        .with_emission(Colour::illuminant_rgb([3.0, 2.7, 2.2]).unwrap());
+    scene.add(&quad(Vec3::new(0.0, 1.2, -0.2), Vec3::Y, 0.3), lamp);
+    if glass {
+        let glass = Material::dielectric("glass", 1.5).unwrap();
+        scene.add(&uv_sphere(Vec3::new(0.0, 1.5, -0.2), 0.25, 16, 32, false), glass);
+    }
+    scene
+}
