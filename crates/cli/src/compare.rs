@@ -139,7 +139,7 @@ pub fn preset(name: &str) -> Option<Vec<Config>> {
     Some(match name {
         "spectral" => each(|c| &mut c.spectral, &["hero", "bins40", "rgb"]),
         "samplers" => each(|c| &mut c.sampler, &["zsobol", "sobol", "independent"]),
-        "integrators" => each(|c| &mut c.integrator, &["path", "bdpt", "atlas", "direct", "whitted"]),
+        "integrators" => each(|c| &mut c.integrator, &["path", "path-caustics", "bdpt", "atlas", "direct", "whitted"]),
         "triangle-tests" => each(|c| &mut c.triangle_test, &["watertight", "moller-trumbore"]),
         "bvh-widths" => each(|c| &mut c.bvh_width, &["4", "8"]),
         "bvh-builders" => each(|c| &mut c.bvh_builder, &["binned_sah", "sweep_sah", "midpoint", "hybrid"]),

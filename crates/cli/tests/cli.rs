@@ -588,7 +588,7 @@ fn integrators_are_chosen_by_name() {
     }
 }
 
-/// `spt compare` end to end: a rendered reference, five configurations at 1, 2, 4, 8 spp,
+/// `spt compare` end to end: a rendered reference, six configurations at 1, 2, 4, 8 spp,
 /// a CSV row per render with falling error for the unbiased one, and both charts; a
 /// reference of the wrong size and unknown configurations are refused.
 #[test]
@@ -603,7 +603,7 @@ fn compare_charts_error_against_time() {
     assert!(o.status.success(), "{}", stderr(&o));
     let csv = std::fs::read_to_string(out.join("compare.csv")).unwrap();
     let rows: Vec<Vec<&str>> = csv.lines().skip(1).map(|l| l.split(',').collect()).collect();
-    assert_eq!(rows.len(), 20, "{csv}");
+    assert_eq!(rows.len(), 24, "{csv}");
     let error = |config: &str, spp: &str| -> f64 {
         rows.iter().find(|r| r[0] == config && r[1] == spp).unwrap()[4].parse().unwrap()
     };
@@ -621,7 +621,7 @@ fn compare_charts_error_against_time() {
     assert!(image::open(out.join("compare.png")).is_ok());
     // A convergence strip per configuration (a 16-pixel crop at 1, 2, 4, 8 spp and the
     // reference) and a heat map of its error at the largest budget.
-    for config in ["path", "bdpt", "atlas", "direct", "whitted"] {
+    for config in ["path", "path-caustics", "bdpt", "atlas", "direct", "whitted"] {
         let strip = image::open(out.join(format!("strip-{config}.png"))).unwrap();
         assert_eq!((strip.width(), strip.height()), (5 * 16, 16), "{config}");
         let heat = image::open(out.join(format!("heat-{config}.png"))).unwrap().into_rgb8();
