@@ -17,36 +17,34 @@ use tracer::material::Material;
 use tracer::mesh::{quad, uv_sphere};
 use tracer::{CausticPathTracer, CpuBackend, Integrator, PathTracer, RenderSettings, Scene, SceneOptions};
 
+/// `path-caustics` at 32 spp and `path` at 96, 16 batches each, agree pixel by pixel.
+fn agree_with_path_tracing(scene: &Scene, mode: SpectralMode) {
+    let caustics = batched(CausticPathTracer, scene, &settings(mode, 32), 16);
+    let path = batched(PathTracer, scene, &settings(mode, 96), 16);
+    assert_agree(&caustics, &path, 0.99);
+}
+
 fn settings(mode: SpectralMode, spp: u32) -> RenderSettings {
     RenderSettings { width: 20, height: 20, spp, seed: 5, mode, ..Default::default() }
 }
 
 #[test]
 fn light_traced_caustics_equal_path_tracing_off_a_mirror_in_rgb() {
-    let scene = mirror_lit_box(false);
-    let caustics = batched(CausticPathTracer, &scene, &settings(SpectralMode::Rgb, 32), 16);
-    let path = batched(PathTracer, &scene, &settings(SpectralMode::Rgb, 96), 16);
-    assert_agree(&caustics, &path, 0.99);
+    agree_with_path_tracing(&mirror_lit_box(false), SpectralMode::Rgb);
 }
 
 /// The lamp's light passes through a smooth glass ball (refractions whose radiance
 /// scaling and shading normals the light paths' adjoint must undo) before the mirror.
 #[test]
 fn light_traced_caustics_equal_path_tracing_through_glass_in_hero_mode() {
-    let scene = mirror_lit_box(true);
-    let caustics = batched(CausticPathTracer, &scene, &settings(SpectralMode::Hero, 32), 16);
-    let path = batched(PathTracer, &scene, &settings(SpectralMode::Hero, 96), 16);
-    assert_agree(&caustics, &path, 0.99);
+    agree_with_path_tracing(&mirror_lit_box(true), SpectralMode::Hero);
 }
 
 /// Glass, a mirror and a rough pane under a large lamp: caustics a small share of the
 /// image, among every other kind of path.
 #[test]
 fn light_traced_caustics_equal_path_tracing_among_other_paths() {
-    let scene = glass_and_mirror_box();
-    let caustics = batched(CausticPathTracer, &scene, &settings(SpectralMode::Hero, 32), 16);
-    let path = batched(PathTracer, &scene, &settings(SpectralMode::Hero, 96), 16);
-    assert_agree(&caustics, &path, 0.99);
+    agree_with_path_tracing(&glass_and_mirror_box(), SpectralMode::Hero);
 }
 
 /// The path tracer with `leave_caustics` (what `path-caustics` runs for its camera
