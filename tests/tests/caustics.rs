@@ -48,11 +48,12 @@ fn light_traced_caustics_equal_path_tracing_among_other_paths() {
 }
 
 /// The path tracer with `leave_caustics` (what `path-caustics` runs for its camera
-/// paths) lacks the light of the caustics: under the mirror, most of the image — so that
-/// the comparison there tests the light paths' part.
+/// paths) lacks the light of the caustics: in the room lit off the mirror, a quarter of
+/// the image (26 %; the rest is its dim ceiling lamp and longer paths, E D D S L) — so
+/// that the comparisons there test the light paths' part.
 #[test]
 fn the_caustics_left_to_light_tracing_are_a_real_share_of_the_image() {
-    let scene = mirror_lit_box(true);
+    let scene = mirror_lit_box(false);
     let full = batched(PathTracer, &scene, &settings(SpectralMode::Rgb, 96), 8);
     let leaving = RenderSettings {
         path: PathSettings { leave_caustics: true, ..Default::default() },
@@ -62,10 +63,7 @@ fn the_caustics_left_to_light_tracing_are_a_real_share_of_the_image() {
     for c in 0..3 {
         let ((a, sa), (b, sb)) = (full.channels[c], left.channels[c]);
         let gap = a - b;
-        assert!(
-            gap > 0.02 * a && gap > 10.0 * (sa * sa + sb * sb).sqrt(),
-            "channel {c}: {a} ± {sa} against {b} ± {sb}"
-        );
+        assert!(gap > 0.2 * a && gap > 10.0 * (sa * sa + sb * sb).sqrt(), "channel {c}: {a} ± {sa} against {b} ± {sb}");
     }
 }
 

@@ -32,7 +32,10 @@ fn lanes_and_general_loop_agree(scene: tracer::Scene, camera: Camera, spp: u32) 
     lanes_and_general_loop_agree_with(PathTracer, scene, camera, spp);
 }
 
+/// As `lanes_and_general_loop_agree` with `integrator`; where it splats (light paths), the
+/// lanes' render must hold splats too.
 fn lanes_and_general_loop_agree_with<I: Integrator>(integrator: I, scene: tracer::Scene, camera: Camera, spp: u32) {
+    let splatting = integrator.splats();
     let prepared =
         CpuBackend::with_integrator(2, integrator).unwrap().prepare_cpu(scene, &SceneOptions::default()).unwrap();
     let default = PathSettings::default().rr_scale;
@@ -65,6 +68,8 @@ fn lanes_and_general_loop_agree_with<I: Integrator>(integrator: I, scene: tracer
         assert!(a.mean_rgb().iter().sum::<f32>() > 0.0, "a lit image");
         assert!(a.pixels() == b.pixels(), "{what}: the lanes' image differs from the general loop's");
         assert!(a.splat_sums() == b.splat_sums(), "{what}: the light paths' splats differ");
+        let splatted = a.splat_sums().is_some_and(|s| s.iter().any(|p| *p != [0; 3]));
+        assert_eq!(splatted, splatting, "{what}: splats");
     }
 }
 

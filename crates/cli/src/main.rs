@@ -493,7 +493,11 @@ struct SceneArgs {
     /// the backend's best (zsobol on both); the viewer: independent.
     #[arg(long, value_parser = parse_sampler)]
     sampler: Option<SamplerKind>,
-    /// Light transport: path (path tracing with next-event estimation and MIS), direct
+    /// Light transport: path (path tracing with next-event estimation and MIS),
+    /// path-caustics (CPU only: path tracing with the caustics seen on diffuse surfaces,
+    /// through glass or off mirrors, found by light paths instead — far less noise there,
+    /// the same image in expectation; without a specular surface, with a depth limit or
+    /// dispersion it is path), direct
     /// (emission plus light sampled at the first surface: path tracing's --max-depth 1
     /// without BSDF-sampled light), ao (ambient occlusion within --ao-distance; not
     /// light), whitted (recursive ray tracing: mirrors and glass split into their Fresnel-

@@ -269,8 +269,9 @@ fn bdpt_shards_and_resumes_to_the_same_bytes() {
 }
 
 /// `path-caustics` splats its light paths too: on a floor lit off a mirror, sample shards
-/// merge to the unsharded bytes, tile shards are refused, and the GPU backend, which has
-/// no such integrator, says so.
+/// merge to the unsharded bytes (that its light paths splat at all is the `tests` crate's
+/// `caustics.rs`), tile shards are refused, and the GPU backend, which has no such
+/// integrator, says so.
 #[test]
 fn path_caustics_shards_to_the_same_bytes_and_is_refused_where_it_cannot_run() {
     let dir = temp_dir("shards-path-caustics");
@@ -287,10 +288,6 @@ fn path_caustics_shards_to_the_same_bytes_and_is_refused_where_it_cannot_run() {
     let out = dir.join("merged.exr");
     ok(merge(&parts, &out, &[]));
     assert!(bytes(&out) == bytes(&full), "path-caustics shards merged differ from the unsharded render");
-    // The light paths splatted: the partials carry splat sums that a path tracer's lack.
-    let path_part = dir.join("path.partial");
-    ok(render_small(&scene, SIZE, &path_part, &["--shard", "1/3"]));
-    assert!(bytes(&parts[0]).len() > bytes(&path_part).len(), "no splats in the path-caustics partial");
     let tiles = dir.join("tiles.partial");
     let msg = refused(&render_small(
         &scene,

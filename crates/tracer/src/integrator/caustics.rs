@@ -10,14 +10,21 @@
 //! camera at the first diffuse point it reaches (light tracing, Veach 1997 § 10.2's t = 1
 //! strategy). So the two estimators split path space between them, with no weighting:
 //! the path tracer leaves out every E D S⁺ L path that ends on a light the light tracer
-//! samples ([`super::Chain`]), and one light path per camera sample adds exactly those
-//! back. Each path is counted by one estimator, so the sum is unbiased (the `tests`
-//! crate's `caustics.rs` compares it with the path tracer). Every other path, including
-//! longer caustic ones (E D D S⁺ L), stays with the path tracer and its lanes.
+//! samples ([`super::Chain`]), and light paths — one per [`LIGHT_PATH_EVERY`] camera
+//! samples, weighted by that — add exactly those back. Each path is counted by one
+//! estimator, so the sum is unbiased (the `tests` crate's `caustics.rs` compares it with
+//! the path tracer). Every other path, including longer caustic ones (E D D S⁺ L), stays
+//! with the path tracer and its lanes. One caveat, shared with bidirectional path
+//! tracing: `--shading-normals adapted` (the default) bends a shading normal towards the
+//! direction a path arrives from, which is the eye's side for a camera path and the
+//! light's for a light path, so where the bend acts (grazing views of smooth glass and
+//! mirrors) the two estimate slightly different BSDFs; `geometric` makes them agree.
 //!
-//! Where the split would need more than that — a depth limit (which path gets cut where
-//! is the path tracer's rule), glass that disperses (the light path would need its own
-//! wavelengths), no film to splat onto — the integrator is the path tracer, unchanged.
+//! Where the split would need more than that — a depth limit (`max_depth` or
+//! `max_diffuse_depth`: which path gets cut where is the path tracer's rule), glass that
+//! disperses (the light path would need its own wavelengths), no film to splat onto, no
+//! material that may scatter specularly (textured materials count as such) — the
+//! integrator is the path tracer, unchanged.
 
 use super::bdpt::adjoint_factor;
 use super::{
