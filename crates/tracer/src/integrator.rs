@@ -1134,7 +1134,9 @@ pub(crate) fn path_vertex<'a, const N: usize, S: Sampler>(
     st.eta_scale *= compression(&bsdf, wo, s.flags.contains(ScatterFlags::TRANSMISSION));
     st.prev_pdf = s.pdf;
     st.prev_specular = s.flags.is_specular();
-    st.chain = st.chain.next(st.bounce, st.prev_specular);
+    if settings.leave_caustics {
+        st.chain = st.chain.next(st.bounce, st.prev_specular);
+    }
     st.prev_p = it.p;
     if view.absorbing {
         st.inside = entered_medium(material, it.ng, wi_world);

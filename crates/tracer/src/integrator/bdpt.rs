@@ -77,16 +77,16 @@ enum Kind {
 }
 
 /// A surface vertex's shading: where it is and the BSDF it scatters with.
-struct SurfaceData<'a, const N: usize> {
-    it: Interaction,
-    material: &'a Material,
-    bsdf: MaterialBsdf<'a, N>,
-    frame: Frame,
+pub(super) struct SurfaceData<'a, const N: usize> {
+    pub(super) it: Interaction,
+    pub(super) material: &'a Material,
+    pub(super) bsdf: MaterialBsdf<'a, N>,
+    pub(super) frame: Frame,
     /// The geometric normal as the BSDF sees it (flipped to the arriving side for
     /// two-sided materials).
-    ng: Vec3,
+    pub(super) ng: Vec3,
     /// Unit direction towards the previous vertex of its subpath.
-    wo_world: Vec3,
+    pub(super) wo_world: Vec3,
 }
 
 /// One vertex of a camera or light subpath.
@@ -222,22 +222,15 @@ fn surface_f<const N: usize>(s: &SurfaceData<'_, N>, wo: Vec3, wi: Vec3, mode: T
 /// towards the light side, ωi towards the camera side): η'² for a transmission (the
 /// BSDF divided radiance by it) times Veach's shading-normal correction
 /// |ωo·n_s| |ωi·n_g| / (|ωo·n_g| |ωi·n_s|) (1997, eq. 5.17).
-fn importance_factor<const N: usize>(s: &SurfaceData<'_, N>, wo: Vec3, wi: Vec3, wo_l: Vec3, wi_l: Vec3) -> f32 {
-    adjoint_factor(&s.bsdf, s.it.ng, s.frame.n, wo, wi, wo_l, wi_l)
-}
-
-/// [`importance_factor`] from its parts: the BSDF, the geometric and shading normals, and
-/// the two directions in world and local (shading-frame) coordinates.
-pub(super) fn adjoint_factor<const N: usize>(
-    bsdf: &impl Bsdf<N>,
-    ng: Vec3,
-    ns: Vec3,
+pub(super) fn importance_factor<const N: usize>(
+    s: &SurfaceData<'_, N>,
     wo: Vec3,
     wi: Vec3,
     wo_l: Vec3,
     wi_l: Vec3,
 ) -> f32 {
-    let k = compression(bsdf, wo_l, wo_l.z * wi_l.z < 0.0);
+    let k = compression(&s.bsdf, wo_l, wo_l.z * wi_l.z < 0.0);
+    let (ng, ns) = (s.it.ng, s.frame.n);
     let den = wo.dot(ng).abs() * wi.dot(ns).abs();
     if den == 0.0 {
         return 0.0;
@@ -878,25 +871,47 @@ fn splat_to_eye<const N: usize>(
     let Some(film) = view.film() else { return };
     let qs = &light[s - 1];
     let Some(sq) = qs.surface.as_ref().filter(|_| qs.connectible()) else { return };
-    let eye = &camera[0];
-    let Some((x, y)) = film.rays.film_position(qs.p).and_then(|f| film.pixel(f)) else { return };
-    let d = eye.p - qs.p;
+    let Some((x, y, c)) = eye_connection(view, film, camera[0].p, sq, qs.beta, wl, counters) else { return };
+    let weight = Strategy { light, camera, sampled: None, s, t: 1, light_tracing: true }.weight(view);
+    splats.push(Splat { x, y, rgb: wl.to_linear_srgb(&(c * weight)) });
+}
+
+/// Light tracing's connection (t = 1) of surface point `sq`, reached from the lights with
+/// throughput `beta`, to the eye at `eye`: the pixel it is seen in and the light it adds
+/// there (before any MIS weight) — the adjoint BSDF towards the eye, W(ω) over the
+/// region's pixel count (the film divides by the light paths per pixel), the cosine and
+/// distance, and Beer–Lambert where the way leaves into an absorbing medium; `None` where
+/// it lands off the region, adds nothing, or something blocks the way.
+pub(super) fn eye_connection<const N: usize>(
+    view: &SceneView,
+    film: &super::FilmView,
+    eye: Vec3,
+    sq: &SurfaceData<'_, N>,
+    beta: SampledSpectrum<N>,
+    wl: &SampledWavelengths<N>,
+    counters: &mut PathCounters,
+) -> Option<(u32, u32, SampledSpectrum<N>)> {
+    let p = sq.it.p;
+    let (x, y) = film.rays.film_position(p).and_then(|f| film.pixel(f))?;
+    let d = eye - p;
     let dist2 = d.length_squared();
     if dist2.is_nan() || dist2 <= 0.0 {
-        return;
+        return None;
     }
     let dist = dist2.sqrt();
     let w = d / dist;
-    // W(ω) over the region's pixel count: the film divides by the light paths per pixel.
-    let importance = film.density(-w);
     let f = surface_f(sq, sq.wo_world, w, Transport::Importance);
-    let mut c = qs.beta * f * (sq.frame.n.dot(w).abs() * importance / dist2);
-    if c.is_black() || !c.0.iter().all(|v| v.is_finite()) || !visible(view, qs, eye, counters) {
-        return;
+    let mut c = beta * f * (sq.frame.n.dot(w).abs() * film.density(-w) / dist2);
+    if c.is_black() || !c.0.iter().all(|v| v.is_finite()) {
+        return None;
     }
-    if let Some(tr) = connection_transmittance(qs, w, dist, wl) {
-        c *= tr;
+    let from = sq.it.spawn_origin(d);
+    counters.rays += 1;
+    if view.occluded(&Ray::segment(from, eye - from, 0.0, SHADOW_T_MAX)) {
+        return None;
     }
-    let weight = Strategy { light, camera, sampled: None, s, t: 1, light_tracing: true }.weight(view);
-    splats.push(Splat { x, y, rgb: wl.to_linear_srgb(&(c * weight)) });
+    if let Some(alpha) = entered_medium(sq.material, sq.it.ng, w) {
+        c *= beer_lambert(alpha, dist, wl);
+    }
+    Some((x, y, c))
 }

@@ -26,10 +26,10 @@
 //! material that may scatter specularly (textured materials count as such) — the
 //! integrator is the path tracer, unchanged.
 
-use super::bdpt::adjoint_factor;
+use super::bdpt::{SurfaceData, eye_connection, importance_factor};
 use super::{
-    CameraSample, FilmView, Integrator, PathCounters, PathSettings, PathTracer, SHADOW_T_MAX, SceneView, Splat,
-    beer_lambert, entered_medium, lobe_leaks, segment_transmittance, shading_normals, survives_roulette,
+    CameraSample, FilmView, Integrator, PathCounters, PathSettings, PathTracer, SceneView, Splat, entered_medium,
+    lobe_leaks, segment_transmittance, shading_normals, survives_roulette,
 };
 use crate::lights::LightSource;
 use crate::sampler::Sampler;
@@ -212,36 +212,30 @@ fn caustic_path<const N: usize, S: Sampler>(
         let frame = Frame::from_normal_tangent(ns, it.tangent);
         let bsdf = material.bsdf_at(it.uv, wl);
         let flags = bsdf.flags();
-        if specular_bounces > 0 && flags.is_non_specular() {
-            splat_to_eye(
-                view,
-                film,
-                eye,
-                wl,
-                counters,
-                splats,
-                &Connection { it: &it, material, ng, frame, wo_world },
-                beta,
-                &bsdf,
-            );
+        let s = SurfaceData { it, material, bsdf, frame, ng, wo_world };
+        if specular_bounces > 0
+            && flags.is_non_specular()
+            && let Some((x, y, c)) = eye_connection(view, film, eye, &s, beta, wl, counters)
+        {
+            splats.push(Splat { x, y, rgb: wl.to_linear_srgb(&c) });
         }
         if !flags.is_specular() {
             return;
         }
         let wo = frame.to_local(wo_world);
-        let Some(bs) = bsdf.sample(wo, sampler.next_1d(), sampler.next_2d()) else { return };
+        let Some(bs) = s.bsdf.sample(wo, sampler.next_1d(), sampler.next_2d()) else { return };
         // Only the specular lobe continues the chain (a surface with both lobes: its
         // non-specular one was connected above).
         if !bs.flags.is_specular() || bs.pdf <= 0.0 || bs.f.is_black() {
             return;
         }
         let wi_world = frame.to_world(bs.wi);
-        if lobe_leaks(material, settings.shading_normals, it.ng, wo_world, wi_world, bs.flags) {
+        if lobe_leaks(material, settings.shading_normals, s.it.ng, wo_world, wi_world, bs.flags) {
             return;
         }
-        beta *= bs.f * (bs.wi.z.abs() / bs.pdf * adjoint_factor(&bsdf, it.ng, frame.n, wo_world, wi_world, wo, bs.wi));
+        beta *= bs.f * (bs.wi.z.abs() / bs.pdf * importance_factor(&s, wo_world, wi_world, wo, bs.wi));
         if view.absorbing {
-            inside = entered_medium(material, it.ng, wi_world);
+            inside = entered_medium(material, s.it.ng, wi_world);
         }
         specular_bounces += 1;
         if specular_bounces >= settings.rr_depth
@@ -252,68 +246,6 @@ fn caustic_path<const N: usize, S: Sampler>(
         if beta.is_black() {
             return;
         }
-        ray = Ray::new(it.spawn_origin(wi_world), wi_world);
+        ray = Ray::new(s.it.spawn_origin(wi_world), wi_world);
     }
-}
-
-/// A light path's vertex to connect to the eye.
-struct Connection<'a> {
-    it: &'a super::Interaction,
-    material: &'a crate::material::Material,
-    ng: Vec3,
-    frame: Frame,
-    wo_world: Vec3,
-}
-
-/// Light tracing's connection (t = 1): the light reaching `c` with throughput `beta`,
-/// scattered towards the eye by the surface's BSDF (adjoint, as bidirectional path
-/// tracing's `splat_to_eye`) and splatted onto the pixel it is seen in, if nothing
-/// blocks the way.
-#[allow(clippy::too_many_arguments)]
-fn splat_to_eye<const N: usize>(
-    view: &SceneView,
-    film: &FilmView,
-    eye: Vec3,
-    wl: &SampledWavelengths<N>,
-    counters: &mut PathCounters,
-    splats: &mut Vec<Splat>,
-    c: &Connection,
-    beta: SampledSpectrum<N>,
-    bsdf: &impl Bsdf<N>,
-) {
-    let p = c.it.p;
-    let Some((x, y)) = film.rays.film_position(p).and_then(|f| film.pixel(f)) else { return };
-    let d = eye - p;
-    let dist2 = d.length_squared();
-    if dist2.is_nan() || dist2 <= 0.0 {
-        return;
-    }
-    let dist = dist2.sqrt();
-    let w = d / dist;
-    // A two-sided surface reflects only on the side the light reached.
-    if c.material.is_two_sided() && c.wo_world.dot(c.ng) * w.dot(c.ng) <= 0.0 {
-        return;
-    }
-    let (wo_l, wi_l) = (c.frame.to_local(c.wo_world), c.frame.to_local(w));
-    let f = bsdf.eval(wo_l, wi_l);
-    if f.is_black() {
-        return;
-    }
-    let f = f * adjoint_factor(bsdf, c.it.ng, c.frame.n, c.wo_world, w, wo_l, wi_l);
-    // W(ω) over the region's pixel count: the film divides by the light paths per pixel.
-    let mut contribution = beta * f * (c.frame.n.dot(w).abs() * film.density(-w) / dist2);
-    if contribution.is_black() || !contribution.0.iter().all(|v| v.is_finite()) {
-        return;
-    }
-    let from = c.it.spawn_origin(w);
-    counters.rays += 1;
-    if view.occluded(&Ray::segment(from, eye - from, 0.0, SHADOW_T_MAX)) {
-        return;
-    }
-    if view.absorbing
-        && let Some(alpha) = entered_medium(c.material, c.it.ng, w)
-    {
-        contribution *= beer_lambert(alpha, dist, wl);
-    }
-    splats.push(Splat { x, y, rgb: wl.to_linear_srgb(&contribution) });
 }

@@ -734,6 +734,12 @@ fn run<const N: usize, S: Sampler>(
             origin.y[k] = offset_coordinate(p.y[k], s * ng.y[k]);
             origin.z[k] = offset_coordinate(p.z[k], s * ng.z[k]);
         }
+        // `PathState::chain` where the caustics are left to light tracing (else unused).
+        if settings.leave_caustics {
+            for k in 0..LANES {
+                st.chain[k] = if go[k] { st.chain[k].next(st.bounce[k], false) } else { st.chain[k] };
+            }
+        }
         for k in 0..LANES {
             let g = go[k];
             for i in 0..N {
@@ -742,7 +748,6 @@ fn run<const N: usize, S: Sampler>(
             }
             st.prev_pdf[k] = select_unpredictable(g, pdf[k], st.prev_pdf[k]);
             st.prev_specular[k] &= !g;
-            st.chain[k] = if g { st.chain[k].next(st.bounce[k], false) } else { st.chain[k] };
             st.prev_p.x[k] = select_unpredictable(g, p.x[k], st.prev_p.x[k]);
             st.prev_p.y[k] = select_unpredictable(g, p.y[k], st.prev_p.y[k]);
             st.prev_p.z[k] = select_unpredictable(g, p.z[k], st.prev_p.z[k]);
