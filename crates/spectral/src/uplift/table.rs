@@ -9,6 +9,14 @@
 //! is fitted by [`super::fit_reflectance`]'s optimiser, warm-started from its neighbour
 //! along z (a fresh continuation fit where that fails), in parallel over the columns.
 //! A lookup interpolates the eight surrounding entries' coefficients; greys are exact.
+//!
+//! The fit takes about two CPU seconds, which every textured render paid at start-up (88 %
+//! of a short Sponza render's CPU time), so the crate ships the fitted table
+//! (`data/uplift_srgb_32.bin`, as Mitsuba 3 ships its `srgb.coeff` and pbrt-v4 generates
+//! its tables at build time) and [`uplift_table`] decodes it. [`UpliftTable::fit`] is the
+//! fit; a test checks that the shipped table is what it gives, and
+//! `cargo run --release -p spectral --example write_uplift_table` writes it anew after a
+//! change to the fit.
 
 use super::{FIT, SigmoidPolynomial, TARGET_EPS, TOL_ACCEPT, TOL_FINAL, fit_normalised, lab, newton, to_nanometres};
 use std::sync::LazyLock;
@@ -24,10 +32,15 @@ pub struct UpliftTable {
     coeffs: Vec<SigmoidPolynomial>,
 }
 
-static TABLE: LazyLock<UpliftTable> = LazyLock::new(UpliftTable::build);
+/// The fitted table as [`UpliftTable::to_bytes`] writes it.
+const SHIPPED: &[u8] = include_bytes!("../../data/uplift_srgb_32.bin");
 
-/// The shared table, built on first use (about a second on two cores; see the tests for
-/// its accuracy and `benches/uplift.rs` for its speed).
+static TABLE: LazyLock<UpliftTable> = LazyLock::new(|| {
+    UpliftTable::from_bytes(SHIPPED).expect("the shipped uplift table is checked by the crate's tests")
+});
+
+/// The shared table, decoded from the shipped one on first use (about a millisecond; see
+/// the tests for its accuracy and `benches/uplift.rs` for its speed).
 pub fn uplift_table() -> &'static UpliftTable {
     &TABLE
 }
@@ -37,7 +50,9 @@ fn smoothstep(x: f64) -> f64 {
 }
 
 impl UpliftTable {
-    fn build() -> Self {
+    /// Fits the table (about two CPU seconds, in parallel over the available cores): what
+    /// the shipped table was written from.
+    pub fn fit() -> Self {
         let n = TABLE_RES;
         let z_nodes: [f64; TABLE_RES] = std::array::from_fn(|i| smoothstep(smoothstep(i as f64 / (n - 1) as f64)));
         // Columns (l, yi, xi), each fitted along z from the middle outwards.
@@ -114,6 +129,30 @@ impl UpliftTable {
         &self.coeffs
     }
 
+    /// The table as bytes: [`TABLE_RES`] as a u32, the z nodes, then every polynomial's
+    /// c₀, c₁, c₂, all little-endian (what [`Self::from_bytes`] reads).
+    pub fn to_bytes(&self) -> Vec<u8> {
+        let floats = self.z_nodes.iter().copied().chain(self.coeffs.iter().flat_map(|c| [c.c0, c.c1, c.c2]));
+        (TABLE_RES as u32).to_le_bytes().into_iter().chain(floats.flat_map(f32::to_le_bytes)).collect()
+    }
+
+    /// A table written by [`Self::to_bytes`]; `None` if `bytes` is not one of this
+    /// resolution (wrong length or header) or holds a non-finite number.
+    pub fn from_bytes(bytes: &[u8]) -> Option<Self> {
+        let n = TABLE_RES;
+        let (head, body) = bytes.split_first_chunk::<4>()?;
+        if u32::from_le_bytes(*head) as usize != n || body.len() != 4 * (n + 9 * n * n * n) {
+            return None;
+        }
+        let floats: Vec<f32> = body.chunks_exact(4).map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]])).collect();
+        if !floats.iter().all(|v| v.is_finite()) {
+            return None;
+        }
+        let z_nodes = std::array::from_fn(|i| floats[i]);
+        let coeffs = floats[n..].chunks_exact(3).map(|c| SigmoidPolynomial { c0: c[0], c1: c[1], c2: c[2] }).collect();
+        Some(Self { z_nodes, coeffs })
+    }
+
     /// Bytes the table occupies.
     pub fn size_bytes(&self) -> usize {
         std::mem::size_of_val(self.coeffs.as_slice()) + std::mem::size_of_val(&self.z_nodes)
@@ -171,11 +210,63 @@ mod tests {
         Colour::from_spectrum(Spectrum::RgbAlbedo(RgbAlbedoSpectrum { poly }), ColourRole::Reflectance).rgb
     }
 
+    /// The shipped table is the fit's: each entry's reflectance within 10⁻⁵ at every 5 nm
+    /// (bit for bit on the machine that wrote it; the margin is for another libm's exp and
+    /// cbrt). A change to the fit fails here until the table is written anew.
+    #[test]
+    fn the_shipped_table_is_what_the_fit_gives() {
+        let start = std::time::Instant::now();
+        let fitted = UpliftTable::fit();
+        eprintln!("uplift table: fitted in {:?}, {} kB", start.elapsed(), fitted.size_bytes() / 1000);
+        let shipped = uplift_table();
+        assert_eq!(shipped.z_nodes, fitted.z_nodes);
+        let mut worst = (0.0f32, 0);
+        let mut differ = 0;
+        for (i, (a, b)) in shipped.coeffs.iter().zip(&fitted.coeffs).enumerate() {
+            differ += usize::from(a != b);
+            for lambda in (360..=830).step_by(5) {
+                let d = (a.eval(lambda as f32) - b.eval(lambda as f32)).abs();
+                if d > worst.0 {
+                    worst = (d, i);
+                }
+            }
+        }
+        eprintln!(
+            "uplift table: {differ} of {} entries differ from the fit's bits, worst |Δs(λ)| {:.1e}",
+            shipped.coeffs.len(),
+            worst.0
+        );
+        assert!(
+            worst.0 < 1e-5,
+            "entry {} of the shipped table is {:?}, the fit gives {:?}: after changing the fit, run \
+             `cargo run --release -p spectral --example write_uplift_table`",
+            worst.1,
+            shipped.coeffs[worst.1],
+            fitted.coeffs[worst.1]
+        );
+    }
+
+    #[test]
+    fn tables_round_trip_through_bytes_and_bad_bytes_are_refused() {
+        let table = uplift_table();
+        let bytes = table.to_bytes();
+        assert_eq!(bytes.as_slice(), SHIPPED);
+        let again = UpliftTable::from_bytes(&bytes).unwrap();
+        assert_eq!(again.coeffs, table.coeffs);
+        assert!(UpliftTable::from_bytes(&bytes[..bytes.len() - 4]).is_none(), "short");
+        assert!(UpliftTable::from_bytes(&[bytes.as_slice(), &[0; 4]].concat()).is_none(), "long");
+        let mut other_res = bytes.clone();
+        other_res[0] = 16;
+        assert!(UpliftTable::from_bytes(&other_res).is_none(), "resolution");
+        let mut nan = bytes.clone();
+        nan[100..104].copy_from_slice(&f32::NAN.to_le_bytes());
+        assert!(UpliftTable::from_bytes(&nan).is_none(), "NaN");
+        assert!(UpliftTable::from_bytes(&[]).is_none(), "empty");
+    }
+
     #[test]
     fn table_lookups_reproduce_their_colours_nearly_as_well_as_fits() {
-        let start = std::time::Instant::now();
         let table = uplift_table();
-        eprintln!("uplift table: built in {:?}, {} kB", start.elapsed(), table.size_bytes() / 1000);
         let mut rng = rng::Pcg32::seed_from_u64(3);
         let (mut worst, mut sum, mut worst_fit) = (0.0f32, 0.0f64, 0.0f32);
         let n = 3000;

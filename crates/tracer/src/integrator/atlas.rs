@@ -876,7 +876,7 @@ impl Integrator for AtlasGi {
 
     fn for_scene(&self, view: &SceneView) -> Result<Option<Self>> {
         let atlas = Atlas::build(view, &self.settings)?;
-        // Spectral lookups uplift through the Jakob–Hanika table: built here, not in the
+        // Spectral lookups uplift through the Jakob–Hanika table: decoded here, not in the
         // first render's samples.
         spectral::uplift::uplift_table();
         Ok(Some(Self { settings: self.settings, atlas: Some(Arc::new(atlas)) }))
