@@ -52,16 +52,7 @@ fn light_traced_caustics_equal_path_tracing_seen_inside_glass() {
     agree_with_path_tracing(&scene, SpectralMode::Rgb);
     // Most of the image is the caustic on the floor (measured: 77–84 % per channel), so
     // the agreement is the light paths'.
-    let full = batched(PathTracer, &scene, &settings(SpectralMode::Rgb, 32), 4);
-    let leaving = RenderSettings {
-        path: PathSettings { leave_caustics: true, ..Default::default() },
-        ..settings(SpectralMode::Rgb, 32)
-    };
-    let left = batched(PathTracer, &scene, &leaving, 4);
-    for c in 0..3 {
-        let (a, b) = (full.channels[c].0, left.channels[c].0);
-        assert!(a - b > 0.6 * a, "channel {c}: {a} against {b} without the caustics");
-    }
+    assert_left_to_light_tracing(&scene, 32, 4, 0.6);
 }
 
 /// Glass, a mirror and a rough pane under a large lamp: caustics a small share of the
@@ -77,17 +68,26 @@ fn light_traced_caustics_equal_path_tracing_among_other_paths() {
 /// that the comparisons there test the light paths' part.
 #[test]
 fn the_caustics_left_to_light_tracing_are_a_real_share_of_the_image() {
-    let scene = mirror_lit_box(false);
-    let full = batched(PathTracer, &scene, &settings(SpectralMode::Rgb, 96), 8);
+    assert_left_to_light_tracing(&mirror_lit_box(false), 96, 8, 0.2);
+}
+
+/// The path tracer with and without `leave_caustics` (RGB, `spp` × `batches`): in every
+/// channel the light left to light tracing is more than `share` of the image and ten
+/// standard errors.
+fn assert_left_to_light_tracing(scene: &Scene, spp: u32, batches: u32, share: f64) {
+    let full = batched(PathTracer, scene, &settings(SpectralMode::Rgb, spp), batches);
     let leaving = RenderSettings {
         path: PathSettings { leave_caustics: true, ..Default::default() },
-        ..settings(SpectralMode::Rgb, 96)
+        ..settings(SpectralMode::Rgb, spp)
     };
-    let left = batched(PathTracer, &scene, &leaving, 8);
+    let left = batched(PathTracer, scene, &leaving, batches);
     for c in 0..3 {
         let ((a, sa), (b, sb)) = (full.channels[c], left.channels[c]);
         let gap = a - b;
-        assert!(gap > 0.2 * a && gap > 10.0 * (sa * sa + sb * sb).sqrt(), "channel {c}: {a} ± {sa} against {b} ± {sb}");
+        assert!(
+            gap > share * a && gap > 10.0 * (sa * sa + sb * sb).sqrt(),
+            "channel {c}: {a} ± {sa} against {b} ± {sb} without the caustics"
+        );
     }
 }
 
