@@ -2,7 +2,8 @@
 //! caustics it sees on diffuse surfaces (E D S⁺ L) and light paths add exactly those
 //! back, so the sum must estimate what the path tracer does, pixel by pixel — under a
 //! large lamp, where the path tracer's own estimate of the caustics converges: a room lit
-//! only off a mirror (in RGB), and glass, a mirror and a rough pane (in hero mode); and
+//! only off a mirror (in RGB), through a glass ball onto the mirror and glass, a mirror
+//! and a rough pane (in hero mode), and a floor seen from inside a glass cube (RGB); and
 //! the part left to the light paths must be a real share of the image (else the
 //! comparison proves nothing).
 
@@ -42,10 +43,10 @@ fn light_traced_caustics_equal_path_tracing_through_glass_in_hero_mode() {
 
 /// The camera and a diffuse floor inside a closed glass block, the lamp outside above
 /// it: all of the floor's light has entered the glass, where radiance is η² = 2.25 times
-/// what it was outside. The camera paths carry that by the BSDF's radiance scaling, the
-/// light paths by the adjoint's factor (`importance_factor`), which a closed glass ball
-/// cancels on the way out; here nothing cancels it, so light paths that left it out would
-/// be 2.25 times off.
+/// the transmitted radiance outside. The camera paths carry that by the BSDF's radiance
+/// scaling, the light paths by the adjoint's factor (`importance_factor`), which a closed
+/// glass ball cancels on the way out; here nothing cancels it, so light paths that left
+/// it out would be 2.25 times off in their share of the image.
 #[test]
 fn light_traced_caustics_equal_path_tracing_seen_inside_glass() {
     let scene = inside_glass();

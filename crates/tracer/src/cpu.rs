@@ -77,8 +77,8 @@ impl<I: Integrator> CpuBackend<I> {
         let geometry = Geometry::build(&scene, options)?;
         let build = start.elapsed();
         let lights = Lights::new(&scene);
-        // Colour textures uplift through a table decoded on first use (about a millisecond
-        // since it ships fitted): decode it here, in preparation, not in the first samples.
+        // Colour textures uplift through a table decoded on first use (about 2 ms since it
+        // ships fitted): decode it here, in preparation, not in the first samples.
         let colour_textures = scene
             .materials
             .iter()
