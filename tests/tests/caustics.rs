@@ -9,7 +9,7 @@
 
 mod common;
 
-use common::batched::{assert_agree, batched, diffuse_box, glass_and_mirror_box};
+use common::batched::{assert_agree, batched, diffuse_box, glass_and_mirror_box, lamp};
 use glam::Vec3;
 use spectral::SpectralMode;
 use spectral::spectrum::Colour;
@@ -121,9 +121,7 @@ fn mirror_lit_box(glass: bool) -> Scene {
     let mut scene = diffuse_box(0.05, 1.0);
     let mirror = Material::builtin("mirror", brdf::ModelId::Mirror, &[]).unwrap();
     scene.add(&quad(Vec3::new(0.0, 1.95, 0.0), -Vec3::Y, 0.9), mirror);
-    let lamp = Material::diffuse("up-lamp", Colour::constant(0.0))
-        .unwrap()
-        .with_emission(Colour::illuminant_rgb([3.0, 2.7, 2.2]).unwrap());
+    let lamp = lamp("up-lamp", [3.0, 2.7, 2.2]);
     scene.add(&quad(Vec3::new(0.0, 1.2, -0.2), Vec3::Y, 0.3), lamp);
     if glass {
         let glass = Material::dielectric("glass", 1.5).unwrap();
@@ -145,9 +143,7 @@ fn inside_glass() -> Scene {
     scene.add(&quad(Vec3::new(0.0, 0.05, 0.0), Vec3::Y, 0.9), floor);
     let ball = Material::diffuse("ball", Colour::constant(0.6)).unwrap();
     scene.add(&uv_sphere(Vec3::new(0.3, 0.35, -0.3), 0.3, 8, 16, false), ball);
-    let lamp = Material::diffuse("lamp", Colour::constant(0.0))
-        .unwrap()
-        .with_emission(Colour::illuminant_rgb([2.0, 1.8, 1.5]).unwrap());
+    let lamp = lamp("lamp", [2.0, 1.8, 1.5]);
     scene.add(&quad(Vec3::new(0.0, 2.6, 0.0), -Vec3::Y, 1.2), lamp);
     scene.camera = common::batched::camera(Vec3::new(0.0, 1.2, 0.9), Vec3::new(0.0, 0.3, -0.2));
     scene

@@ -80,9 +80,7 @@ pub fn diffuse_box(lamp_half: f32, lamp_radiance: f32) -> Scene {
     let white = Material::diffuse("white", Colour::constant(0.75)).unwrap();
     let red = Material::diffuse("red", Colour::reflectance_rgb([0.7, 0.15, 0.1]).unwrap()).unwrap();
     let green = Material::diffuse("green", Colour::reflectance_rgb([0.15, 0.6, 0.15]).unwrap()).unwrap();
-    let lamp = Material::diffuse("lamp", Colour::constant(0.0))
-        .unwrap()
-        .with_emission(Colour::illuminant_rgb([lamp_radiance, 0.85 * lamp_radiance, 0.6 * lamp_radiance]).unwrap());
+    let lamp = lamp("lamp", [lamp_radiance, 0.85 * lamp_radiance, 0.6 * lamp_radiance]);
     scene.add(&quad(Vec3::ZERO, Vec3::Y, 1.0), white.clone());
     scene.add(&quad(Vec3::new(0.0, 2.0, 0.0), -Vec3::Y, 1.0), white.clone());
     scene.add(&quad(Vec3::new(0.0, 1.0, -1.0), Vec3::Z, 1.0), white);
@@ -91,6 +89,11 @@ pub fn diffuse_box(lamp_half: f32, lamp_radiance: f32) -> Scene {
     scene.add(&quad(Vec3::new(0.0, 1.99, 0.0), -Vec3::Y, lamp_half), lamp);
     scene.camera = camera(Vec3::new(0.0, 1.0, 3.4), Vec3::new(0.0, 1.0, 0.0));
     scene
+}
+
+/// A black diffuse emitter of linear-sRGB radiance `rgb`.
+pub fn lamp(name: &str, rgb: [f32; 3]) -> Material {
+    Material::diffuse(name, Colour::constant(0.0)).unwrap().with_emission(Colour::illuminant_rgb(rgb).unwrap())
 }
 
 /// A smooth glass ball (interpolated normals), a rough glass pane and a mirror under a
