@@ -12,7 +12,7 @@ use super::kernel::{Leaf, RayKernel};
 use super::lanes::{BoxRay, watertight_group, watertight_groups};
 use super::sse::SseKernel;
 use crate::{Hit, Ray, WatertightRay};
-use std::arch::x86_64::__m256;
+use std::arch::x86_64::*;
 
 /// The AVX [`RayKernel`] for 8-wide nodes.
 pub(super) struct AvxKernel {
@@ -34,6 +34,12 @@ impl RayKernel<8> for AvxKernel {
     fn enter(&self, node: &Bvh8Node, t_max: f32) -> (u32, [f32; 8]) {
         // SAFETY: AVX is available (see `new`), and the node is 8 wide.
         unsafe { self.boxes.enter(node, t_max) }
+    }
+
+    #[inline(always)]
+    fn watertight_ray(ray: &Ray) -> WatertightRay {
+        // SAFETY: as in `new`.
+        unsafe { watertight_ray(ray) }
     }
 
     #[inline(always)]
@@ -77,4 +83,51 @@ unsafe fn watertight_groups_avx<const ANY_HIT: bool>(
 ) -> bool {
     // SAFETY: the caller's guarantee; the tree pads its arrays for 8-wide loads.
     unsafe { watertight_groups::<__m256, ANY_HIT>(ray, leaf, t_max, best) }
+}
+
+/// The permutation `[kx, ky, kz, 3]` of [`WatertightRay::new`] for the dominant axis kz
+/// (entries 2·kz and 2·kz + 1) and whether the direction points along −kz, which swaps kx
+/// and ky (the odd entries): the index vector of `vpermilps`, lane 3 left in place.
+const PERMUTATIONS: [[i32; 4]; 6] =
+    [[1, 2, 0, 3], [2, 1, 0, 3], [2, 0, 1, 3], [0, 2, 1, 3], [0, 1, 2, 3], [1, 0, 2, 3]];
+
+/// [`WatertightRay::new`] with the permutation applied to the direction and the origin
+/// by one `vpermilps` each, its index vector read from a table, instead of by selects
+/// among the three cyclic shifts (about a hundred instructions of blends per ray with
+/// AVX2). The shear's quotients have the same operands as there, so the same bits
+/// (`tests::the_avx_watertight_ray_is_the_portable_one`); here they are divided after the
+/// permutation, which the first leaf's test is far enough behind not to wait for.
+///
+/// # Safety
+///
+/// The CPU must have AVX (and SSE4.1, which it implies).
+#[inline(always)]
+pub(super) unsafe fn watertight_ray(ray: &Ray) -> WatertightRay {
+    let (d, o) = (ray.dir, ray.origin);
+    let a = d.abs();
+    // The same rule and ties as `WatertightRay::new`: x, then y, then z.
+    let x_dominant = (a.x >= a.y) & (a.x >= a.z);
+    let y_dominant = !x_dominant & (a.y >= a.z);
+    let kz = 2 - 2 * x_dominant as usize - y_dominant as usize;
+    // SAFETY: the caller's guarantee; the table's entries are in 0..4.
+    unsafe {
+        let dv = _mm_setr_ps(d.x, d.y, d.z, 0.0);
+        // `d[kz] < 0.0` as there (−0 does not flip).
+        let negative = _mm_movemask_ps(_mm_cmplt_ps(dv, _mm_setzero_ps())) as usize;
+        let k = &PERMUTATIONS[2 * kz + ((negative >> kz) & 1)];
+        let index = _mm_loadu_si128(k.as_ptr().cast());
+        let dp = _mm_permutevar_ps(dv, index);
+        let op = _mm_permutevar_ps(_mm_setr_ps(o.x, o.y, o.z, 0.0), index);
+        // (d[kx], d[ky], 1) / d[kz].
+        let shear = _mm_div_ps(_mm_blend_ps::<0b0100>(dp, _mm_set1_ps(1.0)), _mm_shuffle_ps::<0b1010_1010>(dp, dp));
+        let (mut s, mut origin) = ([0.0f32; 4], [0.0f32; 4]);
+        _mm_storeu_ps(s.as_mut_ptr(), shear);
+        _mm_storeu_ps(origin.as_mut_ptr(), op);
+        WatertightRay {
+            origin: [origin[0], origin[1], origin[2]],
+            k: [k[0] as usize, k[1] as usize, k[2] as usize],
+            shear: [s[0], s[1], s[2]],
+            t_min: ray.t_min,
+        }
+    }
 }

@@ -20,6 +20,14 @@ use glam::Vec3;
 /// inverted box (+∞, −∞) give an entry of +∞ and an exit of −∞ on every axis.
 pub(super) trait RayKernel<const W: usize> {
     fn new(ray: &Ray) -> Self;
+
+    /// The ray's set-up for the watertight test: [`WatertightRay::new`], which a kernel
+    /// may compute faster with its instructions, to the same bits.
+    #[inline(always)]
+    fn watertight_ray(ray: &Ray) -> WatertightRay {
+        WatertightRay::new(ray)
+    }
+
     /// Bit `i` set if the ray enters child `i`'s box within (t_min, t_max]; lane `i` of
     /// the array is then its entry distance.
     fn enter(&self, node: &WideNode<W>, t_max: f32) -> (u32, [f32; W]);

@@ -468,6 +468,48 @@ fn unused_slots_are_never_entered() {
     }
 }
 
+/// The AVX kernel's watertight set-up, bit for bit [`WatertightRay::new`]'s: random
+/// directions and every direction with components in {−2, −1, −0.5, −0, 0, 0.5, 1, 2} (ties
+/// between the axes, ±0, the zero direction), from origins of both signs.
+#[test]
+#[cfg(target_arch = "x86_64")]
+fn the_avx_watertight_ray_is_the_portable_one() {
+    if !wide8_accelerated() {
+        eprintln!("skipped: this CPU has no AVX2");
+        return;
+    }
+    #[target_feature(enable = "avx2")]
+    unsafe fn avx(ray: &Ray) -> WatertightRay {
+        // SAFETY: the caller's guarantee (AVX2, checked above).
+        unsafe { super::avx::watertight_ray(ray) }
+    }
+    let bits = |w: &WatertightRay| (w.origin.map(f32::to_bits), w.k, w.shear.map(f32::to_bits), w.t_min.to_bits());
+    let mut rng = rng::Pcg32::seed_from_u64(5);
+    let mut f = || rng.next_f32() * 2.0 - 1.0;
+    let mut dirs: Vec<Vec3> = (0..20_000).map(|_| Vec3::new(f(), f(), f())).collect();
+    let values = [-2.0f32, -1.0, -0.5, -0.0, 0.0, 0.5, 1.0, 2.0];
+    for a in values {
+        for b in values {
+            for c in values {
+                dirs.push(Vec3::new(a, b, c));
+            }
+        }
+    }
+    let mut flipped = [0; 3];
+    for (i, d) in dirs.into_iter().enumerate() {
+        let origin = Vec3::new(1.5, -2.25, 3.125) * if i % 2 == 0 { 1.0 } else { -7.0 };
+        let ray = Ray::segment(origin, d, 0.25, 10.0);
+        let portable = WatertightRay::new(&ray);
+        // SAFETY: AVX2 was detected above.
+        let fast = unsafe { avx(&ray) };
+        assert_eq!(bits(&fast), bits(&portable), "{d}");
+        if portable.k[0] != (portable.k[2] + 1) % 3 {
+            flipped[portable.k[2]] += 1;
+        }
+    }
+    assert!(flipped.iter().all(|&n| n > 1000), "every axis flipped: {flipped:?}");
+}
+
 #[test]
 #[cfg(target_arch = "x86_64")]
 fn unused_slots_of_an_8_wide_node_are_never_entered() {

@@ -6,7 +6,7 @@
 
 use super::kernel::{Leaf, RayKernel, ScalarKernel};
 use super::{Bvh4, Bvh8, BvhWide, STACK_DEPTH, WideNode};
-use crate::{Aabb, Accelerator, Hit, Ray, RayStats, TriangleTest, WatertightRay};
+use crate::{Aabb, Accelerator, Hit, Ray, RayStats, TriangleTest};
 use std::mem::MaybeUninit;
 
 /// A child to visit: a node (`count == 0`) or a leaf's triangle range, with the ray's
@@ -133,7 +133,7 @@ impl<const W: usize> BvhWide<W> {
         // The leaf of the closest hit so far, for `refine`.
         let mut best_leaf = Leaf { soa: &[], ids: &[] };
         let mut best_first = 0;
-        let watertight = (self.test == TriangleTest::Watertight).then(|| WatertightRay::new(ray));
+        let watertight = (self.test == TriangleTest::Watertight).then(|| K::watertight_ray(ray));
         let mut t_max = ray.t_max;
         let mut best: Option<Hit> = None;
         // Uninitialised: zeroing 2 KiB would cost more than a short traversal.
