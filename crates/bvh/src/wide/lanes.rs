@@ -225,7 +225,10 @@ impl Lanes for __m256 {
 #[derive(Clone, Copy)]
 pub(super) struct BoxRay<L> {
     pub(super) origin: [L; 3],
-    inv_dir: [L; 3],
+    /// −1/d: the slab distance is computed as (origin − plane)·(−1/d), which is
+    /// (plane − origin)·(1/d) to the bit (both roundings are sign-symmetric) and lets the
+    /// plane's load be the subtraction's memory operand.
+    neg_inv_dir: [L; 3],
     /// First float of the near and far plane row on each axis.
     near: [usize; 3],
     far: [usize; 3],
@@ -243,7 +246,7 @@ impl<L: Lanes> BoxRay<L> {
         let splat = |v: glam::Vec3| unsafe { [L::splat(v.x), L::splat(v.y), L::splat(v.z)] };
         Self {
             origin: splat(ray.origin),
-            inv_dir: splat(ray.inv_dir),
+            neg_inv_dir: splat(-ray.inv_dir),
             near: near.map(|r| r * L::WIDTH),
             far: far.map(|r| r * L::WIDTH),
             t_min: unsafe { L::splat(ray.t_min) },
@@ -264,7 +267,8 @@ impl<L: Lanes> BoxRay<L> {
         // SAFETY: a plane row starts at a multiple of W below 6W, i.e. a (4W)-byte-aligned
         // row of the 64-byte-aligned node's six plane rows; `t` has room for W floats.
         unsafe {
-            let slab = |row: usize, axis: usize| L::load(base.add(row)).sub(self.origin[axis]).mul(self.inv_dir[axis]);
+            let slab =
+                |row: usize, axis: usize| self.origin[axis].sub(L::load(base.add(row))).mul(self.neg_inv_dir[axis]);
             // max/min return their second operand when either is NaN: the accumulator,
             // which is never NaN for a non-NaN t_min / t_max.
             let mut enter = self.t_min;
@@ -310,7 +314,8 @@ pub(super) unsafe fn watertight_group<L: Lanes, const ANY_HIT: bool>(
         // base per vertex, rather than nine products. (No closures: those would be
         // compiled apart from the AVX2 traversal, without AVX.)
         let rows = [kx * n, ky * n, kz * n];
-        let shear = [L::splat(ray.shear[0]), L::splat(ray.shear[1]), L::splat(ray.shear[2])];
+        // S_z negated: see `sheared_vertex`.
+        let shear = [L::splat(ray.shear[0]), L::splat(ray.shear[1]), L::splat(-ray.shear[2])];
         let origin = [L::splat(ray.origin[0]), L::splat(ray.origin[1]), L::splat(ray.origin[2])];
         let first = leaf.soa.as_ptr().add(j);
         let (ax, ay, az) = sheared_vertex(first, rows, origin, shear);
@@ -369,7 +374,10 @@ pub(super) unsafe fn watertight_group<L: Lanes, const ANY_HIT: bool>(
 
 /// A group's vertex (its rows starting at `base`, the permuted axes' rows `rows` floats
 /// further) relative to the ray origin, permuted and sheared as in
-/// `intersect_triangle_watertight`.
+/// `intersect_triangle_watertight` — with x and y negated, given S_z negated (`shear`):
+/// the origin minus the vertex, so that each load is its subtraction's memory operand,
+/// is the negated difference to the bit, so x and y come out negated and z as there. The
+/// edge functions, products of two of x and y, are then the scalar test's to the bit.
 ///
 /// # Safety
 ///
@@ -379,10 +387,10 @@ pub(super) unsafe fn watertight_group<L: Lanes, const ANY_HIT: bool>(
 unsafe fn sheared_vertex<L: Lanes>(base: *const f32, rows: [usize; 3], origin: [L; 3], shear: [L; 3]) -> (L, L, L) {
     // SAFETY: the caller's guarantees.
     unsafe {
-        let px = L::load_unaligned(base.add(rows[0])).sub(origin[0]);
-        let py = L::load_unaligned(base.add(rows[1])).sub(origin[1]);
-        let pz = L::load_unaligned(base.add(rows[2])).sub(origin[2]);
-        (px.sub(shear[0].mul(pz)), py.sub(shear[1].mul(pz)), shear[2].mul(pz))
+        let qx = origin[0].sub(L::load_unaligned(base.add(rows[0])));
+        let qy = origin[1].sub(L::load_unaligned(base.add(rows[1])));
+        let qz = origin[2].sub(L::load_unaligned(base.add(rows[2])));
+        (qx.sub(shear[0].mul(qz)), qy.sub(shear[1].mul(qz)), shear[2].mul(qz))
     }
 }
 
