@@ -136,19 +136,32 @@ impl<const W: usize> BvhWide<W> {
         let watertight = (self.test == TriangleTest::Watertight).then(|| K::watertight_ray(ray));
         let mut t_max = ray.t_max;
         let mut best: Option<Hit> = None;
-        // Uninitialised: zeroing 2 KiB would cost more than a short traversal.
+        // Uninitialised: zeroing 2 KiB would cost more than a short traversal. It never
+        // overflows, so it is indexed unchecked: only interior nodes push, each at most
+        // W − 1 children, while the stack holds at most W − 1 entries per interior node on
+        // the path from the root (pops follow visits) — at most (depth − 1)(W − 1) entries,
+        // which the collapse, the only maker of trees, asserts is within STACK_DEPTH.
         let mut stack = [MaybeUninit::<Entry>::uninit(); STACK_DEPTH];
         let mut sp = 0usize;
         let mut current = Entry { child: start.0, count: start.1, t: 0.0 };
         loop {
             if current.count == 0 {
-                let node = &self.nodes[current.child as usize];
+                debug_assert!((current.child as usize) < self.nodes.len());
+                // SAFETY: `current` is the root (the tree is not empty), a start the caller
+                // took from a node, or an interior child a node holds: the collapse, which
+                // makes every tree, writes only indices into `nodes` there.
+                let node = unsafe { self.nodes.get_unchecked(current.child as usize) };
                 if COUNT {
                     stats.nodes_visited += 1;
                 }
                 let (mask, t) = kernel.enter(node, t_max);
                 if mask != 0 {
-                    let entry = |i: usize| Entry { child: node.child[i], count: node.count[i], t: t[i] };
+                    // `% W` (an `and`: W is 4 or 8) tells the compiler what the mask's W
+                    // bits already say, instead of a bounds check per child.
+                    let entry = |i: usize| {
+                        let i = i % W;
+                        Entry { child: node.child[i], count: node.count[i], t: t[i] }
+                    };
                     if mask & (mask - 1) == 0 {
                         current = entry(mask.trailing_zeros() as usize);
                         continue;
@@ -160,7 +173,9 @@ impl<const W: usize> BvhWide<W> {
                         let (a, b) = (entry(mask.trailing_zeros() as usize), entry(rest.trailing_zeros() as usize));
                         let (near, far) = if b.t < a.t { (b, a) } else { (a, b) };
                         self.prefetch(&far);
-                        stack[sp] = MaybeUninit::new(far);
+                        debug_assert!(sp < STACK_DEPTH);
+                        // SAFETY: `sp` < STACK_DEPTH (see the stack's declaration).
+                        unsafe { *stack.get_unchecked_mut(sp) = MaybeUninit::new(far) };
                         sp += 1;
                         current = near;
                         continue;
@@ -182,7 +197,9 @@ impl<const W: usize> BvhWide<W> {
                     }
                     sort_slots(&mut slots, k, &t);
                     for &i in slots[1..k].iter().rev() {
-                        stack[sp] = MaybeUninit::new(entry(i as usize));
+                        debug_assert!(sp < STACK_DEPTH);
+                        // SAFETY: `sp` < STACK_DEPTH (see the stack's declaration).
+                        unsafe { *stack.get_unchecked_mut(sp) = MaybeUninit::new(entry(i as usize)) };
                         sp += 1;
                     }
                     current = entry(slots[0] as usize);
@@ -220,8 +237,9 @@ impl<const W: usize> BvhWide<W> {
                     };
                 }
                 sp -= 1;
-                // SAFETY: entries below `sp` were all written by the pushes above.
-                let e = unsafe { stack[sp].assume_init() };
+                // SAFETY: entries below `sp` (≤ STACK_DEPTH) were all written by the pushes
+                // above.
+                let e = unsafe { stack.get_unchecked(sp).assume_init() };
                 if e.t <= t_max {
                     current = e;
                     break;
