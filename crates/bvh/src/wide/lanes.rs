@@ -225,9 +225,11 @@ impl Lanes for __m256 {
 #[derive(Clone, Copy)]
 pub(super) struct BoxRay<L> {
     pub(super) origin: [L; 3],
-    /// −1/d: the slab distance is computed as (origin − plane)·(−1/d), which is
-    /// (plane − origin)·(1/d) to the bit (both roundings are sign-symmetric) and lets the
-    /// plane's load be the subtraction's memory operand.
+    /// −1/d: the slab distance is computed as (origin − plane)·(−1/d), which lets the
+    /// plane's load be the subtraction's memory operand and is (plane − origin)·(1/d) to
+    /// the bit (both roundings are sign-symmetric) but for the sign of a zero distance
+    /// (x − x is +0 either way round), which no comparison tells apart and which is never
+    /// returned: the masks and the visit order are the same.
     neg_inv_dir: [L; 3],
     /// First float of the near and far plane row on each axis.
     near: [usize; 3],
@@ -314,8 +316,7 @@ pub(super) unsafe fn watertight_group<L: Lanes, const ANY_HIT: bool>(
         // base per vertex, rather than nine products. (No closures: those would be
         // compiled apart from the AVX2 traversal, without AVX.)
         let rows = [kx * n, ky * n, kz * n];
-        // S_z negated: see `sheared_vertex`.
-        let shear = [L::splat(ray.shear[0]), L::splat(ray.shear[1]), L::splat(-ray.shear[2])];
+        let shear = [L::splat(ray.shear[0]), L::splat(ray.shear[1]), L::splat(ray.shear[2])];
         let origin = [L::splat(ray.origin[0]), L::splat(ray.origin[1]), L::splat(ray.origin[2])];
         let first = leaf.soa.as_ptr().add(j);
         let (ax, ay, az) = sheared_vertex(first, rows, origin, shear);
@@ -374,10 +375,13 @@ pub(super) unsafe fn watertight_group<L: Lanes, const ANY_HIT: bool>(
 
 /// A group's vertex (its rows starting at `base`, the permuted axes' rows `rows` floats
 /// further) relative to the ray origin, permuted and sheared as in
-/// `intersect_triangle_watertight` — with x and y negated, given S_z negated (`shear`):
-/// the origin minus the vertex, so that each load is its subtraction's memory operand,
-/// is the negated difference to the bit, so x and y come out negated and z as there. The
-/// edge functions, products of two of x and y, are then the scalar test's to the bit.
+/// `intersect_triangle_watertight` — with x and y negated. Their differences are taken as
+/// origin minus vertex, so that each load is the subtraction's memory operand, and that is
+/// the negated difference to the bit but for the sign of a zero; so x and y are the scalar
+/// test's negated, up to the sign of a zero, and the edge functions, products of two of
+/// them, are the scalar test's to the bit where they are not zero (a lane with a zero edge
+/// function is redone by the scalar test). z, which t is computed from, keeps the scalar
+/// test's order (vertex minus origin): its zero's sign would reach a t of zero.
 ///
 /// # Safety
 ///
@@ -389,8 +393,9 @@ unsafe fn sheared_vertex<L: Lanes>(base: *const f32, rows: [usize; 3], origin: [
     unsafe {
         let qx = origin[0].sub(L::load_unaligned(base.add(rows[0])));
         let qy = origin[1].sub(L::load_unaligned(base.add(rows[1])));
-        let qz = origin[2].sub(L::load_unaligned(base.add(rows[2])));
-        (qx.sub(shear[0].mul(qz)), qy.sub(shear[1].mul(qz)), shear[2].mul(qz))
+        let pz = L::load_unaligned(base.add(rows[2])).sub(origin[2]);
+        // −(p_x − o_x − S_x p_z) = (o_x − p_x) + S_x p_z, as rounding is sign-symmetric.
+        (qx.add(shear[0].mul(pz)), qy.add(shear[1].mul(pz)), shear[2].mul(pz))
     }
 }
 

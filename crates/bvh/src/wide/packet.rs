@@ -23,7 +23,7 @@
 //! since there packets only broke even on the box (shadow rays and camera rays alike).
 
 use super::kernel::{RayKernel, ScalarKernel, closer_than, tie_bound};
-use super::traverse::origin_and_direction_finite;
+use super::traverse::traceable;
 use super::{BvhWide, MAX_WIDTH};
 use crate::{Accelerator, Hit, Ray, TriangleTest, WatertightRay, intersect_triangle_watertight};
 use glam::Vec3;
@@ -364,7 +364,7 @@ impl<const W: usize> BvhWide<W> {
     fn occluded_lanes<K: RayKernel<W>>(&self, rays: &[Ray]) -> u32 {
         let mut live = 0u32;
         for (i, r) in rays.iter().enumerate() {
-            live |= (origin_and_direction_finite(r) as u32) << i;
+            live |= (traceable(r) as u32) << i;
         }
         if self.nodes.is_empty() || live == 0 {
             return 0;
@@ -440,7 +440,7 @@ impl<const W: usize> BvhWide<W> {
         hits.fill(None);
         let mut live = 0u32;
         for (i, r) in rays.iter().enumerate() {
-            live |= (origin_and_direction_finite(r) as u32) << i;
+            live |= (traceable(r) as u32) << i;
         }
         if self.nodes.is_empty() || live == 0 {
             return;

@@ -617,6 +617,59 @@ fn non_finite_rays_hit_nothing_and_terminate() {
     assert_eq!((bvh.intersect(&r), oracle.intersect(&r)), (None, None));
 }
 
+/// `Ray::inv_dir` is public: a ray whose reciprocal has a zero or NaN component (set apart
+/// from its direction) would make every unused slot's empty box NaN in the box test and so
+/// enter it — the root again, round and round, past the unchecked stack's end. Such rays
+/// are not traced, single or in packets, in every tree and with every kernel.
+#[test]
+fn a_ray_whose_reciprocal_is_zero_or_nan_is_not_traced() {
+    // Two triangles: the root's two other slots are unused (4 wide), six of eight (8 wide).
+    let tris = vec![
+        [Vec3::ZERO, Vec3::X, Vec3::Y],
+        [Vec3::new(5.0, 0.0, 0.0), Vec3::new(6.0, 0.0, 0.0), Vec3::new(5.0, 1.0, 0.0)],
+    ];
+    let config = BuildConfig { max_leaf_size: 1, ..Default::default() };
+    let (bvh4, bvh8) = (Bvh4::build(&tris, config).unwrap(), Bvh8::build(&tris, config).unwrap());
+    let good = Ray::new(Vec3::new(0.2, 0.2, 1.0), -Vec3::Z);
+    assert!(bvh4.intersect(&good).is_some() && bvh8.intersect(&good).is_some());
+    for inv_dir in [Vec3::ZERO, Vec3::new(1.0, 0.0, -1.0), Vec3::splat(f32::NAN), Vec3::new(-0.0, 1.0, 1.0)] {
+        let r = Ray { inv_dir, ..good };
+        assert_eq!(bvh4.intersect(&r), None, "{inv_dir}");
+        assert!(!bvh4.occluded(&r));
+        assert_eq!(intersect_scalar(&bvh4, &r), None);
+        assert!(!occluded_scalar(&bvh8, &r));
+        assert_eq!(bvh8.intersect(&r), None);
+        assert!(!bvh8.occluded(&r));
+        let rays = [r, good, r];
+        let mut hits = [None; 3];
+        let mut blocked = [false; 3];
+        bvh8.intersect_packet(&rays, &mut hits);
+        bvh8.occluded_packet(&rays, &mut blocked);
+        assert_eq!((hits[0], hits[2], blocked), (None, None, [false, true, false]));
+        assert_eq!(hits[1], bvh8.intersect(&good));
+    }
+}
+
+/// A hit at t = 0 (the plane through the origin, reached with t_min < 0) has the scalar
+/// test's +0, not −0, in every kernel: the leaf tests take vertex minus origin on the
+/// permuted z axis, whose zero's sign reaches t (the review of the subtraction's order).
+#[test]
+fn a_hit_at_zero_keeps_the_scalar_tests_sign() {
+    let tris = vec![[Vec3::ZERO, Vec3::X, Vec3::Y]];
+    let r = Ray::segment(Vec3::new(0.25, 0.25, 0.0), Vec3::Z, -1.0, f32::INFINITY);
+    let scalar = intersect_triangle_watertight(&tris[0], &WatertightRay::new(&r), f32::INFINITY).unwrap();
+    assert_eq!(scalar.0.to_bits(), 0.0f32.to_bits());
+    let config = BuildConfig::default();
+    let (bvh4, bvh8) = (Bvh4::build(&tris, config).unwrap(), Bvh8::build(&tris, config).unwrap());
+    for hit in [bvh4.intersect(&r), bvh8.intersect(&r), intersect_scalar(&bvh8, &r)] {
+        let hit = hit.expect("the plane is hit at t = 0");
+        assert_eq!(
+            (hit.t.to_bits(), hit.u.to_bits(), hit.v.to_bits()),
+            (0.0f32.to_bits(), scalar.1.to_bits(), scalar.2.to_bits())
+        );
+    }
+}
+
 #[test]
 fn rejects_non_finite_coordinates() {
     let mut tris = soup(7, 10, 1.0, 1.0);

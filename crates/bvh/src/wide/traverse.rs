@@ -93,12 +93,23 @@ fn fieldwise(ray: &Ray) -> Ray {
     }
 }
 
-/// True if the ray's origin and direction are finite: the largest magnitude among the
-/// six coordinates' bit patterns below infinity's, one comparison instead of six branches.
+/// True if the ray can be traced: its origin and direction finite and no component of
+/// `inv_dir` (a public field, which callers may set apart from `dir`) zero or NaN. Other
+/// rays are answered "no hit": with a non-finite origin or direction no triangle is hit
+/// (the tests' determinants are not finite), and only such rays and those with a zero or
+/// NaN reciprocal could enter an unused slot's empty box ((±∞ − origin)·0 or ·NaN is NaN,
+/// which the box test ignores) — the root again, which would overflow the traversal's stack.
+///
+/// One comparison instead of nine branches: the magnitudes' bit patterns, less one for the
+/// reciprocals (so that ±0 wraps round to the largest), all below infinity's — which the
+/// reciprocals may reach, being ±∞ for zero direction components.
 #[inline(always)]
-pub(super) fn origin_and_direction_finite(ray: &Ray) -> bool {
-    let (o, d) = (ray.origin, ray.dir);
-    [o.x, o.y, o.z, d.x, d.y, d.z].iter().fold(0, |m, c| m.max(c.to_bits() & 0x7fff_ffff)) < f32::INFINITY.to_bits()
+pub(super) fn traceable(ray: &Ray) -> bool {
+    let (o, d, inv) = (ray.origin, ray.dir, ray.inv_dir);
+    let bits = |c: f32| c.to_bits() & 0x7fff_ffff;
+    let largest = [o.x, o.y, o.z, d.x, d.y, d.z].iter().fold(0, |m, &c| m.max(bits(c)));
+    let reciprocal = [inv.x, inv.y, inv.z].iter().fold(0, |m, &c| m.max(bits(c).wrapping_sub(1)));
+    largest.max(reciprocal) < f32::INFINITY.to_bits()
 }
 
 impl<const W: usize> BvhWide<W> {
@@ -124,9 +135,8 @@ impl<const W: usize> BvhWide<W> {
             stats.rays += 1;
         }
         let ray = &fieldwise(ray);
-        // Such rays hit no triangle (Möller–Trumbore's determinant is not finite), and
-        // they are the only ones that could enter an unused slot's empty box.
-        if self.nodes.is_empty() || !origin_and_direction_finite(ray) {
+        // See `traceable`: the stack bound below relies on it.
+        if self.nodes.is_empty() || !traceable(ray) {
             return None;
         }
         let kernel = K::new(ray);
@@ -137,10 +147,11 @@ impl<const W: usize> BvhWide<W> {
         let mut t_max = ray.t_max;
         let mut best: Option<Hit> = None;
         // Uninitialised: zeroing 2 KiB would cost more than a short traversal. It never
-        // overflows, so it is indexed unchecked: only interior nodes push, each at most
-        // W − 1 children, while the stack holds at most W − 1 entries per interior node on
-        // the path from the root (pops follow visits) — at most (depth − 1)(W − 1) entries,
-        // which the collapse, the only maker of trees, asserts is within STACK_DEPTH.
+        // overflows, so it is indexed unchecked: a traceable ray enters no unused slot, so
+        // only interior nodes push, each at most W − 1 of its children, and the stack holds
+        // at most W − 1 entries per interior node on the path from the root (pops follow
+        // visits) — at most (depth − 1)(W − 1) entries, which the collapse, the only maker
+        // of trees, asserts is within STACK_DEPTH.
         let mut stack = [MaybeUninit::<Entry>::uninit(); STACK_DEPTH];
         let mut sp = 0usize;
         let mut current = Entry { child: start.0, count: start.1, t: 0.0 };
