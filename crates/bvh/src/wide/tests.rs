@@ -619,8 +619,9 @@ fn non_finite_rays_hit_nothing_and_terminate() {
 
 /// `Ray::inv_dir` is public: a ray whose reciprocal has a zero or NaN component (set apart
 /// from its direction) would make every unused slot's empty box NaN in the box test and so
-/// enter it — the root again, round and round, past the unchecked stack's end. Such rays
-/// are not traced, single or in packets, in every tree and with every kernel.
+/// enter it — the root again, round and round, past the unchecked stack's end. Such rays,
+/// and those with a subnormal reciprocal, are not traced, single or in packets, in every
+/// tree and with every kernel; an infinite reciprocal (a zero direction component) is.
 #[test]
 fn a_ray_whose_reciprocal_is_zero_or_nan_is_not_traced() {
     // Two triangles: the root's two other slots are unused (4 wide), six of eight (8 wide).
@@ -632,7 +633,15 @@ fn a_ray_whose_reciprocal_is_zero_or_nan_is_not_traced() {
     let (bvh4, bvh8) = (Bvh4::build(&tris, config).unwrap(), Bvh8::build(&tris, config).unwrap());
     let good = Ray::new(Vec3::new(0.2, 0.2, 1.0), -Vec3::Z);
     assert!(bvh4.intersect(&good).is_some() && bvh8.intersect(&good).is_some());
-    for inv_dir in [Vec3::ZERO, Vec3::new(1.0, 0.0, -1.0), Vec3::splat(f32::NAN), Vec3::new(-0.0, 1.0, 1.0)] {
+    // A subnormal reciprocal reads as zero where denormals are treated as zero.
+    let subnormal = f32::MIN_POSITIVE / 4.0;
+    for inv_dir in [
+        Vec3::ZERO,
+        Vec3::new(1.0, 0.0, -1.0),
+        Vec3::splat(f32::NAN),
+        Vec3::new(-0.0, 1.0, 1.0),
+        Vec3::new(1.0, -subnormal, 1.0),
+    ] {
         let r = Ray { inv_dir, ..good };
         assert_eq!(bvh4.intersect(&r), None, "{inv_dir}");
         assert!(!bvh4.occluded(&r));

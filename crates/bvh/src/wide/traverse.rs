@@ -93,23 +93,27 @@ fn fieldwise(ray: &Ray) -> Ray {
     }
 }
 
-/// True if the ray can be traced: its origin and direction finite and no component of
-/// `inv_dir` (a public field, which callers may set apart from `dir`) zero or NaN. Other
-/// rays are answered "no hit": with a non-finite origin or direction no triangle is hit
-/// (the tests' determinants are not finite), and only such rays and those with a zero or
-/// NaN reciprocal could enter an unused slot's empty box ((±∞ − origin)·0 or ·NaN is NaN,
-/// which the box test ignores) — the root again, which would overflow the traversal's stack.
+/// True if the ray can be traced: its origin and direction finite, and each component of
+/// `inv_dir` (a public field, which callers may set apart from `dir`) normal or infinite —
+/// not zero, NaN or subnormal (a subnormal one, which `Ray::new` makes for |d| > 8.5·10³⁷,
+/// reads as zero where denormals are treated as zero). Other rays are answered "no hit":
+/// with a non-finite origin or direction no triangle test reports a finite hit, and only
+/// such rays and those with a zero or NaN reciprocal could enter an unused slot's empty box
+/// ((±∞ − origin)·0 or ·NaN is NaN, which the box test ignores) — the root again, which
+/// would overflow the traversal's stack.
 ///
-/// One comparison instead of nine branches: the magnitudes' bit patterns, less one for the
-/// reciprocals (so that ±0 wraps round to the largest), all below infinity's — which the
-/// reciprocals may reach, being ±∞ for zero direction components.
+/// The magnitudes' bit patterns in two comparisons instead of nine branches: the origin's
+/// and direction's below infinity's, the reciprocals' from the smallest normal's to
+/// infinity's (less the smallest normal, so that smaller ones wrap round to the largest).
 #[inline(always)]
 pub(super) fn traceable(ray: &Ray) -> bool {
+    const NORMAL: u32 = f32::MIN_POSITIVE.to_bits();
+    const INFINITY: u32 = f32::INFINITY.to_bits();
     let (o, d, inv) = (ray.origin, ray.dir, ray.inv_dir);
     let bits = |c: f32| c.to_bits() & 0x7fff_ffff;
     let largest = [o.x, o.y, o.z, d.x, d.y, d.z].iter().fold(0, |m, &c| m.max(bits(c)));
-    let reciprocal = [inv.x, inv.y, inv.z].iter().fold(0, |m, &c| m.max(bits(c).wrapping_sub(1)));
-    largest.max(reciprocal) < f32::INFINITY.to_bits()
+    let reciprocal = [inv.x, inv.y, inv.z].iter().fold(0, |m, &c| m.max(bits(c).wrapping_sub(NORMAL)));
+    (largest < INFINITY) & (reciprocal <= INFINITY - NORMAL)
 }
 
 impl<const W: usize> BvhWide<W> {
@@ -146,7 +150,7 @@ impl<const W: usize> BvhWide<W> {
         let watertight = (self.test == TriangleTest::Watertight).then(|| K::watertight_ray(ray));
         let mut t_max = ray.t_max;
         let mut best: Option<Hit> = None;
-        // Uninitialised: zeroing 2 KiB would cost more than a short traversal. It never
+        // Uninitialised: zeroing its 5 KiB would cost more than a short traversal. It never
         // overflows, so it is indexed unchecked: a traceable ray enters no unused slot, so
         // only interior nodes push, each at most W − 1 of its children, and the stack holds
         // at most W − 1 entries per interior node on the path from the root (pops follow
