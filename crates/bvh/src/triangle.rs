@@ -111,15 +111,13 @@ impl WatertightRay {
         let dv = Vec3A::from(d);
         // Lane i: the quotients with d[i] as denominator, for z' = i (x' = i + 1, y' = i + 2).
         let (over_x, over_y, over_z) = (dv.yzx() / dv, dv.zxy() / dv, Vec3A::ONE / dv);
-        let a = d.abs();
         // The dominant axis z' and the two that follow it cyclically (x' = z' + 1,
         // y' = z' + 2, mod 3), with the direction's components and the origin's.
         let o = ray.origin;
         // Chosen by vector selects, not branches: the axis is as good as random for
         // diffuse rays, and the branches LLVM made of `if`s here (and of scalar float
         // selects, without AVX-512's masked moves) were mispredicted that often.
-        let x_dominant = (a.x >= a.y) & (a.x >= a.z);
-        let y_dominant = !x_dominant & (a.y >= a.z);
+        let (x_dominant, y_dominant) = dominant_axis(d);
         let permute = |v: Vec3A| {
             Vec3A::select(BVec3A::splat(x_dominant), v.yzx(), Vec3A::select(BVec3A::splat(y_dominant), v.zxy(), v))
         };
@@ -137,6 +135,16 @@ impl WatertightRay {
         let [ox, oy, oz] = o.to_array();
         Self { origin: [ox, oy, oz], k: [kx, ky, kz], shear, t_min: ray.t_min }
     }
+}
+
+/// Whether x, else whether y, is the direction's dominant axis (the largest |d| — ties
+/// go to x, then y): the rule of [`WatertightRay::new`] and of the kernels' faster forms
+/// of it, which must agree with it to the bit.
+#[inline(always)]
+pub(crate) fn dominant_axis(d: Vec3) -> (bool, bool) {
+    let a = d.abs();
+    let x_dominant = (a.x >= a.y) & (a.x >= a.z);
+    (x_dominant, !x_dominant & (a.y >= a.z))
 }
 
 /// The watertight ray–triangle test (Woop, Benthin & Wald, JCGT 2(1), 2013, Fig. 2):

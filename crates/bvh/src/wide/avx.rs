@@ -105,10 +105,7 @@ const PERMUTATIONS: [[i32; 4]; 6] =
 #[inline(always)]
 pub(super) unsafe fn watertight_ray(ray: &Ray) -> WatertightRay {
     let (d, o) = (ray.dir, ray.origin);
-    let a = d.abs();
-    // The same rule and ties as `WatertightRay::new`: x, then y, then z.
-    let x_dominant = (a.x >= a.y) & (a.x >= a.z);
-    let y_dominant = !x_dominant & (a.y >= a.z);
+    let (x_dominant, y_dominant) = crate::triangle::dominant_axis(d);
     let kz = 2 - 2 * x_dominant as usize - y_dominant as usize;
     // SAFETY: the caller's guarantee; the table's entries are in 0..4.
     unsafe {

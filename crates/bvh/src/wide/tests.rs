@@ -623,7 +623,7 @@ fn non_finite_rays_hit_nothing_and_terminate() {
 /// and those with a subnormal reciprocal, are not traced, single or in packets, in every
 /// tree and with every kernel; an infinite reciprocal (a zero direction component) is.
 #[test]
-fn a_ray_whose_reciprocal_is_zero_or_nan_is_not_traced() {
+fn a_ray_whose_reciprocal_is_zero_nan_or_subnormal_is_not_traced() {
     // Two triangles: the root's two other slots are unused (4 wide), six of eight (8 wide).
     let tris = vec![
         [Vec3::ZERO, Vec3::X, Vec3::Y],

@@ -18,6 +18,20 @@ struct Entry {
     t: f32,
 }
 
+/// Pushes `e` onto the traversal's stack of `*sp` entries, unchecked.
+///
+/// # Safety
+///
+/// `*sp` must be below [`STACK_DEPTH`]: the traversal's bound (see its stack), checked by
+/// debug builds.
+#[inline(always)]
+unsafe fn push(stack: &mut [MaybeUninit<Entry>; STACK_DEPTH], sp: &mut usize, e: Entry) {
+    debug_assert!(*sp < STACK_DEPTH);
+    // SAFETY: the caller's guarantee.
+    unsafe { *stack.get_unchecked_mut(*sp) = MaybeUninit::new(e) };
+    *sp += 1;
+}
+
 /// Sorts the first `k` (≤ W) slots by their entry distance `t[slot]`, nearest first
 /// (insertion: a few steps for the three or four children most nodes enter).
 #[inline(always)]
@@ -188,10 +202,8 @@ impl<const W: usize> BvhWide<W> {
                         let (a, b) = (entry(mask.trailing_zeros() as usize), entry(rest.trailing_zeros() as usize));
                         let (near, far) = if b.t < a.t { (b, a) } else { (a, b) };
                         self.prefetch(&far);
-                        debug_assert!(sp < STACK_DEPTH);
-                        // SAFETY: `sp` < STACK_DEPTH (see the stack's declaration).
-                        unsafe { *stack.get_unchecked_mut(sp) = MaybeUninit::new(far) };
-                        sp += 1;
+                        // SAFETY: see the stack's declaration.
+                        unsafe { push(&mut stack, &mut sp, far) };
                         current = near;
                         continue;
                     }
@@ -212,10 +224,8 @@ impl<const W: usize> BvhWide<W> {
                     }
                     sort_slots(&mut slots, k, &t);
                     for &i in slots[1..k].iter().rev() {
-                        debug_assert!(sp < STACK_DEPTH);
-                        // SAFETY: `sp` < STACK_DEPTH (see the stack's declaration).
-                        unsafe { *stack.get_unchecked_mut(sp) = MaybeUninit::new(entry(i as usize)) };
-                        sp += 1;
+                        // SAFETY: see the stack's declaration.
+                        unsafe { push(&mut stack, &mut sp, entry(i as usize)) };
                     }
                     current = entry(slots[0] as usize);
                     continue;
