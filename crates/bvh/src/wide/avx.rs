@@ -97,7 +97,8 @@ const PERMUTATIONS: [[i32; 4]; 6] =
 /// AVX2). The shear's quotients have the same operands as there, so the same bits
 /// (`tests::the_avx_watertight_ray_is_the_portable_one`). They are divided after the
 /// permutation: dividing every candidate axis's quotients first, as there, and picking
-/// lane z′ of each cost 2 % more traversal instructions (docs/figures.md).
+/// lane z′ of each cost 0.7–2.6 % more traversal instructions
+/// (`bench/patches/early-shear-division.patch`, docs/figures.md).
 ///
 /// # Safety
 ///
