@@ -909,11 +909,25 @@ fn prepare(
     mode: SpectralMode,
     default_sampler: fn(&Capabilities) -> SamplerKind,
 ) -> Result<(Box<dyn PreparedScene>, RenderSettings)> {
+    prepare_checked(args, spp, mode, default_sampler, |_| Ok(()))
+}
+
+/// [`prepare`], with `check` of the command's own options against the backend's
+/// capabilities also run before anything is built.
+fn prepare_checked(
+    args: &SceneArgs,
+    spp: u32,
+    mode: SpectralMode,
+    default_sampler: fn(&Capabilities) -> SamplerKind,
+    check: impl FnOnce(&Capabilities) -> Result<()>,
+) -> Result<(Box<dyn PreparedScene>, RenderSettings)> {
     let scene = loaded_scene(args)?;
     let backend = make_backend(args)?;
-    let sampler = args.sampler.unwrap_or_else(|| default_sampler(&backend.capabilities()));
+    let caps = backend.capabilities();
+    check(&caps)?;
+    let sampler = args.sampler.unwrap_or_else(|| default_sampler(&caps));
     let settings = settings(args, spp, mode, sampler, &scene)?;
-    backend.capabilities().check_settings(&settings)?;
+    caps.check_settings(&settings)?;
     let options = SceneOptions { first_render: Some((settings.sampler, settings.mode)), ..scene_options(args) };
     let prepared = backend.prepare(scene, &options)?;
     // Whatever else the render needs before its first sample (the GPU compiled the
@@ -1042,14 +1056,6 @@ fn report(output: &Path, stats: &RenderStats, caps: &Capabilities) {
 
 fn run_render(args: RenderArgs) -> Result<()> {
     let outputs = args.pieces.outputs(&args.output)?;
-    let splatting = matches!(args.scene.integrator.as_str(), "bdpt" | "path-caustics");
-    if splatting && outputs.shard.is_some() && args.pieces.shard_by == shard::Split::Tiles {
-        bail!(
-            "--integrator {} splats each light path wherever it lands on the image, so a band of rows cannot \
-             be rendered on its own: shard it by samples (--shard-by samples, the default)",
-            args.scene.integrator
-        );
-    }
     if let Some(p) = &args.stderr
         && outputs.image.is_none()
     {
@@ -1060,7 +1066,17 @@ fn run_render(args: RenderArgs) -> Result<()> {
     {
         bail!("{}: the standard-error image must be an .exr (it is linear)", p.display());
     }
-    let (prepared, settings) = prepare(&args.scene, args.spp, args.spectral, best_sampler)?;
+    let tiles = outputs.shard.is_some() && args.pieces.shard_by == shard::Split::Tiles;
+    let (prepared, settings) = prepare_checked(&args.scene, args.spp, args.spectral, best_sampler, |caps| {
+        if tiles && caps.splats {
+            bail!(
+                "--integrator {} splats each light path wherever it lands on the image, so a band of rows \
+                 cannot be rendered on its own: shard it by samples (--shard-by samples, the default)",
+                caps.integrator
+            );
+        }
+        Ok(())
+    })?;
     let s = prepared.scene();
     let stats = prepared.stats();
     let instanced = if s.instances.is_empty() {

@@ -571,6 +571,15 @@ fn integrators_are_chosen_by_name() {
         assert!(o.status.success(), "gpu bdpt: {}", stderr(&o));
         let m = exr_means(&gpu_bdpt)[1];
         assert!((m / path - 1.0).abs() < 0.1, "gpu bdpt {m} vs path {path}");
+        // Its splats too land anywhere: no band of rows as a shard on the device either.
+        let o = render_small(
+            &scene,
+            (4, 4, 1),
+            &partial,
+            &["--integrator", "bdpt", "--backend", "gpu", "--shard", "1/2", "--shard-by", "tiles"],
+        );
+        let msg = stderr(&o);
+        assert!(!o.status.success() && msg.contains("--integrator bdpt splats"), "{msg}");
         // The GPU's path tracer builds its tree by any split method and at any width, and
         // limits diffuse bounces as the CPU's does; other integrators refuse the limit on
         // both backends.

@@ -463,6 +463,7 @@ fn capabilities_with(integrator: GpuIntegrator, shader_f64: bool) -> Capabilitie
         sample_block: SAMPLES_PER_READBACK,
         // The path tracer alone has a wavefront (wgsl/wavefront.wgsl).
         wavefront: integrator == GpuIntegrator::Path,
+        splats: integrator.splats(),
     }
 }
 

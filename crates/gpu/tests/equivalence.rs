@@ -23,7 +23,7 @@
 use brdf::params::ParamValue;
 use glam::Vec3;
 use gpu::backend::SceneData;
-use gpu::kernel::{KernelOptions, NodeLayout};
+use gpu::kernel::{GpuIntegrator, KernelOptions, NodeLayout};
 use gpu::{GpuBackend, GpuError};
 use spectral::spectrum::Colour;
 use std::path::Path;
@@ -508,14 +508,19 @@ fn unsupported_scenes_and_modes_are_clear_errors() {
     };
     let err = caps.check_settings(&with_extension(250, 10)).unwrap_err().to_string();
     assert!(err.contains("260 bounces") && err.contains("--extension"), "{err}");
-    let whitted = gpu::backend::capabilities_for(gpu::kernel::GpuIntegrator::Whitted);
+    let whitted = gpu::backend::capabilities_for(GpuIntegrator::Whitted);
     let max = gpu::kernel::WHITTED_MAX_DEPTH;
     whitted.check_settings(&with_extension(max, 10)).unwrap();
     let err = whitted.check_settings(&with_extension(max + 1, 0)).unwrap_err().to_string();
     assert!(err.contains(&format!("--max-depth {max} or less")) && !err.contains("--extension"), "{err}");
     // Direct lighting reads neither: its cap is the path tracer's, without the extension.
-    let direct = gpu::backend::capabilities_for(gpu::kernel::GpuIntegrator::Direct);
+    let direct = gpu::backend::capabilities_for(GpuIntegrator::Direct);
     direct.check_settings(&with_extension(250, 10)).unwrap();
+    // Only bdpt's light paths splat onto other pixels (which a band of rows cannot hold).
+    for integrator in [GpuIntegrator::Path, GpuIntegrator::Direct, GpuIntegrator::Whitted, GpuIntegrator::Bdpt] {
+        let splats = gpu::backend::capabilities_for(integrator).splats;
+        assert_eq!(splats, integrator == GpuIntegrator::Bdpt, "{}", integrator.name());
+    }
     // The same refusals through a device: before any upload or compilation.
     let Some(ctx) = gpu::require_gpu() else { return };
     let gpu = GpuBackend::with_context(ctx);
@@ -678,7 +683,6 @@ fn wide_and_binary_bvhs_give_the_same_image() {
 /// same z-tests and channel-mean checks as the path tracer's.
 #[test]
 fn direct_lighting_and_ambient_occlusion_match_the_cpu() {
-    use gpu::kernel::GpuIntegrator;
     use tracer::{AmbientOcclusion, Backend, DirectLighting};
     let Some(ctx) = gpu::require_gpu() else { return };
     let Some(scene) = cornell() else { return };

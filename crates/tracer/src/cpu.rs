@@ -113,7 +113,7 @@ impl<I: Integrator> CpuBackend<I> {
     }
 }
 
-fn cpu_capabilities(integrator: &'static str) -> Capabilities {
+fn cpu_capabilities(integrator: &'static str, splats: bool) -> Capabilities {
     Capabilities {
         backend: "cpu",
         spectral_modes: vec![SpectralMode::Hero, SpectralMode::Bins40, SpectralMode::Rgb],
@@ -133,12 +133,13 @@ fn cpu_capabilities(integrator: &'static str) -> Capabilities {
         bvh_builders: true,
         sample_block: 1,
         wavefront: false,
+        splats,
     }
 }
 
 impl<I: Integrator> Backend for CpuBackend<I> {
     fn capabilities(&self) -> Capabilities {
-        cpu_capabilities(self.integrator.name())
+        cpu_capabilities(self.integrator.name(), self.integrator.splats())
     }
 
     fn prepare(&self, scene: Scene, options: &SceneOptions) -> Result<Box<dyn PreparedScene>> {
@@ -177,7 +178,7 @@ impl<I: Integrator> CpuScene<I> {
 
 impl<I: Integrator> PreparedScene for CpuScene<I> {
     fn capabilities(&self) -> Capabilities {
-        cpu_capabilities(self.integrator.name())
+        cpu_capabilities(self.integrator.name(), self.integrator.splats())
     }
 
     fn scene(&self) -> &Scene {
@@ -387,5 +388,24 @@ impl<I: Integrator> Pass<'_, I> {
         }
         (self.progress)((w * h) as u64 * self.spp as u64);
         TileResult { x0, y0, w, pixels, non_finite, counters }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::Backend;
+    use crate::integrator::{AmbientOcclusion, Bdpt, CausticPathTracer, DirectLighting, PathTracer, Whitted};
+
+    /// The capability follows the integrator's own `splats`: bdpt and path-caustics trace
+    /// light paths onto other pixels, the others do not.
+    #[test]
+    fn splatting_integrators_say_so() {
+        let splats = |b: &dyn Backend| b.capabilities().splats;
+        assert!(!splats(&super::CpuBackend::with_integrator(1, PathTracer).unwrap()));
+        assert!(splats(&super::CpuBackend::with_integrator(1, CausticPathTracer).unwrap()));
+        assert!(splats(&super::CpuBackend::with_integrator(1, Bdpt).unwrap()));
+        assert!(!splats(&super::CpuBackend::with_integrator(1, DirectLighting).unwrap()));
+        assert!(!splats(&super::CpuBackend::with_integrator(1, Whitted).unwrap()));
+        assert!(!splats(&super::CpuBackend::with_integrator(1, AmbientOcclusion::new(1.0)).unwrap()));
     }
 }

@@ -223,6 +223,11 @@ pub struct Capabilities {
     pub sample_block: u32,
     /// Whether it can trace paths as a wavefront ([`SceneOptions::wavefront`]).
     pub wavefront: bool,
+    /// Whether its integrator adds light to pixels other than its samples' own (it traces
+    /// paths from the lights and splats them where they meet the camera:
+    /// [`crate::Integrator::splats`]), so that a band of the image's rows is no piece of
+    /// the whole image that can be rendered alone.
+    pub splats: bool,
 }
 
 /// Which custom BSDFs ([`crate::material::Surface::Custom`]) a backend runs.
