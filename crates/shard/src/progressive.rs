@@ -47,6 +47,11 @@ const UNBOUNDED: Duration = Duration::MAX;
 ///
 /// `checkpoint` is called with the partial whenever `budget.checkpoint_every` has passed
 /// since the last call (never after the last pass: the caller writes the result).
+///
+/// A piece that is a band of rows ([`crate::Split::Tiles`]) is refused
+/// ([`crate::Error::Plan`]) if the backend's integrator splats light paths onto other
+/// pixels (`Capabilities::splats`): those would land outside the band, and the band's
+/// own pixels would miss the light that other bands' paths splat onto them.
 pub fn run_work(
     prepared: &dyn PreparedScene,
     settings: &RenderSettings,
@@ -57,8 +62,16 @@ pub fn run_work(
 ) -> Result<WorkStats> {
     let work = partial.manifest.work.clone();
     let whole = work.region == tracer::render::PixelRect::full(settings.width, settings.height);
+    let caps = prepared.capabilities();
+    if !whole && caps.splats {
+        return Err(crate::Error::Plan(format!(
+            "the '{}' integrator splats each light path wherever it lands on the image, so a band of rows \
+             cannot be rendered on its own: split the render by samples",
+            caps.integrator
+        )));
+    }
     let settings = RenderSettings { crop: (!whole).then_some(work.region), ..settings.clone() };
-    let block = prepared.capabilities().sample_block.max(1);
+    let block = caps.sample_block.max(1);
     let start = Instant::now();
     let mut last_checkpoint = start;
     let mut stats = WorkStats::default();

@@ -14,13 +14,17 @@ use tracer::{CpuBackend, Scene};
 
 /// A floor under a small lamp, viewed by the default framing.
 fn prepared() -> Box<dyn PreparedScene> {
+    prepared_on(&CpuBackend::new(2).unwrap())
+}
+
+/// [`prepared`] on `backend`.
+fn prepared_on(backend: &dyn tracer::Backend) -> Box<dyn PreparedScene> {
     let mut scene = Scene::default();
     let floor = Material::diffuse("floor", Colour::reflectance_rgb([0.7, 0.5, 0.3]).unwrap()).unwrap();
     scene.add(&quad(Vec3::ZERO, Vec3::Y, 1.0), floor);
     let lamp = Material::diffuse("lamp", Colour::constant(0.0)).unwrap().with_emission(Colour::constant(4.0));
     scene.add(&quad(Vec3::new(0.0, 1.0, 0.0), -Vec3::Y, 0.3), lamp);
-    let backend = CpuBackend::new(2).unwrap();
-    tracer::Backend::prepare(&backend, scene, &SceneOptions::default()).unwrap()
+    backend.prepare(scene, &SceneOptions::default()).unwrap()
 }
 
 fn settings() -> RenderSettings {
@@ -141,4 +145,21 @@ fn coverage_names_what_is_missing_duplicated_or_foreign() {
     let msg = err(&[parts[0].clone(), overlapping, parts[2].clone()]);
     assert!(msg.contains("overlap"), "{msg}");
     assert!(err(&[]).contains("no partials"));
+}
+
+/// An integrator whose light paths splat anywhere on the image renders pieces split by
+/// samples, and refuses a band of rows (its splats would leave the band).
+#[test]
+fn a_splatting_integrator_takes_samples_not_bands_of_rows() {
+    let prepared = prepared_on(&CpuBackend::with_integrator(2, tracer::Bdpt).unwrap());
+    let s = RenderSettings { spp: 2, ..settings() };
+    let mut by_samples = piece(prepared.as_ref(), &s, Some(ShardSpec { index: 1, count: 2, split: Split::Samples }));
+    run(prepared.as_ref(), &s, &mut by_samples, Budget::default());
+    assert!(by_samples.manifest.complete());
+    let mut band = piece(prepared.as_ref(), &s, Some(ShardSpec { index: 1, count: 2, split: Split::Tiles }));
+    let err = shard::run_work(prepared.as_ref(), &s, &mut band, &Budget::default(), &mut |_| Ok(()), &|_| {})
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("'bdpt' integrator splats") && err.contains("by samples"), "{err}");
+    assert_eq!(band.manifest.done, band.manifest.work.samples.start, "nothing rendered");
 }
