@@ -113,7 +113,8 @@ impl<I: Integrator> CpuBackend<I> {
     }
 }
 
-fn cpu_capabilities(integrator: &'static str, splats: bool) -> Capabilities {
+/// The CPU backend's capabilities when it runs `integrator`.
+fn cpu_capabilities(integrator: &impl Integrator) -> Capabilities {
     Capabilities {
         backend: "cpu",
         spectral_modes: vec![SpectralMode::Hero, SpectralMode::Bins40, SpectralMode::Rgb],
@@ -125,21 +126,20 @@ fn cpu_capabilities(integrator: &'static str, splats: bool) -> Capabilities {
         environment_maps: true,
         triangle_tests: vec![TriangleTest::Watertight, TriangleTest::MollerTrumbore],
         bvh_widths: BvhWidth::CPU.to_vec(),
-        integrator,
+        integrator: integrator.name(),
         max_bounces: None,
-        extension: matches!(integrator, "path" | "path-caustics"),
-        // Only the path tracer limits diffuse bounces; the others would ignore it.
-        diffuse_depth: matches!(integrator, "path" | "path-caustics"),
+        extension: integrator.extends_specular(),
+        diffuse_depth: integrator.limits_diffuse_depth(),
         bvh_builders: true,
         sample_block: 1,
         wavefront: false,
-        splats,
+        splats: integrator.splats(),
     }
 }
 
 impl<I: Integrator> Backend for CpuBackend<I> {
     fn capabilities(&self) -> Capabilities {
-        cpu_capabilities(self.integrator.name(), self.integrator.splats())
+        cpu_capabilities(self.integrator.as_ref())
     }
 
     fn prepare(&self, scene: Scene, options: &SceneOptions) -> Result<Box<dyn PreparedScene>> {
@@ -178,7 +178,7 @@ impl<I: Integrator> CpuScene<I> {
 
 impl<I: Integrator> PreparedScene for CpuScene<I> {
     fn capabilities(&self) -> Capabilities {
-        cpu_capabilities(self.integrator.name(), self.integrator.splats())
+        cpu_capabilities(self.integrator.as_ref())
     }
 
     fn scene(&self) -> &Scene {
@@ -393,19 +393,26 @@ impl<I: Integrator> Pass<'_, I> {
 
 #[cfg(test)]
 mod tests {
-    use crate::Backend;
     use crate::integrator::{AmbientOcclusion, Bdpt, CausticPathTracer, DirectLighting, PathTracer, Whitted};
+    use crate::{Backend, CpuBackend};
 
-    /// The capability follows the integrator's own `splats`: bdpt and path-caustics trace
-    /// light paths onto other pixels, the others do not.
+    /// The capabilities that depend on the integrator follow its own declarations: bdpt
+    /// and path-caustics splat light paths onto other pixels; the path tracer and
+    /// path-caustics (whose camera paths are the path tracer's) lengthen paths by the
+    /// specular extension and limit diffuse bounces; the others do none of these.
     #[test]
-    fn splatting_integrators_say_so() {
-        let splats = |b: &dyn Backend| b.capabilities().splats;
-        assert!(!splats(&super::CpuBackend::with_integrator(1, PathTracer).unwrap()));
-        assert!(splats(&super::CpuBackend::with_integrator(1, CausticPathTracer).unwrap()));
-        assert!(splats(&super::CpuBackend::with_integrator(1, Bdpt).unwrap()));
-        assert!(!splats(&super::CpuBackend::with_integrator(1, DirectLighting).unwrap()));
-        assert!(!splats(&super::CpuBackend::with_integrator(1, Whitted).unwrap()));
-        assert!(!splats(&super::CpuBackend::with_integrator(1, AmbientOcclusion::new(1.0)).unwrap()));
+    fn integrator_capabilities_follow_the_integrator() {
+        let backends: [(Box<dyn Backend>, [bool; 3]); 6] = [
+            (Box::new(CpuBackend::with_integrator(1, PathTracer).unwrap()), [false, true, true]),
+            (Box::new(CpuBackend::with_integrator(1, CausticPathTracer).unwrap()), [true, true, true]),
+            (Box::new(CpuBackend::with_integrator(1, Bdpt).unwrap()), [true, false, false]),
+            (Box::new(CpuBackend::with_integrator(1, DirectLighting).unwrap()), [false, false, false]),
+            (Box::new(CpuBackend::with_integrator(1, Whitted).unwrap()), [false, false, false]),
+            (Box::new(CpuBackend::with_integrator(1, AmbientOcclusion::new(1.0)).unwrap()), [false, false, false]),
+        ];
+        for (backend, expected) in backends {
+            let c = backend.capabilities();
+            assert_eq!([c.splats, c.extension, c.diffuse_depth], expected, "{}", c.integrator);
+        }
     }
 }

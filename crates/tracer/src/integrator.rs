@@ -190,6 +190,18 @@ pub trait Integrator: Send + Sync + 'static {
         false
     }
 
+    /// Whether its paths are lengthened by [`PathSettings::specular_extension`] (so that a
+    /// backend's bounce cap counts it).
+    fn extends_specular(&self) -> bool {
+        false
+    }
+
+    /// Whether it honours [`PathSettings::max_diffuse_depth`] (a backend refuses the limit
+    /// for an integrator that would ignore it).
+    fn limits_diffuse_depth(&self) -> bool {
+        false
+    }
+
     /// [`Integrator::radiance_block`], pushing contributions to other pixels onto
     /// `splats` (in linear sRGB, to be divided by the number of light paths traced over
     /// the image). The default splats nothing.
@@ -642,6 +654,14 @@ fn power_heuristic(a: f32, b: f32) -> f32 {
 impl Integrator for PathTracer {
     fn name(&self) -> &'static str {
         "path"
+    }
+
+    fn extends_specular(&self) -> bool {
+        true
+    }
+
+    fn limits_diffuse_depth(&self) -> bool {
+        true
     }
 
     #[inline]

@@ -99,6 +99,15 @@ impl Integrator for CausticPathTracer {
         true
     }
 
+    /// Its camera paths are the path tracer's.
+    fn extends_specular(&self) -> bool {
+        true
+    }
+
+    fn limits_diffuse_depth(&self) -> bool {
+        true
+    }
+
     /// Each sample's light path draws its first four values (a point on a light and a
     /// direction) before the camera path, so that they sit in the same dimensions for
     /// every sample of a pixel (stratified, with a low-discrepancy sampler); the camera
