@@ -1067,13 +1067,11 @@ fn run_render(args: RenderArgs) -> Result<()> {
         bail!("{}: the standard-error image must be an .exr (it is linear)", p.display());
     }
     let tiles = outputs.shard.is_some() && args.pieces.shard_by == shard::Split::Tiles;
+    // A band of rows is refused again where it is rendered (`shard::run_work`); checked
+    // here too so that the refusal comes before the scene is built.
     let (prepared, settings) = prepare_checked(&args.scene, args.spp, args.spectral, best_sampler, |caps| {
-        if tiles && caps.splats {
-            bail!(
-                "--integrator {} splats each light path wherever it lands on the image, so a band of rows \
-                 cannot be rendered on its own: shard it by samples (--shard-by samples, the default)",
-                caps.integrator
-            );
+        if tiles {
+            shard::check_band(caps)?;
         }
         Ok(())
     })?;

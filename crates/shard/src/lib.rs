@@ -33,7 +33,7 @@ pub use manifest::{Job, Manifest, scene_hash};
 pub use merge::{merge, plan_coverage, read_manifests};
 pub use partial::Partial;
 pub use plan::{ShardSpec, Split, Work};
-pub use progressive::{Budget, WorkStats, run_work};
+pub use progressive::{Budget, WorkStats, check_band, run_work};
 
 use std::path::PathBuf;
 

@@ -3,7 +3,7 @@
 use crate::Result;
 use crate::partial::Partial;
 use std::time::{Duration, Instant};
-use tracer::render::{PreparedScene, RenderSettings};
+use tracer::render::{Capabilities, PreparedScene, RenderSettings};
 
 /// When a piece stops and how often it saves itself.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -33,6 +33,22 @@ pub struct WorkStats {
     pub checkpoints: u32,
 }
 
+/// Refuses ([`crate::Error::Plan`]) to render a band of the image's rows on its own with
+/// a backend whose integrator splats light paths onto other pixels
+/// (`Capabilities::splats`): they would land outside the band, and the band's own pixels
+/// would miss the light that other bands' paths splat onto them. [`run_work`] checks it;
+/// a caller may check it before preparing a scene, to fail early.
+pub fn check_band(caps: &Capabilities) -> Result<()> {
+    if caps.splats {
+        return Err(crate::Error::Plan(format!(
+            "--integrator {} splats each light path wherever it lands on the image, so a band of rows \
+             cannot be rendered on its own: shard it by samples (--shard-by samples, the default)",
+            caps.integrator
+        )));
+    }
+    Ok(())
+}
+
 /// The longest pass when neither a time budget nor checkpoints ask for shorter ones:
 /// everything that is left, in one pass.
 const UNBOUNDED: Duration = Duration::MAX;
@@ -48,10 +64,8 @@ const UNBOUNDED: Duration = Duration::MAX;
 /// `checkpoint` is called with the partial whenever `budget.checkpoint_every` has passed
 /// since the last call (never after the last pass: the caller writes the result).
 ///
-/// A piece that is a band of rows ([`crate::Split::Tiles`]) is refused
-/// ([`crate::Error::Plan`]) if the backend's integrator splats light paths onto other
-/// pixels (`Capabilities::splats`): those would land outside the band, and the band's
-/// own pixels would miss the light that other bands' paths splat onto them.
+/// A piece that is a band of rows ([`crate::Split::Tiles`]) is refused as [`check_band`]
+/// says.
 pub fn run_work(
     prepared: &dyn PreparedScene,
     settings: &RenderSettings,
@@ -63,12 +77,8 @@ pub fn run_work(
     let work = partial.manifest.work.clone();
     let whole = work.region == tracer::render::PixelRect::full(settings.width, settings.height);
     let caps = prepared.capabilities();
-    if !whole && caps.splats {
-        return Err(crate::Error::Plan(format!(
-            "the '{}' integrator splats each light path wherever it lands on the image, so a band of rows \
-             cannot be rendered on its own: split the render by samples",
-            caps.integrator
-        )));
+    if !whole {
+        check_band(&caps)?;
     }
     let settings = RenderSettings { crop: (!whole).then_some(work.region), ..settings.clone() };
     let block = caps.sample_block.max(1);

@@ -160,6 +160,6 @@ fn a_splatting_integrator_takes_samples_not_bands_of_rows() {
     let err = shard::run_work(prepared.as_ref(), &s, &mut band, &Budget::default(), &mut |_| Ok(()), &|_| {})
         .unwrap_err()
         .to_string();
-    assert!(err.contains("'bdpt' integrator splats") && err.contains("by samples"), "{err}");
+    assert!(err.contains("--integrator bdpt splats") && err.contains("shard it by samples"), "{err}");
     assert_eq!(band.manifest.done, band.manifest.work.samples.start, "nothing rendered");
 }
