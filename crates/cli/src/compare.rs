@@ -20,10 +20,10 @@ pub struct CompareArgs {
     #[command(flatten)]
     scene: SceneArgs,
     /// The configurations: a preset (spectral, samplers, integrators, triangle-tests,
-    /// bvh-widths, bvh-builders, shading-normals) or a JSON file: a list of objects with
-    /// "name" and any of "integrator", "spectral", "sampler", "triangle_test",
-    /// "bvh_width", "bvh_builder", "shading_normals", "backend", "max_depth", "rr_scale"
-    /// and "set" (a
+    /// bvh-widths, bvh-builders, shading-normals, light-samplers) or a JSON file: a list
+    /// of objects with "name" and any of "integrator", "spectral", "sampler",
+    /// "triangle_test", "bvh_width", "bvh_builder", "shading_normals", "light_sampler",
+    /// "backend", "max_depth", "rr_scale" and "set" (a
     /// list of KEY=VALUE changes to a .toml scene, e.g. a material's parameter: BSDF
     /// variants); unset fields take the command line's values.
     #[arg(long, default_value = "samplers")]
@@ -65,6 +65,7 @@ pub struct Config {
     bvh_width: Option<String>,
     bvh_builder: Option<String>,
     shading_normals: Option<String>,
+    light_sampler: Option<String>,
     backend: Option<String>,
     max_depth: Option<u32>,
     rr_scale: Option<f32>,
@@ -109,6 +110,9 @@ impl Config {
         if let Some(n) = &self.shading_normals {
             args.shading_normals = parse_shading_normals(n).map_err(|e| named("shading_normals", e))?;
         }
+        if let Some(l) = &self.light_sampler {
+            args.light_sampler = crate::parse_light_sampler(l).map_err(|e| named("light_sampler", e))?;
+        }
         if let Some(d) = self.max_depth {
             args.max_depth = d;
         }
@@ -144,11 +148,13 @@ pub fn preset(name: &str) -> Option<Vec<Config>> {
         "bvh-widths" => each(|c| &mut c.bvh_width, &["4", "8"]),
         "bvh-builders" => each(|c| &mut c.bvh_builder, &["binned_sah", "sweep_sah", "midpoint", "hybrid"]),
         "shading-normals" => each(|c| &mut c.shading_normals, &["adapted", "face-forward", "geometric"]),
+        "light-samplers" => each(|c| &mut c.light_sampler, &["power", "tree"]),
         _ => return None,
     })
 }
 
-const PRESETS: &str = "spectral, samplers, integrators, triangle-tests, bvh-widths, bvh-builders, shading-normals";
+const PRESETS: &str =
+    "spectral, samplers, integrators, triangle-tests, bvh-widths, bvh-builders, shading-normals, light-samplers";
 
 fn configs(spec: &str) -> Result<Vec<Config>> {
     if let Some(c) = preset(spec) {

@@ -482,6 +482,13 @@ struct SceneArgs {
     /// measure the two designs against each other (docs/gpu.md).
     #[arg(long)]
     wavefront: bool,
+    /// How next-event estimation chooses a light: power (in proportion to power, the
+    /// same everywhere: the GPU's, and the CPU lanes' requirement), tree (a light tree,
+    /// Conty Estevez & Kulla 2018: by what each emitter can give the shading point — for
+    /// scenes of many lights; CPU only) or auto (the tree from 16 emitters on the CPU,
+    /// else power).
+    #[arg(long, default_value = "auto", value_parser = parse_light_sampler)]
+    light_sampler: tracer::LightSampler,
     /// Where to trace: cpu (rayon, every feature) or gpu (wgpu compute; hero mode, triangle
     /// meshes, registered BSDFs). A request outside a backend's capabilities is refused
     /// before any work, with the way out.
@@ -656,6 +663,15 @@ fn parse_bvh_width(s: &str) -> Result<BvhWidth, String> {
         .into_iter()
         .find(|w| w.name() == s)
         .ok_or_else(|| format!("unknown BVH width '{s}' (known: auto, 2, 4, 8)"))
+}
+
+pub(crate) fn parse_light_sampler(s: &str) -> Result<tracer::LightSampler, String> {
+    match s {
+        "auto" => Ok(tracer::LightSampler::Auto),
+        "power" => Ok(tracer::LightSampler::Power),
+        "tree" => Ok(tracer::LightSampler::Tree),
+        _ => Err(format!("unknown light sampler {s:?}: auto, power or tree")),
+    }
 }
 
 fn parse_bvh_builder(s: &str) -> Result<bvh::SplitMethod, String> {
@@ -959,6 +975,7 @@ fn scene_options(args: &SceneArgs) -> SceneOptions {
         bvh_builder: args.bvh_builder,
         first_render: None,
         wavefront: args.wavefront,
+        light_sampler: args.light_sampler,
     }
 }
 

@@ -464,6 +464,7 @@ fn capabilities_with(integrator: GpuIntegrator, shader_f64: bool) -> Capabilitie
         // The path tracer alone has a wavefront (wgsl/wavefront.wgsl).
         wavefront: integrator == GpuIntegrator::Path,
         splats: integrator.splats(),
+        light_tree: false,
     }
 }
 

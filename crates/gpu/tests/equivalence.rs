@@ -478,6 +478,13 @@ fn unsupported_scenes_and_modes_are_clear_errors() {
     for width in [bvh::BvhWidth::Auto, bvh::BvhWidth::Two, bvh::BvhWidth::Four, bvh::BvhWidth::Eight] {
         caps.check_scene(&room, &SceneOptions { bvh_width: width, ..SceneOptions::default() }).unwrap();
     }
+    // Emitters are chosen by power: a light tree is refused with the way out, power and
+    // auto (which means power here) are accepted.
+    let light = |light_sampler| SceneOptions { light_sampler, ..SceneOptions::default() };
+    let err = caps.check_scene(&room, &light(tracer::LightSampler::Tree)).unwrap_err().to_string();
+    assert!(err.contains("light tree") && err.contains("--light-sampler"), "{err}");
+    caps.check_scene(&room, &light(tracer::LightSampler::Power)).unwrap();
+    caps.check_scene(&room, &light(tracer::LightSampler::Auto)).unwrap();
     // Textures and environment maps are read.
     let mut textured = room.clone();
     let image = std::sync::Arc::new(tracer::texture::TextureImage::from_rgba8(1, 1, vec![[9, 9, 9, 255]]).unwrap());

@@ -76,7 +76,7 @@ impl<I: Integrator> CpuBackend<I> {
         let start = Instant::now();
         let geometry = Geometry::build(&scene, options)?;
         let build = start.elapsed();
-        let lights = Lights::new(&scene);
+        let lights = Lights::with_sampler(&scene, options.light_sampler);
         // Colour textures uplift through a table decoded on first use (about 2 ms since it
         // ships fitted): decode it here, in preparation, not in the first samples.
         let colour_textures = scene
@@ -134,6 +134,7 @@ fn cpu_capabilities(integrator: &impl Integrator) -> Capabilities {
         sample_block: 1,
         wavefront: false,
         splats: integrator.splats(),
+        light_tree: true,
     }
 }
 

@@ -742,7 +742,8 @@ fn next_event<const N: usize, B: Bsdf<N>>(
     u: Vec2,
     counters: &mut PathCounters,
 ) -> Option<(SampledSpectrum<N>, SampledSpectrum<N>, f32)> {
-    let ls = view.lights.sample(view.scene, u)?;
+    // The geometric normal: the light tree's estimate takes |cos|, so either side's.
+    let ls = view.lights.sample_at(view.scene, u, at.it.p, at.it.ng)?;
     light_contribution(view, at, bsdf, wl, mis, &ls, counters)
 }
 
@@ -960,6 +961,8 @@ pub(crate) struct PathState<'a, const N: usize> {
     pub(crate) prev_specular: bool,
     /// The previous vertex (the camera at first).
     pub(crate) prev_p: Vec3,
+    /// Its geometric normal (zero at the camera), where a light tree chose its light.
+    pub(crate) prev_n: Vec3,
     /// The bounces so far.
     pub(crate) bounce: u32,
     /// The product of η'² over the transmissions so far, which Russian roulette undoes
@@ -1013,6 +1016,7 @@ impl<const N: usize> PathState<'_, N> {
             prev_pdf: 0.0,
             prev_specular: true,
             prev_p: origin,
+            prev_n: Vec3::ZERO,
             bounce: 0,
             eta_scale: 1.0,
             extension_left: settings.specular_extension,
@@ -1089,7 +1093,7 @@ pub(crate) fn path_vertex<'a, const N: usize, S: Sampler>(
         } else {
             let dist2 = (it.p - st.prev_p).length_squared();
             let cos_l = wo_world.dot(it.ng);
-            let light_pdf = lights.prim_pmf(hit.prim) * dist2 / (cos_l * it.area);
+            let light_pdf = lights.prim_pmf_at(hit.prim, st.prev_p, st.prev_n) * dist2 / (cos_l * it.area);
             power_heuristic(st.prev_pdf, light_pdf)
         };
         // A light that light tracing samples, reached along E D S⁺ L: that path's light is
@@ -1158,6 +1162,7 @@ pub(crate) fn path_vertex<'a, const N: usize, S: Sampler>(
         st.chain = st.chain.next(st.bounce, st.prev_specular);
     }
     st.prev_p = it.p;
+    st.prev_n = it.ng;
     if view.absorbing {
         st.inside = entered_medium(material, it.ng, wi_world);
     }

@@ -45,7 +45,7 @@ pub use integrator::{
 };
 pub use material::Material;
 pub use punctual::PunctualLight;
-pub use render::{Backend, PreparedScene, RenderSettings, RenderStats, SceneOptions, render};
+pub use render::{Backend, LightSampler, PreparedScene, RenderSettings, RenderStats, SceneOptions, render};
 pub use scene::{Environment, Scene};
 pub use spectral::SpectralMode;
 

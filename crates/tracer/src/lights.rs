@@ -1,6 +1,8 @@
 //! Light sources for next-event estimation: emissive triangles and analytic shapes,
 //! point, spot and directional lights, chosen in proportion to their power, plus the
-//! environment (uniform, or importance-sampled by its map's luminance).
+//! environment (uniform, or importance-sampled by its map's luminance) — or, with a light
+//! tree ([`LightSampler::Tree`], module `tree`), the emitters chosen by what each can give
+//! the shading point.
 
 use crate::envmap::EnvironmentMap;
 use crate::punctual::PunctualLight;
@@ -8,6 +10,8 @@ use crate::scene::Scene;
 use brdf::sampling::{UNIFORM_SPHERE_PDF, uniform_sphere, uniform_triangle};
 use glam::{Vec2, Vec3};
 use std::f32::consts::PI;
+
+mod tree;
 
 /// What a light sample was taken on.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -84,6 +88,42 @@ pub struct Lights {
     environment_map: Option<std::sync::Arc<EnvironmentMap>>,
     /// The sun disks among the punctual lights, which escaping rays can see.
     suns: Vec<SunDisk>,
+    /// The light tree over `prims` ([`Lights::with_tree`]), which then chooses among them
+    /// by what each can give the shading point.
+    tree: Option<LightChoice>,
+}
+
+/// What choosing among the emitters by a [`tree::LightTree`] needs besides the tree.
+#[derive(Clone, Debug)]
+struct LightChoice {
+    tree: tree::LightTree,
+    /// Each entry of `prims`' area (its points are drawn uniformly on it).
+    areas: Vec<f32>,
+    /// For each primitive id, its index in `prims` (`u32::MAX`: not an emitter).
+    slot: Vec<u32>,
+    /// The emitters' share of the unit interval: their summed probability.
+    share: f32,
+}
+
+/// How next-event estimation chooses among a scene's emitters.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum LightSampler {
+    /// In proportion to power, the same for every shading point (Mitsuba 3's and the
+    /// GPU's choice; the lanes need it).
+    Power,
+    /// By a light tree (Conty Estevez & Kulla 2018): by what each emitter can give the
+    /// shading point, estimated from bounds on position, orientation and power.
+    Tree,
+    /// The tree where the scene has at least [`LightSampler::TREE_FROM`] emitters, else
+    /// power.
+    #[default]
+    Auto,
+}
+
+impl LightSampler {
+    /// The emitters from which [`LightSampler::Auto`] takes the tree.
+    pub const TREE_FROM: usize = 16;
 }
 
 /// A sun disk as escaping rays need it: which light, where and how large, and the
@@ -213,7 +253,101 @@ impl Lights {
             })
             .collect();
         let environment_map = scene.environment.as_ref().and_then(|e| e.map.clone());
-        Self { prims, triangles, bounds, prim_pmf, punctual_pmf, environment_map, suns }
+        Self { prims, triangles, bounds, prim_pmf, punctual_pmf, environment_map, suns, tree: None }
+    }
+
+    /// [`Lights::new`] with the emitters chosen as `sampler` says.
+    pub fn with_sampler(scene: &Scene, sampler: LightSampler) -> Self {
+        let lights = Self::new(scene);
+        let tree = match sampler {
+            LightSampler::Power => false,
+            LightSampler::Tree => true,
+            LightSampler::Auto => lights.prims.len() >= LightSampler::TREE_FROM,
+        };
+        if tree { lights.with_tree(scene) } else { lights }
+    }
+
+    /// These lights with the emitters chosen by a light tree ([`LightSampler::Tree`]):
+    /// [`Lights::sample_at`] and [`Lights::prim_pmf_at`] then depend on the shading point;
+    /// [`Lights::sample`] and [`Lights::prim_pmf`] stay by power. The environment and the
+    /// punctual lights keep their shares of the unit interval.
+    pub fn with_tree(mut self, scene: &Scene) -> Self {
+        if self.prims.is_empty() {
+            return self;
+        }
+        let mut areas = Vec::with_capacity(self.prims.len());
+        let mut slot = vec![u32::MAX; self.prim_pmf.len()];
+        let bounds: Vec<tree::LightBounds> = self
+            .prims
+            .iter()
+            .enumerate()
+            .map(|(k, &prim)| {
+                slot[prim as usize] = k as u32;
+                let phi = self.prim_pmf[prim as usize];
+                match self.triangles.get(k) {
+                    // A triangle emits from its front, within π/2 of its normal.
+                    Some(t) => {
+                        let [a, b, c] = t.vertices;
+                        areas.push(0.5 * (b - a).cross(c - a).length());
+                        tree::LightBounds {
+                            bounds: bvh::Aabb::from_points(&t.vertices),
+                            w: t.normal,
+                            phi,
+                            cos_theta_o: 1.0,
+                            cos_theta_e: 0.0,
+                        }
+                    }
+                    // A shape emits from its outside, in every direction.
+                    None => {
+                        let shape = scene.shapes[prim as usize - scene.triangles.len()].shape.shape();
+                        areas.push(shape.area());
+                        tree::LightBounds {
+                            bounds: shape.bounds(),
+                            w: Vec3::Z,
+                            phi,
+                            cos_theta_o: -1.0,
+                            cos_theta_e: 0.0,
+                        }
+                    }
+                }
+            })
+            .collect();
+        let tree = tree::LightTree::new(&bounds);
+        if !tree.is_empty() {
+            let share = self.bounds[self.prims.len()] - self.bounds[0];
+            self.tree = Some(LightChoice { tree, areas, slot, share });
+        }
+        self
+    }
+
+    /// Whether the emitters are chosen by a light tree ([`Lights::with_tree`]).
+    pub fn has_tree(&self) -> bool {
+        self.tree.is_some()
+    }
+
+    /// [`Lights::sample`] for a shading point `p` with normal `n` (zero: none): with a
+    /// light tree the emitter is chosen by it, with the pdf of that choice.
+    #[inline]
+    pub fn sample_at(&self, scene: &Scene, u: Vec2, p: Vec3, n: Vec3) -> Option<LightSample> {
+        let Some(choice) = &self.tree else { return self.sample(scene, u) };
+        let (lo, hi) = (self.bounds[0], self.bounds[self.prims.len()]);
+        if !(u.x >= lo && u.x < hi) {
+            // The environment's or a punctual light's stretch, as without the tree.
+            return self.sample(scene, u);
+        }
+        let (k, pmf, x) = choice.tree.sample(p, n, rescale(u.x, lo, hi))?;
+        let pmf = choice.share * pmf;
+        self.sample_prim(scene, k, Vec2::new(x, u.y), pmf, pmf / choice.areas[k])
+    }
+
+    /// The probability that [`Lights::sample_at`] picks primitive `prim` for `p`, `n`.
+    #[inline]
+    pub fn prim_pmf_at(&self, prim: u32, p: Vec3, n: Vec3) -> f32 {
+        let Some(choice) = &self.tree else { return self.prim_pmf(prim) };
+        match choice.slot.get(prim as usize) {
+            Some(&k) if k != u32::MAX => choice.share * choice.tree.pmf(k as usize, p, n),
+            _ => 0.0,
+        }
     }
 
     /// The sun disks (directional lights with an angular size), which escaping rays see.
@@ -347,6 +481,15 @@ impl Lights {
             let ls = Self::sample_punctual(scene, index, u);
             return Some(LightSample { pdf: ls.pdf * self.punctual_pmf[index], ..ls });
         }
+        let pmf = self.prim_pmf[self.prims[k] as usize];
+        self.sample_prim(scene, k, u, pmf, self.triangle_light(k).map_or(0.0, |t| t.pdf))
+    }
+
+    /// A point on emitter `k` (an index into the primitives) from `u`, the emitter chosen
+    /// with probability `pmf`: a triangle's density per unit area is `triangle_pdf` (that
+    /// probability over its area, which the caller has), a shape's `pmf` over its area.
+    #[inline(always)]
+    fn sample_prim(&self, scene: &Scene, k: usize, u: Vec2, pmf: f32, triangle_pdf: f32) -> Option<LightSample> {
         if let Some(t) = self.triangle_light(k) {
             let [v0, v1, v2] = t.vertices;
             let (b0, b1) = uniform_triangle(u);
@@ -355,10 +498,14 @@ impl Lights {
                 on_triangle(b0, b1, [v0.y, v1.y, v2.y]),
                 on_triangle(b0, b1, [v0.z, v1.z, v2.z]),
             );
-            return Some(LightSample { point, normal: t.normal, pdf: t.pdf, source: LightSource::Primitive(t.prim) });
+            return Some(LightSample {
+                point,
+                normal: t.normal,
+                pdf: triangle_pdf,
+                source: LightSource::Primitive(t.prim),
+            });
         }
         let prim = self.prims[k];
-        let pmf = self.prim_pmf[prim as usize];
         let source = LightSource::Primitive(prim);
         let shape = scene.shapes[prim as usize - scene.triangles.len()].shape.shape();
         let (point, normal) = shape.sample_area(u)?;

@@ -8,6 +8,7 @@ use crate::accumulation::{Accumulation, FilmAccumulation};
 use crate::camera::Camera;
 use crate::film::{Film, MAX_PIXEL_SAMPLES};
 use crate::integrator::{PathCounters, PathSettings};
+pub use crate::lights::LightSampler;
 use crate::sampler::SamplerKind;
 use crate::scene::Scene;
 use crate::{Error, Result};
@@ -173,6 +174,10 @@ pub struct SceneOptions {
     /// per camera ray; only a backend whose [`Capabilities::wavefront`] says so runs it
     /// (the GPU's path tracer), the others refuse it.
     pub wavefront: bool,
+    /// How next-event estimation chooses among the emitters (by power, or by a light
+    /// tree for the shading point; [`LightSampler::Auto`]: the tree from
+    /// [`LightSampler::TREE_FROM`] emitters where the backend has one).
+    pub light_sampler: LightSampler,
 }
 
 /// What a backend can render. [`Capabilities::check_scene`] and
@@ -228,6 +233,9 @@ pub struct Capabilities {
     /// [`crate::Integrator::splats`]), so that a band of the image's rows is no piece of
     /// the whole image that can be rendered alone.
     pub splats: bool,
+    /// Whether it chooses emitters by a light tree ([`LightSampler::Tree`]; the CPU), or
+    /// by power only (the GPU, where [`LightSampler::Auto`] means power).
+    pub light_tree: bool,
 }
 
 /// Which custom BSDFs ([`crate::material::Surface::Custom`]) a backend runs.
@@ -282,6 +290,12 @@ impl Capabilities {
             return Err(unsupported(
                 format!("the wavefront schedule for the {} integrator", self.integrator),
                 "it is the GPU path tracer's (--backend gpu --integrator path); drop --wavefront",
+            ));
+        }
+        if options.light_sampler == LightSampler::Tree && !self.light_tree {
+            return Err(unsupported(
+                "a light tree".to_string(),
+                "it chooses emitters by power only: leave --light-sampler at auto or power, or use --backend cpu",
             ));
         }
         if !self.bvh_builders

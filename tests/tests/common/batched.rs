@@ -22,10 +22,18 @@ pub struct Batched {
 }
 
 pub fn batched<I: Integrator>(integrator: I, scene: &Scene, settings: &RenderSettings, batches: u32) -> Batched {
-    let prepared = CpuBackend::with_integrator(2, integrator)
-        .unwrap()
-        .prepare_cpu(scene.clone(), &SceneOptions::default())
-        .unwrap();
+    batched_with(integrator, scene, &SceneOptions::default(), settings, batches)
+}
+
+/// [`batched`] with the scene prepared with `options`.
+pub fn batched_with<I: Integrator>(
+    integrator: I,
+    scene: &Scene,
+    options: &SceneOptions,
+    settings: &RenderSettings,
+    batches: u32,
+) -> Batched {
+    let prepared = CpuBackend::with_integrator(2, integrator).unwrap().prepare_cpu(scene.clone(), options).unwrap();
     let mut rays = 0;
     let images: Vec<Vec<f32>> = (0..batches)
         .map(|k| {

@@ -108,6 +108,7 @@ impl LaneScene {
             && scene.punctual_lights.is_empty()
             && view.lights.suns().is_empty()
             && view.lights.environment_pmf() == 0.0
+            && !view.lights.has_tree()
             && !view.dispersive
             && !view.absorbing
             && scene.material_ids.len() == scene.triangles.len();
@@ -886,6 +887,8 @@ fn vertex_in_one_lane<const N: usize, S: Sampler>(
         prev_pdf: st.prev_pdf[k],
         prev_specular: st.prev_specular[k],
         prev_p: st.prev_p.get(k),
+        // The lanes run only without a light tree (`LaneScene::of`), which alone reads it.
+        prev_n: Vec3::ZERO,
         bounce: st.bounce[k],
         eta_scale: st.eta_scale[k],
         extension_left: st.extension_left[k],

@@ -1,0 +1,71 @@
+#!/usr/bin/env python3
+"""Writes many-lights.obj and many-lights.mtl: a 24 x 24 m hall with a floor and a back wall,
+an 8 x 8 grid of small lamps (0.25 m squares) 1.5 m above the floor facing down, of four
+colours and powers that vary fourfold, and 20 pillars among them. 64 lamps, 128 emissive
+triangles: from any point of the floor a few lamps overhead give most of the light, which
+is what choosing lights by a light tree (`spt render --light-sampler tree`) is for and what
+choosing them by power alone (`--light-sampler power`) spends most of its shadow rays
+beside. Deterministic (no random numbers): run it again to get the same files.
+
+    python3 scenes/many-lights/make.py   # from the repository root
+    spt render scenes/many-lights.toml -o many-lights.png
+"""
+import argparse, os
+
+ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0], formatter_class=argparse.RawDescriptionHelpFormatter)
+ap.add_argument("--grid", type=int, default=8, help="lamps per side of the grid (8: the committed files)")
+ap.add_argument("--out", help="folder to write to, with the same file names (default: beside this script)")
+a = ap.parse_args()
+here = a.out or os.path.dirname(os.path.abspath(__file__))
+os.makedirs(here, exist_ok=True)
+v, f = [], []  # vertices, faces as (material, [1-based vertex indices])
+
+
+def quad(corners, material):
+    """A quad of four corners, counter-clockwise seen from its front."""
+    base = len(v)
+    v.extend(corners)
+    f.append((material, [base + 1, base + 2, base + 3, base + 4]))
+
+
+def box(x0, z0, x1, z1, height, material):
+    """A pillar: four sides and a top (the floor closes it)."""
+    a, b, c, d = (x0, z0), (x1, z0), (x1, z1), (x0, z1)
+    for (p, q) in ((a, b), (b, c), (c, d), (d, a)):
+        quad([(p[0], 0, p[1]), (p[0], height, p[1]), (q[0], height, q[1]), (q[0], 0, q[1])], material)
+    quad([(x0, height, z0), (x0, height, z1), (x1, height, z1), (x1, height, z0)], material)
+
+
+quad([(-12, 0, -12), (-12, 0, 12), (12, 0, 12), (12, 0, -12)], "floor")
+quad([(-12, 0, -12), (12, 0, -12), (12, 4, -12), (-12, 4, -12)], "wall")
+n = a.grid
+for i in range(n):
+    for j in range(n):
+        # The grid spans the hall whatever its size: lamps 24/n apart.
+        x, z, h = -12 + 24 * (i + 0.5) / n, -12 + 24 * (j + 0.5) / n, 0.125
+        material = f"lamp{(i + 2 * j) % 4}_{(i * 3 + j) % 4}"
+        quad([(x - h, 1.5, z - h), (x + h, 1.5, z - h), (x + h, 1.5, z + h), (x - h, 1.5, z + h)], material)
+for k in range(20):
+    i, j = (k * 7) % 9, (k * 4 + k // 3) % 9
+    x, z = -12 + 3 * i, -12 + 3 * j
+    box(x - 0.2, z - 0.2, x + 0.2, z + 0.2, 2.0, "pillar")
+
+colours = [(1.0, 0.75, 0.45), (0.55, 0.7, 1.0), (1.0, 0.45, 0.35), (0.6, 1.0, 0.6)]
+with open(os.path.join(here, "many-lights.mtl"), "w") as m:
+    m.write("# Written by make.py.\n")
+    m.write("newmtl floor\nKd 0.6 0.6 0.6\n\nnewmtl wall\nKd 0.5 0.45 0.4\n\nnewmtl pillar\nKd 0.7 0.7 0.7\n")
+    for c in range(4):
+        for p in range(4):
+            s = 20.0 * (1 + p)
+            r, g, b = colours[c]
+            m.write(f"\nnewmtl lamp{c}_{p}\nKd 0 0 0\nKe {r * s:g} {g * s:g} {b * s:g}\n")
+with open(os.path.join(here, "many-lights.obj"), "w") as o:
+    o.write("# Written by make.py: a hall lit by 64 small lamps.\nmtllib many-lights.mtl\n")
+    for p in v:
+        o.write("v %g %g %g\n" % p)
+    current = None
+    for material, idx in f:
+        if material != current:
+            o.write(f"usemtl {material}\n")
+            current = material
+        o.write("f " + " ".join(map(str, idx)) + "\n")
