@@ -665,6 +665,7 @@ fn parse_bvh_width(s: &str) -> Result<BvhWidth, String> {
         .ok_or_else(|| format!("unknown BVH width '{s}' (known: auto, 2, 4, 8)"))
 }
 
+/// `--light-sampler`'s values (and `spt compare`'s "light_sampler").
 pub(crate) fn parse_light_sampler(s: &str) -> Result<tracer::LightSampler, String> {
     match s {
         "auto" => Ok(tracer::LightSampler::Auto),
@@ -1105,11 +1106,12 @@ fn run_render(args: RenderArgs) -> Result<()> {
         )
     };
     eprintln!(
-        "{}: {} triangles{instanced}, {} shapes, {} emissive, {} built in {:.1} ms{}; {}×{} at {} spp, {} mode, {} backend{}",
+        "{}: {} triangles{instanced}, {} shapes, {} emissive{}, {} built in {:.1} ms{}; {}×{} at {} spp, {} mode, {} backend{}",
         args.scene.scene.display(),
         s.triangles.len(),
         s.shapes.len(),
         stats.emitters,
+        if stats.light_tree { " (chosen by a light tree)" } else { "" },
         stats.accelerator,
         stats.build.as_secs_f64() * 1e3,
         stats.compile.map_or(String::new(), |c| format!(", kernel compiled in {:.1} ms", c.as_secs_f64() * 1e3))

@@ -1455,6 +1455,7 @@ impl GpuBackend {
             integrator: None,
             total: start.elapsed(),
             emitters: data.constants.emitters,
+            light_tree: false,
             accelerator: match data.options.nodes {
                 NodeLayout::Binary => "binary BVH",
                 NodeLayout::Wide4 { .. } => "4-wide BVH",

@@ -140,7 +140,13 @@ fn prepare_both(
     scene: &Scene,
     first_render: Option<&RenderSettings>,
 ) -> Result<(CpuScene, gpu::GpuScene), tracer::Error> {
-    let options = SceneOptions { first_render: first_render.map(|s| (s.sampler, s.mode)), ..SceneOptions::default() };
+    // Both choose emitters by power (the GPU's only way; the CPU's `auto` would take a
+    // light tree from 16 emitters), so that both run the same estimator.
+    let options = SceneOptions {
+        first_render: first_render.map(|s| (s.sampler, s.mode)),
+        light_sampler: tracer::LightSampler::Power,
+        ..SceneOptions::default()
+    };
     Ok((CpuBackend::new(2)?.prepare_cpu(scene.clone(), &options)?, gpu.prepare_gpu(scene.clone(), &options)?))
 }
 

@@ -5,7 +5,7 @@ use crate::camera::RayGenerator;
 use crate::film::{Film, PixelStats, SplatImage};
 use crate::geometry::Geometry;
 use crate::integrator::{CameraSample, Integrator, PathCounters, PathTracer, SceneView};
-use crate::lights::Lights;
+use crate::lights::{LightSampler, Lights};
 use crate::render::{
     Backend, Capabilities, CustomBsdfs, PixelRect, PrepareStats, PreparedScene, RenderSettings, SceneOptions,
     check_pass, check_sample_range,
@@ -76,7 +76,10 @@ impl<I: Integrator> CpuBackend<I> {
         let start = Instant::now();
         let geometry = Geometry::build(&scene, options)?;
         let build = start.elapsed();
-        let lights = Lights::with_sampler(&scene, options.light_sampler);
+        // An integrator that chooses by power gets no tree (`check_scene` refused `Tree`).
+        let sampler =
+            if self.integrator.chooses_lights_per_point() { options.light_sampler } else { LightSampler::Power };
+        let lights = Lights::with_sampler(&scene, sampler);
         // Colour textures uplift through a table decoded on first use (about 2 ms since it
         // ships fitted): decode it here, in preparation, not in the first samples.
         let colour_textures = scene
@@ -99,6 +102,7 @@ impl<I: Integrator> CpuBackend<I> {
                 .then_some(integrator_time),
             total: start.elapsed(),
             emitters: lights.emitter_count(),
+            light_tree: lights.has_tree(),
             accelerator: geometry.triangles.description(),
         };
         Ok(CpuScene {
@@ -134,7 +138,7 @@ fn cpu_capabilities(integrator: &impl Integrator) -> Capabilities {
         sample_block: 1,
         wavefront: false,
         splats: integrator.splats(),
-        light_tree: true,
+        light_tree: integrator.chooses_lights_per_point(),
     }
 }
 
@@ -400,20 +404,24 @@ mod tests {
     /// The capabilities that depend on the integrator follow its own declarations: bdpt
     /// and path-caustics splat light paths onto other pixels; the path tracer and
     /// path-caustics (whose camera paths are the path tracer's) lengthen paths by the
-    /// specular extension and limit diffuse bounces; the others do none of these.
+    /// specular extension and limit diffuse bounces; those two and direct light take a
+    /// light tree's choice; the others do none of these.
     #[test]
     fn integrator_capabilities_follow_the_integrator() {
-        let backends: [(Box<dyn Backend>, [bool; 3]); 6] = [
-            (Box::new(CpuBackend::with_integrator(1, PathTracer).unwrap()), [false, true, true]),
-            (Box::new(CpuBackend::with_integrator(1, CausticPathTracer).unwrap()), [true, true, true]),
-            (Box::new(CpuBackend::with_integrator(1, Bdpt).unwrap()), [true, false, false]),
-            (Box::new(CpuBackend::with_integrator(1, DirectLighting).unwrap()), [false, false, false]),
-            (Box::new(CpuBackend::with_integrator(1, Whitted).unwrap()), [false, false, false]),
-            (Box::new(CpuBackend::with_integrator(1, AmbientOcclusion::new(1.0)).unwrap()), [false, false, false]),
+        let backends: [(Box<dyn Backend>, [bool; 4]); 6] = [
+            (Box::new(CpuBackend::with_integrator(1, PathTracer).unwrap()), [false, true, true, true]),
+            (Box::new(CpuBackend::with_integrator(1, CausticPathTracer).unwrap()), [true, true, true, true]),
+            (Box::new(CpuBackend::with_integrator(1, Bdpt).unwrap()), [true, false, false, false]),
+            (Box::new(CpuBackend::with_integrator(1, DirectLighting).unwrap()), [false, false, false, true]),
+            (Box::new(CpuBackend::with_integrator(1, Whitted).unwrap()), [false, false, false, false]),
+            (
+                Box::new(CpuBackend::with_integrator(1, AmbientOcclusion::new(1.0)).unwrap()),
+                [false, false, false, false],
+            ),
         ];
         for (backend, expected) in backends {
             let c = backend.capabilities();
-            assert_eq!([c.splats, c.extension, c.diffuse_depth], expected, "{}", c.integrator);
+            assert_eq!([c.splats, c.extension, c.diffuse_depth, c.light_tree], expected, "{}", c.integrator);
         }
     }
 }

@@ -202,6 +202,14 @@ pub trait Integrator: Send + Sync + 'static {
         false
     }
 
+    /// Whether its next-event estimation takes the light tree's choice for the shading
+    /// point ([`crate::lights::Lights::sample_at`]) where the scene's lights have one. The
+    /// others choose by power; the CPU backend builds no tree for them and refuses
+    /// [`crate::LightSampler::Tree`].
+    fn chooses_lights_per_point(&self) -> bool {
+        false
+    }
+
     /// [`Integrator::radiance_block`], pushing contributions to other pixels onto
     /// `splats` (in linear sRGB, to be divided by the number of light paths traced over
     /// the image). The default splats nothing.
@@ -654,6 +662,10 @@ fn power_heuristic(a: f32, b: f32) -> f32 {
 impl Integrator for PathTracer {
     fn name(&self) -> &'static str {
         "path"
+    }
+
+    fn chooses_lights_per_point(&self) -> bool {
+        true
     }
 
     fn extends_specular(&self) -> bool {

@@ -50,6 +50,8 @@ pub(crate) struct LightTriangle {
     pub(crate) vertices: [Vec3; 3],
     /// Unit front-face normal (counter-clockwise winding).
     pub(crate) normal: Vec3,
+    /// Its area.
+    pub(crate) area: f32,
     /// Density per unit area of its points, the choice of the light included: its
     /// probability of being chosen over its area.
     pub(crate) pdf: f32,
@@ -97,17 +99,20 @@ pub struct Lights {
 #[derive(Clone, Debug)]
 struct LightChoice {
     tree: tree::LightTree,
-    /// Each entry of `prims`' area (its points are drawn uniformly on it).
-    areas: Vec<f32>,
+    /// Each entry of `prims`' reciprocal area (its points are drawn uniformly on it).
+    inv_areas: Vec<f32>,
     /// For each primitive id, its index in `prims` (`u32::MAX`: not an emitter).
     slot: Vec<u32>,
-    /// The emitters' share of the unit interval: their summed probability.
+    /// The emitters' stretch of the unit interval, `[lo, hi)`: after the environment's,
+    /// before the punctual lights' (where [`Lights::choose`] puts them).
+    lo: f32,
+    hi: f32,
+    /// Its length: the emitters' summed probability.
     share: f32,
 }
 
 /// How next-event estimation chooses among a scene's emitters.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
-#[serde(rename_all = "kebab-case")]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum LightSampler {
     /// In proportion to power, the same for every shading point (Mitsuba 3's and the
     /// GPU's choice; the lanes need it).
@@ -115,14 +120,16 @@ pub enum LightSampler {
     /// By a light tree (Conty Estevez & Kulla 2018): by what each emitter can give the
     /// shading point, estimated from bounds on position, orientation and power.
     Tree,
-    /// The tree where the scene has at least [`LightSampler::TREE_FROM`] emitters, else
-    /// power.
+    /// The tree where the scene has at least [`LightSampler::TREE_FROM`] emitters (and
+    /// the backend and integrator take one), else power.
     #[default]
     Auto,
 }
 
 impl LightSampler {
-    /// The emitters from which [`LightSampler::Auto`] takes the tree.
+    /// The emitters (triangles and shapes) from which [`LightSampler::Auto`] takes the
+    /// tree: between 8 and 18 separate lamps it began to reach a given error sooner than
+    /// power sampling in the lanes (docs/figures.md, "Many lights").
     pub const TREE_FROM: usize = 16;
 }
 
@@ -179,7 +186,7 @@ impl Lights {
             let area = 0.5 * cross.length();
             if push(prim, area, material) {
                 let normal = cross.normalize() * orientation;
-                light_triangles.push((LightTriangle { vertices, normal, pdf: 0.0, prim: prim as u32 }, area));
+                light_triangles.push(LightTriangle { vertices, normal, area, pdf: 0.0, prim: prim as u32 });
             }
         };
         for (i, &m) in scene.material_ids.iter().enumerate() {
@@ -240,7 +247,7 @@ impl Lights {
         }
         let triangles = light_triangles
             .into_iter()
-            .map(|(t, area)| LightTriangle { pdf: prim_pmf[t.prim as usize] / area, ..t })
+            .map(|t| LightTriangle { pdf: prim_pmf[t.prim as usize] / t.area, ..t })
             .collect();
         let suns = scene
             .punctual_lights
@@ -267,15 +274,16 @@ impl Lights {
         if tree { lights.with_tree(scene) } else { lights }
     }
 
-    /// These lights with the emitters chosen by a light tree ([`LightSampler::Tree`]):
-    /// [`Lights::sample_at`] and [`Lights::prim_pmf_at`] then depend on the shading point;
-    /// [`Lights::sample`] and [`Lights::prim_pmf`] stay by power. The environment and the
-    /// punctual lights keep their shares of the unit interval.
-    pub fn with_tree(mut self, scene: &Scene) -> Self {
+    /// These lights (of `scene`) with the emitters chosen by a light tree
+    /// ([`LightSampler::Tree`]): [`Lights::sample_at`] and [`Lights::prim_pmf_at`] then
+    /// depend on the shading point; [`Lights::sample`] and [`Lights::prim_pmf`] stay by
+    /// power. The environment and the punctual lights keep their shares of the unit
+    /// interval.
+    fn with_tree(mut self, scene: &Scene) -> Self {
         if self.prims.is_empty() {
             return self;
         }
-        let mut areas = Vec::with_capacity(self.prims.len());
+        let mut inv_areas = Vec::with_capacity(self.prims.len());
         let mut slot = vec![u32::MAX; self.prim_pmf.len()];
         let bounds: Vec<tree::LightBounds> = self
             .prims
@@ -287,8 +295,7 @@ impl Lights {
                 match self.triangles.get(k) {
                     // A triangle emits from its front, within π/2 of its normal.
                     Some(t) => {
-                        let [a, b, c] = t.vertices;
-                        areas.push(0.5 * (b - a).cross(c - a).length());
+                        inv_areas.push(1.0 / t.area);
                         tree::LightBounds {
                             bounds: bvh::Aabb::from_points(&t.vertices),
                             w: t.normal,
@@ -300,7 +307,7 @@ impl Lights {
                     // A shape emits from its outside, in every direction.
                     None => {
                         let shape = scene.shapes[prim as usize - scene.triangles.len()].shape.shape();
-                        areas.push(shape.area());
+                        inv_areas.push(1.0 / shape.area());
                         tree::LightBounds {
                             bounds: shape.bounds(),
                             w: Vec3::Z,
@@ -314,13 +321,13 @@ impl Lights {
             .collect();
         let tree = tree::LightTree::new(&bounds);
         if !tree.is_empty() {
-            let share = self.bounds[self.prims.len()] - self.bounds[0];
-            self.tree = Some(LightChoice { tree, areas, slot, share });
+            let (lo, hi) = (self.bounds[0], self.bounds[self.prims.len()]);
+            self.tree = Some(LightChoice { tree, inv_areas, slot, lo, hi, share: hi - lo });
         }
         self
     }
 
-    /// Whether the emitters are chosen by a light tree ([`Lights::with_tree`]).
+    /// Whether the emitters are chosen by a light tree ([`LightSampler::Tree`]).
     pub fn has_tree(&self) -> bool {
         self.tree.is_some()
     }
@@ -329,15 +336,13 @@ impl Lights {
     /// light tree the emitter is chosen by it, with the pdf of that choice.
     #[inline]
     pub fn sample_at(&self, scene: &Scene, u: Vec2, p: Vec3, n: Vec3) -> Option<LightSample> {
-        let Some(choice) = &self.tree else { return self.sample(scene, u) };
-        let (lo, hi) = (self.bounds[0], self.bounds[self.prims.len()]);
-        if !(u.x >= lo && u.x < hi) {
+        let Some(c) = &self.tree else { return self.sample(scene, u) };
+        if !(u.x >= c.lo && u.x < c.hi) {
             // The environment's or a punctual light's stretch, as without the tree.
             return self.sample(scene, u);
         }
-        let (k, pmf, x) = choice.tree.sample(p, n, rescale(u.x, lo, hi))?;
-        let pmf = choice.share * pmf;
-        self.sample_prim(scene, k, Vec2::new(x, u.y), pmf, pmf / choice.areas[k])
+        let (k, pmf, x) = c.tree.sample(p, n, rescale(u.x, c.lo, c.hi))?;
+        self.sample_prim(scene, k, Vec2::new(x, u.y), Some(c.share * pmf * c.inv_areas[k]))
     }
 
     /// The probability that [`Lights::sample_at`] picks primitive `prim` for `p`, `n`.
@@ -481,15 +486,15 @@ impl Lights {
             let ls = Self::sample_punctual(scene, index, u);
             return Some(LightSample { pdf: ls.pdf * self.punctual_pmf[index], ..ls });
         }
-        let pmf = self.prim_pmf[self.prims[k] as usize];
-        self.sample_prim(scene, k, u, pmf, self.triangle_light(k).map_or(0.0, |t| t.pdf))
+        self.sample_prim(scene, k, u, None)
     }
 
-    /// A point on emitter `k` (an index into the primitives) from `u`, the emitter chosen
-    /// with probability `pmf`: a triangle's density per unit area is `triangle_pdf` (that
-    /// probability over its area, which the caller has), a shape's `pmf` over its area.
+    /// A point on emitter `k` (an index into the primitives) from `u`, with density `pdf`
+    /// per unit area (the choice's probability over the area), or with the choice by power
+    /// where `None` (a triangle's precomputed density, a shape's probability over its
+    /// area).
     #[inline(always)]
-    fn sample_prim(&self, scene: &Scene, k: usize, u: Vec2, pmf: f32, triangle_pdf: f32) -> Option<LightSample> {
+    fn sample_prim(&self, scene: &Scene, k: usize, u: Vec2, pdf: Option<f32>) -> Option<LightSample> {
         if let Some(t) = self.triangle_light(k) {
             let [v0, v1, v2] = t.vertices;
             let (b0, b1) = uniform_triangle(u);
@@ -501,7 +506,7 @@ impl Lights {
             return Some(LightSample {
                 point,
                 normal: t.normal,
-                pdf: triangle_pdf,
+                pdf: pdf.unwrap_or(t.pdf),
                 source: LightSource::Primitive(t.prim),
             });
         }
@@ -509,7 +514,8 @@ impl Lights {
         let source = LightSource::Primitive(prim);
         let shape = scene.shapes[prim as usize - scene.triangles.len()].shape.shape();
         let (point, normal) = shape.sample_area(u)?;
-        Some(LightSample { point, normal, pdf: pmf / shape.area(), source })
+        let pdf = pdf.unwrap_or_else(|| self.prim_pmf[prim as usize] / shape.area());
+        Some(LightSample { point, normal, pdf, source })
     }
 }
 
@@ -636,6 +642,56 @@ mod tests {
             let share = picked[k] as f32 / n as f32;
             assert!((share - lights.punctual_pmf(k)).abs() < 2.0 / n as f32, "{k}: {share}");
         }
+    }
+
+    /// With a light tree beside a sky and a point light, `sample_at` over a fine grid of the
+    /// first sample value picks the sky and the point light with their power shares (the
+    /// same as without the tree) and each emitter with the tree's probability for the
+    /// point (`prim_pmf_at`), the emitters' frequencies summing to at most their share;
+    /// each emitter's area density is that probability over its area.
+    #[test]
+    fn a_light_tree_chooses_within_the_emitters_share_only() {
+        let mut scene = scene();
+        scene.punctual_lights.push(PunctualLight::point(Vec3::new(0.0, 5.0, 0.0), Colour::constant(1.0)));
+        let lights = Lights::with_sampler(&scene, LightSampler::Tree);
+        assert!(lights.has_tree());
+        let (p, n) = (Vec3::new(2.5, 0.0, 0.3), Vec3::Y);
+        let count = 1 << 16;
+        let (mut sky, mut point, mut none) = (0usize, 0usize, 0usize);
+        let mut prims = vec![0usize; scene.triangles.len()];
+        for i in 0..count {
+            let u = Vec2::new((i as f32 + 0.5) / count as f32, 0.31);
+            match lights.sample_at(&scene, u, p, n).map(|ls| (ls.source, ls.pdf)) {
+                Some((LightSource::Environment, _)) => sky += 1,
+                Some((LightSource::Punctual(_), pdf)) => {
+                    assert_eq!(pdf, lights.punctual_pmf(0));
+                    point += 1
+                }
+                Some((LightSource::Primitive(t), pdf)) => {
+                    let [a, b, c] = scene.triangle_vertices(t as usize);
+                    let area = 0.5 * (b - a).cross(c - a).length();
+                    let pmf = lights.prim_pmf_at(t, p, n);
+                    assert!((pdf * area - pmf).abs() <= 1e-5 * pmf, "triangle {t}: pdf {pdf}, pmf {pmf}");
+                    prims[t as usize] += 1
+                }
+                None => none += 1,
+            }
+        }
+        let frequency = |k: usize| k as f32 / count as f32;
+        let tolerance = 2.0 / count as f32;
+        assert!((frequency(sky) - lights.environment_pmf()).abs() < tolerance, "sky {}", frequency(sky));
+        assert!((frequency(point) - lights.punctual_pmf(0)).abs() < tolerance, "point {}", frequency(point));
+        let mut sum = 0.0;
+        for (t, &k) in prims.iter().enumerate() {
+            let pmf = lights.prim_pmf_at(t as u32, p, n);
+            // Stratified draws: within a few cells of the walk's nested rescalings.
+            assert!((frequency(k) - pmf).abs() < 1e-3, "triangle {t}: drawn {}, pmf {pmf}", frequency(k));
+            sum += pmf;
+        }
+        let share = 1.0 - lights.environment_pmf() - lights.punctual_pmf(0);
+        assert!(sum <= share + 1e-5 && (frequency(none) - (share - sum)).abs() < 1e-3, "{sum} of {share}, none {none}");
+        // Both lamps face down over the point: all four triangles are chosen.
+        assert!(prims.iter().all(|&k| k > 0), "{prims:?}");
     }
 
     #[test]

@@ -233,8 +233,9 @@ pub struct Capabilities {
     /// [`crate::Integrator::splats`]), so that a band of the image's rows is no piece of
     /// the whole image that can be rendered alone.
     pub splats: bool,
-    /// Whether it chooses emitters by a light tree ([`LightSampler::Tree`]; the CPU), or
-    /// by power only (the GPU, where [`LightSampler::Auto`] means power).
+    /// Whether it chooses emitters by a light tree ([`LightSampler::Tree`]; the CPU's
+    /// integrators that declare [`crate::Integrator::chooses_lights_per_point`]), or by
+    /// power only (the GPU and the others, where [`LightSampler::Auto`] means power).
     pub light_tree: bool,
 }
 
@@ -294,8 +295,9 @@ impl Capabilities {
         }
         if options.light_sampler == LightSampler::Tree && !self.light_tree {
             return Err(unsupported(
-                "a light tree".to_string(),
-                "it chooses emitters by power only: leave --light-sampler at auto or power, or use --backend cpu",
+                format!("a light tree for the {} integrator", self.integrator),
+                "it chooses emitters by power: leave --light-sampler at auto or power (the CPU's path, \
+                 path-caustics, direct and atlas integrators take the tree)",
             ));
         }
         if !self.bvh_builders
@@ -438,6 +440,8 @@ pub struct PrepareStats {
     pub total: Duration,
     /// Primitives that emit light.
     pub emitters: usize,
+    /// Whether next-event estimation chooses among them by a light tree.
+    pub light_tree: bool,
     /// The triangles' acceleration structure, for messages (e.g. "8-wide BVH (AVX2)").
     pub accelerator: &'static str,
 }

@@ -874,6 +874,12 @@ impl Integrator for AtlasGi {
         "atlas"
     }
 
+    /// Its per-pixel direct light and the texels' gather; the bake's light paths start
+    /// from emitters chosen by power.
+    fn chooses_lights_per_point(&self) -> bool {
+        true
+    }
+
     fn for_scene(&self, view: &SceneView) -> Result<Option<Self>> {
         let atlas = Atlas::build(view, &self.settings)?;
         // Spectral lookups uplift through the Jakob–Hanika table: decoded here, not in the

@@ -67,6 +67,12 @@ impl Integrator for CausticPathTracer {
         "path-caustics"
     }
 
+    /// Its camera paths' (the path tracer's); its light paths start from emitters chosen
+    /// by power.
+    fn chooses_lights_per_point(&self) -> bool {
+        true
+    }
+
     /// The path tracer's estimate of every path (a caller without a film gets no light
     /// paths, so nothing is left out).
     fn radiance<const N: usize, S: Sampler>(
@@ -169,8 +175,8 @@ impl Integrator for CausticPathTracer {
     }
 }
 
-/// One light path from a point on an emitter (chosen as next-event estimation chooses it,
-/// by `u.0`) along a cosine-distributed direction (`u.1`), followed through specular
+/// One light path from a point on an emitter (chosen by power, as next-event estimation
+/// does without a light tree, by `u.0`) along a cosine-distributed direction (`u.1`), followed through specular
 /// bounces only; at the first surface with a non-specular lobe after one or more of them
 /// it is connected to the eye and splatted. A path whose first surface is non-specular
 /// ends there: its light is the path tracer's.

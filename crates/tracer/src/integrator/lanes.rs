@@ -320,6 +320,9 @@ pub(crate) fn radiance_block<const N: usize, S: Sampler>(
     block: &mut [CameraSample<N, S>],
     counters: &mut PathCounters,
 ) {
+    // The lanes choose lights by power and hand their paths on without a normal for the
+    // tree's MIS weight (`PathState::prev_n`): `LaneScene::of` admits no tree.
+    debug_assert!(!view.lights.has_tree(), "the lanes with a light tree");
     #[cfg(target_arch = "x86_64")]
     match bvh::isa::active() {
         // SAFETY: `active` is at most what the CPU has (detected), and each level has the

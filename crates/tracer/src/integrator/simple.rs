@@ -27,6 +27,10 @@ impl Integrator for DirectLighting {
         "direct"
     }
 
+    fn chooses_lights_per_point(&self) -> bool {
+        true
+    }
+
     fn radiance<const N: usize, S: Sampler>(
         &self,
         view: &SceneView,

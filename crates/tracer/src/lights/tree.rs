@@ -25,10 +25,15 @@ const ONE_MINUS_EPSILON: f32 = super::ONE_MINUS_EPSILON;
 /// front), and their power.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct LightBounds {
+    /// Where the lights are.
     pub(crate) bounds: Aabb,
+    /// The axis of their normals' cone.
     pub(crate) w: Vec3,
+    /// Their power (any common scale: only ratios count).
     pub(crate) phi: f32,
+    /// cos θo: the normals' cone (1: one normal; −1: all directions).
     pub(crate) cos_theta_o: f32,
+    /// cos θe: how far past a normal they emit (0: a hemisphere).
     pub(crate) cos_theta_e: f32,
 }
 
@@ -44,9 +49,21 @@ fn sin_sub_clamped(sin_a: f32, cos_a: f32, sin_b: f32, cos_b: f32) -> f32 {
     if cos_a > cos_b { 0.0 } else { sin_a * cos_b - cos_a * sin_b }
 }
 
+/// sin θ from cos θ for θ in [0, π].
 #[inline]
 fn sin_from_cos(c: f32) -> f32 {
     (1.0 - c * c).max(0.0).sqrt()
+}
+
+/// The angle between unit vectors `a` and `b`, accurate where they are nearly parallel
+/// or opposite (where `acos` of their dot product loses ~10⁻³ rad; pbrt-v4's
+/// `AngleBetween`).
+fn angle_between(a: Vec3, b: Vec3) -> f32 {
+    if a.dot(b) < 0.0 {
+        PI - 2.0 * ((a + b).length() * 0.5).min(1.0).asin()
+    } else {
+        2.0 * ((a - b).length() * 0.5).min(1.0).asin()
+    }
 }
 
 /// The smallest cone (axis, cos of its half-angle) holding cones `a` and `b` (pbrt-v4's
@@ -54,7 +71,7 @@ fn sin_from_cos(c: f32) -> f32 {
 fn cone_union(a: (Vec3, f32), b: (Vec3, f32)) -> (Vec3, f32) {
     let theta_a = a.1.clamp(-1.0, 1.0).acos();
     let theta_b = b.1.clamp(-1.0, 1.0).acos();
-    let theta_d = a.0.dot(b.0).clamp(-1.0, 1.0).acos();
+    let theta_d = angle_between(a.0, b.0);
     if (theta_d + theta_b).min(PI) <= theta_a {
         return a;
     }
@@ -116,6 +133,7 @@ struct Estimate {
     /// The least squared distance the estimate divides by: half the box's diagonal
     /// (pbrt-v4's clamp), so that a point near or inside the box gets a bounded value.
     min_d2: f32,
+    /// As [`LightBounds`]'s, with the cone's sine.
     w: Vec3,
     phi: f32,
     cos_theta_o: f32,
@@ -181,7 +199,7 @@ struct Node {
 }
 
 /// The tree over a scene's sampled emitters (indices into `Lights::prims`).
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug)]
 pub(crate) struct LightTree {
     nodes: Vec<Node>,
     /// For each light, the turns from the root to its leaf (bit d: the child taken at
@@ -215,6 +233,8 @@ impl LightTree {
     /// Builds the subtree over `items`, whose trail so far is `trail` at `depth`; returns
     /// its bounds.
     fn build(&mut self, items: &mut [(u32, LightBounds)], trail: u64, depth: u32) -> LightBounds {
+        // At most MAX_SAOH_DEPTH levels by cost, then halves: ≤ 64 levels for 2³² lights.
+        debug_assert!(depth < 64, "a light tree deeper than its trails' 64 bits");
         if let [(light, b)] = items {
             self.trails[*light as usize] = trail;
             self.nodes.push(Node { estimate: Estimate::new(b), index: *light, leaf: true });
