@@ -89,33 +89,14 @@ fn direct_light_with_a_light_tree_agrees_with_power_sampling() {
 }
 
 /// `Auto` takes the tree from `TREE_FROM` emitters (the hall's 50 triangles and a ball),
-/// not for a single quad lamp, and the probability of every emitter at a point is what
-/// `sample_at` draws it with.
+/// not for a single quad lamp. (That `sample_at` draws each emitter with `prim_pmf_at`,
+/// over its area, is `tracer::lights`' unit test beside a sky and a point light.)
 #[test]
-fn auto_takes_the_tree_for_many_emitters_and_its_probabilities_match_its_samples() {
+fn auto_takes_the_tree_for_many_emitters_only() {
     let scene = hall();
-    let lights = Lights::with_sampler(&scene, LightSampler::Auto);
-    assert!(lights.has_tree());
+    assert!(Lights::with_sampler(&scene, LightSampler::Auto).has_tree());
     let mut one_lamp = Scene::default();
     one_lamp.add(&quad(Vec3::ZERO, -Vec3::Y, 0.5), lamp("lamp", [1.0; 3]));
     assert!(!Lights::with_sampler(&one_lamp, LightSampler::Auto).has_tree());
     assert!(!Lights::with_sampler(&scene, LightSampler::Power).has_tree());
-
-    let (p, n) = (Vec3::new(0.5, 0.0, -1.0), Vec3::Y);
-    let mut found = 0;
-    for i in 0..4096 {
-        let u = glam::Vec2::new((i as f32 + 0.5) / 4096.0, 0.37);
-        let Some(ls) = lights.sample_at(&scene, u, p, n) else { continue };
-        found += 1;
-        if let tracer::lights::LightSource::Primitive(prim) = ls.source {
-            let pmf = lights.prim_pmf_at(prim, p, n);
-            assert!(pmf > 0.0, "primitive {prim} drawn with probability 0");
-            // A triangle's area density is its probability over its area (half the lamp's).
-            if (prim as usize) < scene.triangles.len() {
-                let area = 2.0 * LAMP_HALF * LAMP_HALF;
-                assert!((ls.pdf * area - pmf).abs() <= 1e-4 * pmf, "primitive {prim}: pdf {} vs pmf {pmf}", ls.pdf);
-            }
-        }
-    }
-    assert!(found > 3900, "only {found} of 4096 draws found a light");
 }

@@ -404,9 +404,8 @@ fn light_samplers_render_the_same_light_and_the_gpu_refuses_the_tree() {
         means.push(exr_means(&out));
     }
     for c in 0..3 {
-        // Image means of 49,152 samples each: measured 0.3 % apart at most, power
-        // sampling's own standard error there about 0.7 %. (The pixel-by-pixel test is
-        // tests/tests/light_tree.rs; this is the CLI's path to it.)
+        // Image means of 49,152 samples each, measured 0.3 % apart at most (the
+        // pixel-by-pixel test is tests/tests/light_tree.rs; this is the CLI's path to it).
         let (a, b) = (means[0][c], means[1][c]);
         assert!((a - b).abs() < 0.025 * b, "channel {c}: tree {a}, power {b}");
     }

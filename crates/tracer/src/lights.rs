@@ -104,11 +104,10 @@ struct LightChoice {
     /// For each primitive id, its index in `prims` (`u32::MAX`: not an emitter).
     slot: Vec<u32>,
     /// The emitters' stretch of the unit interval, `[lo, hi)`: after the environment's,
-    /// before the punctual lights' (where [`Lights::choose`] puts them).
+    /// before the punctual lights' (where [`Lights::choose`] puts them). Its length is
+    /// their summed probability.
     lo: f32,
     hi: f32,
-    /// Its length: the emitters' summed probability.
-    share: f32,
 }
 
 /// How next-event estimation chooses among a scene's emitters.
@@ -322,7 +321,7 @@ impl Lights {
         let tree = tree::LightTree::new(&bounds);
         if !tree.is_empty() {
             let (lo, hi) = (self.bounds[0], self.bounds[self.prims.len()]);
-            self.tree = Some(LightChoice { tree, inv_areas, slot, lo, hi, share: hi - lo });
+            self.tree = Some(LightChoice { tree, inv_areas, slot, lo, hi });
         }
         self
     }
@@ -342,7 +341,7 @@ impl Lights {
             return self.sample(scene, u);
         }
         let (k, pmf, x) = c.tree.sample(p, n, rescale(u.x, c.lo, c.hi))?;
-        self.sample_prim(scene, k, Vec2::new(x, u.y), Some(c.share * pmf * c.inv_areas[k]))
+        self.sample_prim(scene, k, Vec2::new(x, u.y), Some((c.hi - c.lo) * pmf * c.inv_areas[k]))
     }
 
     /// The probability that [`Lights::sample_at`] picks primitive `prim` for `p`, `n`.
@@ -350,7 +349,7 @@ impl Lights {
     pub fn prim_pmf_at(&self, prim: u32, p: Vec3, n: Vec3) -> f32 {
         let Some(choice) = &self.tree else { return self.prim_pmf(prim) };
         match choice.slot.get(prim as usize) {
-            Some(&k) if k != u32::MAX => choice.share * choice.tree.pmf(k as usize, p, n),
+            Some(&k) if k != u32::MAX => (choice.hi - choice.lo) * choice.tree.pmf(k as usize, p, n),
             _ => 0.0,
         }
     }

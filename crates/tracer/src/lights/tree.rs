@@ -16,9 +16,6 @@ use bvh::Aabb;
 use glam::{Quat, Vec3};
 use std::f32::consts::PI;
 
-/// The largest f32 below 1.
-const ONE_MINUS_EPSILON: f32 = super::ONE_MINUS_EPSILON;
-
 /// What a node of the tree knows about its lights: where they are, into which directions
 /// they emit (a cone of normals, axis `w` and half-angle θo, widened by θe, the angle
 /// past a normal into which a light still emits: π/2 for a surface that emits on its
@@ -351,11 +348,11 @@ impl LightTree {
             }
             let p0 = a / total;
             if u < p0 {
-                u = (u / p0).min(ONE_MINUS_EPSILON);
+                u = super::rescale(u, 0.0, p0);
                 pmf *= p0;
                 node += 1;
             } else {
-                u = ((u - p0) / (1.0 - p0)).clamp(0.0, ONE_MINUS_EPSILON);
+                u = super::rescale(u, p0, 1.0);
                 // b / total, not 1 − p0: the same factor as `pmf`'s.
                 pmf *= b / total;
                 node = second;
