@@ -99,4 +99,12 @@ fn auto_takes_the_tree_for_many_emitters_only() {
     one_lamp.add(&quad(Vec3::ZERO, -Vec3::Y, 0.5), lamp("lamp", [1.0; 3]));
     assert!(!Lights::with_sampler(&one_lamp, LightSampler::Auto).has_tree());
     assert!(!Lights::with_sampler(&scene, LightSampler::Power).has_tree());
+    // The threshold itself: lamps of two triangles each, one short of it and at it.
+    for (lamps, tree) in [(LightSampler::TREE_FROM / 2 - 1, false), (LightSampler::TREE_FROM / 2, true)] {
+        let mut row = Scene::default();
+        for i in 0..lamps {
+            row.add(&quad(Vec3::new(i as f32, 0.0, 0.0), -Vec3::Y, 0.4), lamp("lamp", [1.0; 3]));
+        }
+        assert_eq!(Lights::with_sampler(&row, LightSampler::Auto).has_tree(), tree, "{lamps} lamps");
+    }
 }

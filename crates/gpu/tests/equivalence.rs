@@ -141,7 +141,7 @@ fn prepare_both(
     first_render: Option<&RenderSettings>,
 ) -> Result<(CpuScene, gpu::GpuScene), tracer::Error> {
     // Both choose emitters by power (the GPU's only way; the CPU's `auto` would take a
-    // light tree from 16 emitters), so that both run the same estimator.
+    // light tree from 8 emitters), so that both run the same estimator.
     let options = SceneOptions {
         first_render: first_render.map(|s| (s.sampler, s.mode)),
         light_sampler: tracer::LightSampler::Power,

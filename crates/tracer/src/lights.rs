@@ -110,11 +110,27 @@ struct LightChoice {
     hi: f32,
 }
 
+impl LightChoice {
+    /// Whether the first sample value `x` falls in the emitters' stretch.
+    #[inline(always)]
+    fn holds(&self, x: f32) -> bool {
+        x >= self.lo && x < self.hi
+    }
+
+    /// The emitter the tree chooses for `p`, `n` with `x` (in the emitters' stretch), `x`
+    /// rescaled within the choice, and the chosen point's density per unit area.
+    #[inline(always)]
+    fn choose(&self, x: f32, p: Vec3, n: Vec3) -> Option<(usize, f32, f32)> {
+        let (k, pmf, x) = self.tree.sample(p, n, rescale(x, self.lo, self.hi))?;
+        Some((k, x, (self.hi - self.lo) * pmf * self.inv_areas[k]))
+    }
+}
+
 /// How next-event estimation chooses among a scene's emitters.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum LightSampler {
     /// In proportion to power, the same for every shading point (Mitsuba 3's and the
-    /// GPU's choice; the lanes need it).
+    /// GPU's choice).
     Power,
     /// By a light tree (Conty Estevez & Kulla 2018): by what each emitter can give the
     /// shading point, estimated from bounds on position, orientation and power.
@@ -127,9 +143,10 @@ pub enum LightSampler {
 
 impl LightSampler {
     /// The emitters (triangles and shapes) from which [`LightSampler::Auto`] takes the
-    /// tree: between 8 and 18 separate lamps it began to reach a given error sooner than
-    /// power sampling in the lanes (docs/figures.md, "Many lights").
-    pub const TREE_FROM: usize = 16;
+    /// tree: at 8 (four lamps) the four-wide tree in the lanes reached a given error
+    /// 1.15× sooner than power sampling, at 2 (one lamp) 0.85–1.0× as soon
+    /// (docs/figures.md, "The light tree four wide and in the lanes").
+    pub const TREE_FROM: usize = 8;
 }
 
 /// A sun disk as escaping rays need it: which light, where and how large, and the
@@ -336,12 +353,27 @@ impl Lights {
     #[inline]
     pub fn sample_at(&self, scene: &Scene, u: Vec2, p: Vec3, n: Vec3) -> Option<LightSample> {
         let Some(c) = &self.tree else { return self.sample(scene, u) };
-        if !(u.x >= c.lo && u.x < c.hi) {
+        if !c.holds(u.x) {
             // The environment's or a punctual light's stretch, as without the tree.
             return self.sample(scene, u);
         }
-        let (k, pmf, x) = c.tree.sample(p, n, rescale(u.x, c.lo, c.hi))?;
-        self.sample_prim(scene, k, Vec2::new(x, u.y), Some((c.hi - c.lo) * pmf * c.inv_areas[k]))
+        let (k, x, pdf) = c.choose(u.x, p, n)?;
+        self.sample_prim(scene, k, Vec2::new(x, u.y), Some(pdf))
+    }
+
+    /// [`Lights::choose`] for a shading point `p` with normal `n`, as [`Lights::sample_at`]
+    /// chooses: the light's index, `x` rescaled within its stretch and, where a light tree
+    /// chose it, its density per unit area (`None`: the light's own by power). `None`
+    /// where the tree's walk finds nothing to choose. The caller checks as `choose` asks.
+    #[inline(always)]
+    pub(crate) fn choose_at(&self, x: f32, p: Vec3, n: Vec3) -> Option<(usize, f32, Option<f32>)> {
+        match &self.tree {
+            Some(c) if c.holds(x) => c.choose(x, p, n).map(|(k, x, pdf)| (k, x, Some(pdf))),
+            _ => {
+                let (k, x) = self.choose(x);
+                Some((k, x, None))
+            }
+        }
     }
 
     /// The probability that [`Lights::sample_at`] picks primitive `prim` for `p`, `n`.

@@ -23,7 +23,8 @@
 //!
 //! The specialisation ("model no more than a scene needs") applies where the scene is
 //! triangles only (no analytic shapes or instances), lit by its emissive triangles alone
-//! (no environment, punctual lights or suns), every emitter's colour an RGB uplift or a
+//! (no environment, punctual lights or suns; chosen by power or by a light tree for the
+//! shading point, one lane at a time), every emitter's colour an RGB uplift or a
 //! constant, no material disperses or absorbs, at least one material is an untextured
 //! [`brdf::Lambert`] with such colours (the surfaces the lanes shade), and there is no
 //! diffuse-depth limit ([`LaneScene::of`], [`LaneScene::admits`]). Anything else runs the
@@ -108,7 +109,6 @@ impl LaneScene {
             && scene.punctual_lights.is_empty()
             && view.lights.suns().is_empty()
             && view.lights.environment_pmf() == 0.0
-            && !view.lights.has_tree()
             && !view.dispersive
             && !view.absorbing
             && scene.material_ids.len() == scene.triangles.len();
@@ -302,6 +302,9 @@ struct Lanes<const N: usize> {
     prev_pdf: F,
     prev_specular: M,
     prev_p: V3,
+    /// `PathState::prev_n`: the previous vertex's geometric normal, which a light tree's
+    /// MIS weight reads (kept only where the scene's lights have a tree).
+    prev_n: V3,
     bounce: [u32; LANES],
     /// `PathState::eta_scale`, changed only at surfaces shaded one lane at a time.
     eta_scale: F,
@@ -320,9 +323,6 @@ pub(crate) fn radiance_block<const N: usize, S: Sampler>(
     block: &mut [CameraSample<N, S>],
     counters: &mut PathCounters,
 ) {
-    // The lanes choose lights by power and hand their paths on without a normal for the
-    // tree's MIS weight (`PathState::prev_n`): `LaneScene::of` admits no tree.
-    debug_assert!(!view.lights.has_tree(), "the lanes with a light tree");
     #[cfg(target_arch = "x86_64")]
     match bvh::isa::active() {
         // SAFETY: `active` is at most what the CPU has (detected), and each level has the
@@ -373,6 +373,8 @@ fn run<const N: usize, S: Sampler>(
 ) {
     let scene = view.scene;
     let lights = view.lights;
+    // Whether a light tree chooses the emitters by the shading point (`Lights::sample_at`).
+    let tree = lights.has_tree();
     let rgb = block.first().is_some_and(|s| s.wl.is_rgb());
     let mut st = Lanes::<N> {
         slot: [None; LANES],
@@ -385,6 +387,7 @@ fn run<const N: usize, S: Sampler>(
         prev_pdf: [0.0; LANES],
         prev_specular: [true; LANES],
         prev_p: V3::default(),
+        prev_n: V3::default(),
         bounce: [0; LANES],
         eta_scale: [1.0; LANES],
         extension_left: [0; LANES],
@@ -402,7 +405,10 @@ fn run<const N: usize, S: Sampler>(
     let (mut t0, mut t1, mut t2) = (V3::default(), V3::default(), V3::default());
     let mut albedo = Gathered::default();
     let mut emission = Gathered::default();
+    // The chance that light sampling picks the emitter hit: by power (whether light
+    // tracing samples it), and from the previous vertex (the MIS weight's).
     let mut pmf: F = [0.0; LANES];
+    let mut mis_pmf: F = [0.0; LANES];
     let (mut p, mut ng, mut wo) = (V3::default(), V3::default(), V3::default());
     let mut area: F = [0.0; LANES];
     // ω_o · n_g: which side the path arrived on, the emitter's cosine, the leak test's.
@@ -442,6 +448,7 @@ fn run<const N: usize, S: Sampler>(
             st.origin.set(k, s.ray.origin);
             st.dir.set(k, s.ray.dir);
             st.prev_p.set(k, s.ray.origin);
+            st.prev_n.set(k, Vec3::ZERO);
             for i in 0..N {
                 st.lambda[i][k] = s.wl.lambda[i];
                 st.beta[i][k] = 1.0;
@@ -507,6 +514,8 @@ fn run<const N: usize, S: Sampler>(
                 emissive[k] = true;
                 emission.set(k, e);
                 pmf[k] = lights.prim_pmf(hit.prim);
+                mis_pmf[k] =
+                    if tree { lights.prim_pmf_at(hit.prim, st.prev_p.get(k), st.prev_n.get(k)) } else { pmf[k] };
             }
         }
 
@@ -548,7 +557,7 @@ fn run<const N: usize, S: Sampler>(
                 } else {
                     let d = (p.x[k] - st.prev_p.x[k], p.y[k] - st.prev_p.y[k], p.z[k] - st.prev_p.z[k]);
                     let dist2 = (d.0 * d.0) + (d.1 * d.1) + (d.2 * d.2);
-                    let light_pdf = pmf[k] * dist2 / (cos_o[k] * area[k]);
+                    let light_pdf = mis_pmf[k] * dist2 / (cos_o[k] * area[k]);
                     power_heuristic(st.prev_pdf[k], light_pdf)
                 };
                 // As `path_vertex`: light that light tracing finds instead is left out.
@@ -625,23 +634,24 @@ fn run<const N: usize, S: Sampler>(
         // Next-event estimation: the light samples (one query each into the lights'
         // distribution), then their geometry, MIS weight and BSDF across the lanes.
         draws.draw(2, &st, &live, block, &mut ux, &mut uy);
-        // `Lights::sample` in two steps: the choice of a light and its data, one lane at
-        // a time, then the points across the lanes. A lane scene's lights are all
-        // triangles (no environment, shapes or punctual lights); a lane without a light
-        // keeps `lemissive` false and its stale values are never used.
+        // `Lights::sample_at` in two steps: the choice of a light (by power, or by the light
+        // tree for the hit point) and its data, one lane at a time, then the points across
+        // the lanes. A lane scene's lights are all triangles (no environment, shapes or
+        // punctual lights); a lane without a light keeps `lemissive` false and its stale
+        // values are never used.
         let mut lemissive: M = [false; LANES];
         if !lights.is_empty() {
             let n = lanes_where(&live, &mut list);
             for &k in &list[..n] {
                 let k = k as usize;
-                let (i, x) = lights.choose(ux[k]);
+                let Some((i, x, pdf)) = lights.choose_at(ux[k], p.get(k), ng.get(k)) else { continue };
                 let Some(t) = lights.triangle_light(i) else { continue };
                 ux[k] = x;
                 lv0.set(k, t.vertices[0]);
                 lv1.set(k, t.vertices[1]);
                 lv2.set(k, t.vertices[2]);
                 ln.set(k, t.normal);
-                lpdf[k] = t.pdf;
+                lpdf[k] = pdf.unwrap_or(t.pdf);
                 if let Some(e) = &ls.emission[scene.material_ids[t.prim as usize] as usize] {
                     lemissive[k] = true;
                     light_colour.set(k, e);
@@ -762,6 +772,14 @@ fn run<const N: usize, S: Sampler>(
             st.dir.y[k] = select_unpredictable(g, wi.y[k], st.dir.y[k]);
             st.dir.z[k] = select_unpredictable(g, wi.z[k], st.dir.z[k]);
             st.bounce[k] += g as u32;
+        }
+        if tree {
+            for k in 0..LANES {
+                let g = go[k];
+                st.prev_n.x[k] = select_unpredictable(g, ng.x[k], st.prev_n.x[k]);
+                st.prev_n.y[k] = select_unpredictable(g, ng.y[k], st.prev_n.y[k]);
+                st.prev_n.z[k] = select_unpredictable(g, ng.z[k], st.prev_n.z[k]);
+            }
         }
 
         // Russian roulette (`survives_roulette`): the sample values first.
@@ -890,8 +908,7 @@ fn vertex_in_one_lane<const N: usize, S: Sampler>(
         prev_pdf: st.prev_pdf[k],
         prev_specular: st.prev_specular[k],
         prev_p: st.prev_p.get(k),
-        // The lanes run only without a light tree (`LaneScene::of`), which alone reads it.
-        prev_n: Vec3::ZERO,
+        prev_n: st.prev_n.get(k),
         bounce: st.bounce[k],
         eta_scale: st.eta_scale[k],
         extension_left: st.extension_left[k],
@@ -908,6 +925,7 @@ fn vertex_in_one_lane<const N: usize, S: Sampler>(
     st.prev_pdf[k] = path.prev_pdf;
     st.prev_specular[k] = path.prev_specular;
     st.prev_p.set(k, path.prev_p);
+    st.prev_n.set(k, path.prev_n);
     st.bounce[k] = path.bounce;
     st.eta_scale[k] = path.eta_scale;
     st.extension_left[k] = path.extension_left;
@@ -926,7 +944,7 @@ fn vertex_in_one_lane<const N: usize, S: Sampler>(
 mod tests {
     use super::*;
     use crate::geometry::Geometry;
-    use crate::lights::Lights;
+    use crate::lights::{LightSampler, Lights};
     use crate::material::Material;
     use crate::mesh::{quad, uv_sphere};
     use crate::render::SceneOptions;
@@ -988,18 +1006,21 @@ mod tests {
         wl: impl Fn(f32) -> SampledWavelengths<N>,
         settings: PathSettings,
     ) {
-        lanes_equal_the_general_loop_with(scene, wl, settings, &|i| Pcg32::for_sample(7, i, 0));
+        lanes_equal_the_general_loop_with(scene, wl, settings, &|i| Pcg32::for_sample(7, i, 0), LightSampler::Power);
     }
 
-    /// As `lanes_equal_the_general_loop`, every sample drawing from `sampler(i)`.
+    /// As `lanes_equal_the_general_loop`, every sample drawing from `sampler(i)`, the
+    /// emitters chosen by `light_sampler`.
     fn lanes_equal_the_general_loop_with<const N: usize, S: Sampler>(
         scene: &Scene,
         wl: impl Fn(f32) -> SampledWavelengths<N>,
         settings: PathSettings,
         sampler: &impl Fn(u32) -> S,
+        light_sampler: LightSampler,
     ) {
         let geometry = Geometry::build(scene, &SceneOptions::default()).unwrap();
-        let lights = Lights::new(scene);
+        let lights = Lights::with_sampler(scene, light_sampler);
+        assert_eq!(lights.has_tree(), light_sampler == LightSampler::Tree);
         let view = SceneView::new(scene, &geometry, &lights);
         let lanes = view.lane_scene(&settings).expect("a scene for the lanes");
         let mut general = block(&wl, sampler);
@@ -1080,11 +1101,42 @@ mod tests {
         for (size, spp) in [(32, 16), (65_536, 2)] {
             let layout = ZSobolLayout::new(size, size, spp, 5);
             let zsobol = |i: u32| layout.sampler(i % 32, (i / 32) % 32, (i / 1024) % spp);
-            lanes_equal_the_general_loop_with(&scene, hero, base, &zsobol);
+            lanes_equal_the_general_loop_with(&scene, hero, base, &zsobol, LightSampler::Power);
         }
         let padded = |i: u32| PaddedSobol::new(i % 32, i / 32, i % 4, 4, 9);
-        lanes_equal_the_general_loop_with(&scene, hero, base, &padded);
-        lanes_equal_the_general_loop_with(&scene, |_| SampledWavelengths::<3>::rgb(), base, &padded);
+        lanes_equal_the_general_loop_with(&scene, hero, base, &padded, LightSampler::Power);
+        let rgb = |_| SampledWavelengths::<3>::rgb();
+        lanes_equal_the_general_loop_with(&scene, rgb, base, &padded, LightSampler::Power);
+    }
+
+    /// With a light tree the lanes choose each path's light for its hit point and weigh
+    /// the emitters their paths hit by the previous vertex's choice, as the general loop:
+    /// the same bits, in a room of 14 lamps (two facing away from much of it, one on the
+    /// glass sphere's side of the room), through paths that pass the surfaces shaded one
+    /// lane at a time.
+    #[test]
+    fn lanes_choose_lights_by_a_tree_bit_for_bit() {
+        let base = PathSettings { rr_depth: 2, ..Default::default() };
+        let mut scene = room();
+        let lamp = |c: Colour| Material::diffuse("lamp", Colour::constant(0.0)).unwrap().with_emission(c);
+        for i in 0..12 {
+            let (x, z) = (-0.75 + 0.3 * (i % 6) as f32, if i < 6 { -0.5 } else { 0.5 });
+            let (at, facing) = if i % 5 == 4 { (1.0, Vec3::Y) } else { (1.98, -Vec3::Y) };
+            let colour = Colour::illuminant_rgb([1.0 + 0.2 * i as f32, 1.0, 0.5]).unwrap();
+            scene.add(&quad(Vec3::new(x, at, z), facing, 0.06), lamp(colour));
+        }
+        let hero = SampledWavelengths::<4>::sample_hero;
+        let pcg = |i: u32| Pcg32::for_sample(7, i, 0);
+        lanes_equal_the_general_loop_with(&scene, hero, base, &pcg, LightSampler::Tree);
+        let layout = crate::sampler::ZSobolLayout::new(32, 32, 16, 5);
+        let zsobol = |i: u32| layout.sampler(i % 32, (i / 32) % 32, (i / 1024) % 16);
+        lanes_equal_the_general_loop_with(&scene, hero, base, &zsobol, LightSampler::Tree);
+        let rgb = |_| SampledWavelengths::<3>::rgb();
+        lanes_equal_the_general_loop_with(&scene, rgb, base, &pcg, LightSampler::Tree);
+        // Caustics left to light tracing: the emitters' power shares decide which, the
+        // tree's choice the MIS weight.
+        let caustics = PathSettings { leave_caustics: true, ..base };
+        lanes_equal_the_general_loop_with(&scene, hero, caustics, &pcg, LightSampler::Tree);
     }
 
     #[test]
@@ -1116,6 +1168,9 @@ mod tests {
         for shading_normals in [ShadingNormals::Adapted, ShadingNormals::FaceForward, ShadingNormals::Geometric] {
             assert!(runs(&view, &PathSettings { shading_normals, ..Default::default() }), "{shading_normals:?}");
         }
+        // The emitters chosen by a light tree.
+        let tree = Lights::with_sampler(&scene, LightSampler::Tree);
+        assert!(runs(&SceneView::new(&scene, &geometry, &tree), &PathSettings::default()), "with a light tree");
         // A diffuse-depth limit, or the switch off.
         assert!(!runs(&view, &PathSettings { max_diffuse_depth: 2, ..Default::default() }));
         assert!(!runs(&view, &PathSettings { lanes: false, ..Default::default() }));

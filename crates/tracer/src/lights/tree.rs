@@ -1,11 +1,17 @@
-//! A light tree: the emitters in a binary hierarchy whose nodes bound their lights'
-//! positions, emission directions and power, so that a shading point chooses a light in
-//! proportion to an estimate of what each part of the tree can give it, instead of in
-//! proportion to power alone (Conty Estevez & Kulla 2018, "Importance Sampling of Many
-//! Lights with Adaptive Tree Splitting"; the bounds, importance and build as pbrt-v4's
+//! A light tree: the emitters in a hierarchy whose nodes bound their lights' positions,
+//! emission directions and power, so that a shading point chooses a light in proportion
+//! to an estimate of what each part of the tree can give it, instead of in proportion to
+//! power alone (Conty Estevez & Kulla 2018, "Importance Sampling of Many Lights with
+//! Adaptive Tree Splitting"; the bounds, importance and build as pbrt-v4's
 //! `BVHLightSampler`, Pharr, Jakob & Humphreys, *Physically Based Rendering*, 4th ed.,
 //! §12.6.3). With many lights most of them are far, small or facing away from any given
 //! point, and power sampling spends its shadow rays on them.
+//!
+//! Built binary (pbrt-v4's split by cost), then collapsed to four children per node, whose
+//! estimates one pass of four-wide vector instructions computes: the walk takes half the
+//! levels, each choice is arithmetic instead of a branch, and a node's children are
+//! estimated from their own bounds rather than through their parents' looser ones
+//! (docs/figures.md, "The light tree four wide and in the lanes").
 //!
 //! The choice is unbiased however rough the estimate, as long as every light that can
 //! light a point has a non-zero probability there: the bounds are conservative (a node's
@@ -13,7 +19,7 @@
 //! no light of a node can reach the point.
 
 use bvh::Aabb;
-use glam::{Quat, Vec3};
+use glam::{Quat, Vec3, Vec4};
 use std::f32::consts::PI;
 
 /// What a node of the tree knows about its lights: where they are, into which directions
@@ -32,24 +38,6 @@ pub(crate) struct LightBounds {
     pub(crate) cos_theta_o: f32,
     /// cos θe: how far past a normal they emit (0: a hemisphere).
     pub(crate) cos_theta_e: f32,
-}
-
-/// cos(max(0, a − b)) from the sines and cosines of a and b (pbrt-v4's `cosSubClamped`).
-#[inline]
-fn cos_sub_clamped(sin_a: f32, cos_a: f32, sin_b: f32, cos_b: f32) -> f32 {
-    if cos_a > cos_b { 1.0 } else { cos_a * cos_b + sin_a * sin_b }
-}
-
-/// sin(max(0, a − b)) (pbrt-v4's `sinSubClamped`).
-#[inline]
-fn sin_sub_clamped(sin_a: f32, cos_a: f32, sin_b: f32, cos_b: f32) -> f32 {
-    if cos_a > cos_b { 0.0 } else { sin_a * cos_b - cos_a * sin_b }
-}
-
-/// sin θ from cos θ for θ in [0, π].
-#[inline]
-fn sin_from_cos(c: f32) -> f32 {
-    (1.0 - c * c).max(0.0).sqrt()
 }
 
 /// The angle between unit vectors `a` and `b`, accurate where they are nearly parallel
@@ -119,95 +107,159 @@ impl LightBounds {
     }
 }
 
-/// What [`Estimate::importance`] reads of a node's [`LightBounds`], precomputed once:
-/// the box's centre, its bounding sphere and the cone's sine (a node is estimated at
-/// every step of every light choice).
-#[derive(Clone, Copy, Debug)]
-struct Estimate {
-    centre: Vec3,
-    /// The bounding sphere's squared radius.
-    radius2: f32,
-    /// The least squared distance the estimate divides by: half the box's diagonal
-    /// (pbrt-v4's clamp), so that a point near or inside the box gets a bounded value.
-    min_d2: f32,
-    /// As [`LightBounds`]'s, with the cone's sine.
-    w: Vec3,
-    phi: f32,
-    cos_theta_o: f32,
-    sin_theta_o: f32,
-    cos_theta_e: f32,
+/// The build's cost of a node (Conty Estevez & Kulla 2018, §4.4): power × orientation
+/// measure × surface area. The split minimises its sum over both sides; the collapse to
+/// four children opens the costliest child first.
+fn saoh_cost(b: &LightBounds) -> f64 {
+    b.phi as f64 * b.orientation_measure() as f64 * b.bounds.surface_area().max(0.0) as f64
 }
 
-impl Estimate {
-    fn new(b: &LightBounds) -> Self {
+/// sin θ from cos θ for four angles in [0, π].
+#[inline(always)]
+fn sin_from_cos4(c: Vec4) -> Vec4 {
+    (Vec4::ONE - c * c).max(Vec4::ZERO).sqrt()
+}
+
+/// cos(max(0, a − b)) for four pairs (pbrt-v4's `cosSubClamped`).
+#[inline(always)]
+fn cos_sub_clamped4(sin_a: Vec4, cos_a: Vec4, sin_b: Vec4, cos_b: Vec4) -> Vec4 {
+    Vec4::select(cos_a.cmpgt(cos_b), Vec4::ONE, cos_a * cos_b + sin_a * sin_b)
+}
+
+/// A node of the tree: up to four children, each a light or another node, with what the
+/// importance estimate reads of each child's [`LightBounds`] precomputed (the box's
+/// centre, its bounding sphere, the cone's sine) and laid out as structure of arrays, so
+/// that one pass of four-wide vector instructions estimates all four children. A walk
+/// down a binary tree estimated two children per level, one level after the other, and
+/// mispredicted its branch to the next level half of the time; four children per level
+/// halve the levels, and the choice among them is arithmetic.
+#[derive(Clone, Copy, Debug)]
+struct Node {
+    centre: [Vec4; 3],
+    /// The bounding sphere's squared radius.
+    radius2: Vec4,
+    /// The least squared distance the estimate divides by: half the box's diagonal
+    /// (pbrt-v4's clamp), so that a point near or inside the box gets a bounded value.
+    min_d2: Vec4,
+    /// The cone's axis, as [`LightBounds::w`].
+    w: [Vec4; 3],
+    /// Power; zero in an unused slot, whose importance is then zero.
+    phi: Vec4,
+    cos_theta_o: Vec4,
+    sin_theta_o: Vec4,
+    cos_theta_e: Vec4,
+    /// Each slot's light (index into the tree's lights) or node.
+    child: [u32; 4],
+    /// Bit i: slot i holds a light.
+    lights: u8,
+}
+
+impl Node {
+    /// A node with no children (every slot's power zero).
+    const EMPTY: Self = Self {
+        centre: [Vec4::ZERO; 3],
+        radius2: Vec4::ZERO,
+        min_d2: Vec4::ZERO,
+        w: [Vec4::ZERO; 3],
+        phi: Vec4::ZERO,
+        cos_theta_o: Vec4::ZERO,
+        sin_theta_o: Vec4::ZERO,
+        cos_theta_e: Vec4::ZERO,
+        child: [0; 4],
+        lights: 0,
+    };
+
+    /// Puts bounds `b` in slot `i`, for a light (`light`) or a node.
+    fn set(&mut self, i: usize, b: &LightBounds, child: u32, light: bool) {
         let centre = b.bounds.centre();
-        Self {
-            centre,
-            radius2: centre.distance_squared(b.bounds.max),
-            min_d2: 0.5 * b.bounds.extent().length(),
-            w: b.w,
-            phi: b.phi,
-            cos_theta_o: b.cos_theta_o,
-            sin_theta_o: sin_from_cos(b.cos_theta_o),
-            cos_theta_e: b.cos_theta_e,
+        for (axis, row) in self.centre.iter_mut().enumerate() {
+            row[i] = centre[axis];
         }
+        for (axis, row) in self.w.iter_mut().enumerate() {
+            row[i] = b.w[axis];
+        }
+        self.radius2[i] = centre.distance_squared(b.bounds.max);
+        self.min_d2[i] = 0.5 * b.bounds.extent().length();
+        self.phi[i] = b.phi;
+        self.cos_theta_o[i] = b.cos_theta_o;
+        self.sin_theta_o[i] = (1.0 - b.cos_theta_o * b.cos_theta_o).max(0.0).sqrt();
+        self.cos_theta_e[i] = b.cos_theta_e;
+        self.child[i] = child;
+        self.lights |= (light as u8) << i;
     }
 
-    /// An upper estimate of what the node's lights give point `p` with normal `n`
+    /// An upper estimate of what each child's lights give point `p` with normal `n`
     /// (zero `n`: no cosine there): power over squared distance, times the cosine at the
     /// lights of the smallest angle between their cone and the direction to `p`, and the
     /// cosine at `p` of the smallest angle to the box, each angle reduced by the box's
     /// angular radius seen from `p` (pbrt-v4's `LightBounds::Importance`). Zero only where
-    /// no direction the lights emit into reaches `p`; finite and never negative.
+    /// no direction a child's lights emit into reaches `p` (and in unused slots); finite
+    /// and never negative.
     #[inline(always)]
-    fn importance(&self, p: Vec3, n: Vec3) -> f32 {
-        let d = p - self.centre;
-        let dist2 = d.length_squared();
-        let wi = if dist2 > 0.0 { d / dist2.sqrt() } else { Vec3::ZERO };
-        let cos_theta_w = self.w.dot(wi);
-        let sin_theta_w = sin_from_cos(cos_theta_w);
+    fn importance(&self, p: Vec3, n: Vec3) -> Vec4 {
+        let [cx, cy, cz] = &self.centre;
+        let (dx, dy, dz) = (Vec4::splat(p.x) - *cx, Vec4::splat(p.y) - *cy, Vec4::splat(p.z) - *cz);
+        let dist2 = dx * dx + dy * dy + dz * dz;
+        let inv = Vec4::select(dist2.cmpgt(Vec4::ZERO), dist2.sqrt().recip(), Vec4::ZERO);
+        let (wx, wy, wz) = (dx * inv, dy * inv, dz * inv);
+        let cos_theta_w = self.w[0] * wx + self.w[1] * wy + self.w[2] * wz;
+        let sin_theta_w = sin_from_cos4(cos_theta_w);
         // The box's angular radius from p, through its bounding sphere.
-        let cos_theta_b = if dist2 < self.radius2 { -1.0 } else { (1.0 - self.radius2 / dist2).max(0.0).sqrt() };
-        let sin_theta_b = sin_from_cos(cos_theta_b);
-        let cos_theta_x = cos_sub_clamped(sin_theta_w, cos_theta_w, self.sin_theta_o, self.cos_theta_o);
-        let sin_theta_x = sin_sub_clamped(sin_theta_w, cos_theta_w, self.sin_theta_o, self.cos_theta_o);
-        let cos_theta_p = cos_sub_clamped(sin_theta_x, cos_theta_x, sin_theta_b, cos_theta_b);
-        if cos_theta_p <= self.cos_theta_e {
-            return 0.0;
-        }
+        let outside = (Vec4::ONE - self.radius2 / dist2).max(Vec4::ZERO).sqrt();
+        let cos_theta_b = Vec4::select(dist2.cmplt(self.radius2), Vec4::NEG_ONE, outside);
+        let sin_theta_b = sin_from_cos4(cos_theta_b);
+        let within = cos_theta_w.cmpgt(self.cos_theta_o);
+        let cos_theta_x =
+            Vec4::select(within, Vec4::ONE, cos_theta_w * self.cos_theta_o + sin_theta_w * self.sin_theta_o);
+        let sin_theta_x =
+            Vec4::select(within, Vec4::ZERO, sin_theta_w * self.cos_theta_o - cos_theta_w * self.sin_theta_o);
+        let cos_theta_p = cos_sub_clamped4(sin_theta_x, cos_theta_x, sin_theta_b, cos_theta_b);
         let mut importance = self.phi * cos_theta_p / dist2.max(self.min_d2);
         if n != Vec3::ZERO {
-            let cos_theta_i = wi.dot(n).abs();
-            let sin_theta_i = sin_from_cos(cos_theta_i);
-            importance *= cos_sub_clamped(sin_theta_i, cos_theta_i, sin_theta_b, cos_theta_b);
+            let cos_theta_i = (wx * n.x + wy * n.y + wz * n.z).abs();
+            let sin_theta_i = sin_from_cos4(cos_theta_i);
+            importance *= cos_sub_clamped4(sin_theta_i, cos_theta_i, sin_theta_b, cos_theta_b);
         }
-        if importance.is_finite() { importance.max(0.0) } else { 0.0 }
+        // (NaN, from an unused slot's 0/0 or a point at a light's centre, fails both.)
+        let keep =
+            cos_theta_p.cmpgt(self.cos_theta_e) & importance.cmpge(Vec4::ZERO) & importance.cmplt(Vec4::INFINITY);
+        Vec4::select(keep, importance, Vec4::ZERO)
     }
-}
 
-/// A node: its estimate and either its light (a leaf) or its second child (the first
-/// follows it).
-#[derive(Clone, Copy, Debug)]
-struct Node {
-    estimate: Estimate,
-    /// Leaf: the light's index; interior: the second child's node index.
-    index: u32,
-    leaf: bool,
+    /// The children's importance for `p`, `n` as the ends of their stretches of
+    /// [0, total): `ends[i]` = the sum of slots 0..=i (`ends[3]` the total), in this order
+    /// of additions for [`LightTree::sample`] and [`LightTree::pmf`] alike.
+    #[inline(always)]
+    fn ends(&self, p: Vec3, n: Vec3) -> ([f32; 4], [f32; 4]) {
+        let e = self.importance(p, n).to_array();
+        let s1 = e[0] + e[1];
+        let s2 = s1 + e[2];
+        (e, [e[0], s1, s2, s2 + e[3]])
+    }
 }
 
 /// The tree over a scene's sampled emitters (indices into `Lights::prims`).
 #[derive(Clone, Debug)]
 pub(crate) struct LightTree {
+    /// The root first.
     nodes: Vec<Node>,
-    /// For each light, the turns from the root to its leaf (bit d: the child taken at
-    /// depth d, 1 for the second).
-    trails: Vec<u64>,
+    /// For each light, the slots from the root to it (bits 2d and 2d + 1: the slot taken
+    /// at depth d).
+    trails: Vec<u128>,
 }
 
-/// Deeper than this the build splits by count, so that every trail fits its 64 bits.
+/// Deeper than this the binary build splits by count, so that the four-wide tree is at
+/// most 64 levels deep and every trail fits its 128 bits.
 const MAX_SAOH_DEPTH: u32 = 32;
 /// Buckets per axis of the build's split search (pbrt-v4's 12).
 const BUCKETS: usize = 12;
+
+/// A node of the binary tree the build makes before it is collapsed to four children.
+struct BinaryNode {
+    bounds: LightBounds,
+    /// A light (its index), or the two children's node indices.
+    kind: Result<u32, (usize, usize)>,
+}
 
 impl LightTree {
     /// The tree over `lights` (light k's bounds at index k); lights of zero power are
@@ -217,7 +269,9 @@ impl LightTree {
         let mut items: Vec<(u32, LightBounds)> =
             lights.iter().enumerate().filter(|(_, b)| b.phi > 0.0).map(|(i, b)| (i as u32, *b)).collect();
         if !items.is_empty() {
-            tree.build(&mut items, 0, 0);
+            let mut binary = Vec::with_capacity(2 * items.len());
+            let root = Self::build(&mut binary, &mut items, 0);
+            tree.collapse(&binary, root, 0, 0);
         }
         tree
     }
@@ -227,27 +281,58 @@ impl LightTree {
         self.nodes.is_empty()
     }
 
-    /// Builds the subtree over `items`, whose trail so far is `trail` at `depth`; returns
-    /// its bounds.
-    fn build(&mut self, items: &mut [(u32, LightBounds)], trail: u64, depth: u32) -> LightBounds {
-        // At most MAX_SAOH_DEPTH levels by cost, then halves: ≤ 64 levels for 2³² lights.
-        debug_assert!(depth < 64, "a light tree deeper than its trails' 64 bits");
-        if let [(light, b)] = items {
-            self.trails[*light as usize] = trail;
-            self.nodes.push(Node { estimate: Estimate::new(b), index: *light, leaf: true });
-            return *b;
+    /// Builds the binary subtree over `items` at `depth` into `nodes`; returns its index.
+    fn build(nodes: &mut Vec<BinaryNode>, items: &mut [(u32, LightBounds)], depth: u32) -> usize {
+        // At most MAX_SAOH_DEPTH levels by cost, then halves: < 64 levels for 2³² lights.
+        debug_assert!(depth < 64, "a light tree deeper than its trails' 64 levels");
+        let bounds = if let [(light, b)] = items {
+            BinaryNode { bounds: *b, kind: Ok(*light) }
+        } else {
+            let mid = Self::split(items, depth);
+            let (left, right) = items.split_at_mut(mid);
+            let a = Self::build(nodes, left, depth + 1);
+            let b = Self::build(nodes, right, depth + 1);
+            BinaryNode { bounds: nodes[a].bounds.union(nodes[b].bounds), kind: Err((a, b)) }
+        };
+        nodes.push(bounds);
+        nodes.len() - 1
+    }
+
+    /// Makes the four-wide node for binary node `at` (whose trail so far is `trail`, at
+    /// `depth`): its children, opened costliest first until there are four (or only
+    /// lights); returns its index.
+    fn collapse(&mut self, binary: &[BinaryNode], at: usize, trail: u128, depth: u32) -> u32 {
+        let mut slots = match binary[at].kind {
+            Ok(_) => vec![at],
+            Err((a, b)) => vec![a, b],
+        };
+        while slots.len() < 4 {
+            let costliest = (0..slots.len())
+                .filter(|&i| binary[slots[i]].kind.is_err())
+                .max_by(|&i, &j| saoh_cost(&binary[slots[i]].bounds).total_cmp(&saoh_cost(&binary[slots[j]].bounds)));
+            let Some(i) = costliest else { break };
+            let Err((a, b)) = binary[slots[i]].kind else { unreachable!("an interior node") };
+            slots[i] = a;
+            slots.insert(i + 1, b);
         }
-        let mid = Self::split(items, depth);
-        let at = self.nodes.len();
-        // A placeholder, completed once both children are built.
-        self.nodes.push(Node { estimate: Estimate::new(&items[0].1), index: 0, leaf: false });
-        let (left, right) = items.split_at_mut(mid);
-        let a = self.build(left, trail, depth + 1);
-        let second = self.nodes.len() as u32;
-        let b = self.build(right, trail | (1 << depth), depth + 1);
-        let bounds = a.union(b);
-        self.nodes[at] = Node { estimate: Estimate::new(&bounds), index: second, leaf: false };
-        bounds
+        let index = self.nodes.len();
+        self.nodes.push(Node::EMPTY);
+        let mut node = Node::EMPTY;
+        for (i, &s) in slots.iter().enumerate() {
+            let trail = trail | (i as u128) << (2 * depth);
+            match binary[s].kind {
+                Ok(light) => {
+                    self.trails[light as usize] = trail;
+                    node.set(i, &binary[s].bounds, light, true);
+                }
+                Err(_) => {
+                    let child = self.collapse(binary, s, trail, depth + 1);
+                    node.set(i, &binary[s].bounds, child, false);
+                }
+            }
+        }
+        self.nodes[index] = node;
+        index as u32
     }
 
     /// Orders `items` and returns where the first child's end: the bucket boundary of
@@ -274,9 +359,7 @@ impl LightTree {
             return by_count(items, widest);
         }
         let diagonal = bounds.extent();
-        let cost = |b: &Option<LightBounds>| {
-            b.map_or(0.0, |b| b.phi as f64 * b.orientation_measure() as f64 * b.bounds.surface_area().max(0.0) as f64)
-        };
+        let cost = |b: &Option<LightBounds>| b.as_ref().map_or(0.0, saoh_cost);
         let bucket = |c: f32, axis: usize| -> usize {
             let f = (c - centroids.min[axis]) / extent[axis];
             ((f * BUCKETS as f32) as usize).min(BUCKETS - 1)
@@ -317,81 +400,59 @@ impl LightTree {
         if mid == 0 || mid == items.len() { by_count(items, axis) } else { mid }
     }
 
-    /// The two children's importance for `p`, `n`, and the second child's index. (Both
-    /// inlined here: the two estimates are independent, and the CPU overlaps them.)
-    #[inline(always)]
-    fn children(&self, node: usize, p: Vec3, n: Vec3) -> ([f32; 2], usize) {
-        let second = self.nodes[node].index as usize;
-        ([self.nodes[node + 1].estimate.importance(p, n), self.nodes[second].estimate.importance(p, n)], second)
-    }
-
     /// A light for point `p` with normal `n` (zero: none), chosen with `u` ∈ [0, 1)
     /// from the root down in proportion to the children's importance: its index, its
     /// probability and `u` rescaled to [0, 1) within its share (so that it can place
     /// the point on the light). `None` where no light can reach `p`.
     pub(crate) fn sample(&self, p: Vec3, n: Vec3, mut u: f32) -> Option<(usize, f32, f32)> {
-        let mut node = 0;
+        let mut node = self.nodes.first()?;
         let mut pmf = 1.0f32;
         loop {
-            let current = self.nodes.get(node)?;
-            if current.leaf {
-                if node > 0 || current.estimate.importance(p, n) > 0.0 {
-                    return Some((current.index as usize, pmf, u));
-                }
-                return None;
-            }
-            let ([a, b], second) = self.children(node, p, n);
-            let total = a + b;
+            let (e, ends) = node.ends(p, n);
+            let total = ends[3];
             // (Importances are finite and never negative.)
             if total <= 0.0 {
                 return None;
             }
-            let p0 = a / total;
-            if u < p0 {
-                u = super::rescale(u, 0.0, p0);
-                pmf *= p0;
-                node += 1;
-            } else {
-                u = super::rescale(u, p0, 1.0);
-                // b / total, not 1 − p0: the same factor as `pmf`'s.
-                pmf *= b / total;
-                node = second;
+            let x = u * total;
+            // The first slot whose stretch ends past x (a slot of no importance has an
+            // empty stretch and is passed over) …
+            let mut slot = (ends[0] <= x) as usize + (ends[1] <= x) as usize + (ends[2] <= x) as usize;
+            // … but x may round up to the total, past a last slot of no importance.
+            while slot > 0 && e[slot] <= 0.0 {
+                slot -= 1;
             }
+            let start = if slot == 0 { 0.0 } else { ends[slot - 1] };
+            u = super::rescale(x, start, ends[slot]);
+            pmf *= e[slot] / total;
+            let child = node.child[slot];
+            if node.lights & (1 << slot) != 0 {
+                return Some((child as usize, pmf, u));
+            }
+            node = &self.nodes[child as usize];
         }
     }
 
     /// The probability that [`LightTree::sample`] chooses `light` for `p`, `n`.
     pub(crate) fn pmf(&self, light: usize, p: Vec3, n: Vec3) -> f32 {
-        let Some(&trail) = self.trails.get(light) else { return 0.0 };
-        let mut node = 0;
+        let (Some(&trail), Some(mut node)) = (self.trails.get(light), self.nodes.first()) else { return 0.0 };
         let mut pmf = 1.0f32;
         let mut depth = 0;
         loop {
-            let Some(current) = self.nodes.get(node) else { return 0.0 };
-            if current.leaf {
-                // A light left out of the tree has trail 0 and would end at another leaf.
-                if current.index as usize != light {
-                    return 0.0;
-                }
-                if node == 0 && current.estimate.importance(p, n) <= 0.0 {
-                    return 0.0;
-                }
-                return pmf;
-            }
-            let ([a, b], second) = self.children(node, p, n);
-            let total = a + b;
+            let (e, ends) = node.ends(p, n);
+            let total = ends[3];
             // (Importances are finite and never negative.)
             if total <= 0.0 {
                 return 0.0;
             }
-            let right = (trail >> depth) & 1 == 1;
-            if right {
-                pmf *= b / total;
-                node = second;
-            } else {
-                pmf *= a / total;
-                node += 1;
+            let slot = (trail >> (2 * depth)) as usize & 3;
+            pmf *= e[slot] / total;
+            let child = node.child[slot];
+            if node.lights & (1 << slot) != 0 {
+                // A light left out of the tree has trail 0 and ends at another light.
+                return if child as usize == light { pmf } else { 0.0 };
             }
+            node = &self.nodes[child as usize];
             depth += 1;
         }
     }

@@ -179,16 +179,16 @@ fn lights_in_one_place_and_lights_without_power_build_a_usable_tree() {
 }
 
 /// Lights at x = 1.6ᵏ: each split by cost peels off the few farthest lights, a tree
-/// twenty and more levels deep (the depth limit, after which the build halves by count,
-/// guards its 64-bit trails: a debug assertion); the deep lights' trails still lead to
+/// ten and more levels deep (the depth limit, after which the build halves by count,
+/// guards its 128-bit trails: a debug assertion); the deep lights' trails still lead to
 /// them and the tree still samples what it says.
 #[test]
 fn lopsided_lights_build_a_deep_tree_whose_trails_hold() {
     let lights: Vec<LightBounds> =
         (0..80).map(|k| emitter(Vec3::new(1.6f32.powi(k), 0.0, 0.0), 0.1, Vec3::Y, 1.0)).collect();
     let tree = LightTree::new(&lights);
-    let deepest = tree.trails.iter().map(|t| 64 - t.leading_zeros()).max().unwrap();
-    assert!(deepest >= 12, "a shallow tree (deepest right turn at depth {deepest})");
+    let deepest = tree.trails.iter().map(|t| (128 - t.leading_zeros()).div_ceil(2)).max().unwrap();
+    assert!(deepest >= 8, "a shallow tree (deepest turn off the first slot at depth {deepest})");
     let p = Vec3::new(3.0, 2.0, 0.0);
     let sum: f64 = (0..lights.len()).map(|k| tree.pmf(k, p, Vec3::ZERO) as f64).sum();
     assert!((sum - 1.0).abs() < 1e-4, "{sum}");
