@@ -99,12 +99,18 @@ fn auto_takes_the_tree_for_many_emitters_only() {
     one_lamp.add(&quad(Vec3::ZERO, -Vec3::Y, 0.5), lamp("lamp", [1.0; 3]));
     assert!(!Lights::with_sampler(&one_lamp, LightSampler::Auto).has_tree());
     assert!(!Lights::with_sampler(&scene, LightSampler::Power).has_tree());
-    // The threshold itself: lamps of two triangles each, one short of it and at it.
-    for (lamps, tree) in [(LightSampler::TREE_FROM / 2 - 1, false), (LightSampler::TREE_FROM / 2, true)] {
+    // The threshold itself: one emitter short of it and at it (quad lamps of two
+    // triangles, then glowing balls of one emitter each).
+    for (emitters, tree) in [(LightSampler::TREE_FROM - 1, false), (LightSampler::TREE_FROM, true)] {
         let mut row = Scene::default();
-        for i in 0..lamps {
+        for i in 0..emitters / 2 {
             row.add(&quad(Vec3::new(i as f32, 0.0, 0.0), -Vec3::Y, 0.4), lamp("lamp", [1.0; 3]));
         }
-        assert_eq!(Lights::with_sampler(&row, LightSampler::Auto).has_tree(), tree, "{lamps} lamps");
+        for i in 2 * (emitters / 2)..emitters {
+            let ball = Sphere::new(Vec3::new(i as f32, 1.0, 0.0), 0.2, SphereMethod::default()).unwrap();
+            row.add_shape(ShapeKind::Sphere(ball), lamp("ball", [1.0; 3]));
+        }
+        assert_eq!(Lights::new(&row).emitter_count(), emitters);
+        assert_eq!(Lights::with_sampler(&row, LightSampler::Auto).has_tree(), tree, "{emitters} emitters");
     }
 }

@@ -144,8 +144,9 @@ pub enum LightSampler {
 impl LightSampler {
     /// The emitters (triangles and shapes) from which [`LightSampler::Auto`] takes the
     /// tree: at 8 (four lamps) the four-wide tree in the lanes reached a given error
-    /// 1.15× sooner than power sampling, at 2 (one lamp) 0.85–1.0× as soon
-    /// (docs/figures.md, "The light tree four wide and in the lanes").
+    /// 1.15× sooner than power sampling, at 2 (one lamp) about as soon (0.9–1.2×, within
+    /// the runs' spread); 3 to 7 were not measured, so 8 is the fewest where it was seen
+    /// to win (docs/figures.md, "The light tree four wide and in the lanes").
     pub const TREE_FROM: usize = 8;
 }
 

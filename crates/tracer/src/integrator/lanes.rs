@@ -303,7 +303,8 @@ struct Lanes<const N: usize> {
     prev_specular: M,
     prev_p: V3,
     /// `PathState::prev_n`: the previous vertex's geometric normal, which a light tree's
-    /// MIS weight reads (kept only where the scene's lights have a tree).
+    /// MIS weight reads (kept current by the lanes only where the scene's lights have a
+    /// tree; a vertex shaded one lane at a time sets it regardless).
     prev_n: V3,
     bounce: [u32; LANES],
     /// `PathState::eta_scale`, changed only at surfaces shaded one lane at a time.
@@ -405,10 +406,11 @@ fn run<const N: usize, S: Sampler>(
     let (mut t0, mut t1, mut t2) = (V3::default(), V3::default(), V3::default());
     let mut albedo = Gathered::default();
     let mut emission = Gathered::default();
-    // The chance that light sampling picks the emitter hit: by power (whether light
-    // tracing samples it), and from the previous vertex (the MIS weight's).
+    // The chance that light sampling picks the emitter hit: by power (the MIS weight's,
+    // and whether light tracing samples it), and by a light tree from the previous vertex
+    // (the MIS weight's where there is a tree).
     let mut pmf: F = [0.0; LANES];
-    let mut mis_pmf: F = [0.0; LANES];
+    let mut tree_pmf: F = [0.0; LANES];
     let (mut p, mut ng, mut wo) = (V3::default(), V3::default(), V3::default());
     let mut area: F = [0.0; LANES];
     // ω_o · n_g: which side the path arrived on, the emitter's cosine, the leak test's.
@@ -514,8 +516,9 @@ fn run<const N: usize, S: Sampler>(
                 emissive[k] = true;
                 emission.set(k, e);
                 pmf[k] = lights.prim_pmf(hit.prim);
-                mis_pmf[k] =
-                    if tree { lights.prim_pmf_at(hit.prim, st.prev_p.get(k), st.prev_n.get(k)) } else { pmf[k] };
+                if tree && !st.prev_specular[k] {
+                    tree_pmf[k] = lights.prim_pmf_at(hit.prim, st.prev_p.get(k), st.prev_n.get(k));
+                }
             }
         }
 
@@ -557,7 +560,8 @@ fn run<const N: usize, S: Sampler>(
                 } else {
                     let d = (p.x[k] - st.prev_p.x[k], p.y[k] - st.prev_p.y[k], p.z[k] - st.prev_p.z[k]);
                     let dist2 = (d.0 * d.0) + (d.1 * d.1) + (d.2 * d.2);
-                    let light_pdf = mis_pmf[k] * dist2 / (cos_o[k] * area[k]);
+                    let chance = if tree { tree_pmf[k] } else { pmf[k] };
+                    let light_pdf = chance * dist2 / (cos_o[k] * area[k]);
                     power_heuristic(st.prev_pdf[k], light_pdf)
                 };
                 // As `path_vertex`: light that light tracing finds instead is left out.
@@ -1111,13 +1115,16 @@ mod tests {
 
     /// With a light tree the lanes choose each path's light for its hit point and weigh
     /// the emitters their paths hit by the previous vertex's choice, as the general loop:
-    /// the same bits, in a room of 14 lamps (two facing away from much of it, one on the
-    /// glass sphere's side of the room), through paths that pass the surfaces shaded one
-    /// lane at a time.
+    /// the same bits, in a room of 15 lamps (two facing away from much of it, one on the
+    /// glass sphere's side of the room, one a rough emitter that the general loop shades
+    /// one lane at a time, with the normal the lanes hand it), through paths that pass the
+    /// surfaces shaded one lane at a time.
     #[test]
     fn lanes_choose_lights_by_a_tree_bit_for_bit() {
         let base = PathSettings { rr_depth: 2, ..Default::default() };
         let mut scene = room();
+        let rough = Material::builtin("rough lamp", brdf::ModelId::OrenNayar, &[]).unwrap();
+        scene.add(&quad(Vec3::new(-0.99, 1.5, 0.3), Vec3::X, 0.2), rough.with_emission(Colour::constant(3.0)));
         let lamp = |c: Colour| Material::diffuse("lamp", Colour::constant(0.0)).unwrap().with_emission(c);
         for i in 0..12 {
             let (x, z) = (-0.75 + 0.3 * (i % 6) as f32, if i < 6 { -0.5 } else { 0.5 });
@@ -1127,16 +1134,12 @@ mod tests {
         }
         let hero = SampledWavelengths::<4>::sample_hero;
         let pcg = |i: u32| Pcg32::for_sample(7, i, 0);
-        lanes_equal_the_general_loop_with(&scene, hero, base, &pcg, LightSampler::Tree);
         let layout = crate::sampler::ZSobolLayout::new(32, 32, 16, 5);
         let zsobol = |i: u32| layout.sampler(i % 32, (i / 32) % 32, (i / 1024) % 16);
         lanes_equal_the_general_loop_with(&scene, hero, base, &zsobol, LightSampler::Tree);
         let rgb = |_| SampledWavelengths::<3>::rgb();
         lanes_equal_the_general_loop_with(&scene, rgb, base, &pcg, LightSampler::Tree);
-        // Caustics left to light tracing: the emitters' power shares decide which, the
-        // tree's choice the MIS weight.
-        let caustics = PathSettings { leave_caustics: true, ..base };
-        lanes_equal_the_general_loop_with(&scene, hero, caustics, &pcg, LightSampler::Tree);
+        lanes_equal_the_general_loop_with(&scene, hero, base, &pcg, LightSampler::Tree);
     }
 
     #[test]

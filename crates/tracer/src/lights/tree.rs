@@ -182,7 +182,6 @@ impl Node {
         self.min_d2[i] = 0.5 * b.bounds.extent().length();
         self.phi[i] = b.phi;
         self.cos_theta_o[i] = b.cos_theta_o;
-        self.sin_theta_o[i] = (1.0 - b.cos_theta_o * b.cos_theta_o).max(0.0).sqrt();
         self.cos_theta_e[i] = b.cos_theta_e;
         self.child[i] = child;
         self.lights |= (light as u8) << i;
@@ -257,8 +256,16 @@ const BUCKETS: usize = 12;
 /// A node of the binary tree the build makes before it is collapsed to four children.
 struct BinaryNode {
     bounds: LightBounds,
-    /// A light (its index), or the two children's node indices.
-    kind: Result<u32, (usize, usize)>,
+    kind: BinaryKind,
+}
+
+/// What a [`BinaryNode`] holds.
+#[derive(Clone, Copy)]
+enum BinaryKind {
+    /// A light, by its index.
+    Light(u32),
+    /// Two children, by their node indices.
+    Split(usize, usize),
 }
 
 impl LightTree {
@@ -285,16 +292,16 @@ impl LightTree {
     fn build(nodes: &mut Vec<BinaryNode>, items: &mut [(u32, LightBounds)], depth: u32) -> usize {
         // At most MAX_SAOH_DEPTH levels by cost, then halves: < 64 levels for 2³² lights.
         debug_assert!(depth < 64, "a light tree deeper than its trails' 64 levels");
-        let bounds = if let [(light, b)] = items {
-            BinaryNode { bounds: *b, kind: Ok(*light) }
+        let node = if let [(light, b)] = items {
+            BinaryNode { bounds: *b, kind: BinaryKind::Light(*light) }
         } else {
             let mid = Self::split(items, depth);
             let (left, right) = items.split_at_mut(mid);
             let a = Self::build(nodes, left, depth + 1);
             let b = Self::build(nodes, right, depth + 1);
-            BinaryNode { bounds: nodes[a].bounds.union(nodes[b].bounds), kind: Err((a, b)) }
+            BinaryNode { bounds: nodes[a].bounds.union(nodes[b].bounds), kind: BinaryKind::Split(a, b) }
         };
-        nodes.push(bounds);
+        nodes.push(node);
         nodes.len() - 1
     }
 
@@ -302,16 +309,20 @@ impl LightTree {
     /// `depth`): its children, opened costliest first until there are four (or only
     /// lights); returns its index.
     fn collapse(&mut self, binary: &[BinaryNode], at: usize, trail: u128, depth: u32) -> u32 {
-        let mut slots = match binary[at].kind {
-            Ok(_) => vec![at],
-            Err((a, b)) => vec![a, b],
+        let children = |s: usize| match binary[s].kind {
+            BinaryKind::Light(_) => None,
+            BinaryKind::Split(a, b) => Some((a, b)),
+        };
+        let mut slots = match children(at) {
+            None => vec![at],
+            Some((a, b)) => vec![a, b],
         };
         while slots.len() < 4 {
             let costliest = (0..slots.len())
-                .filter(|&i| binary[slots[i]].kind.is_err())
+                .filter(|&i| children(slots[i]).is_some())
                 .max_by(|&i, &j| saoh_cost(&binary[slots[i]].bounds).total_cmp(&saoh_cost(&binary[slots[j]].bounds)));
             let Some(i) = costliest else { break };
-            let Err((a, b)) = binary[slots[i]].kind else { unreachable!("an interior node") };
+            let (a, b) = children(slots[i]).expect("an interior node");
             slots[i] = a;
             slots.insert(i + 1, b);
         }
@@ -321,16 +332,17 @@ impl LightTree {
         for (i, &s) in slots.iter().enumerate() {
             let trail = trail | (i as u128) << (2 * depth);
             match binary[s].kind {
-                Ok(light) => {
+                BinaryKind::Light(light) => {
                     self.trails[light as usize] = trail;
                     node.set(i, &binary[s].bounds, light, true);
                 }
-                Err(_) => {
+                BinaryKind::Split(..) => {
                     let child = self.collapse(binary, s, trail, depth + 1);
                     node.set(i, &binary[s].bounds, child, false);
                 }
             }
         }
+        node.sin_theta_o = sin_from_cos4(node.cos_theta_o);
         self.nodes[index] = node;
         index as u32
     }
@@ -410,8 +422,9 @@ impl LightTree {
         loop {
             let (e, ends) = node.ends(p, n);
             let total = ends[3];
-            // (Importances are finite and never negative.)
-            if total <= 0.0 {
+            // (Importances are finite and never negative; their sum is tested for
+            // overflow too, as in `pmf`.)
+            if !(total > 0.0 && total < f32::INFINITY) {
                 return None;
             }
             let x = u * total;
@@ -421,6 +434,10 @@ impl LightTree {
             // … but x may round up to the total, past a last slot of no importance.
             while slot > 0 && e[slot] <= 0.0 {
                 slot -= 1;
+            }
+            if e[slot] <= 0.0 {
+                // Only for a `u` outside [0, 1) (NaN): nothing to choose.
+                return None;
             }
             let start = if slot == 0 { 0.0 } else { ends[slot - 1] };
             u = super::rescale(x, start, ends[slot]);
@@ -441,8 +458,8 @@ impl LightTree {
         loop {
             let (e, ends) = node.ends(p, n);
             let total = ends[3];
-            // (Importances are finite and never negative.)
-            if total <= 0.0 {
+            // (Importances are finite and never negative; their sum may overflow.)
+            if !(total > 0.0 && total < f32::INFINITY) {
                 return 0.0;
             }
             let slot = (trail >> (2 * depth)) as usize & 3;
