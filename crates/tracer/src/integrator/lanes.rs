@@ -956,6 +956,11 @@ mod tests {
     use crate::scene::Scene;
     use spectral::SampledWavelengths;
 
+    /// A black Lambertian lamp that emits `c`.
+    fn lamp(c: Colour) -> Material {
+        Material::diffuse("lamp", Colour::constant(0.0)).unwrap().with_emission(c)
+    }
+
     /// A room: coloured diffuse walls (RGB uplifts), a grey constant, a smooth diffuse
     /// sphere, two lamps (one a coloured uplift, one a constant) and what the lanes shade
     /// one lane at a time: a glass sphere, a mirror and a rough (Oren–Nayar) panel. Walls
@@ -976,7 +981,6 @@ mod tests {
         scene.add(&quad(Vec3::new(0.99, 0.8, -0.4), -Vec3::X, 0.25), mirror);
         let rough = Material::builtin("rough", brdf::ModelId::OrenNayar, &[]).unwrap();
         scene.add(&quad(Vec3::new(0.4, 1.3, -0.99), Vec3::Z, 0.25), rough);
-        let lamp = |c: Colour| Material::diffuse("lamp", Colour::constant(0.0)).unwrap().with_emission(c);
         scene.add(
             &quad(Vec3::new(0.0, 1.99, 0.0), -Vec3::Y, 0.3),
             lamp(Colour::illuminant_rgb([4.0, 3.0, 2.0]).unwrap()),
@@ -1125,7 +1129,6 @@ mod tests {
         let mut scene = room();
         let rough = Material::builtin("rough lamp", brdf::ModelId::OrenNayar, &[]).unwrap();
         scene.add(&quad(Vec3::new(-0.99, 1.5, 0.3), Vec3::X, 0.2), rough.with_emission(Colour::constant(3.0)));
-        let lamp = |c: Colour| Material::diffuse("lamp", Colour::constant(0.0)).unwrap().with_emission(c);
         for i in 0..12 {
             let (x, z) = (-0.75 + 0.3 * (i % 6) as f32, if i < 6 { -0.5 } else { 0.5 });
             let (at, facing) = if i % 5 == 4 { (1.0, Vec3::Y) } else { (1.98, -Vec3::Y) };
