@@ -483,9 +483,10 @@ struct SceneArgs {
     #[arg(long)]
     wavefront: bool,
     /// How next-event estimation chooses a light: power (in proportion to power, the
-    /// same everywhere: the GPU's way), tree (a light tree, Conty Estevez & Kulla 2018: by
-    /// what each emitter can give the shading point — for scenes of many lights; CPU only)
-    /// or auto (the tree from 8 emitters on the CPU, else power).
+    /// same everywhere), tree (a light tree, Conty Estevez & Kulla 2018: by what each
+    /// emitter can give the shading point — for scenes of many lights; the path, direct,
+    /// atlas and path-caustics integrators) or auto (the tree from 8 emitters where the
+    /// integrator takes one, else power).
     #[arg(long, default_value = "auto", value_parser = parse_light_sampler)]
     light_sampler: tracer::LightSampler,
     /// Where to trace: cpu (rayon, every feature) or gpu (wgpu compute; hero mode, triangle

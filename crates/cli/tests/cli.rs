@@ -389,11 +389,12 @@ fn simd_levels_render_the_same_image_and_a_level_the_cpu_lacks_is_refused() {
 }
 
 /// `--light-sampler`: the hall of 64 lamps renders with the tree and by power to the
-/// same mean, a value that is not one is refused,
-/// and so is the tree on the GPU (where there is one; the capability itself is tested
-/// device-free in the gpu crate).
+/// same mean, a value that is not one is refused, and the GPU (where there is one) takes
+/// the tree too, says so and renders the CPU's image (its paths follow the CPU's for the
+/// same seed: tested pixel by pixel in the gpu crate's equivalence tests), while its bdpt,
+/// which chooses by power, refuses it with the way out.
 #[test]
-fn light_samplers_render_the_same_light_and_the_gpu_refuses_the_tree() {
+fn light_samplers_render_the_same_light_on_both_backends() {
     let dir = temp_dir("light-sampler");
     let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/many-lights.toml");
     let mut means = Vec::new();
@@ -401,6 +402,7 @@ fn light_samplers_render_the_same_light_and_the_gpu_refuses_the_tree() {
         let out = dir.join(format!("{sampler}.exr"));
         let o = render_small(&scene, (32, 24, 64), &out, &["--light-sampler", sampler, "--seed", "3"]);
         assert!(o.status.success(), "{sampler}: {}", stderr(&o));
+        assert_eq!(stderr(&o).contains("chosen by a light tree"), sampler == "tree", "{}", stderr(&o));
         means.push(exr_means(&out));
     }
     for c in 0..3 {
@@ -412,7 +414,17 @@ fn light_samplers_render_the_same_light_and_the_gpu_refuses_the_tree() {
     let o = spt(&["render", scene.to_str().unwrap(), "--light-sampler", "nearest"]);
     assert!(!o.status.success() && stderr(&o).contains("auto, power or tree"), "{}", stderr(&o));
     if gpu::require_gpu().is_some() {
-        let o = render_small(&scene, (8, 6, 1), &dir.join("gpu.exr"), &["--backend", "gpu", "--light-sampler", "tree"]);
+        let out = dir.join("gpu.exr");
+        let o =
+            render_small(&scene, (32, 24, 64), &out, &["--backend", "gpu", "--light-sampler", "tree", "--seed", "3"]);
+        assert!(o.status.success() && stderr(&o).contains("chosen by a light tree"), "{}", stderr(&o));
+        let gpu = exr_means(&out);
+        for c in 0..3 {
+            // The same seed: the CPU's paths, to rounding (measured 10⁻⁵ apart).
+            assert!((gpu[c] - means[0][c]).abs() < 0.002 * means[0][c], "channel {c}: gpu {gpu:?}, cpu {:?}", means[0]);
+        }
+        let bdpt = ["--backend", "gpu", "--integrator", "bdpt", "--light-sampler", "tree"];
+        let o = render_small(&scene, (8, 6, 1), &dir.join("bdpt.exr"), &bdpt);
         let err = stderr(&o);
         assert!(!o.status.success() && err.contains("light tree") && err.contains("--light-sampler"), "{err}");
     }

@@ -464,7 +464,7 @@ fn capabilities_with(integrator: GpuIntegrator, shader_f64: bool) -> Capabilitie
         // The path tracer alone has a wavefront (wgsl/wavefront.wgsl).
         wavefront: integrator == GpuIntegrator::Path,
         splats: integrator.splats(),
-        light_tree: false,
+        light_tree: integrator.takes_light_tree(),
     }
 }
 
@@ -655,6 +655,8 @@ struct SceneConstants {
     env_pmf: f32,
     scene_flags: u32,
     emitters: usize,
+    /// `Params::light_tree`.
+    light_tree: [u32; 4],
 }
 
 /// A scene as the flat arrays the kernel reads, built on the CPU; see the module docs.
@@ -744,7 +746,8 @@ impl SceneData {
             ..options
         };
         let build_time = start.elapsed();
-        let lights = tracer::lights::Lights::new(scene);
+        // (Power sampling's probabilities stay those of `Lights::new`, with a tree too.)
+        let lights = tracer::lights::Lights::with_sampler(scene, options.light_sampler);
         let pmfs = lights.prim_pmfs();
 
         // Per triangle in leaf order: its vertices, material, light pmf and the CPU's
@@ -993,6 +996,20 @@ impl SceneData {
         }
         tables.extend(punctual_spectra);
 
+        // The light tree: its nodes, the primitive → emitter table, the trails.
+        let mut light_tree = [0; 4];
+        let tree = lights.tree_tables();
+        if let Some(t) = &tree {
+            light_tree[0] = tables.len() as u32;
+            tables.extend_from_slice(&t.nodes);
+            light_tree[1] = tables.len() as u32;
+            tables.extend(t.slots.iter().map(|&k| f32::from_bits(k)));
+            light_tree[2] = tables.len() as u32;
+            tables.extend(t.trails.iter().flatten().map(|&w| f32::from_bits(w)));
+            light_tree[3] = t.hi.to_bits();
+        }
+        let options = KernelOptions { light_tree: tree.is_some(), ..options };
+
         let constants = SceneConstants {
             integrator: options.integrator,
             white_offset,
@@ -1014,6 +1031,7 @@ impl SceneData {
             env_pmf: lights.environment_pmf(),
             scene_flags,
             emitters: lights.emitter_count(),
+            light_tree,
         };
         Ok(Self {
             constants,
@@ -1337,6 +1355,11 @@ impl GpuBackend {
             mode,
             bvh_builder: options.bvh_builder.unwrap_or(KernelOptions::default().bvh_builder),
             wavefront: options.wavefront,
+            light_sampler: if self.integrator.takes_light_tree() {
+                options.light_sampler
+            } else {
+                tracer::LightSampler::Power
+            },
             ..KernelOptions::default()
         }
     }
@@ -1455,7 +1478,7 @@ impl GpuBackend {
             integrator: None,
             total: start.elapsed(),
             emitters: data.constants.emitters,
-            light_tree: false,
+            light_tree: data.options.light_tree,
             accelerator: match data.options.nodes {
                 NodeLayout::Binary => "binary BVH",
                 NodeLayout::Wide4 { .. } => "4-wide BVH",
@@ -1801,6 +1824,7 @@ impl GpuScene {
             zseed_hi: (zseed >> 32) as u32,
             max_diffuse_depth: settings.path.max_diffuse_depth,
             region: [region.x, region.y, region.width, region.height],
+            light_tree: self.constants.light_tree,
             film_density: rays.pixels_per_steradian(forward) / region.pixel_count() as f32,
             ..Params::default()
         }

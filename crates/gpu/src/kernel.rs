@@ -198,6 +198,11 @@ wgsl_struct! {
         /// The region rendered (x, y, width, height; the whole image but for a crop
         /// window): bdpt's splats land only there and its camera density counts its pixels.
         region: [u32; 4],
+        /// The light tree (`wgsl/lights.wgsl`, `tracer::lights::LightTreeTables`): the
+        /// offsets in `pt_tables` of its nodes, of the primitive → emitter table and of the
+        /// trails, and the upper end of the emitters' stretch of the unit interval (f32
+        /// bits; the lower is `env_pmf`). Zeros without a tree.
+        light_tree: [u32; 4],
     }
 }
 
@@ -257,6 +262,15 @@ impl GpuIntegrator {
     /// and the subpaths' scratch (bindings 13 and 14) and its film takes splat sums.
     pub fn splats(self) -> bool {
         self == Self::Bdpt
+    }
+
+    /// Whether its next-event estimation chooses emitters by a light tree where the scene
+    /// has one (`pt_sample_light_at`; as the CPU's integrators that declare
+    /// `Integrator::chooses_lights_per_point`): the path tracer, direct light and the
+    /// atlas's direct light. bdpt's and Whitted's light samples stay by power, as on the
+    /// CPU.
+    pub fn takes_light_tree(self) -> bool {
+        matches!(self, Self::Path | Self::Direct | Self::Atlas(_))
     }
 
     /// The code `PT_INTEGRATOR` holds.
@@ -504,6 +518,13 @@ pub struct KernelOptions {
     /// entry points and their buffers, bindings 15 and 16 and group 1) rather than as
     /// `pt_main`'s megakernel alone.
     pub wavefront: bool,
+    /// How next-event estimation chooses emitters, as asked (`SceneOptions::light_sampler`;
+    /// [`tracer::LightSampler::Power`] for an integrator that does not take a tree,
+    /// [`GpuIntegrator::takes_light_tree`]).
+    pub light_sampler: tracer::LightSampler,
+    /// Whether the scene's emitters are chosen by a light tree (`PT_LIGHT_TREE`; set by
+    /// `SceneData::new` from `light_sampler` and the scene's emitters).
+    pub light_tree: bool,
 }
 
 /// A default kernel: the watertight test, the binary tree, the path tracer, ZSobol, hero
@@ -528,6 +549,8 @@ impl Default for KernelOptions {
             env_map: false,
             bvh_builder: crate::backend::triangle_build_config().method,
             wavefront: false,
+            light_sampler: tracer::LightSampler::Power,
+            light_tree: false,
         }
     }
 }
@@ -635,6 +658,7 @@ pub fn header(options: &KernelOptions) -> String {
     u("PT_POLYGON_CROSSING", polygon_test_code(shapes::polygon::InsideTest::CrossingNumber));
     u("PT_STACK", stack);
     u("PT_INTEGRATOR", options.integrator.code());
+    u("PT_TREE_NODE_FLOATS", tracer::lights::LIGHT_TREE_NODE_FLOATS as u32);
     u("PT_SAMPLER", sampler_code(options.sampler));
     u("PT_SEED_DIMENSIONS", tracer::sampler::PRECOMPUTED_DIMENSIONS);
     for kind in SamplerKind::ALL {
@@ -660,6 +684,7 @@ pub fn header(options: &KernelOptions) -> String {
     let _ = writeln!(out, "const PT_HAS_SHAPES: bool = {};", options.shapes);
     let _ = writeln!(out, "const PT_HAS_INSTANCES: bool = {};", options.instances);
     let _ = writeln!(out, "const PT_HAS_PUNCTUAL: bool = {};", options.punctual_lights);
+    let _ = writeln!(out, "const PT_LIGHT_TREE: bool = {};", options.light_tree);
     let _ = writeln!(out, "const PT_RGB: bool = {};", options.mode == SpectralMode::Rgb);
     let _ = writeln!(out, "const PT_BINS40: bool = {};", options.mode == SpectralMode::Bins40);
     let _ = writeln!(out, "const PT_HAS_TEXTURES: bool = {};", options.textures);

@@ -21,7 +21,7 @@ use crate::kernel::Params;
 
 /// Bytes of one path's state (`PtWfPath` in `wgsl/wavefront.wgsl`, as naga lays it out;
 /// `crates/gpu/tests/kernel.rs` checks it).
-pub const PATH_BYTES: u64 = 256;
+pub const PATH_BYTES: u64 = 272;
 
 /// Invocations per workgroup of the per-path stages (`PT_WF_GROUP`, which
 /// `crates/gpu/tests/kernel.rs` checks).
@@ -121,7 +121,7 @@ impl Buffers {
         let slots = slots.max(1);
         if slots > max_slots(limits) {
             return Err(GpuError::Limit {
-                what: "one wave of the wavefront's paths (one per pixel of a band, 256 bytes each)",
+                what: "one wave of the wavefront's paths (one per pixel of a band, 272 bytes each)",
                 needed: slots * PATH_BYTES,
                 limit_name: "wave size (max_compute_workgroups_per_dimension × 64 paths, at most 1 GiB)",
                 limit: max_slots(limits) * PATH_BYTES,

@@ -140,8 +140,8 @@ fn prepare_both(
     scene: &Scene,
     first_render: Option<&RenderSettings>,
 ) -> Result<(CpuScene, gpu::GpuScene), tracer::Error> {
-    // Both choose emitters by power (the GPU's only way; the CPU's `auto` would take a
-    // light tree from 8 emitters), so that both run the same estimator.
+    // Both choose emitters by power (as Mitsuba does; both backends' `auto` would take a
+    // light tree from 8 emitters, which `the_light_tree_chooses_as_on_the_cpu` tests).
     let options = SceneOptions {
         first_render: first_render.map(|s| (s.sampler, s.mode)),
         light_sampler: tracer::LightSampler::Power,
@@ -484,13 +484,25 @@ fn unsupported_scenes_and_modes_are_clear_errors() {
     for width in [bvh::BvhWidth::Auto, bvh::BvhWidth::Two, bvh::BvhWidth::Four, bvh::BvhWidth::Eight] {
         caps.check_scene(&room, &SceneOptions { bvh_width: width, ..SceneOptions::default() }).unwrap();
     }
-    // Emitters are chosen by power: a light tree is refused with the way out, power and
-    // auto (which means power here) are accepted.
+    // The path tracer, direct light and the atlas choose emitters by a light tree where
+    // asked (as on the CPU); Whitted, bdpt and ambient occlusion by power only: a tree is
+    // refused there with the way out, power and auto (which means power there) accepted.
     let light = |light_sampler| SceneOptions { light_sampler, ..SceneOptions::default() };
-    let err = caps.check_scene(&room, &light(tracer::LightSampler::Tree)).unwrap_err().to_string();
-    assert!(err.contains("light tree") && err.contains("--light-sampler"), "{err}");
-    caps.check_scene(&room, &light(tracer::LightSampler::Power)).unwrap();
-    caps.check_scene(&room, &light(tracer::LightSampler::Auto)).unwrap();
+    for sampler in [tracer::LightSampler::Tree, tracer::LightSampler::Power, tracer::LightSampler::Auto] {
+        caps.check_scene(&room, &light(sampler)).unwrap();
+    }
+    for integrator in [GpuIntegrator::Direct, GpuIntegrator::Atlas(Default::default())] {
+        gpu::backend::capabilities_for(integrator).check_scene(&room, &light(tracer::LightSampler::Tree)).unwrap();
+    }
+    for integrator in
+        [GpuIntegrator::Whitted, GpuIntegrator::Bdpt, GpuIntegrator::AmbientOcclusion { max_distance: 1.0 }]
+    {
+        let by_power = gpu::backend::capabilities_for(integrator);
+        let err = by_power.check_scene(&room, &light(tracer::LightSampler::Tree)).unwrap_err().to_string();
+        assert!(err.contains("light tree") && err.contains("--light-sampler"), "{err}");
+        by_power.check_scene(&room, &light(tracer::LightSampler::Power)).unwrap();
+        by_power.check_scene(&room, &light(tracer::LightSampler::Auto)).unwrap();
+    }
     // Textures and environment maps are read.
     let mut textured = room.clone();
     let image = std::sync::Arc::new(tracer::texture::TextureImage::from_rgba8(1, 1, vec![[9, 9, 9, 255]]).unwrap());
@@ -720,6 +732,81 @@ fn direct_lighting_and_ambient_occlusion_match_the_cpu() {
         assert!(r.cpu.channel_means()[1] > 0.01, "{name}: a black image proves nothing");
         failures.extend(compare_all(&format!("Cornell box, {name}"), &r));
     }
+    assert!(failures.is_empty(), "{failures:#?}");
+}
+
+/// A hall for the light tree: a floor and a back wall under a 4 × 4 grid of small lamps
+/// facing down (powers varying fourfold, large and low enough that BSDF samples find them,
+/// so that a wrong MIS weight for those hits shows), a glowing ball (an analytic shape in
+/// the tree), a point light and a dim sky (which keep their shares of the choice beside the
+/// tree's).
+fn lamp_hall() -> Scene {
+    let mut scene = Scene::default();
+    let grey = Material::diffuse("grey", Colour::constant(0.6)).unwrap();
+    scene.add(&quad(Vec3::ZERO, Vec3::Y, 5.0), grey.clone());
+    scene.add(&quad(Vec3::new(0.0, 2.0, -5.0), Vec3::Z, 5.0), grey);
+    let lamp = |name: &str, rgb: [f32; 3]| {
+        Material::diffuse(name, Colour::constant(0.0)).unwrap().with_emission(Colour::illuminant_rgb(rgb).unwrap())
+    };
+    for i in 0..4 {
+        for j in 0..4 {
+            let s = 2.0 * (1 + (i * 3 + j) % 4) as f32;
+            let centre = Vec3::new(-3.6 + 2.4 * i as f32, 0.8, -3.6 + 2.4 * j as f32);
+            let rgb = [[1.0, 0.75, 0.45], [0.55, 0.7, 1.0]][(i + j) % 2].map(|c| c * s);
+            scene.add(&quad(centre, -Vec3::Y, 0.4), lamp(&format!("lamp{i}{j}"), rgb));
+        }
+    }
+    let ball = shapes::sphere::Sphere::new(Vec3::new(1.2, 0.3, 1.0), 0.3, Default::default()).unwrap();
+    scene.add_shape(tracer::ShapeKind::Sphere(ball), lamp("ball", [2.0, 1.5, 1.0]));
+    scene
+        .punctual_lights
+        .push(tracer::PunctualLight::point(Vec3::new(-2.0, 3.0, 2.0), Colour::illuminant_rgb([3.0; 3]).unwrap()));
+    scene.environment = Some(Environment::uniform(Colour::illuminant_rgb([0.01, 0.014, 0.02]).unwrap()));
+    scene.camera =
+        Some(Camera { eye: Vec3::new(0.0, 2.5, 6.5), center: Vec3::new(0.0, 0.3, 0.0), up: Vec3::Y, fov_y_deg: 60.0 });
+    scene
+}
+
+/// `--light-sampler tree` on the GPU: the path tracer (megakernel and wavefront) and
+/// direct light choose emitters by the CPU's light tree (its nodes, walk and trails in
+/// `wgsl/lights.wgsl`), so that same-seed renders follow the CPU's paths — which the GPU's
+/// power sampling, unbiased too, does not (checked: the test can tell them apart) — and
+/// other seeds pass the z-tests. The path tracer's MIS weights of lamps hit by BSDF samples
+/// read the tree's probability from the previous vertex.
+#[test]
+fn the_light_tree_chooses_as_on_the_cpu() {
+    use tracer::{Backend, DirectLighting, LightSampler};
+    let Some(ctx) = gpu::require_gpu() else { return };
+    let scene = lamp_hall();
+    let s = settings(24, 18, 64);
+    let by = |light_sampler| SceneOptions { light_sampler, ..SceneOptions::default() };
+    let path = GpuBackend::with_context(ctx.clone());
+    let cpu_path = CpuBackend::new(2).unwrap().prepare_cpu(scene.clone(), &by(LightSampler::Tree)).unwrap();
+    let cpu_direct = CpuBackend::with_integrator(2, DirectLighting)
+        .unwrap()
+        .prepare(scene.clone(), &by(LightSampler::Tree))
+        .unwrap();
+    let direct = GpuBackend::with_context(ctx).with_integrator(GpuIntegrator::Direct);
+    let wavefront = SceneOptions { wavefront: true, ..by(LightSampler::Tree) };
+    let cases: [(&str, &dyn PreparedScene, &GpuBackend, SceneOptions); 3] = [
+        ("path", &cpu_path, &path, by(LightSampler::Tree)),
+        ("path, wavefront", &cpu_path, &path, wavefront),
+        ("direct", cpu_direct.as_ref(), &direct, by(LightSampler::Tree)),
+    ];
+    let mut failures = Vec::new();
+    for (name, cpu, backend, options) in cases {
+        let gpu_scene = backend.prepare_gpu(scene.clone(), &options).unwrap();
+        assert!(gpu_scene.stats().light_tree && gpu_scene.stats().emitters == 33, "{name}: {:?}", gpu_scene.stats());
+        let r = render_three_with(cpu, &gpu_scene, &s).unwrap();
+        assert!(r.cpu.channel_means()[1] > 0.01, "{name}: a black image proves nothing");
+        failures.extend(compare_all(&format!("lamp hall, {name}"), &r));
+        failures.extend(paths_follow_the_cpu(&format!("lamp hall, {name}"), &r, 0.05));
+    }
+    // By power, the GPU's same-seed paths leave the CPU tree's.
+    let power = path.prepare_gpu(scene.clone(), &by(LightSampler::Power)).unwrap();
+    assert!(!power.stats().light_tree);
+    let r = render_three_with(&cpu_path, &power, &s).unwrap();
+    assert!(paths_follow_the_cpu("lamp hall, power against the tree", &r, 0.05).is_some());
     assert!(failures.is_empty(), "{failures:#?}");
 }
 

@@ -25,6 +25,8 @@ fn options(triangle_test: bvh::TriangleTest) -> KernelOptions {
         env_map: true,
         bvh_builder: bvh::SplitMethod::BinnedSah,
         wavefront: false,
+        light_sampler: tracer::LightSampler::Tree,
+        light_tree: true,
     }
 }
 
@@ -161,6 +163,7 @@ fn shared_constants_are_the_rust_values() {
     assert_eq!(constant(&module, "PT_VIS_TANH_HI"), f(spectral::sampled::VIS_TANH_HI));
     assert_eq!(constant(&module, "PT_OFFSET_INT_SCALE"), f(shapes::offset::OFFSET_INT_SCALE));
     assert_eq!(constant(&module, "PT_MAX_BOUNCES"), vec![gpu::backend::MAX_BOUNCES as f64]);
+    assert_eq!(constant(&module, "PT_TREE_NODE_FLOATS"), vec![tracer::lights::LIGHT_TREE_NODE_FLOATS as f64]);
     let row = spectral::colour::XYZ_TO_SRGB[1];
     assert_eq!(constant(&module, "PT_XYZ_TO_SRGB_G"), row.map(|v| v as f64).to_vec());
     for mode in tracer::shading::ShadingNormals::ALL {

@@ -13,6 +13,8 @@ use std::f32::consts::PI;
 
 mod tree;
 
+pub use tree::NODE_FLOATS as LIGHT_TREE_NODE_FLOATS;
+
 /// What a light sample was taken on.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum LightSource {
@@ -126,11 +128,34 @@ impl LightChoice {
     }
 }
 
+/// A light tree as flat arrays, for a backend that walks it elsewhere (the GPU's
+/// `wgsl/lights.wgsl`), from [`Lights::tree_tables`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct LightTreeTables {
+    /// The nodes, root first, [`LIGHT_TREE_NODE_FLOATS`] floats each: twelve rows of four
+    /// floats, one per child slot — the slot's box centre x, y, z, its bounding sphere's
+    /// squared radius, the least squared distance the estimate divides by, its cone axis
+    /// x, y, z, power (0: an unused slot), cos θo, sin θo, cos θe — then the four children
+    /// (u32 bits: an entry of [`Lights::prims`] where the mask's bit is set, else a node),
+    /// the mask (bit i: slot i holds a light) and three zeros.
+    pub nodes: Vec<f32>,
+    /// For each entry of [`Lights::prims`], the slots from the root to it: four words, low
+    /// bits first, bits 2d and 2d + 1 the slot taken at depth d.
+    pub trails: Vec<[u32; 4]>,
+    /// For each primitive id, its entry in [`Lights::prims`] (`u32::MAX`: not sampled).
+    pub slots: Vec<u32>,
+    /// The emitters' stretch `[lo, hi)` of the unit interval the first sample value falls
+    /// in (after the environment's, before the punctual lights'); its length is their
+    /// summed probability, by which the tree's own probabilities are scaled.
+    pub lo: f32,
+    /// See `lo`.
+    pub hi: f32,
+}
+
 /// How next-event estimation chooses among a scene's emitters.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum LightSampler {
-    /// In proportion to power, the same for every shading point (Mitsuba 3's and the
-    /// GPU's choice).
+    /// In proportion to power, the same for every shading point (Mitsuba 3's choice).
     Power,
     /// By a light tree (Conty Estevez & Kulla 2018): by what each emitter can give the
     /// shading point, estimated from bounds on position, orientation and power.
@@ -342,6 +367,15 @@ impl Lights {
             self.tree = Some(LightChoice { tree, inv_areas, slot, lo, hi });
         }
         self
+    }
+
+    /// The light tree as flat arrays, for a backend that walks it elsewhere; `None`
+    /// without one. Its walk there is [`Lights::sample_at`]'s and its probabilities
+    /// [`Lights::prim_pmf_at`]'s.
+    pub fn tree_tables(&self) -> Option<LightTreeTables> {
+        let c = self.tree.as_ref()?;
+        let (nodes, trails) = c.tree.flatten();
+        Some(LightTreeTables { nodes, trails, slots: c.slot.clone(), lo: c.lo, hi: c.hi })
     }
 
     /// Whether the emitters are chosen by a light tree ([`LightSampler::Tree`]).

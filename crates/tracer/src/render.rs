@@ -234,8 +234,9 @@ pub struct Capabilities {
     /// the whole image that can be rendered alone.
     pub splats: bool,
     /// Whether it chooses emitters by a light tree ([`LightSampler::Tree`]; the CPU's
-    /// integrators that declare [`crate::Integrator::chooses_lights_per_point`]), or by
-    /// power only (the GPU and the others, where [`LightSampler::Auto`] means power).
+    /// integrators that declare [`crate::Integrator::chooses_lights_per_point`], the GPU's
+    /// path tracer, direct light and atlas), or by power only (the others, where
+    /// [`LightSampler::Auto`] means power).
     pub light_tree: bool,
 }
 
@@ -296,8 +297,8 @@ impl Capabilities {
         if options.light_sampler == LightSampler::Tree && !self.light_tree {
             return Err(unsupported(
                 format!("a light tree for the {} integrator", self.integrator),
-                "it chooses emitters by power: leave --light-sampler at auto or power (the CPU's path, \
-                 path-caustics, direct and atlas integrators take the tree)",
+                "it chooses emitters by power: leave --light-sampler at auto or power (the path, direct \
+                 and atlas integrators take the tree on either backend, path-caustics on the CPU)",
             ));
         }
         if !self.bvh_builders

@@ -1,6 +1,9 @@
 // Light sampling, mirroring crates/tracer/src/lights.rs (`Lights::sample`): the
 // environment owns [0, env_pmf) of the unit interval, emissive triangles the rest by
 // their cdf; with the uniform sphere and triangle maps of crates/brdf/src/sampling.rs.
+// Where the kernel has a light tree (`PT_LIGHT_TREE`), the emitters' stretch of the
+// interval is chosen by it for the shading point (`Lights::sample_at`; the tree as
+// crates/tracer/src/lights/tree.rs lays it out, `LightTreeTables`).
 
 // `brdf::sampling::uniform_sphere`.
 fn pt_uniform_sphere(u: vec2f) -> vec3f {
@@ -126,7 +129,13 @@ fn pt_sample_light(u_in: vec2f) -> PtLightSample {
         below = pt_light_f(k - 1u, PT_LIGHT_CDF);
     }
     let u = vec2f(pt_rescale(u_in.x, below, pt_light_f(k, PT_LIGHT_CDF)), u_in.y);
-    let pmf = pt_light_f(k, PT_LIGHT_PMF);
+    return pt_sample_entry(k, u, pt_light_f(k, PT_LIGHT_PMF));
+}
+
+// A sample of entry `k` of the light table, chosen with probability `pmf`, from `u`
+// (`Lights::sample_prim` and `Lights::sample_punctual`).
+fn pt_sample_entry(k: u32, u: vec2f, pmf: f32) -> PtLightSample {
+    var ls: PtLightSample;
     ls.kind = pt_light_u(k, PT_LIGHT_KIND);
     ls.entry = k;
     ls.material = pt_light_u(k, PT_LIGHT_MATERIAL);
@@ -261,4 +270,190 @@ fn pt_suns_seen(dir: vec3f, lambda: vec4f, bsdf_pdf: f32, weighted: bool) -> vec
         }
     }
     return l;
+}
+
+// ---- The light tree (`tracer::lights::tree`): `pt_params.light_tree` holds the offsets in
+// `pt_tables` of its nodes (PT_TREE_NODE_FLOATS floats each: twelve rows of four slots,
+// then the children and the lights mask), of the primitive → emitter table and of the
+// trails (four words per emitter), and the end of the emitters' stretch of the unit
+// interval (bits; it starts at `env_pmf`).
+
+// Row `row` of node `node`: one value per child slot.
+fn pt_tree_row(node: u32, row: u32) -> vec4f {
+    let b = pt_params.light_tree.x + PT_TREE_NODE_FLOATS * node + 4u * row;
+    return vec4f(pt_tables[b], pt_tables[b + 1u], pt_tables[b + 2u], pt_tables[b + 3u]);
+}
+
+// sin θ from cos θ, θ ∈ [0, π] (tree.rs: `sin_from_cos4`).
+fn pt_sin_from_cos4(c: vec4f) -> vec4f {
+    return sqrt(max(vec4f(1.0) - c * c, vec4f(0.0)));
+}
+
+// cos(max(0, a − b)) (tree.rs: `cos_sub_clamped4`, pbrt-v4's `cosSubClamped`).
+fn pt_cos_sub_clamped4(sin_a: vec4f, cos_a: vec4f, sin_b: vec4f, cos_b: vec4f) -> vec4f {
+    return select(cos_a * cos_b + sin_a * sin_b, vec4f(1.0), cos_a > cos_b);
+}
+
+// What each child of `node` can give point `p` with normal `n` (zero: no cosine there), as
+// tree.rs's `Node::importance` (pbrt-v4's `LightBounds::Importance`). Zero in unused slots
+// and where no direction a child's lights emit into reaches `p`. WGSL does not promise
+// NaN or ∞, so the divisions that can meet a zero on the CPU (which then drops the slot
+// by its NaN) are kept off it here: the same values wherever the CPU's are finite.
+fn pt_tree_importance(node: u32, p: vec3f, n: vec3f) -> vec4f {
+    let dx = vec4f(p.x) - pt_tree_row(node, 0u);
+    let dy = vec4f(p.y) - pt_tree_row(node, 1u);
+    let dz = vec4f(p.z) - pt_tree_row(node, 2u);
+    let radius2 = pt_tree_row(node, 3u);
+    let min_d2 = pt_tree_row(node, 4u);
+    let phi = pt_tree_row(node, 8u);
+    let cos_theta_o = pt_tree_row(node, 9u);
+    let sin_theta_o = pt_tree_row(node, 10u);
+    let cos_theta_e = pt_tree_row(node, 11u);
+    let dist2 = dx * dx + dy * dy + dz * dz;
+    let positive = dist2 > vec4f(0.0);
+    let safe_d2 = select(vec4f(1.0), dist2, positive);
+    let inv = select(vec4f(0.0), vec4f(1.0) / sqrt(safe_d2), positive);
+    let wx = dx * inv;
+    let wy = dy * inv;
+    let wz = dz * inv;
+    let cos_theta_w = pt_tree_row(node, 5u) * wx + pt_tree_row(node, 6u) * wy + pt_tree_row(node, 7u) * wz;
+    let sin_theta_w = pt_sin_from_cos4(cos_theta_w);
+    // The box's angular radius from p, through its bounding sphere.
+    let outside = sqrt(max(vec4f(1.0) - radius2 / safe_d2, vec4f(0.0)));
+    let cos_theta_b = select(outside, vec4f(-1.0), dist2 < radius2);
+    let sin_theta_b = pt_sin_from_cos4(cos_theta_b);
+    let within = cos_theta_w > cos_theta_o;
+    let cos_theta_x = select(cos_theta_w * cos_theta_o + sin_theta_w * sin_theta_o, vec4f(1.0), within);
+    let sin_theta_x = select(sin_theta_w * cos_theta_o - cos_theta_w * sin_theta_o, vec4f(0.0), within);
+    let cos_theta_p = pt_cos_sub_clamped4(sin_theta_x, cos_theta_x, sin_theta_b, cos_theta_b);
+    let d2 = max(dist2, min_d2);
+    var importance = phi * cos_theta_p / select(vec4f(1.0), d2, d2 > vec4f(0.0));
+    if any(n != vec3f(0.0)) {
+        let cos_theta_i = abs(wx * n.x + wy * n.y + wz * n.z);
+        importance *= pt_cos_sub_clamped4(pt_sin_from_cos4(cos_theta_i), cos_theta_i, sin_theta_b, cos_theta_b);
+    }
+    let keep = (cos_theta_p > cos_theta_e) & (phi > vec4f(0.0)) & (d2 > vec4f(0.0)) & (importance > vec4f(0.0));
+    return select(vec4f(0.0), importance, keep);
+}
+
+// Child `slot` of `node` (an emitter where the node's mask has bit `slot`, else a node),
+// and whether it is an emitter.
+fn pt_tree_child(node: u32, slot: u32) -> vec2u {
+    let b = pt_params.light_tree.x + PT_TREE_NODE_FLOATS * node + 48u;
+    let mask = bitcast<u32>(pt_tables[b + 4u]);
+    return vec2u(bitcast<u32>(pt_tables[b + slot]), (mask >> slot) & 1u);
+}
+
+// The emitter the tree chooses for `p`, `n` with `u` ∈ [0, 1) (`LightTree::sample`): its
+// entry of the light table, the probability of the choice and `u` rescaled within its
+// share; `valid` false where no emitter can reach `p`.
+struct PtTreeChoice {
+    k: u32,
+    pmf: f32,
+    u: f32,
+    valid: bool,
+}
+
+fn pt_tree_sample(p: vec3f, n: vec3f, u_in: f32) -> PtTreeChoice {
+    var out = PtTreeChoice(0u, 0.0, 0.0, false);
+    var node = 0u;
+    var pmf = 1.0;
+    var u = u_in;
+    // (At most 64 levels: the trails' 128 bits.)
+    for (var depth = 0u; depth < 64u; depth++) {
+        let e = pt_tree_importance(node, p, n);
+        let ends = vec4f(e.x, e.x + e.y, e.x + e.y + e.z, e.x + e.y + e.z + e.w);
+        let total = ends.w;
+        if !(total > 0.0) {
+            return out;
+        }
+        let x = u * total;
+        // The first slot whose stretch ends past x, but never one of no importance (x may
+        // round up to the total, past a last slot of none).
+        var slot = u32(ends.x <= x) + u32(ends.y <= x) + u32(ends.z <= x);
+        while slot > 0u && e[slot] <= 0.0 {
+            slot -= 1u;
+        }
+        if e[slot] <= 0.0 {
+            return out;
+        }
+        var start = 0.0;
+        if slot > 0u {
+            start = ends[slot - 1u];
+        }
+        u = pt_rescale(x, start, ends[slot]);
+        pmf *= e[slot] / total;
+        let child = pt_tree_child(node, slot);
+        if child.y != 0u {
+            return PtTreeChoice(child.x, pmf, u, true);
+        }
+        node = child.x;
+    }
+    return out;
+}
+
+// The probability that `pt_tree_sample` chooses emitter `k` for `p`, `n` (`LightTree::pmf`):
+// the walk down its trail.
+fn pt_tree_pmf(k: u32, p: vec3f, n: vec3f) -> f32 {
+    let t = pt_params.light_tree.z + 4u * k;
+    let trail = vec4u(bitcast<u32>(pt_tables[t]), bitcast<u32>(pt_tables[t + 1u]),
+        bitcast<u32>(pt_tables[t + 2u]), bitcast<u32>(pt_tables[t + 3u]));
+    var node = 0u;
+    var pmf = 1.0;
+    for (var depth = 0u; depth < 64u; depth++) {
+        let e = pt_tree_importance(node, p, n);
+        let total = e.x + e.y + e.z + e.w;
+        if !(total > 0.0) {
+            return 0.0;
+        }
+        let slot = (trail[depth / 16u] >> (2u * (depth % 16u))) & 3u;
+        pmf *= e[slot] / total;
+        let child = pt_tree_child(node, slot);
+        if child.y != 0u {
+            return select(0.0, pmf, child.x == k);
+        }
+        node = child.x;
+    }
+    return 0.0;
+}
+
+// The upper end of the emitters' stretch of the unit interval (the lower: `env_pmf`).
+fn pt_tree_hi() -> f32 {
+    return bitcast<f32>(pt_params.light_tree.w);
+}
+
+// `Lights::sample_at`: a light sample for the shading point `p` with geometric normal `n`;
+// by the tree where the kernel has one and the first value falls in the emitters'
+// stretch, else as `pt_sample_light`.
+fn pt_sample_light_at(u_in: vec2f, p: vec3f, n: vec3f) -> PtLightSample {
+    if PT_LIGHT_TREE {
+        let lo = pt_params.env_pmf;
+        let hi = pt_tree_hi();
+        if u_in.x >= lo && u_in.x < hi {
+            let c = pt_tree_sample(p, n, pt_rescale(u_in.x, lo, hi));
+            if !c.valid {
+                var none: PtLightSample;
+                none.valid = false;
+                none.material = PT_NO_HIT;
+                return none;
+            }
+            return pt_sample_entry(c.k, vec2f(c.u, u_in.y), (hi - lo) * c.pmf);
+        }
+    }
+    return pt_sample_light(u_in);
+}
+
+// The probability that next-event estimation at `prev_p` (normal `prev_n`) chooses the
+// emitter `sf` lies on (`Lights::prim_pmf_at`): by the tree where the kernel has one, else
+// its share of the power. (Only sampled emitters have a share; a placed object's triangle
+// never is one, so its own primitive id is not looked up.)
+fn pt_emitter_pmf(sf: PtSurface, prev_p: vec3f, prev_n: vec3f) -> f32 {
+    if PT_LIGHT_TREE && sf.prim_pmf > 0.0 {
+        let k = bitcast<u32>(pt_tables[pt_params.light_tree.y + sf.prim]);
+        if k == PT_NO_HIT {
+            return 0.0;
+        }
+        return (pt_tree_hi() - pt_params.env_pmf) * pt_tree_pmf(k, prev_p, prev_n);
+    }
+    return sf.prim_pmf;
 }

@@ -33,7 +33,8 @@ fn pt_lobe_leaks(ng: vec3f, wo_world: vec3f, wi_world: vec3f, flags: u32, two_si
 // A surface hit: position from the vertices, geometric and shading normals, tangent
 // (`SceneView::interaction`), and the primitive's material, light pmf and area. A shape's
 // surface is its intersection with the ray (o, d) again: the same root as in the traversal
-// (an implicit surface's: its point at the traversal's t, `pt_shape_surface`).
+// (an implicit surface's: its point at the traversal's t, `pt_shape_surface`). `prim` is
+// the CPU's primitive id (an object's own for a placed object's triangle).
 struct PtSurface {
     p: vec3f,
     ng: vec3f,
@@ -42,13 +43,15 @@ struct PtSurface {
     m: u32,
     prim_pmf: f32,
     area: f32,
+    prim: u32,
 }
 
 fn pt_surface(hit: PtHit, o: vec3f, d: vec3f) -> PtSurface {
     if pt_is_shape(hit.prim) {
         let rec = hit.prim & ~PT_SHAPE_PRIM_BIT;
         let h = pt_shape_surface(rec, o, d, hit.t);
-        return PtSurface(h.p, h.n, h.n, vec3f(0.0), pt_tu(rec + 1u), pt_tables[rec + 2u], pt_tables[rec + 3u]);
+        return PtSurface(h.p, h.n, h.n, vec3f(0.0), pt_tu(rec + 1u), pt_tables[rec + 2u], pt_tables[rec + 3u],
+            pt_tu(rec + 4u));
     }
     let i = hit.prim;
     // (A placed object's vertices are taken into world space first, as on the CPU.)
@@ -78,7 +81,8 @@ fn pt_surface(hit: PtHit, o: vec3f, d: vec3f) -> PtSurface {
         }
     }
     let m = pt_instance_material(hit, bitcast<u32>(pt_tri_verts[3u * i].w));
-    return PtSurface(p, it_ng, it_ns, tangent, m, pt_tri_verts[3u * i + 1u].w, area);
+    return PtSurface(p, it_ng, it_ns, tangent, m, pt_tri_verts[3u * i + 1u].w, area,
+        bitcast<u32>(pt_tri_verts[3u * i + 2u].w));
 }
 
 // The surface of `hit` on the ray (o, d) with its texture coordinates (returned) and the
@@ -154,7 +158,7 @@ struct PtNextEvent {
 }
 
 fn pt_next_event(at: PtShading, lambda: vec4f, u: vec2f, mis: bool, rays: ptr<function, u32>) -> PtNextEvent {
-    let ls = pt_sample_light(u);
+    let ls = pt_sample_light_at(u, at.sf.p, at.sf.ng);
     if !ls.valid {
         return PtNextEvent(vec4f(0.0), vec4f(0.0), 0.0, false);
     }
@@ -289,6 +293,9 @@ fn pt_radiance(
     var prev_pdf = 0.0;
     var prev_specular = true;
     var prev_p = origin;
+    // The previous vertex's geometric normal, which a light tree's estimate reads (the
+    // CPU's `PathState::prev_n`).
+    var prev_n = vec3f(0.0);
     var bounce = 0u;
     var extension_left = pt_params.specular_extension;
     // Non-specular hits so far, against `max_diffuse_depth` (the CPU's `diffuse_bounces`).
@@ -321,7 +328,7 @@ fn pt_radiance(
                     let dp = sf.p - prev_p;
                     let dist2 = dot(dp, dp);
                     let cos_l = dot(wo_world, sf.ng);
-                    let light_pdf = sf.prim_pmf * dist2 / (cos_l * sf.area);
+                    let light_pdf = pt_emitter_pmf(sf, prev_p, prev_n) * dist2 / (cos_l * sf.area);
                     w = pt_power_heuristic(prev_pdf, light_pdf);
                 }
                 l += beta * le * w;
@@ -395,6 +402,7 @@ fn pt_radiance(
         prev_pdf = s.pdf;
         prev_specular = pt_is_specular(s.flags);
         prev_p = sf.p;
+        prev_n = sf.ng;
         inside = select(PT_NO_HIT, m, dot(wi_world, sf.ng) < 0.0 && !two_sided && material_absorbing(m));
         o = pt_offset_ray_origin(sf.p, select(-sf.ng, sf.ng, dot(wi_world, sf.ng) > 0.0));
         d = wi_world;

@@ -120,6 +120,8 @@ struct PtPath {
     prev_p: vec3f,
     // Whether the previous BSDF sample was a delta (no MIS then): 0 or 1.
     prev_specular: u32,
+    // The previous vertex's geometric normal, which a light tree's estimate reads.
+    prev_n: vec3f,
     l: vec4f,
     beta: vec4f,
     bounce: u32,
@@ -131,7 +133,7 @@ struct PtPath {
 }
 
 fn pt_path_start(origin: vec3f, dir: vec3f) -> PtPath {
-    return PtPath(origin, 1.0, dir, 0.0, origin, 1u, vec4f(0.0), pt_unit_throughput(), 0u,
+    return PtPath(origin, 1.0, dir, 0.0, origin, 1u, vec3f(0.0), vec4f(0.0), pt_unit_throughput(), 0u,
         pt_params.specular_extension, 0u, PT_NO_HIT);
 }
 
@@ -187,7 +189,7 @@ fn pt_path_step(
                 let dp = sf.p - (*p).prev_p;
                 let dist2 = dot(dp, dp);
                 let cos_l = dot(wo_world, sf.ng);
-                let light_pdf = sf.prim_pmf * dist2 / (cos_l * sf.area);
+                let light_pdf = pt_emitter_pmf(sf, (*p).prev_p, (*p).prev_n) * dist2 / (cos_l * sf.area);
                 w = pt_power_heuristic((*p).prev_pdf, light_pdf);
             }
             (*p).l += beta * le * w;
@@ -236,7 +238,7 @@ fn pt_path_step(
 
     // Next-event estimation: one shadow ray to a point on a light.
     if pt_is_non_specular(flags) {
-        let ls = pt_sample_light(pt_next_2d(smp));
+        let ls = pt_sample_light_at(pt_next_2d(smp), sf.p, sf.ng);
         if ls.valid {
             let link = pt_light_link(at, lambda, ls);
             if link.e.valid {
@@ -266,6 +268,7 @@ fn pt_path_step(
     (*p).prev_pdf = s.pdf;
     (*p).prev_specular = select(0u, 1u, pt_is_specular(s.flags));
     (*p).prev_p = sf.p;
+    (*p).prev_n = sf.ng;
     (*p).inside = select(PT_NO_HIT, m, dot(wi_world, sf.ng) < 0.0 && !two_sided && material_absorbing(m));
     (*p).o = pt_offset_ray_origin(sf.p, select(-sf.ng, sf.ng, dot(wi_world, sf.ng) > 0.0));
     (*p).d = wi_world;

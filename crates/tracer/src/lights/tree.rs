@@ -250,6 +250,8 @@ pub(crate) struct LightTree {
 /// Deeper than this the binary build splits by count, so that the four-wide tree is at
 /// most 64 levels deep and every trail fits its 128 bits.
 const MAX_SAOH_DEPTH: u32 = 32;
+/// Floats per node in [`LightTree::flatten`]'s layout.
+pub const NODE_FLOATS: usize = 56;
 /// Buckets per axis of the build's split search (pbrt-v4's 12).
 const BUCKETS: usize = 12;
 
@@ -448,6 +450,37 @@ impl LightTree {
             }
             node = &self.nodes[child as usize];
         }
+    }
+
+    /// The tree as flat arrays for another backend (the GPU's `wgsl/lights.wgsl`): the
+    /// nodes, root first, [`NODE_FLOATS`] floats each — twelve rows of four (one per slot):
+    /// the centre's x, y and z, the squared radius, the least squared distance, the cone
+    /// axis's x, y and z, power, cos θo, sin θo and cos θe — then the four children (bits),
+    /// the lights bitmask (bits) and three zeros; and each light's trail as four words,
+    /// low bits first (bits 2d and 2d + 1: the slot taken at depth d).
+    pub(crate) fn flatten(&self) -> (Vec<f32>, Vec<[u32; 4]>) {
+        let mut nodes = Vec::with_capacity(NODE_FLOATS * self.nodes.len());
+        for n in &self.nodes {
+            let rows = [
+                n.centre[0],
+                n.centre[1],
+                n.centre[2],
+                n.radius2,
+                n.min_d2,
+                n.w[0],
+                n.w[1],
+                n.w[2],
+                n.phi,
+                n.cos_theta_o,
+                n.sin_theta_o,
+                n.cos_theta_e,
+            ];
+            nodes.extend(rows.iter().flat_map(|r| r.to_array()));
+            nodes.extend(n.child.map(f32::from_bits));
+            nodes.extend([f32::from_bits(n.lights as u32), 0.0, 0.0, 0.0]);
+        }
+        let trails = self.trails.iter().map(|&t| std::array::from_fn(|i| (t >> (32 * i)) as u32)).collect();
+        (nodes, trails)
     }
 
     /// The probability that [`LightTree::sample`] chooses `light` for `p`, `n`.
