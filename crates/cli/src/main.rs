@@ -105,6 +105,20 @@ struct InfoArgs {
 }
 
 /// `spt info`: a scene's contents, as loaded (before any default sky is added).
+
+/// `names` each once, in the order first met, with how often it occurs where more than
+/// once ("lamp ×4, floor").
+fn counted(names: Vec<String>) -> String {
+    let mut seen: Vec<(String, usize)> = Vec::new();
+    for n in names {
+        match seen.iter_mut().find(|(m, _)| *m == n) {
+            Some((_, k)) => *k += 1,
+            None => seen.push((n, 1)),
+        }
+    }
+    seen.iter().map(|(n, k)| if *k > 1 { format!("{n} ×{k}") } else { n.clone() }).collect::<Vec<_>>().join(", ")
+}
+
 fn run_info(args: InfoArgs) -> Result<()> {
     let (scene, cameras) = if is_gltf(&args.scene) {
         let loaded = load_gltf(&args.scene, None)?;
@@ -140,21 +154,16 @@ fn run_info(args: InfoArgs) -> Result<()> {
     for (kind, n) in &shape_kinds {
         println!("    {n} × {kind}");
     }
-    // Per model, each name once (OBJ files repeat materials), with how often it occurs.
-    let mut by_model: std::collections::BTreeMap<String, Vec<(&str, usize)>> = Default::default();
+    // Per model, each name once (OBJ files and copied meshes repeat materials), with how
+    // often it occurs.
+    let mut by_model: std::collections::BTreeMap<String, Vec<String>> = Default::default();
     for m in &scene.materials {
         let model = m.model().map_or("custom".to_string(), |id| id.name().to_string());
-        let names = by_model.entry(model).or_default();
-        match names.iter_mut().find(|(n, _)| *n == m.name) {
-            Some((_, k)) => *k += 1,
-            None => names.push((&m.name, 1)),
-        }
+        by_model.entry(model).or_default().push(m.name.clone());
     }
     println!("  materials: {}", scene.materials.len());
-    for (model, names) in &by_model {
-        let listed: Vec<String> =
-            names.iter().map(|&(n, k)| if k > 1 { format!("{n} ×{k}") } else { n.to_string() }).collect();
-        println!("    {model}: {}", listed.join(", "));
+    for (model, names) in by_model {
+        println!("    {model}: {}", counted(names));
     }
     let textured: Vec<&tracer::texture::MaterialTextures> =
         scene.materials.iter().filter_map(|m| m.textures.as_deref()).collect();
@@ -190,7 +199,7 @@ fn run_info(args: InfoArgs) -> Result<()> {
         "  lights: {emitting_triangles} emissive triangles, {emitting_shapes} emissive shapes ({} emissive \
          materials{}), environment: {}",
         emissive.len(),
-        if emissive.is_empty() { String::new() } else { format!(": {}", emissive.join(", ")) },
+        if emissive.is_empty() { String::new() } else { format!(": {}", counted(emissive.clone())) },
         if scene.environment.is_some() { "yes" } else { "none" }
     );
     if !scene.punctual_lights.is_empty() {

@@ -883,6 +883,12 @@ fn info_lists_geometry_materials_and_lights() {
     assert!(out.contains("lambert: white, lamp"), "{out}");
     assert!(out.contains("lights: 2 emissive triangles, 0 emissive shapes (1 emissive materials: lamp)"), "{out}");
     assert!(!out.contains("no light"), "{out}");
+    // A mesh copied per lamp repeats its material: each name once, with its count.
+    let hall = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/many-lights.toml");
+    let o = spt(&["info", hall.to_str().unwrap()]);
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(out.contains("(64 emissive materials: lamp0_0 ×4, lamp2_1 ×4,"), "{out}");
+    assert_eq!(out.matches("lamp0_0").count(), 2, "once among the materials, once among the lights: {out}");
     let dark = dir.join("dark.obj");
     std::fs::write(&dark, OBJ.replace("usemtl lamp\n", "usemtl white\n")).unwrap();
     let o = spt(&["info", dark.to_str().unwrap()]);
