@@ -104,8 +104,6 @@ struct InfoArgs {
     scene: PathBuf,
 }
 
-/// `spt info`: a scene's contents, as loaded (before any default sky is added).
-
 /// `names` each once, in the order first met, with how often it occurs where more than
 /// once ("lamp ×4, floor").
 fn counted(names: Vec<String>) -> String {
@@ -119,6 +117,7 @@ fn counted(names: Vec<String>) -> String {
     seen.iter().map(|(n, k)| if *k > 1 { format!("{n} ×{k}") } else { n.clone() }).collect::<Vec<_>>().join(", ")
 }
 
+/// `spt info`: a scene's contents, as loaded (before any default sky is added).
 fn run_info(args: InfoArgs) -> Result<()> {
     let (scene, cameras) = if is_gltf(&args.scene) {
         let loaded = load_gltf(&args.scene, None)?;
