@@ -758,6 +758,16 @@ mod tests {
         assert!(sum <= share + 1e-5 && (frequency(none) - (share - sum)).abs() < 1e-3, "{sum} of {share}, none {none}");
         // Both lamps face down over the point: all four triangles are chosen.
         assert!(prims.iter().all(|&k| k > 0), "{prims:?}");
+        // The tables another backend walks: the stretch, and each emitter's entry by id.
+        let t = lights.tree_tables().expect("a tree");
+        assert_eq!(t.lo, lights.environment_pmf());
+        assert!((t.hi - t.lo - share).abs() < 1e-6, "{t:?}");
+        assert_eq!(t.slots.len(), scene.triangles.len());
+        for (id, &k) in t.slots.iter().enumerate() {
+            assert_eq!(lights.prims().iter().position(|&p| p as usize == id).map_or(u32::MAX, |k| k as u32), k);
+        }
+        assert_eq!(t.trails.len(), lights.prims().len());
+        assert!(Lights::with_sampler(&scene, LightSampler::Power).tree_tables().is_none());
     }
 
     #[test]

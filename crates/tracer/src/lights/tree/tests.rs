@@ -203,3 +203,38 @@ fn lopsided_lights_build_a_deep_tree_whose_trails_hold() {
     assert!(none as f64 / 1e5 <= 1.0 - sum + 1e-4, "{none} walks found no light");
     assert!(drawn[..8].iter().all(|&d| d), "the lights near the point are drawn");
 }
+
+/// `flatten` loses nothing and lays the nodes out as documented (what the GPU's
+/// `wgsl/lights.wgsl` reads): each node read back from its floats by that layout is the
+/// node, bit for bit, and each trail's four words are the trail.
+#[test]
+fn the_flat_tables_hold_the_tree_in_the_documented_layout() {
+    for tree in [LightTree::new(&scattered(300, 11)), LightTree::new(&scattered(5, 3))] {
+        let (nodes, trails) = tree.flatten();
+        assert_eq!(nodes.len(), NODE_FLOATS * tree.nodes.len());
+        for (flat, node) in nodes.chunks_exact(NODE_FLOATS).zip(&tree.nodes) {
+            let row = |r: usize| Vec4::from_slice(&flat[4 * r..4 * r + 4]);
+            let bits = |i: usize| flat[i].to_bits();
+            let read = Node {
+                centre: [row(0), row(1), row(2)],
+                radius2: row(3),
+                min_d2: row(4),
+                w: [row(5), row(6), row(7)],
+                phi: row(8),
+                cos_theta_o: row(9),
+                sin_theta_o: row(10),
+                cos_theta_e: row(11),
+                child: [bits(48), bits(49), bits(50), bits(51)],
+                lights: bits(52) as u8,
+            };
+            assert_eq!(format!("{read:?}"), format!("{node:?}"));
+            assert_eq!(bits(52) >> 4, 0, "four slots, four mask bits");
+            assert_eq!(&flat[53..], &[0.0; 3]);
+        }
+        assert_eq!(trails.len(), tree.trails.len());
+        for (words, &trail) in trails.iter().zip(&tree.trails) {
+            let joined = words.iter().enumerate().fold(0u128, |t, (i, &w)| t | (w as u128) << (32 * i));
+            assert_eq!(joined, trail);
+        }
+    }
+}
