@@ -492,8 +492,8 @@ struct SceneArgs {
     wavefront: bool,
     /// How next-event estimation chooses a light: power (in proportion to power, the
     /// same everywhere), tree (a light tree, Conty Estevez & Kulla 2018: by what each
-    /// emitter can give the shading point — for scenes of many lights; the path, direct,
-    /// atlas and path-caustics integrators) or auto (the tree from 8 emitters where the
+    /// emitter can give the shading point — for scenes of many lights; the path, direct
+    /// and atlas integrators, and path-caustics on the CPU) or auto (the tree from 8 emitters where the
     /// integrator takes one, else power).
     #[arg(long, default_value = "auto", value_parser = parse_light_sampler)]
     light_sampler: tracer::LightSampler,

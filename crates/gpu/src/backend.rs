@@ -746,8 +746,13 @@ impl SceneData {
             ..options
         };
         let build_time = start.elapsed();
-        // (Power sampling's probabilities stay those of `Lights::new`, with a tree too.)
-        let lights = tracer::lights::Lights::with_sampler(scene, options.light_sampler);
+        // (Power sampling's probabilities stay those of `Lights::new`, with a tree too.) A
+        // tree only for the integrators whose kernels walk one.
+        let sampler = match options.integrator.takes_light_tree() {
+            true => options.light_sampler,
+            false => tracer::LightSampler::Power,
+        };
+        let lights = tracer::lights::Lights::with_sampler(scene, sampler);
         let pmfs = lights.prim_pmfs();
 
         // Per triangle in leaf order: its vertices, material, light pmf and the CPU's
@@ -1000,10 +1005,15 @@ impl SceneData {
         let mut light_tree = [0; 4];
         let tree = lights.tree_tables();
         if let Some(t) = &tree {
+            // (The kernel's lower end of the stretch is `env_pmf`.)
+            debug_assert_eq!(t.lo, lights.environment_pmf());
             light_tree[0] = tables.len() as u32;
             tables.extend_from_slice(&t.nodes);
             light_tree[1] = tables.len() as u32;
-            tables.extend(t.slots.iter().map(|&k| f32::from_bits(k)));
+            // Only the ids an emitter can have: the world's triangles and the shapes (placed
+            // objects' triangles are never sampled, and the kernel never looks them up).
+            let ids = scene.triangles.len() + scene.shapes.len();
+            tables.extend(t.slots[..ids].iter().map(|&k| f32::from_bits(k)));
             light_tree[2] = tables.len() as u32;
             tables.extend(t.trails.iter().flatten().map(|&w| f32::from_bits(w)));
             light_tree[3] = t.hi.to_bits();

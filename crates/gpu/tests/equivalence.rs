@@ -801,6 +801,12 @@ fn the_light_tree_chooses_as_on_the_cpu() {
         assert!(r.cpu.channel_means()[1] > 0.01, "{name}: a black image proves nothing");
         failures.extend(compare_all(&format!("lamp hall, {name}"), &r));
         failures.extend(paths_follow_the_cpu(&format!("lamp hall, {name}"), &r, 0.05));
+        if name == "path" {
+            // A kernel compiled later, for another sampler, walks the tree too.
+            let independent = RenderSettings { sampler: tracer::sampler::SamplerKind::Independent, ..s.clone() };
+            let r = render_three_with(cpu, &gpu_scene, &independent).unwrap();
+            failures.extend(paths_follow_the_cpu("lamp hall, path, a second kernel", &r, 0.05));
+        }
     }
     // By power, the GPU's same-seed paths leave the CPU tree's.
     let power = path.prepare_gpu(scene.clone(), &by(LightSampler::Power)).unwrap();

@@ -278,6 +278,10 @@ fn pt_suns_seen(dir: vec3f, lambda: vec4f, bsdf_pdf: f32, weighted: bool) -> vec
 // trails (four words per emitter), and the end of the emitters' stretch of the unit
 // interval (bits; it starts at `env_pmf`).
 
+// The largest finite f32 (the sums of importance are tested against it, as the CPU tests
+// them against ∞).
+const PT_F32_MAX: f32 = 3.40282347e38;
+
 // Row `row` of node `node`: one value per child slot.
 fn pt_tree_row(node: u32, row: u32) -> vec4f {
     let b = pt_params.light_tree.x + PT_TREE_NODE_FLOATS * node + 4u * row;
@@ -332,7 +336,10 @@ fn pt_tree_importance(node: u32, p: vec3f, n: vec3f) -> vec4f {
         let cos_theta_i = abs(wx * n.x + wy * n.y + wz * n.z);
         importance *= pt_cos_sub_clamped4(pt_sin_from_cos4(cos_theta_i), cos_theta_i, sin_theta_b, cos_theta_b);
     }
-    let keep = (cos_theta_p > cos_theta_e) & (phi > vec4f(0.0)) & (d2 > vec4f(0.0)) & (importance > vec4f(0.0));
+    // (Finite, as the CPU keeps only finite importance: its ∞ would need a box at
+    // distance zero, which `d2` rules out, or a power of that size.)
+    let keep = (cos_theta_p > cos_theta_e) & (phi > vec4f(0.0)) & (d2 > vec4f(0.0)) & (importance > vec4f(0.0))
+        & (importance <= vec4f(PT_F32_MAX));
     return select(vec4f(0.0), importance, keep);
 }
 
@@ -364,7 +371,7 @@ fn pt_tree_sample(p: vec3f, n: vec3f, u_in: f32) -> PtTreeChoice {
         let e = pt_tree_importance(node, p, n);
         let ends = vec4f(e.x, e.x + e.y, e.x + e.y + e.z, e.x + e.y + e.z + e.w);
         let total = ends.w;
-        if !(total > 0.0) {
+        if !(total > 0.0 && total <= PT_F32_MAX) {
             return out;
         }
         let x = u * total;
@@ -403,7 +410,7 @@ fn pt_tree_pmf(k: u32, p: vec3f, n: vec3f) -> f32 {
     for (var depth = 0u; depth < 64u; depth++) {
         let e = pt_tree_importance(node, p, n);
         let total = e.x + e.y + e.z + e.w;
-        if !(total > 0.0) {
+        if !(total > 0.0 && total <= PT_F32_MAX) {
             return 0.0;
         }
         let slot = (trail[depth / 16u] >> (2u * (depth % 16u))) & 3u;

@@ -250,7 +250,8 @@ pub(crate) struct LightTree {
 /// Deeper than this the binary build splits by count, so that the four-wide tree is at
 /// most 64 levels deep and every trail fits its 128 bits.
 const MAX_SAOH_DEPTH: u32 = 32;
-/// Floats per node in [`LightTree::flatten`]'s layout.
+/// Floats per node of the flat tree another backend walks
+/// ([`crate::lights::LightTreeTables::nodes`]).
 pub const NODE_FLOATS: usize = 56;
 /// Buckets per axis of the build's split search (pbrt-v4's 12).
 const BUCKETS: usize = 12;
