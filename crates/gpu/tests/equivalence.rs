@@ -735,6 +735,11 @@ fn direct_lighting_and_ambient_occlusion_match_the_cpu() {
     assert!(failures.is_empty(), "{failures:#?}");
 }
 
+/// A black emitter of linear-sRGB radiance `rgb`.
+fn lamp(name: &str, rgb: [f32; 3]) -> Material {
+    Material::diffuse(name, Colour::constant(0.0)).unwrap().with_emission(Colour::illuminant_rgb(rgb).unwrap())
+}
+
 /// A hall for the light tree: a floor and a back wall under a 4 × 4 grid of small lamps
 /// facing down (powers varying fourfold, large and low enough that BSDF samples find them,
 /// so that a wrong MIS weight for those hits shows), a glowing ball (an analytic shape in
@@ -745,9 +750,6 @@ fn lamp_hall() -> Scene {
     let grey = Material::diffuse("grey", Colour::constant(0.6)).unwrap();
     scene.add(&quad(Vec3::ZERO, Vec3::Y, 5.0), grey.clone());
     scene.add(&quad(Vec3::new(0.0, 2.0, -5.0), Vec3::Z, 5.0), grey);
-    let lamp = |name: &str, rgb: [f32; 3]| {
-        Material::diffuse(name, Colour::constant(0.0)).unwrap().with_emission(Colour::illuminant_rgb(rgb).unwrap())
-    };
     for i in 0..4 {
         for j in 0..4 {
             let s = 2.0 * (1 + (i * 3 + j) % 4) as f32;
@@ -913,9 +915,6 @@ fn shape_scene() -> Scene {
         ShapeKind::Polygon(Polygon::new(ell.to_vec(), InsideTest::WindingNumber).unwrap()),
         diffuse("green", [0.1, 0.6, 0.2]),
     );
-    let lamp = |name: &str, rgb: [f32; 3]| {
-        Material::diffuse(name, Colour::constant(0.0)).unwrap().with_emission(Colour::illuminant_rgb(rgb).unwrap())
-    };
     // A concave lamp facing down (clockwise seen from above).
     let lamp_l = [[0.0, 0.0], [0.0, 0.8], [0.3, 0.8], [0.3, 0.3], [0.9, 0.3], [0.9, 0.0]]
         .map(|[x, z]| Vec3::new(-0.6 + x, 2.6, -0.4 + z));
