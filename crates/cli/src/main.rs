@@ -106,15 +106,15 @@ struct InfoArgs {
 
 /// `names` each once, in the order first met, with how often it occurs where more than
 /// once ("lamp ×4, floor").
-fn counted(names: Vec<String>) -> String {
-    let mut seen: Vec<(String, usize)> = Vec::new();
+fn counted<'a>(names: impl IntoIterator<Item = &'a str>) -> String {
+    let mut seen: Vec<(&str, usize)> = Vec::new();
     for n in names {
         match seen.iter_mut().find(|(m, _)| *m == n) {
             Some((_, k)) => *k += 1,
             None => seen.push((n, 1)),
         }
     }
-    seen.iter().map(|(n, k)| if *k > 1 { format!("{n} ×{k}") } else { n.clone() }).collect::<Vec<_>>().join(", ")
+    seen.iter().map(|(n, k)| if *k > 1 { format!("{n} ×{k}") } else { n.to_string() }).collect::<Vec<_>>().join(", ")
 }
 
 /// `spt info`: a scene's contents, as loaded (before any default sky is added).
@@ -155,10 +155,10 @@ fn run_info(args: InfoArgs) -> Result<()> {
     }
     // Per model, each name once (OBJ files and copied meshes repeat materials), with how
     // often it occurs.
-    let mut by_model: std::collections::BTreeMap<String, Vec<String>> = Default::default();
+    let mut by_model: std::collections::BTreeMap<String, Vec<&str>> = Default::default();
     for m in &scene.materials {
         let model = m.model().map_or("custom".to_string(), |id| id.name().to_string());
-        by_model.entry(model).or_default().push(m.name.clone());
+        by_model.entry(model).or_default().push(&m.name);
     }
     println!("  materials: {}", scene.materials.len());
     for (model, names) in by_model {
@@ -198,7 +198,7 @@ fn run_info(args: InfoArgs) -> Result<()> {
         "  lights: {emitting_triangles} emissive triangles, {emitting_shapes} emissive shapes ({} emissive \
          materials{}), environment: {}",
         emissive.len(),
-        if emissive.is_empty() { String::new() } else { format!(": {}", counted(emissive.clone())) },
+        if emissive.is_empty() { String::new() } else { format!(": {}", counted(emissive.iter().map(String::as_str))) },
         if scene.environment.is_some() { "yes" } else { "none" }
     );
     if !scene.punctual_lights.is_empty() {

@@ -1365,11 +1365,7 @@ impl GpuBackend {
             mode,
             bvh_builder: options.bvh_builder.unwrap_or(KernelOptions::default().bvh_builder),
             wavefront: options.wavefront,
-            light_sampler: if self.integrator.takes_light_tree() {
-                options.light_sampler
-            } else {
-                tracer::LightSampler::Power
-            },
+            light_sampler: options.light_sampler,
             ..KernelOptions::default()
         }
     }

@@ -519,8 +519,8 @@ pub struct KernelOptions {
     /// `pt_main`'s megakernel alone.
     pub wavefront: bool,
     /// How next-event estimation chooses emitters, as asked (`SceneOptions::light_sampler`;
-    /// [`tracer::LightSampler::Power`] for an integrator that does not take a tree,
-    /// [`GpuIntegrator::takes_light_tree`]).
+    /// `SceneData::new` takes a tree only for an integrator that walks one,
+    /// [`GpuIntegrator::takes_light_tree`], and power for the others).
     pub light_sampler: tracer::LightSampler,
     /// Whether the scene's emitters are chosen by a light tree (`PT_LIGHT_TREE`; set by
     /// `SceneData::new` from `light_sampler` and the scene's emitters).

@@ -65,6 +65,14 @@ struct PtLightSample {
     valid: bool,
 }
 
+// No light sample (`valid` false).
+fn pt_no_light_sample() -> PtLightSample {
+    var ls: PtLightSample;
+    ls.valid = false;
+    ls.material = PT_NO_HIT;
+    return ls;
+}
+
 fn pt_light_f(k: u32, j: u32) -> f32 {
     return pt_tables[pt_params.lights_offset + PT_LIGHT_FLOATS * k + j];
 }
@@ -88,9 +96,7 @@ fn pt_rescale(x: f32, lo: f32, hi: f32) -> f32 {
 
 // lights.rs: `Lights::sample` — u.x picks the light and is reused, rescaled, for the point.
 fn pt_sample_light(u_in: vec2f) -> PtLightSample {
-    var ls: PtLightSample;
-    ls.valid = false;
-    ls.material = PT_NO_HIT;
+    var ls = pt_no_light_sample();
     let count = pt_params.light_count;
     if count == 0u && pt_params.env_pmf == 0.0 {
         return ls;
@@ -343,6 +349,14 @@ fn pt_tree_importance(node: u32, p: vec3f, n: vec3f) -> vec4f {
     return select(vec4f(0.0), importance, keep);
 }
 
+// The importances' running sums (tree.rs: `Node::ends`): one order of additions for the
+// walk and for its probability, so that both see the same totals.
+fn pt_tree_ends(e: vec4f) -> vec4f {
+    let s1 = e.x + e.y;
+    let s2 = s1 + e.z;
+    return vec4f(e.x, s1, s2, s2 + e.w);
+}
+
 // Child `slot` of `node` (an emitter where the node's mask has bit `slot`, else a node),
 // and whether it is an emitter.
 fn pt_tree_child(node: u32, slot: u32) -> vec2u {
@@ -369,7 +383,7 @@ fn pt_tree_sample(p: vec3f, n: vec3f, u_in: f32) -> PtTreeChoice {
     // (At most 64 levels: the trails' 128 bits.)
     for (var depth = 0u; depth < 64u; depth++) {
         let e = pt_tree_importance(node, p, n);
-        let ends = vec4f(e.x, e.x + e.y, e.x + e.y + e.z, e.x + e.y + e.z + e.w);
+        let ends = pt_tree_ends(e);
         let total = ends.w;
         if !(total > 0.0 && total <= PT_F32_MAX) {
             return out;
@@ -409,7 +423,7 @@ fn pt_tree_pmf(k: u32, p: vec3f, n: vec3f) -> f32 {
     var pmf = 1.0;
     for (var depth = 0u; depth < 64u; depth++) {
         let e = pt_tree_importance(node, p, n);
-        let total = e.x + e.y + e.z + e.w;
+        let total = pt_tree_ends(e).w;
         if !(total > 0.0 && total <= PT_F32_MAX) {
             return 0.0;
         }
@@ -439,10 +453,7 @@ fn pt_sample_light_at(u_in: vec2f, p: vec3f, n: vec3f) -> PtLightSample {
         if u_in.x >= lo && u_in.x < hi {
             let c = pt_tree_sample(p, n, pt_rescale(u_in.x, lo, hi));
             if !c.valid {
-                var none: PtLightSample;
-                none.valid = false;
-                none.material = PT_NO_HIT;
-                return none;
+                return pt_no_light_sample();
             }
             return pt_sample_entry(c.k, vec2f(c.u, u_in.y), (hi - lo) * c.pmf);
         }
