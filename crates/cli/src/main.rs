@@ -1114,11 +1114,15 @@ fn run_render(args: RenderArgs) -> Result<()> {
         )
     };
     eprintln!(
-        "{}: {} triangles{instanced}, {} shapes, {} emissive{}, {} built in {:.1} ms{}; {}×{} at {} spp, {} mode, {} backend{}",
+        "{}: {} triangles{instanced}, {} shapes, {} emissive{}{}, {} built in {:.1} ms{}; {}×{} at {} spp, {} mode, {} backend{}",
         args.scene.scene.display(),
         s.triangles.len(),
         s.shapes.len(),
         stats.emitters,
+        match s.punctual_lights.len() {
+            0 => String::new(),
+            n => format!(" + {n} punctual"),
+        },
         if stats.light_tree { " (chosen by a light tree)" } else { "" },
         stats.accelerator,
         stats.build.as_secs_f64() * 1e3,

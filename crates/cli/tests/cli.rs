@@ -430,6 +430,27 @@ fn light_samplers_render_the_same_light_on_both_backends() {
     }
 }
 
+/// Point lights and spots join the tree: the hall of 64 of them renders with the tree by
+/// default (`auto`) and says so, lit (a tree that dropped them would leave it black),
+/// and by power on request; the tree on the GPU too where one is usable (its same-seed
+/// paths are `the_light_tree_chooses_as_on_the_cpu`'s, crates/gpu/tests/equivalence.rs).
+#[test]
+fn point_and_spot_lights_are_chosen_by_the_light_tree() {
+    let dir = temp_dir("point-lights");
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/many-point-lights.toml");
+    let gpu = gpu::require_gpu().is_some();
+    let cases = [("cpu", "auto", true), ("cpu", "power", false), ("gpu", "auto", true)];
+    for (backend, sampler, tree) in cases.into_iter().filter(|&(b, ..)| b == "cpu" || gpu) {
+        let out = dir.join(format!("{backend}-{sampler}.exr"));
+        let args = ["--backend", backend, "--light-sampler", sampler];
+        let o = render_small(&scene, (16, 12, 4), &out, &args);
+        let err = stderr(&o);
+        assert!(o.status.success() && err.contains("0 emissive + 64 punctual"), "{backend}, {sampler}: {err}");
+        assert_eq!(err.contains("(chosen by a light tree)"), tree, "{backend}, {sampler}: {err}");
+        assert!(exr_means(&out)[1] > 0.01, "{backend}, {sampler}: a dark hall");
+    }
+}
+
 /// Mean of each channel of a linear EXR.
 fn exr_means(path: &Path) -> [f64; 3] {
     let img = image::open(path).unwrap().into_rgb32f();

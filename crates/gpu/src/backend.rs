@@ -964,7 +964,8 @@ impl SceneData {
         }
 
         // The light table, in the order of the CPU's cdf: emissive triangles and shapes,
-        // then the punctual lights (each with its spectrum tabulated at 1 nm after the table).
+        // then the punctual lights, point and spot lights first (each with its spectrum
+        // tabulated at 1 nm after the table). The tree's lights are entries of this table.
         let lights_offset = tables.len() as u32;
         let mut punctual_spectra = Vec::new();
         let entries = lights.cdf().len();
@@ -985,7 +986,7 @@ impl SceneData {
                     (LightKind::Shape, scene.shapes[shape].material, pmfs[prim as usize])
                 }
                 None => {
-                    let index = k - lights.prims().len();
+                    let index = lights.punctual_entries()[k - lights.prims().len()] as usize;
                     let light = &scene.punctual_lights[index];
                     let spectrum = f32::from_bits((spectra_offset + punctual_spectra.len()) as u32);
                     punctual_spectra.extend(colour_entry(light.colour()));

@@ -200,7 +200,7 @@ wgsl_struct! {
         region: [u32; 4],
         /// The light tree (`wgsl/lights.wgsl`, `tracer::lights::LightTreeTables`): the
         /// offsets in `pt_tables` of its nodes, of the primitive → emitter table and of the
-        /// trails, and the upper end of the emitters' stretch of the unit interval (f32
+        /// trails, and the upper end of the tree's stretch of the unit interval (f32
         /// bits; the lower is `env_pmf`). Zeros without a tree.
         light_tree: [u32; 4],
     }

@@ -743,8 +743,9 @@ fn lamp(name: &str, rgb: [f32; 3]) -> Material {
 /// A hall for the light tree: a floor and a back wall under a 4 × 4 grid of small lamps
 /// facing down (powers varying fourfold, large and low enough that BSDF samples find them,
 /// so that a wrong MIS weight for those hits shows), a glowing ball (an analytic shape in
-/// the tree), a point light and a dim sky (which keep their shares of the choice beside the
-/// tree's).
+/// the tree), a point light and a spot (in the tree too), a sun and a dim sky (which keep
+/// their shares of the choice beside the tree's). The sun comes first in the scene's
+/// lights, the light table puts it after the spot and the point light.
 fn lamp_hall() -> Scene {
     let mut scene = Scene::default();
     let grey = Material::diffuse("grey", Colour::constant(0.6)).unwrap();
@@ -760,6 +761,11 @@ fn lamp_hall() -> Scene {
     }
     let ball = shapes::sphere::Sphere::new(Vec3::new(1.2, 0.3, 1.0), 0.3, Default::default()).unwrap();
     scene.add_shape(tracer::ShapeKind::Sphere(ball), lamp("ball", [2.0, 1.5, 1.0]));
+    let sun = Colour::illuminant_rgb([0.05, 0.045, 0.04]).unwrap();
+    scene.punctual_lights.push(tracer::PunctualLight::directional(Vec3::new(0.3, -1.0, -0.4), sun));
+    let spot = Colour::illuminant_rgb([4.0, 3.0, 2.0]).unwrap();
+    let aim = Vec3::new(0.5, -1.0, 0.2);
+    scene.punctual_lights.push(tracer::PunctualLight::spot(Vec3::new(0.6, 1.5, -1.0), aim, spot, 0.4, 0.7));
     scene
         .punctual_lights
         .push(tracer::PunctualLight::point(Vec3::new(-2.0, 3.0, 2.0), Colour::illuminant_rgb([3.0; 3]).unwrap()));
@@ -770,7 +776,7 @@ fn lamp_hall() -> Scene {
 }
 
 /// `--light-sampler tree` on the GPU: the path tracer (megakernel and wavefront) and
-/// direct light choose emitters by the CPU's light tree (its nodes, walk and trails in
+/// direct light choose emitters, point and spot lights by the CPU's light tree (its nodes, walk and trails in
 /// `wgsl/lights.wgsl`), so that same-seed renders follow the CPU's paths — which the GPU's
 /// power sampling, unbiased too, does not (checked: the test can tell them apart) — and
 /// other seeds pass the z-tests. The path tracer's MIS weights of lamps hit by BSDF samples

@@ -1,8 +1,8 @@
 //! Light sources for next-event estimation: emissive triangles and analytic shapes,
 //! point, spot and directional lights, chosen in proportion to their power, plus the
 //! environment (uniform, or importance-sampled by its map's luminance) — or, with a light
-//! tree ([`LightSampler::Tree`], module `tree`), the emitters chosen by what each can give
-//! the shading point.
+//! tree ([`LightSampler::Tree`], module `tree`), the emitters and the point and spot
+//! lights chosen by what each can give the shading point.
 
 use crate::envmap::EnvironmentMap;
 use crate::punctual::PunctualLight;
@@ -85,41 +85,51 @@ pub struct Lights {
     /// Probability of choosing each primitive (0 for non-emitters), for MIS when a
     /// BSDF-sampled ray hits an emitter.
     prim_pmf: Vec<f32>,
-    /// Probability of choosing each of the scene's punctual lights (their entries follow
-    /// the primitives' in `cdf`).
+    /// Probability of choosing each of the scene's punctual lights, by its index in
+    /// [`Scene::punctual_lights`].
     punctual_pmf: Vec<f32>,
+    /// The punctual lights in the order of their entries in `cdf` (after the
+    /// primitives'): the point and spot lights, then the directional ones, each in the
+    /// scene's order — so that the lights a tree can hold are one stretch.
+    punctual_order: Vec<u32>,
+    /// How many of `punctual_order`'s lights have a position (point and spot lights).
+    positioned: usize,
     /// The environment's map, sampled by luminance (uniform directions without one).
     environment_map: Option<std::sync::Arc<EnvironmentMap>>,
     /// The sun disks among the punctual lights, which escaping rays can see.
     suns: Vec<SunDisk>,
-    /// The light tree over `prims` ([`Lights::with_tree`]), which then chooses among them
-    /// by what each can give the shading point.
+    /// The light tree over `prims` and the positioned punctual lights
+    /// ([`Lights::with_tree`]), which then chooses among them by what each can give the
+    /// shading point.
     tree: Option<LightChoice>,
 }
 
-/// What choosing among the emitters by a [`tree::LightTree`] needs besides the tree.
+/// What choosing among the emitters and positioned punctual lights by a
+/// [`tree::LightTree`] needs besides the tree. Its lights are entries of the cdf: those of
+/// `prims`, then the point and spot lights.
 #[derive(Clone, Debug)]
 struct LightChoice {
     tree: tree::LightTree,
-    /// Each entry of `prims`' reciprocal area (its points are drawn uniformly on it).
+    /// Each light's reciprocal area (an emitter's points are drawn uniformly on it; 1 for
+    /// a point or spot light, whose choice is its probability).
     inv_areas: Vec<f32>,
     /// For each primitive id, its index in `prims` (`u32::MAX`: not an emitter).
     slot: Vec<u32>,
-    /// The emitters' stretch of the unit interval, `[lo, hi)`: after the environment's,
-    /// before the punctual lights' (where [`Lights::choose`] puts them). Its length is
-    /// their summed probability.
+    /// The tree's stretch of the unit interval, `[lo, hi)`: after the environment's,
+    /// before the directional lights' (where [`Lights::choose`] puts them). Its length is
+    /// its lights' summed probability.
     lo: f32,
     hi: f32,
 }
 
 impl LightChoice {
-    /// Whether the first sample value `x` falls in the emitters' stretch.
+    /// Whether the first sample value `x` falls in the tree's stretch.
     #[inline(always)]
     fn holds(&self, x: f32) -> bool {
         x >= self.lo && x < self.hi
     }
 
-    /// The emitter the tree chooses for `p`, `n` with `x` (in the emitters' stretch), `x`
+    /// The light the tree chooses for `p`, `n` with `x` (in its stretch), `x`
     /// rescaled within the choice, and the chosen point's density per unit area.
     #[inline(always)]
     fn choose(&self, x: f32, p: Vec3, n: Vec3) -> Option<(usize, f32, f32)> {
@@ -137,16 +147,18 @@ pub struct LightTreeTables {
     /// squared radius, the least squared distance the estimate divides by, its cone axis
     /// x, y, z, power (0: an unused slot), cos θo, sin θo, cos θe — then the four children
     /// (u32 bits: an entry of [`Lights::prims`] where the mask's bit is set, else a node),
-    /// the mask (bit i: slot i holds a light) and three zeros.
+    /// the mask (bit i: slot i holds a light) and three zeros. A light is an entry of
+    /// [`Lights::cdf`]: one of [`Lights::prims`], or past them a point or spot light.
     pub nodes: Vec<f32>,
-    /// For each entry of [`Lights::prims`], the slots from the root to it: four words, low
-    /// bits first, bits 2d and 2d + 1 the slot taken at depth d.
+    /// For each light of the tree (the entries of [`Lights::prims`], then the point and
+    /// spot lights' entries of [`Lights::cdf`]), the slots from the root to it: four
+    /// words, low bits first, bits 2d and 2d + 1 the slot taken at depth d.
     pub trails: Vec<[u32; 4]>,
     /// For each primitive id, its entry in [`Lights::prims`] (`u32::MAX`: not sampled).
     pub slots: Vec<u32>,
-    /// The emitters' stretch `[lo, hi)` of the unit interval the first sample value falls
-    /// in (after the environment's, before the punctual lights'); its length is their
-    /// summed probability, by which the tree's own probabilities are scaled.
+    /// The tree's stretch `[lo, hi)` of the unit interval the first sample value falls in
+    /// (after the environment's, before the directional lights'); its length is its
+    /// lights' summed probability, by which the tree's own probabilities are scaled.
     pub lo: f32,
     /// See `lo`.
     pub hi: f32,
@@ -157,18 +169,19 @@ pub struct LightTreeTables {
 pub enum LightSampler {
     /// In proportion to power, the same for every shading point (Mitsuba 3's choice).
     Power,
-    /// By a light tree (Conty Estevez & Kulla 2018): by what each emitter can give the
-    /// shading point, estimated from bounds on position, orientation and power.
+    /// By a light tree (Conty Estevez & Kulla 2018): by what each emitter, point or spot
+    /// light can give the shading point, estimated from bounds on position, orientation
+    /// and power. The environment and directional lights keep their power shares.
     Tree,
-    /// The tree where the scene has at least [`LightSampler::TREE_FROM`] emitters (and
-    /// the backend and integrator take one), else power.
+    /// The tree where the scene has at least [`LightSampler::TREE_FROM`] emitters, point
+    /// and spot lights (and the backend and integrator take one), else power.
     #[default]
     Auto,
 }
 
 impl LightSampler {
-    /// The emitters (triangles and shapes) from which [`LightSampler::Auto`] takes the
-    /// tree: at 8 (four lamps) the four-wide tree in the lanes reached a given error
+    /// The lights a tree would hold (emissive triangles and shapes, point and spot lights)
+    /// from which [`LightSampler::Auto`] takes the tree: at 8 emitters (four lamps) the four-wide tree in the lanes reached a given error
     /// 1.15× sooner than power sampling, at 2 (one lamp) about as soon (0.9–1.2×, within
     /// the runs' spread); 3 to 7 were not measured, so 8 is the fewest where it was seen
     /// to win (docs/figures.md, "The light tree four wide and in the lanes").
@@ -273,11 +286,20 @@ impl Lights {
         if total <= 0.0 {
             return Self { prim_pmf, ..Default::default() };
         }
+        // Point and spot lights first, so that a tree's lights are one stretch.
+        let positioned = |l: &PunctualLight| !matches!(l, PunctualLight::Directional { .. });
+        let all = 0..scene.punctual_lights.len() as u32;
+        let punctual_order: Vec<u32> = all
+            .clone()
+            .filter(|&i| positioned(&scene.punctual_lights[i as usize]))
+            .chain(all.filter(|&i| !positioned(&scene.punctual_lights[i as usize])))
+            .collect();
+        let positioned = scene.punctual_lights.iter().filter(|l| positioned(l)).count();
         // The environment owns [0, pmf_env) of the unit interval, primitives the next
         // stretch, punctual lights the rest.
         let mut acc = env_power;
         let bounds = std::iter::once(env_power)
-            .chain(power.iter().chain(&punctual_power).map(|p| {
+            .chain(power.iter().chain(punctual_order.iter().map(|&i| &punctual_power[i as usize])).map(|p| {
                 acc += p;
                 acc
             }))
@@ -302,7 +324,18 @@ impl Lights {
             })
             .collect();
         let environment_map = scene.environment.as_ref().and_then(|e| e.map.clone());
-        Self { prims, triangles, bounds, prim_pmf, punctual_pmf, environment_map, suns, tree: None }
+        Self {
+            prims,
+            triangles,
+            bounds,
+            prim_pmf,
+            punctual_pmf,
+            punctual_order,
+            positioned,
+            environment_map,
+            suns,
+            tree: None,
+        }
     }
 
     /// [`Lights::new`] with the emitters chosen as `sampler` says.
@@ -311,23 +344,23 @@ impl Lights {
         let tree = match sampler {
             LightSampler::Power => false,
             LightSampler::Tree => true,
-            LightSampler::Auto => lights.prims.len() >= LightSampler::TREE_FROM,
+            LightSampler::Auto => lights.prims.len() + lights.positioned >= LightSampler::TREE_FROM,
         };
         if tree { lights.with_tree(scene) } else { lights }
     }
 
-    /// These lights (of `scene`) with the emitters chosen by a light tree
-    /// ([`LightSampler::Tree`]): [`Lights::sample_at`] and [`Lights::prim_pmf_at`] then
-    /// depend on the shading point; [`Lights::sample`] and [`Lights::prim_pmf`] stay by
-    /// power. The environment and the punctual lights keep their shares of the unit
-    /// interval.
+    /// These lights (of `scene`) with the emitters, point and spot lights chosen by a
+    /// light tree ([`LightSampler::Tree`]): [`Lights::sample_at`] and
+    /// [`Lights::prim_pmf_at`] then depend on the shading point; [`Lights::sample`] and
+    /// [`Lights::prim_pmf`] stay by power. The environment and the directional lights keep
+    /// their shares of the unit interval.
     fn with_tree(mut self, scene: &Scene) -> Self {
-        if self.prims.is_empty() {
+        if self.prims.len() + self.positioned == 0 {
             return self;
         }
-        let mut inv_areas = Vec::with_capacity(self.prims.len());
+        let mut inv_areas = Vec::with_capacity(self.prims.len() + self.positioned);
         let mut slot = vec![u32::MAX; self.prim_pmf.len()];
-        let bounds: Vec<tree::LightBounds> = self
+        let mut bounds: Vec<tree::LightBounds> = self
             .prims
             .iter()
             .enumerate()
@@ -361,9 +394,20 @@ impl Lights {
                 }
             })
             .collect();
+        // The point and spot lights follow, their power in the emitters' units: an
+        // emitter's π·A·L is π times the intensity L·A it sends along its normal, so a
+        // light of intensity I weighs π·I (pbrt-v4 weighs 4π·I against L·A, which
+        // favours punctual lights fourfold).
+        for &index in &self.punctual_order[..self.positioned] {
+            let light = &scene.punctual_lights[index as usize];
+            let (power, pmf) = (light.power(1.0), self.punctual_pmf[index as usize]);
+            let phi = if power > 0.0 { pmf * PI * light.colour().luminance().max(0.0) / power } else { 0.0 };
+            inv_areas.push(1.0);
+            bounds.push(punctual_bounds(light, phi));
+        }
         let tree = tree::LightTree::new(&bounds);
         if !tree.is_empty() {
-            let (lo, hi) = (self.bounds[0], self.bounds[self.prims.len()]);
+            let (lo, hi) = (self.bounds[0], self.bounds[self.prims.len() + self.positioned]);
             self.tree = Some(LightChoice { tree, inv_areas, slot, lo, hi });
         }
         self
@@ -393,7 +437,7 @@ impl Lights {
             return self.sample(scene, u);
         }
         let (k, x, pdf) = c.choose(u.x, p, n)?;
-        self.sample_prim(scene, k, Vec2::new(x, u.y), Some(pdf))
+        self.sample_entry(scene, k, Vec2::new(x, u.y), Some(pdf))
     }
 
     /// [`Lights::choose`] for a shading point `p` with normal `n`, as [`Lights::sample_at`]
@@ -418,6 +462,17 @@ impl Lights {
         match choice.slot.get(prim as usize) {
             Some(&k) if k != u32::MAX => (choice.hi - choice.lo) * choice.tree.pmf(k as usize, p, n),
             _ => 0.0,
+        }
+    }
+
+    /// The probability that [`Lights::sample_at`] picks punctual light `index` (of
+    /// [`Scene::punctual_lights`]) for `p`, `n`: by the tree for a point or spot light
+    /// where there is one, else its share of the power.
+    pub fn punctual_pmf_at(&self, index: usize, p: Vec3, n: Vec3) -> f32 {
+        let entry = self.punctual_order[..self.positioned].iter().position(|&i| i as usize == index);
+        match (&self.tree, entry) {
+            (Some(c), Some(j)) => (c.hi - c.lo) * c.tree.pmf(self.prims.len() + j, p, n),
+            _ => self.punctual_pmf(index),
         }
     }
 
@@ -458,6 +513,13 @@ impl Lights {
         self.punctual_pmf.get(index).copied().unwrap_or(0.0)
     }
 
+    /// The punctual lights (indices into [`Scene::punctual_lights`]) in the order of their
+    /// entries in [`Lights::cdf`], which follow the primitives': the point and spot
+    /// lights, then the directional ones, each in the scene's order.
+    pub fn punctual_entries(&self) -> &[u32] {
+        &self.punctual_order
+    }
+
     /// Number of emissive primitives that are sampled.
     pub fn emitter_count(&self) -> usize {
         self.prims.len()
@@ -470,7 +532,7 @@ impl Lights {
     }
 
     /// The cumulative distribution over [`Lights::prims`], then the scene's punctual
-    /// lights: entry k is the probability of picking the environment or one of entries
+    /// lights in the order of [`Lights::punctual_entries`]: entry k is the probability of picking the environment or one of entries
     /// 0..=k (the environment owns [0, [`Lights::environment_pmf`])). [`Lights::sample`]
     /// picks the first k with `cdf[k] > u` (clamped to the last).
     pub fn cdf(&self) -> &[f32] {
@@ -546,21 +608,21 @@ impl Lights {
             });
         }
         let (k, x) = self.choose(u.x);
-        let u = Vec2::new(x, u.y);
-        if k >= self.prims.len() {
-            let index = k - self.prims.len();
-            let ls = Self::sample_punctual(scene, index, u);
-            return Some(LightSample { pdf: ls.pdf * self.punctual_pmf[index], ..ls });
-        }
-        self.sample_prim(scene, k, u, None)
+        self.sample_entry(scene, k, Vec2::new(x, u.y), None)
     }
 
-    /// A point on emitter `k` (an index into the primitives) from `u`, with density `pdf`
-    /// per unit area (the choice's probability over the area), or with the choice by power
-    /// where `None` (a triangle's precomputed density, a shape's probability over its
-    /// area).
+    /// A sample of entry `k` of [`Lights::cdf`] from `u`: a point on an emitter (an index
+    /// into the primitives) with density `pdf` per unit area (the choice's probability
+    /// over the area), or with the choice by power where `None` (a triangle's
+    /// precomputed density, a shape's probability over its area); past the primitives a
+    /// punctual light's sample, chosen with probability `pdf` (by power where `None`).
     #[inline(always)]
-    fn sample_prim(&self, scene: &Scene, k: usize, u: Vec2, pdf: Option<f32>) -> Option<LightSample> {
+    fn sample_entry(&self, scene: &Scene, k: usize, u: Vec2, pdf: Option<f32>) -> Option<LightSample> {
+        if let Some(&index) = k.checked_sub(self.prims.len()).and_then(|j| self.punctual_order.get(j)) {
+            let index = index as usize;
+            let ls = Self::sample_punctual(scene, index, u);
+            return Some(LightSample { pdf: ls.pdf * pdf.unwrap_or(self.punctual_pmf[index]), ..ls });
+        }
         if let Some(t) = self.triangle_light(k) {
             let [v0, v1, v2] = t.vertices;
             let (b0, b1) = uniform_triangle(u);
@@ -582,6 +644,23 @@ impl Lights {
         let (point, normal) = shape.sample_area(u)?;
         let pdf = pdf.unwrap_or_else(|| self.prim_pmf[prim as usize] / shape.area());
         Some(LightSample { point, normal, pdf, source })
+    }
+}
+
+/// A point or spot light's bounds in a light tree, with power `phi` (pbrt-v4's
+/// `PointLight::Bounds` and `SpotLight::Bounds`): at one point, emitting in every
+/// direction (θo = π), or, for a spot, fully within its inner cone (θo) and fading to
+/// nothing at its outer one (θe = θ_outer − θ_inner).
+fn punctual_bounds(light: &PunctualLight, phi: f32) -> tree::LightBounds {
+    let point = light.towards();
+    let bounds = bvh::Aabb { min: point, max: point };
+    match *light {
+        PunctualLight::Spot { direction, cos_inner, cos_outer, .. } => {
+            let angle = |c: f32| c.clamp(-1.0, 1.0).acos();
+            let theta_e = (angle(cos_outer) - angle(cos_inner)).max(0.0);
+            tree::LightBounds { bounds, w: direction, phi, cos_theta_o: cos_inner, cos_theta_e: theta_e.cos() }
+        }
+        _ => tree::LightBounds { bounds, w: Vec3::Z, phi, cos_theta_o: -1.0, cos_theta_e: 0.0 },
     }
 }
 
@@ -680,13 +759,14 @@ mod tests {
     #[test]
     fn punctual_lights_are_chosen_by_power_beside_the_emitters() {
         let mut scene = scene();
-        // A point light of intensity 1 (power 4π) and a sun of irradiance 2 over the
-        // scene's disc (power 2πr²).
-        scene.punctual_lights.push(PunctualLight::point(Vec3::new(0.0, 5.0, 0.0), Colour::constant(1.0)));
+        // A sun of irradiance 2 over the scene's disc (power 2πr²) and a point light of
+        // intensity 1 (power 4π), whose entry comes first (point and spot lights lead).
         scene.punctual_lights.push(PunctualLight::directional(Vec3::new(0.0, -2.0, 0.0), Colour::constant(2.0)));
+        scene.punctual_lights.push(PunctualLight::point(Vec3::new(0.0, 5.0, 0.0), Colour::constant(1.0)));
         let lights = Lights::new(&scene);
+        assert_eq!(lights.punctual_entries(), [1, 0]);
         let r = 0.5 * scene.bounds().extent().length();
-        let powers = [4.0 * PI, 2.0 * PI * r * r];
+        let powers = [2.0 * PI * r * r, 4.0 * PI];
         let emitters = PI * (1.0 * 4.0 + 0.25 * 2.0);
         let sky = 4.0 * PI * PI * r * r * 0.01;
         let total = powers[0] + powers[1] + emitters + sky;
@@ -700,7 +780,7 @@ mod tests {
             if let LightSource::Punctual(k) = ls.source {
                 picked[k as usize] += 1;
                 assert_eq!(ls.pdf, lights.punctual_pmf(k as usize));
-                let expect = if k == 0 { Vec3::new(0.0, 5.0, 0.0) } else { Vec3::Y };
+                let expect = if k == 1 { Vec3::new(0.0, 5.0, 0.0) } else { Vec3::Y };
                 assert!((ls.point - expect).length() < 1e-6, "towards the light: {}", ls.point);
             }
         }
@@ -710,27 +790,33 @@ mod tests {
         }
     }
 
-    /// With a light tree beside a sky and a point light, `sample_at` over a fine grid of the
-    /// first sample value picks the sky and the point light with their power shares (the
-    /// same as without the tree) and each emitter with the tree's probability for the
-    /// point (`prim_pmf_at`), the emitters' frequencies summing to at most their share;
-    /// each emitter's area density is that probability over its area.
+    /// With a light tree beside a sky and a sun, `sample_at` over a fine grid of the first
+    /// sample value picks the sky and the sun with their power shares (the same as without
+    /// the tree) and each emitter and the point light with the tree's probability for the
+    /// shading point (`prim_pmf_at`, `punctual_pmf_at`), their frequencies summing to at
+    /// most their share; each emitter's area density is that probability over its area,
+    /// the point light's sample has it as its pdf.
     #[test]
-    fn a_light_tree_chooses_within_the_emitters_share_only() {
+    fn a_light_tree_chooses_within_its_lights_share_only() {
         let mut scene = scene();
+        scene.punctual_lights.push(PunctualLight::directional(Vec3::new(0.3, -2.0, 0.0), Colour::constant(0.1)));
         scene.punctual_lights.push(PunctualLight::point(Vec3::new(0.0, 5.0, 0.0), Colour::constant(1.0)));
         let lights = Lights::with_sampler(&scene, LightSampler::Tree);
         assert!(lights.has_tree());
         let (p, n) = (Vec3::new(2.5, 0.0, 0.3), Vec3::Y);
         let count = 1 << 16;
-        let (mut sky, mut point, mut none) = (0usize, 0usize, 0usize);
+        let (mut sky, mut sun, mut point, mut none) = (0usize, 0usize, 0usize, 0usize);
         let mut prims = vec![0usize; scene.triangles.len()];
         for i in 0..count {
             let u = Vec2::new((i as f32 + 0.5) / count as f32, 0.31);
             match lights.sample_at(&scene, u, p, n).map(|ls| (ls.source, ls.pdf)) {
                 Some((LightSource::Environment, _)) => sky += 1,
-                Some((LightSource::Punctual(_), pdf)) => {
+                Some((LightSource::Punctual(0), pdf)) => {
                     assert_eq!(pdf, lights.punctual_pmf(0));
+                    sun += 1
+                }
+                Some((LightSource::Punctual(k), pdf)) => {
+                    assert_eq!((k, pdf), (1, lights.punctual_pmf_at(1, p, n)));
                     point += 1
                 }
                 Some((LightSource::Primitive(t), pdf)) => {
@@ -746,8 +832,11 @@ mod tests {
         let frequency = |k: usize| k as f32 / count as f32;
         let tolerance = 2.0 / count as f32;
         assert!((frequency(sky) - lights.environment_pmf()).abs() < tolerance, "sky {}", frequency(sky));
-        assert!((frequency(point) - lights.punctual_pmf(0)).abs() < tolerance, "point {}", frequency(point));
-        let mut sum = 0.0;
+        assert!((frequency(sun) - lights.punctual_pmf(0)).abs() < tolerance, "sun {}", frequency(sun));
+        let point_pmf = lights.punctual_pmf_at(1, p, n);
+        assert!((frequency(point) - point_pmf).abs() < 1e-3, "point {} against {point_pmf}", frequency(point));
+        assert!(point_pmf > 0.0 && point_pmf != lights.punctual_pmf(1), "the tree's own probability");
+        let mut sum = point_pmf;
         for (t, &k) in prims.iter().enumerate() {
             let pmf = lights.prim_pmf_at(t as u32, p, n);
             // Stratified draws: within a few cells of the walk's nested rescalings.
@@ -766,8 +855,48 @@ mod tests {
         for (id, &k) in t.slots.iter().enumerate() {
             assert_eq!(lights.prims().iter().position(|&p| p as usize == id).map_or(u32::MAX, |k| k as u32), k);
         }
-        assert_eq!(t.trails.len(), lights.prims().len());
+        // The point light is the tree's light after the emitters, the sun in none.
+        assert_eq!(t.trails.len(), lights.prims().len() + 1);
         assert!(Lights::with_sampler(&scene, LightSampler::Power).tree_tables().is_none());
+    }
+
+    /// A tree holding only point and spot lights chooses by what each gives the shading
+    /// point: a near light more often than an equal far one, a spot aimed away never
+    /// (its cone bounds it), one aimed at the point in proportion; the probabilities over
+    /// the lights that can reach the point sum to one.
+    #[test]
+    fn point_and_spot_lights_in_a_tree_are_chosen_by_what_they_give_the_point() {
+        let mut scene = Scene::default();
+        let white = Colour::constant(1.0);
+        let (near, far) = (Vec3::new(0.0, 1.0, 0.0), Vec3::new(0.0, 4.0, 0.0));
+        scene.punctual_lights.push(PunctualLight::point(near, white.clone()));
+        scene.punctual_lights.push(PunctualLight::point(far, white.clone()));
+        let (inner, outer) = (0.3, 0.5);
+        scene.punctual_lights.push(PunctualLight::spot(Vec3::new(1.0, 1.0, 0.0), Vec3::Y, white.clone(), inner, outer));
+        let aimed = Vec3::new(-1.0, -1.0, 0.0).normalize();
+        scene.punctual_lights.push(PunctualLight::spot(Vec3::new(1.0, 1.0, 0.0), aimed, white, inner, outer));
+        let lights = Lights::with_sampler(&scene, LightSampler::Tree);
+        assert!(lights.has_tree() && lights.emitter_count() == 0);
+        let (p, n) = (Vec3::ZERO, Vec3::Y);
+        let pmf: Vec<f32> = (0..4).map(|k| lights.punctual_pmf_at(k, p, n)).collect();
+        // Power sampling would take the two points equally.
+        assert!(pmf[0] > 4.0 * pmf[1], "near {} against far {}", pmf[0], pmf[1]);
+        assert_eq!(pmf[2], 0.0, "a spot aimed away");
+        assert!(pmf[3] > 0.0);
+        assert!((pmf.iter().sum::<f32>() - 1.0).abs() < 1e-5, "{pmf:?}");
+        // The walk draws them so.
+        let count = 1 << 14;
+        let mut drawn = [0usize; 4];
+        for i in 0..count {
+            let u = Vec2::new((i as f32 + 0.5) / count as f32, 0.5);
+            let ls = lights.sample_at(&scene, u, p, n).expect("a light reaches the point");
+            let LightSource::Punctual(k) = ls.source else { panic!("{:?}", ls.source) };
+            assert_eq!(ls.pdf, pmf[k as usize]);
+            drawn[k as usize] += 1;
+        }
+        for k in 0..4 {
+            assert!((drawn[k] as f32 / count as f32 - pmf[k]).abs() < 1e-3, "light {k}: {drawn:?} against {pmf:?}");
+        }
     }
 
     #[test]

@@ -1,9 +1,10 @@
 // Light sampling, mirroring crates/tracer/src/lights.rs (`Lights::sample`): the
 // environment owns [0, env_pmf) of the unit interval, emissive triangles the rest by
 // their cdf; with the uniform sphere and triangle maps of crates/brdf/src/sampling.rs.
-// Where the kernel has a light tree (`PT_LIGHT_TREE`), the emitters' stretch of the
-// interval is chosen by it for the shading point (`Lights::sample_at`; the tree as
-// crates/tracer/src/lights/tree.rs lays it out, `LightTreeTables`).
+// Where the kernel has a light tree (`PT_LIGHT_TREE`), the tree's stretch of the interval
+// (the emitters', then the point and spot lights') is chosen by it for the shading point
+// (`Lights::sample_at`; the tree as crates/tracer/src/lights/tree.rs lays it out,
+// `LightTreeTables`).
 
 // `brdf::sampling::uniform_sphere`.
 fn pt_uniform_sphere(u: vec2f) -> vec3f {
@@ -281,8 +282,9 @@ fn pt_suns_seen(dir: vec3f, lambda: vec4f, bsdf_pdf: f32, weighted: bool) -> vec
 // ---- The light tree (`tracer::lights::tree`): `pt_params.light_tree` holds the offsets in
 // `pt_tables` of its nodes (PT_TREE_NODE_FLOATS floats each: twelve rows of four slots,
 // then the children and the lights mask), of the primitive → emitter table and of the
-// trails (four words per emitter), and the end of the emitters' stretch of the unit
-// interval (bits; it starts at `env_pmf`).
+// trails (four words per light of the tree), and the end of the tree's stretch of the
+// unit interval (bits; it starts at `env_pmf`). The tree's lights are entries of the
+// light table: emitters, then point and spot lights.
 
 // The largest finite f32 (the sums of importance are tested against it, as the CPU tests
 // them against ∞).
@@ -357,17 +359,17 @@ fn pt_tree_ends(e: vec4f) -> vec4f {
     return vec4f(e.x, s1, s2, s2 + e.w);
 }
 
-// Child `slot` of `node` (an emitter where the node's mask has bit `slot`, else a node),
-// and whether it is an emitter.
+// Child `slot` of `node` (a light where the node's mask has bit `slot`, else a node), and
+// whether it is a light.
 fn pt_tree_child(node: u32, slot: u32) -> vec2u {
     let b = pt_params.light_tree.x + PT_TREE_NODE_FLOATS * node + 48u;
     let mask = bitcast<u32>(pt_tables[b + 4u]);
     return vec2u(bitcast<u32>(pt_tables[b + slot]), (mask >> slot) & 1u);
 }
 
-// The emitter the tree chooses for `p`, `n` with `u` ∈ [0, 1) (`LightTree::sample`): its
+// The light the tree chooses for `p`, `n` with `u` ∈ [0, 1) (`LightTree::sample`): its
 // entry of the light table, the probability of the choice and `u` rescaled within its
-// share; `valid` false where no emitter can reach `p`.
+// share; `valid` false where no light can reach `p`.
 struct PtTreeChoice {
     k: u32,
     pmf: f32,
@@ -413,7 +415,7 @@ fn pt_tree_sample(p: vec3f, n: vec3f, u_in: f32) -> PtTreeChoice {
     return out;
 }
 
-// The probability that `pt_tree_sample` chooses emitter `k` for `p`, `n` (`LightTree::pmf`):
+// The probability that `pt_tree_sample` chooses light `k` for `p`, `n` (`LightTree::pmf`):
 // the walk down its trail.
 fn pt_tree_pmf(k: u32, p: vec3f, n: vec3f) -> f32 {
     let t = pt_params.light_tree.z + 4u * k;
@@ -438,14 +440,14 @@ fn pt_tree_pmf(k: u32, p: vec3f, n: vec3f) -> f32 {
     return 0.0;
 }
 
-// The upper end of the emitters' stretch of the unit interval (the lower: `env_pmf`).
+// The upper end of the tree's stretch of the unit interval (the lower: `env_pmf`).
 fn pt_tree_hi() -> f32 {
     return bitcast<f32>(pt_params.light_tree.w);
 }
 
 // `Lights::sample_at`: a light sample for the shading point `p` with geometric normal `n`;
-// by the tree where the kernel has one and the first value falls in the emitters'
-// stretch, else as `pt_sample_light`.
+// by the tree where the kernel has one and the first value falls in its stretch, else as
+// `pt_sample_light`.
 fn pt_sample_light_at(u_in: vec2f, p: vec3f, n: vec3f) -> PtLightSample {
     if PT_LIGHT_TREE {
         let lo = pt_params.env_pmf;
