@@ -492,9 +492,9 @@ struct SceneArgs {
     wavefront: bool,
     /// How next-event estimation chooses a light: power (in proportion to power, the
     /// same everywhere), tree (a light tree, Conty Estevez & Kulla 2018: by what each
-    /// emitter can give the shading point — for scenes of many lights; the path, direct
-    /// and atlas integrators, and path-caustics on the CPU) or auto (the tree from 8 emitters where the
-    /// integrator takes one, else power).
+    /// emitter, point or spot light can give the shading point — for scenes of many
+    /// lights; the path, direct and atlas integrators, and path-caustics on the CPU) or
+    /// auto (the tree from 8 such lights where the integrator takes one, else power).
     #[arg(long, default_value = "auto", value_parser = parse_light_sampler)]
     light_sampler: tracer::LightSampler,
     /// Where to trace: cpu (rayon, every feature) or gpu (wgpu compute; hero mode, triangle

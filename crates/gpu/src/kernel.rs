@@ -264,7 +264,7 @@ impl GpuIntegrator {
         self == Self::Bdpt
     }
 
-    /// Whether its next-event estimation chooses emitters by a light tree where the scene
+    /// Whether its next-event estimation chooses lights by a light tree where the scene
     /// has one (`pt_sample_light_at`; as the CPU's integrators that declare
     /// `Integrator::chooses_lights_per_point`): the path tracer, direct light and the
     /// atlas's direct light. bdpt's and Whitted's light samples stay by power, as on the
@@ -518,12 +518,13 @@ pub struct KernelOptions {
     /// entry points and their buffers, bindings 15 and 16 and group 1) rather than as
     /// `pt_main`'s megakernel alone.
     pub wavefront: bool,
-    /// How next-event estimation chooses emitters, as asked (`SceneOptions::light_sampler`;
+    /// How next-event estimation chooses lights, as asked (`SceneOptions::light_sampler`;
     /// `SceneData::new` takes a tree only for an integrator that walks one,
     /// [`GpuIntegrator::takes_light_tree`], and power for the others).
     pub light_sampler: tracer::LightSampler,
-    /// Whether the scene's emitters are chosen by a light tree (`PT_LIGHT_TREE`; set by
-    /// `SceneData::new` from `light_sampler` and the scene's emitters).
+    /// Whether the scene's emitters, point and spot lights are chosen by a light tree
+    /// (`PT_LIGHT_TREE`; set by `SceneData::new` from `light_sampler` and the scene's
+    /// lights).
     pub light_tree: bool,
 }
 

@@ -92,6 +92,8 @@ pub struct Lights {
     /// primitives'): the point and spot lights, then the directional ones, each in the
     /// scene's order — so that the lights a tree can hold are one stretch.
     punctual_order: Vec<u32>,
+    /// Each punctual light's place in `punctual_order` (by its index in the scene).
+    punctual_rank: Vec<u32>,
     /// How many of `punctual_order`'s lights have a position (point and spot lights).
     positioned: usize,
     /// The environment's map, sampled by luminance (uniform directions without one).
@@ -130,7 +132,8 @@ impl LightChoice {
     }
 
     /// The light the tree chooses for `p`, `n` with `x` (in its stretch), `x`
-    /// rescaled within the choice, and the chosen point's density per unit area.
+    /// rescaled within the choice, and the choice's probability over the light's area
+    /// (for a point or spot light the probability itself).
     #[inline(always)]
     fn choose(&self, x: f32, p: Vec3, n: Vec3) -> Option<(usize, f32, f32)> {
         let (k, pmf, x) = self.tree.sample(p, n, rescale(x, self.lo, self.hi))?;
@@ -146,9 +149,9 @@ pub struct LightTreeTables {
     /// floats, one per child slot — the slot's box centre x, y, z, its bounding sphere's
     /// squared radius, the least squared distance the estimate divides by, its cone axis
     /// x, y, z, power (0: an unused slot), cos θo, sin θo, cos θe — then the four children
-    /// (u32 bits: an entry of [`Lights::prims`] where the mask's bit is set, else a node),
-    /// the mask (bit i: slot i holds a light) and three zeros. A light is an entry of
-    /// [`Lights::cdf`]: one of [`Lights::prims`], or past them a point or spot light.
+    /// (u32 bits: a light where the mask's bit is set, else a node), the mask (bit i:
+    /// slot i holds a light) and three zeros. A light is an entry of [`Lights::cdf`]: one
+    /// of [`Lights::prims`], or past them a point or spot light.
     pub nodes: Vec<f32>,
     /// For each light of the tree (the entries of [`Lights::prims`], then the point and
     /// spot lights' entries of [`Lights::cdf`]), the slots from the root to it: four
@@ -180,9 +183,10 @@ pub enum LightSampler {
 }
 
 impl LightSampler {
-    /// The lights a tree would hold (emissive triangles and shapes, point and spot lights)
-    /// from which [`LightSampler::Auto`] takes the tree: at 8 emitters (four lamps) the four-wide tree in the lanes reached a given error
-    /// 1.15× sooner than power sampling, at 2 (one lamp) about as soon (0.9–1.2×, within
+    /// The lights a tree would hold (emissive triangles and shapes, point and spot lights
+    /// with power) from which [`LightSampler::Auto`] takes the tree: at 8 emitters (four
+    /// lamps) the four-wide tree in the lanes reached a given error 1.15× sooner than power
+    /// sampling, at 2 (one lamp) about as soon (0.9–1.2×, within
     /// the runs' spread); 3 to 7 were not measured, so 8 is the fewest where it was seen
     /// to win (docs/figures.md, "The light tree four wide and in the lanes").
     pub const TREE_FROM: usize = 8;
@@ -295,6 +299,10 @@ impl Lights {
             .chain(all.filter(|&i| !positioned(&scene.punctual_lights[i as usize])))
             .collect();
         let positioned = scene.punctual_lights.iter().filter(|l| positioned(l)).count();
+        let mut punctual_rank = vec![0; punctual_order.len()];
+        for (rank, &i) in punctual_order.iter().enumerate() {
+            punctual_rank[i as usize] = rank as u32;
+        }
         // The environment owns [0, pmf_env) of the unit interval, primitives the next
         // stretch, punctual lights the rest.
         let mut acc = env_power;
@@ -331,6 +339,7 @@ impl Lights {
             prim_pmf,
             punctual_pmf,
             punctual_order,
+            punctual_rank,
             positioned,
             environment_map,
             suns,
@@ -344,9 +353,14 @@ impl Lights {
         let tree = match sampler {
             LightSampler::Power => false,
             LightSampler::Tree => true,
-            LightSampler::Auto => lights.prims.len() + lights.positioned >= LightSampler::TREE_FROM,
+            LightSampler::Auto => lights.prims.len() + lights.lit_positioned() >= LightSampler::TREE_FROM,
         };
         if tree { lights.with_tree(scene) } else { lights }
+    }
+
+    /// The point and spot lights with a share of the power (those a tree holds).
+    fn lit_positioned(&self) -> usize {
+        self.punctual_order[..self.positioned].iter().filter(|&&i| self.punctual_pmf[i as usize] > 0.0).count()
     }
 
     /// These lights (of `scene`) with the emitters, point and spot lights chosen by a
@@ -422,18 +436,20 @@ impl Lights {
         Some(LightTreeTables { nodes, trails, slots: c.slot.clone(), lo: c.lo, hi: c.hi })
     }
 
-    /// Whether the emitters are chosen by a light tree ([`LightSampler::Tree`]).
+    /// Whether the emitters, point and spot lights are chosen by a light tree
+    /// ([`LightSampler::Tree`]).
     pub fn has_tree(&self) -> bool {
         self.tree.is_some()
     }
 
     /// [`Lights::sample`] for a shading point `p` with normal `n` (zero: none): with a
-    /// light tree the emitter is chosen by it, with the pdf of that choice.
+    /// light tree an emitter, point or spot light is chosen by it, with the pdf of that
+    /// choice.
     #[inline]
     pub fn sample_at(&self, scene: &Scene, u: Vec2, p: Vec3, n: Vec3) -> Option<LightSample> {
         let Some(c) = &self.tree else { return self.sample(scene, u) };
         if !c.holds(u.x) {
-            // The environment's or a punctual light's stretch, as without the tree.
+            // The environment's or a directional light's stretch, as without the tree.
             return self.sample(scene, u);
         }
         let (k, x, pdf) = c.choose(u.x, p, n)?;
@@ -442,7 +458,8 @@ impl Lights {
 
     /// [`Lights::choose`] for a shading point `p` with normal `n`, as [`Lights::sample_at`]
     /// chooses: the light's index, `x` rescaled within its stretch and, where a light tree
-    /// chose it, its density per unit area (`None`: the light's own by power). `None`
+    /// chose it, the choice's probability over the light's area (a point or spot light's:
+    /// the probability; `None`: the light's own by power). `None`
     /// where the tree's walk finds nothing to choose. The caller checks as `choose` asks.
     #[inline(always)]
     pub(crate) fn choose_at(&self, x: f32, p: Vec3, n: Vec3) -> Option<(usize, f32, Option<f32>)> {
@@ -469,9 +486,9 @@ impl Lights {
     /// [`Scene::punctual_lights`]) for `p`, `n`: by the tree for a point or spot light
     /// where there is one, else its share of the power.
     pub fn punctual_pmf_at(&self, index: usize, p: Vec3, n: Vec3) -> f32 {
-        let entry = self.punctual_order[..self.positioned].iter().position(|&i| i as usize == index);
-        match (&self.tree, entry) {
-            (Some(c), Some(j)) => (c.hi - c.lo) * c.tree.pmf(self.prims.len() + j, p, n),
+        let rank = self.punctual_rank.get(index).map(|&r| r as usize);
+        match (&self.tree, rank) {
+            (Some(c), Some(j)) if j < self.positioned => (c.hi - c.lo) * c.tree.pmf(self.prims.len() + j, p, n),
             _ => self.punctual_pmf(index),
         }
     }
@@ -532,8 +549,8 @@ impl Lights {
     }
 
     /// The cumulative distribution over [`Lights::prims`], then the scene's punctual
-    /// lights in the order of [`Lights::punctual_entries`]: entry k is the probability of picking the environment or one of entries
-    /// 0..=k (the environment owns [0, [`Lights::environment_pmf`])). [`Lights::sample`]
+    /// lights in the order of [`Lights::punctual_entries`]: entry k is the probability of
+    /// picking the environment or one of entries 0..=k (the environment owns [0, [`Lights::environment_pmf`])). [`Lights::sample`]
     /// picks the first k with `cdf[k] > u` (clamped to the last).
     pub fn cdf(&self) -> &[f32] {
         self.bounds.get(1..).unwrap_or_default()
@@ -565,8 +582,8 @@ impl Lights {
     }
 
     /// The light whose stretch of the unit interval holds `x` (the first coordinate of
-    /// [`Lights::sample`]'s sample: index k into the primitives, then the punctual
-    /// lights), and `x` rescaled to [0, 1) within that stretch. The caller checks that
+    /// [`Lights::sample`]'s sample: index k into the primitives, then the punctual lights
+    /// in the order of [`Lights::punctual_entries`]), and `x` rescaled to [0, 1) within that stretch. The caller checks that
     /// there is a light and that `x` is past the environment's share.
     #[inline(always)]
     pub(crate) fn choose(&self, x: f32) -> (usize, f32) {
@@ -650,15 +667,23 @@ impl Lights {
 /// A point or spot light's bounds in a light tree, with power `phi` (pbrt-v4's
 /// `PointLight::Bounds` and `SpotLight::Bounds`): at one point, emitting in every
 /// direction (θo = π), or, for a spot, fully within its inner cone (θo) and fading to
-/// nothing at its outer one (θe = θ_outer − θ_inner).
+/// nothing at its outer one (θe = θ_outer − θ_inner). Two cases pbrt-v4 gets wrong are
+/// kept conservative, as the tree's estimate must be (zero only where the light gives
+/// nothing): a cone widened by more than π/2 would give directions past θo + π/2 a
+/// negative cosine and an estimate of zero, so θo takes the excess (θe ≤ π/2); and a
+/// hard-edged spot (θe = 0, cos θe = 1) would never pass the estimate's test cos θ' >
+/// cos θe, so cos θe stays just below 1.
 fn punctual_bounds(light: &PunctualLight, phi: f32) -> tree::LightBounds {
     let point = light.towards();
     let bounds = bvh::Aabb { min: point, max: point };
     match *light {
         PunctualLight::Spot { direction, cos_inner, cos_outer, .. } => {
             let angle = |c: f32| c.clamp(-1.0, 1.0).acos();
-            let theta_e = (angle(cos_outer) - angle(cos_inner)).max(0.0);
-            tree::LightBounds { bounds, w: direction, phi, cos_theta_o: cos_inner, cos_theta_e: theta_e.cos() }
+            let inner = angle(cos_inner);
+            let outer = angle(cos_outer).max(inner);
+            let theta_o = inner.max(outer - std::f32::consts::FRAC_PI_2);
+            let cos_theta_e = (outer - theta_o).cos().min(ONE_MINUS_EPSILON);
+            tree::LightBounds { bounds, w: direction, phi, cos_theta_o: theta_o.cos(), cos_theta_e }
         }
         _ => tree::LightBounds { bounds, w: Vec3::Z, phi, cos_theta_o: -1.0, cos_theta_e: 0.0 },
     }
@@ -896,6 +921,62 @@ mod tests {
         }
         for k in 0..4 {
             assert!((drawn[k] as f32 / count as f32 - pmf[k]).abs() < 1e-3, "light {k}: {drawn:?} against {pmf:?}");
+        }
+    }
+
+    /// The tree's estimate for a spot is zero only where it gives nothing: around spots
+    /// of every shape — hard-edged (inner = outer, and inner > outer, which `spot` makes
+    /// hard-edged), a falloff wider than a right angle (0° to 120°), an ordinary one — a
+    /// point in each direction (every degree from the axis to behind it) where the
+    /// falloff is positive has a positive probability, and one more than a degree past the
+    /// outer cone has none.
+    #[test]
+    fn spots_of_every_shape_are_chosen_wherever_they_shine() {
+        let (at, axis) = (Vec3::new(0.5, 2.0, -1.0), Vec3::new(0.3, -1.0, 0.2).normalize());
+        let side = axis.any_orthonormal_vector();
+        for (inner, outer) in [(25.0f32, 25.0f32), (40.0, 30.0), (0.0, 120.0), (20.0, 45.0)] {
+            let mut scene = Scene::default();
+            let spot = PunctualLight::spot(at, axis, Colour::constant(2.0), inner.to_radians(), outer.to_radians());
+            let PunctualLight::Spot { cos_inner, cos_outer, .. } = spot else { unreachable!() };
+            scene.punctual_lights.push(spot);
+            let lights = Lights::with_sampler(&scene, LightSampler::Tree);
+            for degrees in 0..=180 {
+                let theta = (degrees as f32).to_radians();
+                let p = at + 2.0 * (theta.cos() * axis + theta.sin() * side);
+                let falloff = PunctualLight::spot_falloff(theta.cos(), cos_inner, cos_outer);
+                let pmf = lights.punctual_pmf_at(0, p, Vec3::ZERO);
+                let past = degrees as f32 > inner.max(outer) + 1.0;
+                assert!(pmf.is_finite() && (falloff <= 0.0 || pmf > 0.0), "{inner}°/{outer}° at {degrees}°: {pmf}");
+                assert!(!past || pmf == 0.0, "{inner}°/{outer}° at {degrees}°: {pmf} past the cone");
+            }
+        }
+    }
+
+    /// A point light without power is left out of the tree (never drawn, probability 0,
+    /// not counted towards `auto`'s threshold), and a shading point at a point light's
+    /// position gets another light with a finite pdf, not a NaN.
+    #[test]
+    fn dark_point_lights_and_points_at_a_light_are_harmless() {
+        let mut scene = Scene::default();
+        let at = |i: usize| Vec3::new(i as f32, 2.0, 0.0);
+        for i in 0..LightSampler::TREE_FROM - 1 {
+            scene.punctual_lights.push(PunctualLight::point(at(i), Colour::constant(1.0)));
+        }
+        scene.punctual_lights.push(PunctualLight::point(at(9), Colour::constant(0.0)));
+        assert!(!Lights::with_sampler(&scene, LightSampler::Auto).has_tree(), "7 lit point lights and a dark one");
+        let lights = Lights::with_sampler(&scene, LightSampler::Tree);
+        let dark = LightSampler::TREE_FROM - 1;
+        let count = 4096;
+        // (Points without a normal: the lights lie in the plane at y = 2 through the last two.)
+        for p in [Vec3::new(3.2, 0.0, 0.5), at(9), at(2)] {
+            assert_eq!(lights.punctual_pmf_at(dark, p, Vec3::ZERO), 0.0);
+            for i in 0..count {
+                let u = Vec2::new((i as f32 + 0.5) / count as f32, 0.5);
+                let ls = lights.sample_at(&scene, u, p, Vec3::ZERO).expect("a lit light");
+                assert!(ls.pdf > 0.0 && ls.pdf.is_finite(), "{p}: {ls:?}");
+                assert_ne!(ls.source, LightSource::Punctual(dark as u32));
+                assert!(p != at(2) || ls.source != LightSource::Punctual(2), "the light at the point itself");
+            }
         }
     }
 

@@ -174,9 +174,9 @@ pub struct SceneOptions {
     /// per camera ray; only a backend whose [`Capabilities::wavefront`] says so runs it
     /// (the GPU's path tracer), the others refuse it.
     pub wavefront: bool,
-    /// How next-event estimation chooses among the emitters (by power, or by a light
-    /// tree for the shading point; [`LightSampler::Auto`]: the tree from
-    /// [`LightSampler::TREE_FROM`] emitters where the backend has one).
+    /// How next-event estimation chooses among the emitters, point and spot lights (by
+    /// power, or by a light tree for the shading point; [`LightSampler::Auto`]: the tree
+    /// from [`LightSampler::TREE_FROM`] of them where the backend has one).
     pub light_sampler: LightSampler,
 }
 
@@ -441,7 +441,8 @@ pub struct PrepareStats {
     pub total: Duration,
     /// Primitives that emit light.
     pub emitters: usize,
-    /// Whether next-event estimation chooses among them by a light tree.
+    /// Whether next-event estimation chooses among them (and the point and spot lights)
+    /// by a light tree.
     pub light_tree: bool,
     /// The triangles' acceleration structure, for messages (e.g. "8-wide BVH (AVX2)").
     pub accelerator: &'static str,

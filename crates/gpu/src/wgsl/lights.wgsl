@@ -1,5 +1,6 @@
 // Light sampling, mirroring crates/tracer/src/lights.rs (`Lights::sample`): the
-// environment owns [0, env_pmf) of the unit interval, emissive triangles the rest by
+// environment owns [0, env_pmf) of the unit interval, the light table's entries (emissive
+// triangles and shapes, then point and spot lights, then directional ones) the rest by
 // their cdf; with the uniform sphere and triangle maps of crates/brdf/src/sampling.rs.
 // Where the kernel has a light tree (`PT_LIGHT_TREE`), the tree's stretch of the interval
 // (the emitters', then the point and spot lights') is chosen by it for the shading point

@@ -1,4 +1,4 @@
-//! A light tree: the emitters in a hierarchy whose nodes bound their lights' positions,
+//! A light tree: the emitters, point and spot lights in a hierarchy whose nodes bound their lights' positions,
 //! emission directions and power, so that a shading point chooses a light in proportion
 //! to an estimate of what each part of the tree can give it, instead of in proportion to
 //! power alone (Conty Estevez & Kulla 2018, "Importance Sampling of Many Lights with
@@ -237,7 +237,8 @@ impl Node {
     }
 }
 
-/// The tree over a scene's sampled emitters (indices into `Lights::prims`).
+/// The tree over a scene's sampled emitters and its point and spot lights (indices into
+/// `Lights::cdf`'s entries: those of `Lights::prims`, then the point and spot lights').
 #[derive(Clone, Debug)]
 pub(crate) struct LightTree {
     /// The root first.
