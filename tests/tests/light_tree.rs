@@ -40,18 +40,24 @@ fn room() -> Scene {
     scene
 }
 
-/// The [`room`] under a 5 × 5 grid of small lamps facing down (four colours, powers
-/// varying fourfold), a glowing ball and a dim point light.
+/// A 5 × 5 grid of lights: each one's row, column and linear-sRGB colour (four colours,
+/// brightness varying fourfold).
+fn grid() -> impl Iterator<Item = (usize, usize, [f32; 3])> {
+    let colours = [[1.0, 0.75, 0.45], [0.55, 0.7, 1.0], [1.0, 0.45, 0.35], [0.6, 1.0, 0.6]];
+    (0..25).map(move |k| {
+        let (i, j) = (k / 5, k % 5);
+        let s = 2.0 * (1 + (i * 3 + j) % 4) as f32;
+        (i, j, colours[(i + 2 * j) % 4].map(|c| c * s))
+    })
+}
+
+/// The [`room`] under a [`grid`] of small lamps facing down, a glowing ball and a dim
+/// point light.
 fn hall() -> Scene {
     let mut scene = room();
-    let colours = [[1.0, 0.75, 0.45], [0.55, 0.7, 1.0], [1.0, 0.45, 0.35], [0.6, 1.0, 0.6]];
-    for i in 0..5 {
-        for j in 0..5 {
-            let s = 2.0 * (1 + (i * 3 + j) % 4) as f32;
-            let rgb = colours[(i + 2 * j) % 4].map(|c| c * s);
-            let centre = Vec3::new(-4.8 + 2.4 * i as f32, 0.8, -4.8 + 2.4 * j as f32);
-            scene.add(&quad(centre, -Vec3::Y, LAMP_HALF), lamp(&format!("lamp{i}{j}"), rgb));
-        }
+    for (i, j, rgb) in grid() {
+        let centre = Vec3::new(-4.8 + 2.4 * i as f32, 0.8, -4.8 + 2.4 * j as f32);
+        scene.add(&quad(centre, -Vec3::Y, LAMP_HALF), lamp(&format!("lamp{i}{j}"), rgb));
     }
     let ball = Sphere::new(Vec3::new(1.3, 0.3, 1.0), 0.3, SphereMethod::default()).unwrap();
     scene.add_shape(ShapeKind::Sphere(ball), lamp("ball", [2.0, 1.5, 1.0]));
@@ -65,22 +71,17 @@ fn settings(mode: SpectralMode, spp: u32) -> RenderSettings {
     RenderSettings { width: 24, height: 18, spp, seed: 9, mode, ..Default::default() }
 }
 
-/// The [`room`] under a 5 × 5 grid of point lights and spots aimed down (alternating;
-/// four colours, intensities varying fourfold), beside a dim sun, which keeps its power
-/// share as the sky does.
+/// The [`room`] under a [`grid`] of point lights and spots aimed down (alternating),
+/// beside a dim sun, which keeps its power share as the sky does.
 fn punctual_hall() -> Scene {
     let mut scene = room();
-    let colours = [[1.0, 0.75, 0.45], [0.55, 0.7, 1.0], [1.0, 0.45, 0.35], [0.6, 1.0, 0.6]];
-    for i in 0..5 {
-        for j in 0..5 {
-            let s = 2.0 * (1 + (i * 3 + j) % 4) as f32;
-            let colour = Colour::illuminant_rgb(colours[(i + 2 * j) % 4].map(|c| c * s)).unwrap();
-            let at = Vec3::new(-4.8 + 2.4 * i as f32, 1.6, -3.6 + 2.4 * j as f32);
-            scene.punctual_lights.push(match (i + j) % 2 {
-                0 => PunctualLight::point(at, colour),
-                _ => PunctualLight::spot(at, -Vec3::Y, colour, 0.5, 0.9),
-            });
-        }
+    for (i, j, rgb) in grid() {
+        let colour = Colour::illuminant_rgb(rgb).unwrap();
+        let at = Vec3::new(-4.8 + 2.4 * i as f32, 1.6, -3.6 + 2.4 * j as f32);
+        scene.punctual_lights.push(match (i + j) % 2 {
+            0 => PunctualLight::point(at, colour),
+            _ => PunctualLight::spot(at, -Vec3::Y, colour, 0.5, 0.9),
+        });
     }
     let sun = Colour::illuminant_rgb([0.05, 0.045, 0.04]).unwrap();
     scene.punctual_lights.push(PunctualLight::directional(Vec3::new(0.3, -1.0, -0.4), sun));
