@@ -290,15 +290,12 @@ impl Lights {
         if total <= 0.0 {
             return Self { prim_pmf, ..Default::default() };
         }
-        // Point and spot lights first, so that a tree's lights are one stretch.
-        let positioned = |l: &PunctualLight| !matches!(l, PunctualLight::Directional { .. });
-        let all = 0..scene.punctual_lights.len() as u32;
-        let punctual_order: Vec<u32> = all
-            .clone()
-            .filter(|&i| positioned(&scene.punctual_lights[i as usize]))
-            .chain(all.filter(|&i| !positioned(&scene.punctual_lights[i as usize])))
-            .collect();
-        let positioned = scene.punctual_lights.iter().filter(|l| positioned(l)).count();
+        // Point and spot lights first (a stable sort keeps the scene's order within each
+        // kind), so that a tree's lights are one stretch.
+        let directional = |i: &u32| matches!(scene.punctual_lights[*i as usize], PunctualLight::Directional { .. });
+        let mut punctual_order: Vec<u32> = (0..scene.punctual_lights.len() as u32).collect();
+        punctual_order.sort_by_key(directional);
+        let positioned = punctual_order.partition_point(|i| !directional(i));
         let mut punctual_rank = vec![0; punctual_order.len()];
         for (rank, &i) in punctual_order.iter().enumerate() {
             punctual_rank[i as usize] = rank as u32;
