@@ -3,7 +3,7 @@
 //! direction (the Neumann series Le·Σρᵏ). The render must match within its own
 //! confidence interval, in every spectral mode.
 
-mod common;
+use crate::common;
 
 use common::{channel_mean_and_se, sidak_z};
 use spectral::{SampledSpectrum, SampledWavelengths, SpectralMode};

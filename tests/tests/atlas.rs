@@ -4,8 +4,6 @@
 //! artefacts — light leaking through walls without visibility, dark seams without the
 //! gutter's dilation — shown to exist and to be fixed.
 
-mod common;
-
 use glam::Vec3;
 use spectral::SpectralMode;
 use spectral::spectrum::Colour;

@@ -8,7 +8,7 @@
 //! not cover a bidirectional render: its errors come from independent batches (renders
 //! with different seeds) instead, for both integrators alike.
 
-mod common;
+use crate::common;
 
 use common::batched::{Batched, assert_agree, batched, diffuse_box, glass_and_mirror_box};
 use common::{sidak_z, z_test};

@@ -7,7 +7,7 @@
 //! the part left to the light paths must be a real share of the image (else the
 //! comparison proves nothing).
 
-mod common;
+use crate::common;
 
 use common::batched::{assert_agree, batched, diffuse_box, glass_and_mirror_box, lamp};
 use glam::Vec3;

@@ -2,7 +2,7 @@
 //! of radiance 1 are invisible — every pixel equals the sky — however many bounces the
 //! light takes between them. A BSDF or integrator that loses or gains energy shows.
 
-mod common;
+use crate::common;
 
 use common::channel_mean_and_se;
 use glam::Vec3;

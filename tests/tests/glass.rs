@@ -1,7 +1,7 @@
 //! Transmission: Beer–Lambert absorption against its closed form, dispersive glass in the
 //! white furnace, and the thesis's path extension through specular surfaces.
 
-mod common;
+use crate::common;
 
 use brdf::params::ParamValue;
 use bvh::{Accelerator, Ray};

@@ -3,7 +3,7 @@
 //! tracing against path tracing on a scene of mirrors and glass and on diffuse surfaces
 //! under point lights.
 
-mod common;
+use crate::common;
 
 use common::{channel_mean_and_se, z_test};
 use glam::Vec3;

@@ -7,7 +7,7 @@
 //! hall of point and spot lights beside a sun — and the tree's images there are less noisy
 //! at the same sample count.
 
-mod common;
+use crate::common;
 
 use common::batched::{Batched, assert_agree, batched_with, lamp};
 use glam::Vec3;

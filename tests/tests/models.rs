@@ -2,7 +2,7 @@
 //! parameters) in a white furnace — a uniform sky of radiance 1 — must never come out
 //! brighter than the sky (no model creates energy), and never yield NaN or Inf.
 
-mod common;
+use crate::common;
 
 use common::channel_mean_and_se;
 use glam::Vec3;

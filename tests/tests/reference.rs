@@ -3,7 +3,7 @@
 //! (z = Δ / √(se_ours² + se_ref²), α = 0.01 Šidák-corrected), in RGB mode against the
 //! RGB reference and in hero-spectral mode against the spectral one.
 
-mod common;
+use crate::common;
 
 use common::z_test;
 use glam::Vec3;

@@ -10,7 +10,7 @@
 //! * Smooth-shaded glass in a white furnace stays white (a lossless dielectric), and a
 //!   smooth-shaded diffuse sphere shows no black silhouette.
 
-mod common;
+use crate::common;
 
 use common::channel_mean_and_se;
 use glam::Vec3;

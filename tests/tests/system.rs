@@ -1,0 +1,24 @@
+//! The whole-system tests as one test binary: each file a module, so that the renderer's
+//! generic code is compiled once rather than once per file (19 binaries took ~45 % of the
+//! workspace's test build; see docs/figures.md, "CI's build time").
+
+mod common;
+
+mod analytic;
+mod atlas;
+mod bdpt;
+mod caustics;
+mod determinism;
+mod environment;
+mod furnace;
+mod glass;
+mod gltf;
+mod instances;
+mod integrators;
+mod lanes;
+mod light_tree;
+mod models;
+mod punctual;
+mod reference;
+mod shapes;
+mod textures;
