@@ -1,6 +1,6 @@
 //! The whole-system tests as one test binary: each file a module, so that the renderer's
 //! generic code is compiled once rather than once per file (19 binaries took ~45 % of the
-//! workspace's test build; see docs/figures.md, "CI's build time").
+//! workspace's test build; see docs/figures.md, "CI's time on a slow machine").
 
 mod common;
 
