@@ -1,6 +1,7 @@
 //! The whole-system tests as one test binary: each file a module, so that the renderer's
-//! generic code is compiled once rather than once per file (19 binaries took ~45 % of the
-//! workspace's test build; see docs/figures.md, "CI's time on a slow machine").
+//! generic code is compiled once rather than once per file (CI's test build on a 2-core
+//! machine: 32 min with 19 binaries, 21 min with one; docs/figures.md, "CI's time on a
+//! slow machine").
 
 mod common;
 
