@@ -1161,7 +1161,9 @@ struct FilmBuffers {
 /// shading stage) and, for a wavefront, its other stages.
 #[derive(Clone)]
 pub(crate) struct Kernel {
-    main: wgpu::ComputePipeline,
+    /// The main pipeline and its module (held: the device finds the kernel again while
+    /// a scene holds it).
+    main: Arc<crate::context::CompiledKernel>,
     stages: Option<Arc<wavefront::Stages>>,
 }
 
@@ -1276,7 +1278,7 @@ fn kernel(
     entries: &[wgpu::BindGroupLayoutEntry],
     source: &str,
     entry: &str,
-) -> Result<(wgpu::ComputePipeline, wgpu::ShaderModule), GpuError> {
+) -> Result<Arc<crate::context::CompiledKernel>, GpuError> {
     ctx.kernels.get_or_compile(source, entries, || compile_kernel(ctx, layout, source, entry))
 }
 
@@ -1466,15 +1468,16 @@ impl GpuBackend {
         let shader_result =
             kernel(&self.ctx, &pipeline_layout, &entries, &data.shader_source(), main_entry(&data.options));
         let stages = match (&shader_result, &wavefront_layouts) {
-            (Ok((_, module)), Some((_, control))) => {
-                Some(wavefront::Stages::new(&self.ctx, module, &pipeline_layout, control))
+            (Ok(compiled), Some((_, control))) => {
+                Some(wavefront::Stages::new(&self.ctx, &compiled.1, &pipeline_layout, control))
             }
             _ => None,
         };
         let compile_time = compile_start.elapsed();
         let memory_result = pop_scope(memory, "out of GPU memory uploading the scene");
         let validation_result = pop_scope(validation, "uploading the scene");
-        let (pipeline, module) = shader_result?;
+        let compiled = shader_result?;
+        let module = compiled.1.clone();
         let stages = stages.transpose()?;
         memory_result?;
         validation_result?;
@@ -1496,7 +1499,7 @@ impl GpuBackend {
             ctx: Arc::clone(&self.ctx),
             bounds: scene.bounds(),
             scene,
-            pipelines: Mutex::new(vec![((data.options.sampler, data.options.mode), Kernel { main: pipeline, stages })]),
+            pipelines: Mutex::new(vec![((data.options.sampler, data.options.mode), Kernel { main: compiled, stages })]),
             pipeline_layout,
             wavefront_layouts,
             layout_entries: entries,
@@ -2089,10 +2092,9 @@ impl GpuScene {
         }
         let options = KernelOptions { sampler: key.0, mode: key.1, ..self.kernel_options };
         let source = crate::kernel::source(&self.material_wgsl, &options);
-        let (main, module) =
-            kernel(&self.ctx, &self.pipeline_layout, &self.layout_entries, &source, main_entry(&options))?;
+        let main = kernel(&self.ctx, &self.pipeline_layout, &self.layout_entries, &source, main_entry(&options))?;
         let stages = match &self.wavefront_layouts {
-            Some((_, control)) => Some(wavefront::Stages::new(&self.ctx, &module, &self.pipeline_layout, control)?),
+            Some((_, control)) => Some(wavefront::Stages::new(&self.ctx, &main.1, &self.pipeline_layout, control)?),
             None => None,
         };
         let compiled = Kernel { main, stages };
@@ -2117,7 +2119,7 @@ impl GpuScene {
     ) -> Result<wgpu::SubmissionIndex, GpuError> {
         match (&kernel.stages, wavefront) {
             (Some(stages), Some(buffers)) => {
-                return wavefront::submit(&self.ctx, stages, &kernel.main, bind_group, buffers, encoder, params);
+                return wavefront::submit(&self.ctx, stages, &kernel.main.0, bind_group, buffers, encoder, params);
             }
             (None, None) => {}
             _ => return Err(GpuError::Shader("a wavefront kernel without its paths, or paths without one".into())),
@@ -2125,7 +2127,7 @@ impl GpuScene {
         {
             let mut pass =
                 encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("spt"), timestamp_writes: None });
-            pass.set_pipeline(&kernel.main);
+            pass.set_pipeline(&kernel.main.0);
             pass.set_bind_group(0, bind_group, &[]);
             pass.dispatch_workgroups(width.div_ceil(WORKGROUP), rows.div_ceil(WORKGROUP), 1);
         }

@@ -10,78 +10,99 @@ pub(crate) type CompiledKernel = (wgpu::ComputePipeline, wgpu::ShaderModule);
 /// The kernels compiled on one device, by WGSL source and bind group layout entries.
 ///
 /// Why: a GPU's driver compiles a path kernel in about a second (H100: 0.9–1.2 s, 8–12 ms
-/// from its own disk cache; `docs/gpu/figures-h100.txt`), lavapipe in 20–50 s, and
+/// from its own disk cache; `docs/gpu/figures-h100.txt`), lavapipe in 20–90 s, and
 /// preparing a second scene with the same materials and features (another camera or
 /// image size, the same scene again, a clone of the context with other limits) needs the
 /// same kernel. Pipelines made from a layout with the same entries are compatible with
 /// the new scene's bind groups: wgpu deduplicates identical bind group layouts on a
-/// device. Only the [`KEPT_KERNELS`] most recently compiled are kept: lavapipe's compiled
-/// code is large (a device keeping every kernel of the equivalence tests grew to 24 GB and
-/// was killed), and a scene keeps its own kernels anyway.
+/// device.
+///
+/// Two ways a kernel is found again: the cache itself holds the [`KEPT_KERNELS`] most
+/// recently used (lavapipe's compiled code is large: a device holding every kernel of the
+/// equivalence tests grew to 24 GB and was killed), and any kernel a prepared scene still
+/// holds is found too, however long ago it was compiled — it costs no memory that the
+/// scene does not already hold (the cache keeps only a weak reference to it).
 #[derive(Clone, Default)]
 pub(crate) struct KernelCache(Arc<Mutex<Kept>>);
 
 /// How many compiled kernels a device keeps beyond those its scenes hold.
 pub const KEPT_KERNELS: usize = 2;
 
-/// The kept kernels' slots, and their keys oldest first.
+/// The kernels' slots, and strong references to the most recently used.
 #[derive(Default)]
 struct Kept {
     slots: HashMap<KernelKey, KernelSlot>,
-    order: std::collections::VecDeque<KernelKey>,
+    recent: std::collections::VecDeque<Arc<CompiledKernel>>,
+    /// How many kernels were compiled (what the cache did not spare).
+    compiled: usize,
+}
+
+impl Kept {
+    /// Keeps `kernel` as the most recently used (once), dropping the oldest beyond
+    /// [`KEPT_KERNELS`].
+    fn touch(&mut self, kernel: &Arc<CompiledKernel>) {
+        self.recent.retain(|k| !Arc::ptr_eq(k, kernel));
+        self.recent.push_back(Arc::clone(kernel));
+        while self.recent.len() > KEPT_KERNELS {
+            self.recent.pop_front();
+        }
+    }
 }
 
 /// The source and the layout entries a kernel was compiled with.
 type KernelKey = (String, Vec<wgpu::BindGroupLayoutEntry>);
 
-/// One kernel's entry: empty until it compiled without error. Locked while it compiles, so
-/// that a second thread asking for the same kernel waits for it instead of compiling too.
-type KernelSlot = Arc<Mutex<Option<CompiledKernel>>>;
+/// One kernel's entry: a weak reference to it once it compiled without error (alive while
+/// the cache's recent list or a scene holds it). Locked while it compiles, so that a
+/// second thread asking for the same kernel waits for it instead of compiling too.
+type KernelSlot = Arc<Mutex<std::sync::Weak<CompiledKernel>>>;
 
 fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
     m.lock().unwrap_or_else(PoisonError::into_inner)
 }
 
 impl KernelCache {
-    /// The kernel compiled from `source` with `entries`: the kept one, or `compile`'s
-    /// (kept if it succeeds; an error is returned and nothing kept).
+    /// The kernel compiled from `source` with `entries`: a kept or still held one, or
+    /// `compile`'s (kept if it succeeds; an error is returned and nothing kept). Holding
+    /// the returned kernel keeps it findable.
     pub(crate) fn get_or_compile(
         &self,
         source: &str,
         entries: &[wgpu::BindGroupLayoutEntry],
         compile: impl FnOnce() -> Result<CompiledKernel, GpuError>,
-    ) -> Result<CompiledKernel, GpuError> {
+    ) -> Result<Arc<CompiledKernel>, GpuError> {
         let slot = {
             let mut kept = lock(&self.0);
             let key = (source.to_string(), entries.to_vec());
-            match kept.slots.get(&key) {
-                Some(slot) => Arc::clone(slot),
-                None => {
-                    if kept.order.len() >= KEPT_KERNELS
-                        && let Some(oldest) = kept.order.pop_front()
-                    {
-                        kept.slots.remove(&oldest);
-                    }
-                    let slot = KernelSlot::default();
-                    kept.slots.insert(key.clone(), Arc::clone(&slot));
-                    kept.order.push_back(key);
-                    slot
-                }
-            }
+            // Forget kernels nobody holds (a slot locked or shared is being compiled or
+            // waited for: kept).
+            kept.slots.retain(|k, slot| {
+                *k == key || Arc::strong_count(slot) > 1 || slot.try_lock().map_or(true, |w| w.strong_count() > 0)
+            });
+            Arc::clone(kept.slots.entry(key).or_default())
         };
-        let mut kernel = lock(&slot);
-        if let Some(kept) = &*kernel {
-            return Ok(kept.clone());
+        let mut weak = lock(&slot);
+        if let Some(kernel) = weak.upgrade() {
+            lock(&self.0).touch(&kernel);
+            return Ok(kernel);
         }
-        let compiled = compile()?;
-        *kernel = Some(compiled.clone());
-        Ok(compiled)
+        let kernel = Arc::new(compile()?);
+        *weak = Arc::downgrade(&kernel);
+        let mut kept = lock(&self.0);
+        kept.touch(&kernel);
+        kept.compiled += 1;
+        Ok(kernel)
     }
 
-    /// How many kernels are kept.
+    /// How many kernels were compiled.
+    pub(crate) fn compiled(&self) -> usize {
+        lock(&self.0).compiled
+    }
+
+    /// How many compiled kernels can be found again (kept or held).
     pub(crate) fn len(&self) -> usize {
         let slots: Vec<KernelSlot> = lock(&self.0).slots.values().cloned().collect();
-        slots.iter().filter(|slot| lock(slot).is_some()).count()
+        slots.iter().filter(|slot| lock(slot).strong_count() > 0).count()
     }
 }
 
@@ -145,10 +166,16 @@ impl GpuContext {
         self.device.features().contains(wgpu::Features::SHADER_F64)
     }
 
-    /// How many compiled kernels the device keeps for reuse (each distinct WGSL source and
-    /// layout once, the [`KEPT_KERNELS`] most recent).
+    /// How many compiled kernels the device can reuse (each distinct WGSL source and layout
+    /// once: the [`KEPT_KERNELS`] most recently used and those prepared scenes hold).
     pub fn compiled_kernels(&self) -> usize {
         self.kernels.len()
+    }
+
+    /// How many kernels were compiled on the device and its clones (each compile the cache
+    /// did not spare; a failed one not counted): what a session's first renders cost.
+    pub fn kernels_compiled(&self) -> usize {
+        self.kernels.compiled()
     }
 }
 
@@ -165,5 +192,59 @@ pub fn require_gpu() -> Option<GpuContext> {
             eprintln!("skipping a GPU test: {e}");
             None
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A trivial kernel, different per `n` (lavapipe compiles it in milliseconds).
+    fn tiny(ctx: &GpuContext, n: u32) -> Result<Arc<CompiledKernel>, GpuError> {
+        let source = format!("@compute @workgroup_size(1) fn main() {{ _ = {n}u; }}");
+        ctx.kernels.get_or_compile(&source, &[], || {
+            let module = ctx.device.create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: None,
+                source: wgpu::ShaderSource::Wgsl(source.as_str().into()),
+            });
+            let pipeline = ctx.device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: None,
+                layout: None,
+                module: &module,
+                entry_point: Some("main"),
+                compilation_options: Default::default(),
+                cache: None,
+            });
+            Ok((pipeline, module))
+        })
+    }
+
+    /// The cache finds the most recently used kernels and any kernel still held, and
+    /// forgets the others.
+    #[test]
+    fn held_and_recent_kernels_are_found_again() {
+        let Some(ctx) = require_gpu() else { return };
+        let held = tiny(&ctx, 1).unwrap();
+        for n in 2..=4 {
+            tiny(&ctx, n).unwrap();
+        }
+        assert_eq!(ctx.kernels_compiled(), 4);
+        // Held (though the oldest): found, not compiled again.
+        assert!(Arc::ptr_eq(&tiny(&ctx, 1).unwrap(), &held));
+        assert_eq!(ctx.kernels_compiled(), 4);
+        // The most recent before it: kept.
+        tiny(&ctx, 4).unwrap();
+        assert_eq!(ctx.kernels_compiled(), 4);
+        // Neither held nor among the two most recent: compiled again.
+        tiny(&ctx, 2).unwrap();
+        assert_eq!(ctx.kernels_compiled(), 5);
+        // Findable now: 1 (held; it is not among the recent, 4 and 2), 4 and 2.
+        assert_eq!(ctx.compiled_kernels(), 3);
+        drop(held);
+        assert_eq!(ctx.compiled_kernels(), 2);
+        // A clone shares the kernels and the count.
+        let clone = ctx.clone();
+        tiny(&clone, 2).unwrap();
+        assert_eq!(ctx.kernels_compiled(), 5);
     }
 }
