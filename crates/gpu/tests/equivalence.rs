@@ -214,48 +214,9 @@ fn cornell() -> Option<Scene> {
     Some(tracer::obj::load_obj(Path::new(CORNELL)).unwrap())
 }
 
-/// A kernel [`shared_gpu`] keeps compiled for the test binary's whole run.
-#[derive(Clone, Copy)]
-enum Pinned {
-    /// The path tracer's on the Cornell box with the default settings.
-    Path,
-    /// bdpt's on the Cornell box, hero and RGB.
-    Bdpt,
-}
-
-/// One device shared by the tests whose scenes need the kernels in `pins` (compiled on
-/// first use and then held by scenes kept for the whole run: a device finds a kernel again
-/// while a scene holds it). Why: lavapipe compiles the path kernel in ~25 s and bdpt's in
-/// ~80 s, and ten tests need one of these — the glowing room's kernels are the Cornell
-/// box's (the same materials and features). `None` (with a message) where no GPU exists.
-fn shared_gpu(pins: &[Pinned]) -> Option<gpu::GpuContext> {
-    use std::sync::OnceLock;
-    static CONTEXT: OnceLock<Option<gpu::GpuContext>> = OnceLock::new();
-    static PATH: OnceLock<Option<gpu::GpuScene>> = OnceLock::new();
-    static BDPT: OnceLock<Option<gpu::GpuScene>> = OnceLock::new();
-    let ctx = CONTEXT.get_or_init(gpu::require_gpu).clone()?;
-    for pin in pins {
-        match pin {
-            Pinned::Path => PATH.get_or_init(|| {
-                let backend = GpuBackend::with_context(ctx.clone());
-                cornell().map(|scene| backend.prepare_gpu(scene, &SceneOptions::default()).unwrap())
-            }),
-            Pinned::Bdpt => BDPT.get_or_init(|| {
-                let backend = GpuBackend::with_context(ctx.clone()).with_integrator(GpuIntegrator::Bdpt);
-                let scene = cornell()?;
-                let prepared = backend.prepare_gpu(scene, &SceneOptions::default()).unwrap();
-                let rgb = RenderSettings { mode: SpectralMode::Rgb, ..settings(1, 1, 1) };
-                prepared.warm_up(&rgb).unwrap();
-                Some(prepared)
-            }),
-        };
-    }
-    Some(ctx)
-}
-
 #[test]
 fn cornell_box_matches_the_cpu() {
-    let Some(ctx) = shared_gpu(&[Pinned::Path]) else { return };
+    let Some(ctx) = gpu::require_gpu() else { return };
     let Some(scene) = cornell() else { return };
     println!("adapter: {} ({:?})", ctx.info.name, ctx.info.backend);
     let gpu = GpuBackend::with_context(ctx);
@@ -377,7 +338,7 @@ fn path_settings_match_the_cpu() {
 #[test]
 fn max_diffuse_depth_ends_paths_as_on_the_cpu() {
     // One diffuse bounce: direct light only (the second hit's emission, then the end).
-    let Some(ctx) = shared_gpu(&[Pinned::Path]) else { return };
+    let Some(ctx) = gpu::require_gpu() else { return };
     let Some(scene) = cornell() else { return };
     let (cpu, gpu) = prepare_both(&GpuBackend::with_context(ctx), &scene, None).unwrap();
     let base = settings(32, 32, 64);
@@ -398,7 +359,7 @@ fn max_diffuse_depth_ends_paths_as_on_the_cpu() {
 fn every_bvh_builder_renders_the_cpus_image() {
     // `--bvh-builder`: the GPU's binary tree built by each split method; the same paths as
     // the CPU's (its wide tree collapsed from a tree built the same way).
-    let Some(ctx) = shared_gpu(&[Pinned::Path]) else { return };
+    let Some(ctx) = gpu::require_gpu() else { return };
     let Some(scene) = cornell() else { return };
     let gpu = GpuBackend::with_context(ctx);
     let s = settings(32, 32, 16);
@@ -475,7 +436,7 @@ fn passes_bands_and_reruns_add_up() {
 /// (whichever runs first); a crop window is, bit for bit, the same pixels of the image.
 #[test]
 fn long_passes_are_merged_in_groups() {
-    let Some(ctx) = shared_gpu(&[Pinned::Path]) else { return };
+    let Some(ctx) = gpu::require_gpu() else { return };
     let Some(scene) = cornell() else { return };
     let gpu = GpuBackend::with_context(ctx).prepare_gpu(scene, &SceneOptions::default()).unwrap();
     let s = settings(8, 8, 1100);
@@ -585,9 +546,8 @@ fn unsupported_scenes_and_modes_are_clear_errors() {
         let splats = gpu::backend::capabilities_for(integrator).splats;
         assert_eq!(splats, integrator == GpuIntegrator::Bdpt, "{}", integrator.name());
     }
-    // The same refusals through a device: before any upload or compilation. (The grey
-    // room's kernel is the Cornell box's.)
-    let Some(ctx) = shared_gpu(&[Pinned::Path]) else { return };
+    // The same refusals through a device: before any upload or compilation.
+    let Some(ctx) = gpu::require_gpu() else { return };
     let gpu = GpuBackend::with_context(ctx);
     let on_device = tracer::Backend::capabilities(&gpu);
     let implicit = on_device.analytic_shapes.kinds.contains(&"implicit surface");
@@ -895,7 +855,7 @@ fn paths_follow_the_cpu(label: &str, r: &Renders, limit: f64) -> Option<String> 
 #[test]
 fn sobol_samplers_match_the_cpu() {
     use tracer::sampler::SamplerKind;
-    let Some(ctx) = shared_gpu(&[Pinned::Path]) else { return };
+    let Some(ctx) = gpu::require_gpu() else { return };
     let Some(scene) = cornell() else { return };
     let gpu = GpuBackend::with_context(ctx);
     // Preparing compiles the kernel of the first render's sampler (without a hint the
@@ -1175,7 +1135,7 @@ fn russian_roulette_inside_glass_sees_through_radiance_compression() {
 /// bit on lavapipe), and BDPT's subpaths grow longer with it as well.
 #[test]
 fn russian_roulette_scale_converges_in_a_glowing_room() {
-    let Some(ctx) = shared_gpu(&[Pinned::Bdpt]) else { return };
+    let Some(ctx) = gpu::require_gpu() else { return };
     let exact = ctx.info.device_type == wgpu::DeviceType::Cpu;
     let scene = room::glowing_room(0.8, 0.5);
     let gpu = GpuBackend::with_context(ctx);
@@ -1757,7 +1717,7 @@ fn compare_with_splats(cpu: &Film, gpu: &Film, gpu_other: &Film) -> SplatCompari
 fn bdpt_matches_the_cpu() {
     use gpu::kernel::GpuIntegrator;
     use tracer::{Backend, Bdpt};
-    let Some(ctx) = shared_gpu(&[Pinned::Bdpt]) else { return };
+    let Some(ctx) = gpu::require_gpu() else { return };
     let backend = GpuBackend::with_context(ctx).with_integrator(GpuIntegrator::Bdpt);
     assert_eq!(backend.capabilities().integrator, "bdpt");
     assert_eq!(backend.capabilities().max_bounces, None, "bdpt's own cap, as on the CPU");
@@ -1838,7 +1798,7 @@ fn bdpt_matches_the_cpu() {
 #[test]
 fn bdpt_bands_give_the_same_film() {
     use gpu::kernel::{BDPT_SLOT_BYTES, GpuIntegrator};
-    let Some(ctx) = shared_gpu(&[Pinned::Bdpt]) else { return };
+    let Some(ctx) = gpu::require_gpu() else { return };
     let Some(scene) = cornell() else { return };
     let options = KernelOptions { integrator: GpuIntegrator::Bdpt, ..KernelOptions::default() };
     let largest = SceneData::new(&scene, options).unwrap().buffer_sizes().iter().map(|b| b.1).max().unwrap();
@@ -1982,7 +1942,7 @@ fn instances_match_the_cpu() {
 /// mode and the CPU refuse it by name.
 #[test]
 fn the_wavefront_gives_the_megakernels_image() {
-    let Some(ctx) = shared_gpu(&[Pinned::Path]) else { return };
+    let Some(ctx) = gpu::require_gpu() else { return };
     let exact = ctx.info.device_type == wgpu::DeviceType::Cpu;
     let gpu = GpuBackend::with_context(ctx);
     // The same film, bit for bit where the compiler fuses no multiply–add; else the same
