@@ -1289,12 +1289,12 @@ fn main_entry(options: &KernelOptions) -> &'static str {
 }
 
 /// Compiles `source`'s `entry` with `layout` (what [`kernel`] keeps).
-fn compile_kernel(
+pub(crate) fn compile_kernel(
     ctx: &GpuContext,
     layout: &wgpu::PipelineLayout,
     source: &str,
     entry: &str,
-) -> Result<(wgpu::ComputePipeline, wgpu::ShaderModule), GpuError> {
+) -> Result<crate::context::CompiledKernel, GpuError> {
     let device = &ctx.device;
     // (Out of memory caught here too: a pipeline that failed must not be kept.)
     let memory = device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
@@ -1314,7 +1314,7 @@ fn compile_kernel(
     let compiled = pop_scope(scope, "the path-tracing kernel does not compile");
     pop_scope(memory, "out of GPU memory compiling the path-tracing kernel")?;
     compiled?;
-    Ok((pipeline, module))
+    Ok(crate::context::CompiledKernel { pipeline, module })
 }
 
 /// Waits for an error scope and turns what it caught into a [`GpuError::Shader`].
@@ -1469,7 +1469,7 @@ impl GpuBackend {
             kernel(&self.ctx, &pipeline_layout, &entries, &data.shader_source(), main_entry(&data.options));
         let stages = match (&shader_result, &wavefront_layouts) {
             (Ok(compiled), Some((_, control))) => {
-                Some(wavefront::Stages::new(&self.ctx, &compiled.1, &pipeline_layout, control))
+                Some(wavefront::Stages::new(&self.ctx, &compiled.module, &pipeline_layout, control))
             }
             _ => None,
         };
@@ -1477,7 +1477,6 @@ impl GpuBackend {
         let memory_result = pop_scope(memory, "out of GPU memory uploading the scene");
         let validation_result = pop_scope(validation, "uploading the scene");
         let compiled = shader_result?;
-        let module = compiled.1.clone();
         let stages = stages.transpose()?;
         memory_result?;
         validation_result?;
@@ -1499,7 +1498,10 @@ impl GpuBackend {
             ctx: Arc::clone(&self.ctx),
             bounds: scene.bounds(),
             scene,
-            pipelines: Mutex::new(vec![((data.options.sampler, data.options.mode), Kernel { main: compiled, stages })]),
+            pipelines: Mutex::new(vec![(
+                (data.options.sampler, data.options.mode),
+                Kernel { main: Arc::clone(&compiled), stages },
+            )]),
             pipeline_layout,
             wavefront_layouts,
             layout_entries: entries,
@@ -1516,7 +1518,7 @@ impl GpuBackend {
         };
         if let Some(pending) = pending_gather {
             let at = pending.irradiance_at;
-            let (s, on_device) = prepared.gather_atlas(pending, &module)?;
+            let (s, on_device) = prepared.gather_atlas(pending, &compiled.module)?;
             prepared.stats.integrator = Some(s.unwrap + s.direct + s.gather);
             prepared.stats.total = start.elapsed();
             let texels = s.width as usize * s.height as usize;
@@ -2094,7 +2096,9 @@ impl GpuScene {
         let source = crate::kernel::source(&self.material_wgsl, &options);
         let main = kernel(&self.ctx, &self.pipeline_layout, &self.layout_entries, &source, main_entry(&options))?;
         let stages = match &self.wavefront_layouts {
-            Some((_, control)) => Some(wavefront::Stages::new(&self.ctx, &main.1, &self.pipeline_layout, control)?),
+            Some((_, control)) => {
+                Some(wavefront::Stages::new(&self.ctx, &main.module, &self.pipeline_layout, control)?)
+            }
             None => None,
         };
         let compiled = Kernel { main, stages };
@@ -2119,7 +2123,15 @@ impl GpuScene {
     ) -> Result<wgpu::SubmissionIndex, GpuError> {
         match (&kernel.stages, wavefront) {
             (Some(stages), Some(buffers)) => {
-                return wavefront::submit(&self.ctx, stages, &kernel.main.0, bind_group, buffers, encoder, params);
+                return wavefront::submit(
+                    &self.ctx,
+                    stages,
+                    &kernel.main.pipeline,
+                    bind_group,
+                    buffers,
+                    encoder,
+                    params,
+                );
             }
             (None, None) => {}
             _ => return Err(GpuError::Shader("a wavefront kernel without its paths, or paths without one".into())),
@@ -2127,7 +2139,7 @@ impl GpuScene {
         {
             let mut pass =
                 encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("spt"), timestamp_writes: None });
-            pass.set_pipeline(&kernel.main.0);
+            pass.set_pipeline(&kernel.main.pipeline);
             pass.set_bind_group(0, bind_group, &[]);
             pass.dispatch_workgroups(width.div_ceil(WORKGROUP), rows.div_ceil(WORKGROUP), 1);
         }

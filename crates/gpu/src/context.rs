@@ -5,7 +5,12 @@ use std::collections::HashMap;
 use std::sync::{Arc, Mutex, PoisonError};
 
 /// A compiled kernel: what [`KernelCache`] keeps.
-pub(crate) type CompiledKernel = (wgpu::ComputePipeline, wgpu::ShaderModule);
+pub(crate) struct CompiledKernel {
+    /// The pipeline of the entry point it was compiled for.
+    pub(crate) pipeline: wgpu::ComputePipeline,
+    /// Its module (the kernel's other entry points, e.g. the wavefront's stages).
+    pub(crate) module: wgpu::ShaderModule,
+}
 
 /// The kernels compiled on one device, by WGSL source and bind group layout entries.
 ///
@@ -202,21 +207,8 @@ mod tests {
     /// A trivial kernel, different per `n` (lavapipe compiles it in milliseconds).
     fn tiny(ctx: &GpuContext, n: u32) -> Result<Arc<CompiledKernel>, GpuError> {
         let source = format!("@compute @workgroup_size(1) fn main() {{ _ = {n}u; }}");
-        ctx.kernels.get_or_compile(&source, &[], || {
-            let module = ctx.device.create_shader_module(wgpu::ShaderModuleDescriptor {
-                label: None,
-                source: wgpu::ShaderSource::Wgsl(source.as_str().into()),
-            });
-            let pipeline = ctx.device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: None,
-                layout: None,
-                module: &module,
-                entry_point: Some("main"),
-                compilation_options: Default::default(),
-                cache: None,
-            });
-            Ok((pipeline, module))
-        })
+        let layout = ctx.device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor::default());
+        ctx.kernels.get_or_compile(&source, &[], || crate::backend::compile_kernel(ctx, &layout, &source, "main"))
     }
 
     /// The cache finds the most recently used kernels and any kernel still held, and
