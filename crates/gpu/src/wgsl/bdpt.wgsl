@@ -387,14 +387,51 @@ fn bd_weight(s: u32, t: u32, qs: BdVertex, pt: BdVertex, pm: BdVertex, lambda: v
     var qs_rev = 0.0;
     var qs_minus_rev = 0.0;
     if s > 0u {
-        pt_rev = bd_pdf_to(qs, qm.p, s > 1u, pt.p, pt.n, lambda);
-        if t > 1u {
-            pt_minus_rev = bd_pdf_to(pt, qs.p, true, pm.p, pm.n, lambda);
+        // One call of `bd_pdf_to` in a loop, not four calls: shader compilers inline every
+        // call, and each copy carries every material's pdf. The trip count depends on s
+        // and t, so the loop is not unrolled back into copies either.
+        // Entries: 0 pt_rev, 1 qs_rev (always), 2 pt_minus_rev (t > 1), 3 qs_minus_rev
+        // (s > 1).
+        let needed = 2u + select(0u, 1u, t > 1u) + select(0u, 1u, s > 1u);
+        var rev = vec4f(0.0);
+        for (var k = 0u; k < needed; k++) {
+            var entry = k;
+            if k == 2u && t <= 1u {
+                entry = 3u;
+            }
+            // From the light side's end (entries 0 and 3) or the camera side's.
+            let from_light = entry == 0u || entry == 3u;
+            var v = pt;
+            var other = qs;
+            if from_light {
+                v = qs;
+                other = pt;
+            }
+            // Towards the other end (entries 0 and 1) or the neighbour behind `v`.
+            var prev = other.p;
+            var has_prev = true;
+            var next_p = pm.p;
+            var next_n = pm.n;
+            if entry == 0u {
+                next_p = pt.p;
+                next_n = pt.n;
+                prev = qm.p;
+                has_prev = s > 1u;
+            } else if entry == 1u {
+                next_p = qs.p;
+                next_n = qs.n;
+                prev = pm.p;
+                has_prev = t > 1u;
+            } else if entry == 3u {
+                next_p = qm.p;
+                next_n = qm.n;
+            }
+            rev[entry] = bd_pdf_to(v, prev, has_prev, next_p, next_n, lambda);
         }
-        qs_rev = bd_pdf_to(pt, pm.p, t > 1u, qs.p, qs.n, lambda);
-        if s > 1u {
-            qs_minus_rev = bd_pdf_to(qs, pt.p, true, qm.p, qm.n, lambda);
-        }
+        pt_rev = rev[0];
+        qs_rev = rev[1];
+        pt_minus_rev = rev[2];
+        qs_minus_rev = rev[3];
     } else {
         pt_rev = pt.origin_pdf;
         if t > 1u {
@@ -629,22 +666,17 @@ fn bd_light_vertex(ls: PtLightSample, lambda: vec4f) -> BdVertex {
     return v;
 }
 
-// `start_light_path` and the light walk: stores the light subpath and returns its length.
-fn bd_light_path(
-    lambda: vec4f,
-    smp: ptr<function, PtSampler>,
-    rays: ptr<function, u32>,
-    truncated: ptr<function, u32>,
-    max_vertices: u32,
-) -> u32 {
+// `start_light_path`: the light subpath's first vertex (BD_NONE where the light sample
+// gives none) and the walk leaving it (`w`). Both sample pairs are drawn either way.
+fn bd_start_light_path(lambda: vec4f, smp: ptr<function, PtSampler>, w: ptr<function, BdWalk>) -> BdVertex {
     let ls = pt_sample_light(pt_next_2d(smp));
     let u = pt_next_2d(smp);
     if !ls.valid {
-        return 0u;
+        return bd_no_vertex();
     }
     let v0 = bd_light_vertex(ls, lambda);
     if v0.kind == BD_NONE {
-        return 0u;
+        return v0;
     }
     var dir: vec3f;
     var pdf_dir: f32;
@@ -666,43 +698,11 @@ fn bd_light_path(
         pdf_dir = PT_INV_4PI;
     }
     if !(pdf_dir > 0.0) {
-        return 0u;
+        return bd_no_vertex();
     }
-    bd_store_light(0u, v0);
-    var n = 1u;
-    var last = v0;
     // β = Le·cos θ / (p_pos · p_dir), v0's β being Le / p_pos.
-    var w = BdWalk(bd_origin_towards(v0, v0.p + dir), dir, v0.beta * (emitted / pdf_dir), pdf_dir, PT_NO_HIT, 1.0, false);
-    var at: PtShading;
-    loop {
-        *rays += 1u;
-        let hit = pt_trace(w.o, w.d, 0.0, PT_FAR, false);
-        if hit.prim == PT_NO_HIT {
-            break;
-        }
-        var v = bd_hit_vertex(hit, &w, last.p, false, lambda, &at);
-        if n + 1u >= max_vertices {
-            bd_store_light(n, v);
-            n += 1u;
-            if bd_cut_by_cap() {
-                *truncated += 1u;
-            }
-            break;
-        }
-        // Stored after its scattering, which sets its delta flag (and the previous
-        // vertex's reverse density).
-        let sc = bd_scatter(&v, &w, last.p, last.n, n, true, lambda, smp);
-        bd_store_light(n, v);
-        n += 1u;
-        if sc.scattered {
-            bd_set_light_rev(n - 2u, sc.prev_rev);
-        }
-        if !sc.alive {
-            break;
-        }
-        last = v;
-    }
-    return n;
+    *w = BdWalk(bd_origin_towards(v0, v0.p + dir), dir, v0.beta * (emitted / pdf_dir), pdf_dir, PT_NO_HIT, 1.0, false);
+    return v0;
 }
 
 // ---- The strategies
@@ -771,120 +771,106 @@ fn bd_add_splat(x: u32, y: u32, rgb: vec3f) {
     }
 }
 
-// t = 1 (`splat_to_eye`): light vertex s−1 connected to the eye and splatted onto the
-// pixel it is seen in.
-fn bd_splat_to_eye(s: u32, eye: BdVertex, wl: PtWavelengths, rays: ptr<function, u32>) {
-    let qs = bd_load_light(s - 1u);
-    if qs.kind != BD_SURFACE || !bd_connectible(qs) {
-        return;
-    }
-    let px = bd_pixel_of(qs.p);
-    if px.x == PT_NO_HIT {
-        return;
-    }
-    let d = eye.p - qs.p;
-    let dist2 = dot(d, d);
-    if !(dist2 > 0.0) {
-        return;
-    }
-    let dist = sqrt(dist2);
-    let w = d / dist;
-    let lambda = wl.lambda;
-    let importance = bd_camera_density(-w);
-    let f = bd_surface_f(qs, w, true, lambda);
-    var c = qs.beta * f * (abs(dot(qs.fz, w)) * importance / dist2);
-    if bd_is_black(c) || !bd_is_finite4(c) || !bd_visible(qs, eye, rays) {
-        return;
-    }
-    let tr = bd_connection_transmittance(qs, w, dist, lambda);
-    c *= tr.tr;
-    let weight = bd_weight(s, 1u, qs, eye, bd_no_vertex(), lambda);
-    bd_add_splat(px.x, px.y, pt_to_linear_srgb(c * weight, wl));
+// A strategy's estimate before its MIS weight, with what the weight needs: the light
+// side's last vertex `qs`, and whether to weight at all. The camera loop weighs every
+// strategy at one call of `bd_weight` (each call is an inlined copy of it).
+struct BdEstimate {
+    c: vec4f,
+    qs: BdVertex,
+    weighted: bool,
+}
+
+fn bd_no_estimate() -> BdEstimate {
+    return BdEstimate(vec4f(0.0), bd_no_vertex(), false);
 }
 
 // s = 0 (`hit_light`): camera vertex t−1 on an emitter's front face.
-fn bd_hit_light(t: u32, pt: BdVertex, pm: BdVertex, lambda: vec4f) -> vec4f {
+fn bd_hit_light(pt: BdVertex, lambda: vec4f) -> BdEstimate {
     if dot(pt.wo, pt.n) <= 0.0 {
-        return vec4f(0.0);
+        return bd_no_estimate();
     }
     let le = pt_emission_at(pt.m, pt.uv, lambda);
     if bd_is_black(le) {
-        return vec4f(0.0);
+        return bd_no_estimate();
     }
     // An emitter that light sampling never picks is found by this strategy alone.
-    var w = 1.0;
-    if pt.origin_pdf > 0.0 {
-        w = bd_weight(0u, t, bd_no_vertex(), pt, pm, lambda);
-    }
-    return pt.beta * le * w;
+    return BdEstimate(pt.beta * le, bd_no_vertex(), pt.origin_pdf > 0.0);
 }
 
 // s = 1 (`next_event`): a fresh light sample connected to camera vertex t−1; a light at
 // infinity is weighted as the path tracer weighs it.
 fn bd_next_event(
-    t: u32,
     pt: BdVertex,
-    pm: BdVertex,
     at: PtShading,
     lambda: vec4f,
     smp: ptr<function, PtSampler>,
     rays: ptr<function, u32>,
-) -> vec4f {
+) -> BdEstimate {
     let u = pt_next_2d(smp);
     if !bd_connectible(pt) {
-        return vec4f(0.0);
+        return bd_no_estimate();
     }
     let ls = pt_sample_light(u);
     if !ls.valid {
-        return vec4f(0.0);
+        return bd_no_estimate();
     }
     pt_set_texels(pt.m, pt.uv, lambda);
-    if ls.kind == PT_LIGHT_ENVIRONMENT || ls.kind == PT_LIGHT_DIRECTIONAL {
-        let e = pt_light_contribution(at, lambda, ls, true, rays);
-        if !e.valid {
-            return vec4f(0.0);
+    // A light at infinity is weighted by the path tracer's MIS inside the contribution;
+    // one call for both kinds (each call is a copy of the shadow ray's traversal).
+    let at_infinity = ls.kind == PT_LIGHT_ENVIRONMENT || ls.kind == PT_LIGHT_DIRECTIONAL;
+    var sampled = bd_no_vertex();
+    if !at_infinity {
+        sampled = bd_light_vertex(ls, lambda);
+        if sampled.kind == BD_NONE {
+            return bd_no_estimate();
         }
-        return pt.beta * e.f * e.le * e.k;
     }
-    let sampled = bd_light_vertex(ls, lambda);
-    if sampled.kind == BD_NONE {
-        return vec4f(0.0);
-    }
-    let e = pt_light_contribution(at, lambda, ls, false, rays);
+    let e = pt_light_contribution(at, lambda, ls, at_infinity, rays);
     if !e.valid {
-        return vec4f(0.0);
+        return bd_no_estimate();
     }
-    let w = bd_weight(1u, t, sampled, pt, pm, lambda);
-    return pt.beta * e.f * e.le * (e.k * w);
+    return BdEstimate(pt.beta * e.f * e.le * e.k, sampled, !at_infinity);
 }
 
-// s, t ≥ 2 (`connect`): light vertex s−1 connected to camera vertex t−1.
-fn bd_connect(s: u32, t: u32, pt: BdVertex, pm: BdVertex, lambda: vec4f, rays: ptr<function, u32>) -> vec4f {
+// s ≥ 2 (`connect`): light vertex s−1 connected to camera vertex t−1; for t = 1, the
+// eye (`splat_to_eye`: the estimate is splatted onto the pixel the vertex is seen in).
+// One function for both: every call is an inlined copy of the shadow ray's traversal and
+// of every material's BSDF.
+fn bd_connect(s: u32, t: u32, pt: BdVertex, lambda: vec4f, rays: ptr<function, u32>) -> BdEstimate {
     let qs = bd_load_light(s - 1u);
     if qs.kind != BD_SURFACE || !bd_connectible(qs) || !bd_connectible(pt) {
-        return vec4f(0.0);
+        return bd_no_estimate();
+    }
+    if t == 1u && bd_pixel_of(qs.p).x == PT_NO_HIT {
+        return bd_no_estimate();
     }
     let d = pt.p - qs.p;
     let dist2 = dot(d, d);
     if !(dist2 > 0.0) {
-        return vec4f(0.0);
+        return bd_no_estimate();
     }
     let dist = sqrt(dist2);
     let w = d / dist;
     let f_q = bd_surface_f(qs, w, true, lambda);
-    let f_p = bd_surface_f(pt, -w, false, lambda);
-    let g = abs(dot(qs.fz, w)) * abs(dot(pt.fz, w)) / dist2;
-    var c = qs.beta * f_q * f_p * pt.beta * g;
-    if bd_is_black(c) || !bd_is_finite4(c) || !bd_visible(qs, pt, rays) {
-        return vec4f(0.0);
+    var c: vec4f;
+    if t == 1u {
+        c = qs.beta * f_q * (abs(dot(qs.fz, w)) * bd_camera_density(-w) / dist2);
+    } else {
+        let f_p = bd_surface_f(pt, -w, false, lambda);
+        let g = abs(dot(qs.fz, w)) * abs(dot(pt.fz, w)) / dist2;
+        c = qs.beta * f_q * f_p * pt.beta * g;
     }
+    if bd_is_black(c) || !bd_is_finite4(c) || !bd_visible(qs, pt, rays) {
+        return bd_no_estimate();
+    }
+    // (The eye is no surface: its side gives 1.)
     let from_q = bd_connection_transmittance(qs, w, dist, lambda);
     if from_q.entered {
         c *= from_q.tr;
     } else {
         c *= bd_connection_transmittance(pt, -w, dist, lambda).tr;
     }
-    return c * bd_weight(s, t, qs, pt, pm, lambda);
+    return BdEstimate(c, qs, true);
 }
 
 // Whether strategy (s, t) makes a path deeper than `max_depth` allows.
@@ -914,62 +900,105 @@ fn pt_bdpt(
     if pt_params.max_depth > 0u {
         camera_vertices = min(pt_params.max_depth + 2u, PT_BDPT_MAX_VERTICES);
     }
+    let light_vertices = camera_vertices - 1u;
     var l = vec4f(0.0);
-
-    // The light subpath, and light tracing from each of its vertices.
-    let light_len = bd_light_path(lambda, smp, rays, truncated, camera_vertices - 1u);
-    let eye = bd_eye(origin);
     bd_set_cam(0u, vec3f(1.0, 0.0, 0.0));
-    for (var s = 2u; s <= light_len; s++) {
-        if !bd_too_deep(s, 1u) {
-            bd_splat_to_eye(s, eye, *wl, rays);
-        }
-    }
 
-    // The camera subpath, each vertex connected as it is reached.
-    var w = BdWalk(origin, dir, pt_unit_throughput(), bd_camera_pdf(dir), PT_NO_HIT, 1.0, true);
-    var last = eye;
+    // One loop walks both subpaths: the light's, stored whole, then the camera's, each
+    // vertex connected to every light-subpath prefix as it is reached (at the eye, t = 1,
+    // that is light tracing, splatted). With one call of each piece (the trace, the hit,
+    // the scattering, each strategy, the weight) the compiled kernel stays small: shader
+    // compilers inline every call (docs/gpu.md, "BDPT's compile time").
+    var w: BdWalk;
+    var cur = bd_start_light_path(lambda, smp, &w);
+    var camera = false;
+    // Where the light walk ends, the camera walk starts from the eye.
+    var to_camera = cur.kind == BD_NONE;
+    var light_len = 0u;
+    var last = bd_no_vertex();
     var t = 1u;
     var at: PtShading;
     loop {
+        if to_camera {
+            to_camera = false;
+            camera = true;
+            w = BdWalk(origin, dir, pt_unit_throughput(), bd_camera_pdf(dir), PT_NO_HIT, 1.0, true);
+            cur = bd_eye(origin);
+            last = bd_no_vertex();
+        }
+        // `cur` is the walk's newest vertex, index `k` on its subpath.
+        var k = light_len;
+        var at_cap = k + 1u >= light_vertices;
+        if camera {
+            k = t - 1u;
+            at_cap = t >= camera_vertices;
+            // s = 1 draws its own light sample: it runs even where the light subpath is
+            // empty.
+            for (var s = select(0u, 2u, t == 1u); s <= max(light_len, 1u); s++) {
+                if bd_too_deep(s, t) {
+                    continue;
+                }
+                var e: BdEstimate;
+                if s == 0u {
+                    e = bd_hit_light(cur, lambda);
+                } else if s == 1u {
+                    e = bd_next_event(cur, at, lambda, smp, rays);
+                } else {
+                    e = bd_connect(s, t, cur, lambda, rays);
+                }
+                if e.weighted && !bd_is_black(e.c) {
+                    e.c *= bd_weight(s, t, e.qs, cur, last, lambda);
+                }
+                if t > 1u {
+                    l += e.c;
+                } else if !bd_is_black(e.c) {
+                    let px = bd_pixel_of(e.qs.p);
+                    bd_add_splat(px.x, px.y, pt_to_linear_srgb(e.c, *wl));
+                }
+            }
+        }
+        if at_cap && bd_cut_by_cap() {
+            *truncated += 1u;
+        }
+        // A walk's start (the light's vertex, the eye) has its direction already.
+        var alive = !at_cap;
+        if alive && k > 0u {
+            let sc = bd_scatter(&cur, &w, last.p, last.n, k, !camera, lambda, smp);
+            alive = sc.alive;
+            if sc.scattered && camera {
+                let before = bd_cam(k - 1u);
+                bd_set_cam(k - 1u, vec3f(before.x, sc.prev_rev, before.z));
+                bd_set_cam(k, vec3f(cur.pdf_fwd, 0.0, select(0.0, 1.0, (cur.flags & BD_DELTA) != 0u)));
+            } else if sc.scattered {
+                bd_set_light_rev(k - 1u, sc.prev_rev);
+            }
+        }
+        if !camera {
+            // Stored after its scattering, which sets its delta flag.
+            bd_store_light(k, cur);
+            light_len = k + 1u;
+        }
+        if !alive {
+            if camera {
+                break;
+            }
+            to_camera = true;
+            continue;
+        }
+        last = cur;
         *rays += 1u;
         let hit = pt_trace(w.o, w.d, 0.0, PT_FAR, false);
         if hit.prim == PT_NO_HIT {
-            // The lights at infinity, weighted as the path tracer weighs them.
-            l += w.beta * pt_escaped(w.d, lambda, w.pdf_dir, w.specular);
-            break;
-        }
-        var pt = bd_hit_vertex(hit, &w, last.p, true, lambda, &at);
-        t += 1u;
-        // s = 1 draws its own light sample: it runs even where the light subpath is empty.
-        for (var s = 0u; s <= max(light_len, 1u); s++) {
-            if bd_too_deep(s, t) {
-                continue;
+            if camera {
+                // The lights at infinity, weighted as the path tracer weighs them.
+                l += w.beta * pt_escaped(w.d, lambda, w.pdf_dir, w.specular);
+                break;
             }
-            if s == 0u {
-                l += bd_hit_light(t, pt, last, lambda);
-            } else if s == 1u {
-                l += bd_next_event(t, pt, last, at, lambda, smp, rays);
-            } else {
-                l += bd_connect(s, t, pt, last, lambda, rays);
-            }
+            to_camera = true;
+            continue;
         }
-        if t >= camera_vertices {
-            if bd_cut_by_cap() {
-                *truncated += 1u;
-            }
-            break;
-        }
-        let sc = bd_scatter(&pt, &w, last.p, last.n, t - 1u, false, lambda, smp);
-        if sc.scattered {
-            let before = bd_cam(t - 2u);
-            bd_set_cam(t - 2u, vec3f(before.x, sc.prev_rev, before.z));
-            bd_set_cam(t - 1u, vec3f(pt.pdf_fwd, 0.0, select(0.0, 1.0, (pt.flags & BD_DELTA) != 0u)));
-        }
-        if !sc.alive {
-            break;
-        }
-        last = pt;
+        cur = bd_hit_vertex(hit, &w, last.p, camera, lambda, &at);
+        t += select(0u, 1u, camera);
     }
     return l;
 }
