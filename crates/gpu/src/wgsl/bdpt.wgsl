@@ -395,38 +395,28 @@ fn bd_weight(s: u32, t: u32, qs: BdVertex, pt: BdVertex, pm: BdVertex, lambda: v
         let needed = 2u + select(0u, 1u, t > 1u) + select(0u, 1u, s > 1u);
         var rev = vec4f(0.0);
         for (var k = 0u; k < needed; k++) {
-            var entry = k;
-            if k == 2u && t <= 1u {
-                entry = 3u;
-            }
-            // From the light side's end (entries 0 and 3) or the camera side's.
-            let from_light = entry == 0u || entry == 3u;
+            let entry = select(k, 3u, k == 2u && t <= 1u);
+            // `bd_pdf_to(v, prev, has_prev, next)` of each entry; entry 1's by default.
             var v = pt;
-            var other = qs;
-            if from_light {
-                v = qs;
-                other = pt;
-            }
-            // Towards the other end (entries 0 and 1) or the neighbour behind `v`.
-            var prev = other.p;
-            var has_prev = true;
-            var next_p = pm.p;
-            var next_n = pm.n;
+            var prev = pm.p;
+            var has_prev = t > 1u;
+            var next = qs;
             if entry == 0u {
-                next_p = pt.p;
-                next_n = pt.n;
+                v = qs;
                 prev = qm.p;
                 has_prev = s > 1u;
-            } else if entry == 1u {
-                next_p = qs.p;
-                next_n = qs.n;
-                prev = pm.p;
-                has_prev = t > 1u;
+                next = pt;
+            } else if entry == 2u {
+                prev = qs.p;
+                has_prev = true;
+                next = pm;
             } else if entry == 3u {
-                next_p = qm.p;
-                next_n = qm.n;
+                v = qs;
+                prev = pt.p;
+                has_prev = true;
+                next = qm;
             }
-            rev[entry] = bd_pdf_to(v, prev, has_prev, next_p, next_n, lambda);
+            rev[entry] = bd_pdf_to(v, prev, has_prev, next.p, next.n, lambda);
         }
         pt_rev = rev[0];
         qs_rev = rev[1];
@@ -772,16 +762,18 @@ fn bd_add_splat(x: u32, y: u32, rgb: vec3f) {
 }
 
 // A strategy's estimate before its MIS weight, with what the weight needs: the light
-// side's last vertex `qs`, and whether to weight at all. The camera loop weighs every
-// strategy at one call of `bd_weight` (each call is an inlined copy of it).
+// side's last vertex `qs`, and whether to weight at all; for light tracing (t = 1) the
+// pixel it splats onto. The camera loop weighs every strategy at one call of `bd_weight`
+// (each call is an inlined copy of it).
 struct BdEstimate {
     c: vec4f,
     qs: BdVertex,
     weighted: bool,
+    pixel: vec2u,
 }
 
 fn bd_no_estimate() -> BdEstimate {
-    return BdEstimate(vec4f(0.0), bd_no_vertex(), false);
+    return BdEstimate(vec4f(0.0), bd_no_vertex(), false, vec2u(PT_NO_HIT));
 }
 
 // s = 0 (`hit_light`): camera vertex t−1 on an emitter's front face.
@@ -794,7 +786,7 @@ fn bd_hit_light(pt: BdVertex, lambda: vec4f) -> BdEstimate {
         return bd_no_estimate();
     }
     // An emitter that light sampling never picks is found by this strategy alone.
-    return BdEstimate(pt.beta * le, bd_no_vertex(), pt.origin_pdf > 0.0);
+    return BdEstimate(pt.beta * le, bd_no_vertex(), pt.origin_pdf > 0.0, vec2u(PT_NO_HIT));
 }
 
 // s = 1 (`next_event`): a fresh light sample connected to camera vertex t−1; a light at
@@ -829,7 +821,7 @@ fn bd_next_event(
     if !e.valid {
         return bd_no_estimate();
     }
-    return BdEstimate(pt.beta * e.f * e.le * e.k, sampled, !at_infinity);
+    return BdEstimate(pt.beta * e.f * e.le * e.k, sampled, !at_infinity, vec2u(PT_NO_HIT));
 }
 
 // s ≥ 2 (`connect`): light vertex s−1 connected to camera vertex t−1; for t = 1, the
@@ -841,8 +833,12 @@ fn bd_connect(s: u32, t: u32, pt: BdVertex, lambda: vec4f, rays: ptr<function, u
     if qs.kind != BD_SURFACE || !bd_connectible(qs) || !bd_connectible(pt) {
         return bd_no_estimate();
     }
-    if t == 1u && bd_pixel_of(qs.p).x == PT_NO_HIT {
-        return bd_no_estimate();
+    var pixel = vec2u(PT_NO_HIT);
+    if t == 1u {
+        pixel = bd_pixel_of(qs.p);
+        if pixel.x == PT_NO_HIT {
+            return bd_no_estimate();
+        }
     }
     let d = pt.p - qs.p;
     let dist2 = dot(d, d);
@@ -870,7 +866,7 @@ fn bd_connect(s: u32, t: u32, pt: BdVertex, lambda: vec4f, rays: ptr<function, u
     } else {
         c *= bd_connection_transmittance(pt, -w, dist, lambda).tr;
     }
-    return BdEstimate(c, qs, true);
+    return BdEstimate(c, qs, true, pixel);
 }
 
 // Whether strategy (s, t) makes a path deeper than `max_depth` allows.
@@ -927,11 +923,9 @@ fn pt_bdpt(
             last = bd_no_vertex();
         }
         // `cur` is the walk's newest vertex, index `k` on its subpath.
-        var k = light_len;
-        var at_cap = k + 1u >= light_vertices;
+        let k = select(light_len, t - 1u, camera);
+        let at_cap = k + 1u >= select(light_vertices, camera_vertices, camera);
         if camera {
-            k = t - 1u;
-            at_cap = t >= camera_vertices;
             // s = 1 draws its own light sample: it runs even where the light subpath is
             // empty.
             for (var s = select(0u, 2u, t == 1u); s <= max(light_len, 1u); s++) {
@@ -952,8 +946,7 @@ fn pt_bdpt(
                 if t > 1u {
                     l += e.c;
                 } else if !bd_is_black(e.c) {
-                    let px = bd_pixel_of(e.qs.p);
-                    bd_add_splat(px.x, px.y, pt_to_linear_srgb(e.c, *wl));
+                    bd_add_splat(e.pixel.x, e.pixel.y, pt_to_linear_srgb(e.c, *wl));
                 }
             }
         }
