@@ -840,15 +840,21 @@ fn punctual_incidence<const N: usize>(
     p: Vec3,
     wl: &SampledWavelengths<N>,
 ) -> Option<(Vec3, f32, SampledSpectrum<N>)> {
-    let (intensity, falloff_of) = match light {
+    let (wi, dist, scale) = punctual_geometry(light, point, p)?;
+    Some((wi, dist, light.colour().sample(wl) * scale))
+}
+
+/// [`punctual_incidence`] before the light's colour: direction, distance and the factor
+/// on the colour (falloff/d² for a point or spot light, a sun disk's radiance scale for a
+/// directional one), so that the lanes can evaluate the colour across paths and scale it
+/// with the same bits.
+#[inline(always)]
+pub(crate) fn punctual_geometry(light: &PunctualLight, point: Vec3, p: Vec3) -> Option<(Vec3, f32, f32)> {
+    let falloff_of = match light {
         // A sun disk's radiance, or a delta direction's irradiance.
-        PunctualLight::Directional { irradiance, .. } => {
-            return Some((point, f32::INFINITY, irradiance.sample(wl) * light.disk_radiance_scale()));
-        }
-        PunctualLight::Point { intensity, .. } => (intensity, None),
-        PunctualLight::Spot { intensity, direction, cos_inner, cos_outer, .. } => {
-            (intensity, Some((*direction, *cos_inner, *cos_outer)))
-        }
+        PunctualLight::Directional { .. } => return Some((point, f32::INFINITY, light.disk_radiance_scale())),
+        PunctualLight::Point { .. } => None,
+        PunctualLight::Spot { direction, cos_inner, cos_outer, .. } => Some((*direction, *cos_inner, *cos_outer)),
     };
     let d = point - p;
     let dist2 = d.length_squared();
@@ -858,7 +864,7 @@ fn punctual_incidence<const N: usize>(
     let dist = dist2.sqrt();
     let wi = d / dist;
     let falloff = falloff_of.map_or(1.0, |(axis, ci, co)| PunctualLight::spot_falloff(-wi.dot(axis), ci, co));
-    Some((wi, dist, intensity.sample(wl) * (falloff / dist2)))
+    Some((wi, dist, falloff / dist2))
 }
 
 /// The absorption inside the surface a ray leaving it along `dir` enters: a direction into

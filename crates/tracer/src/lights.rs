@@ -589,6 +589,13 @@ impl Lights {
         (k, rescale(x, self.bounds[k], cdf[k]))
     }
 
+    /// Light `k` of [`Lights::choose`] if it is a punctual light: its index in
+    /// [`Scene::punctual_lights`].
+    #[inline(always)]
+    pub(crate) fn punctual_light(&self, k: usize) -> Option<usize> {
+        k.checked_sub(self.prims.len()).and_then(|j| self.punctual_order.get(j)).map(|&i| i as usize)
+    }
+
     /// Light `k` of [`Lights::choose`] if it is one of the emissive triangles.
     #[inline(always)]
     pub(crate) fn triangle_light(&self, k: usize) -> Option<&LightTriangle> {
@@ -632,8 +639,7 @@ impl Lights {
     /// punctual light's sample, chosen with probability `pdf` (by power where `None`).
     #[inline(always)]
     fn sample_entry(&self, scene: &Scene, k: usize, u: Vec2, pdf: Option<f32>) -> Option<LightSample> {
-        if let Some(&index) = k.checked_sub(self.prims.len()).and_then(|j| self.punctual_order.get(j)) {
-            let index = index as usize;
+        if let Some(index) = self.punctual_light(k) {
             let ls = Self::sample_punctual(scene, index, u);
             return Some(LightSample { pdf: ls.pdf * pdf.unwrap_or(self.punctual_pmf[index]), ..ls });
         }

@@ -22,10 +22,11 @@
 //! contracts a·b + c into a fused multiply-add, so the AVX2 build rounds as the baseline).
 //!
 //! The specialisation ("model no more than a scene needs") applies where the scene is
-//! triangles only (no analytic shapes or instances), lit by its emissive triangles alone
-//! (no environment, punctual lights or suns; chosen by power or by a light tree for the
-//! shading point, one lane at a time), every emitter's colour an RGB uplift or a
-//! constant, no material disperses or absorbs, at least one material is an untextured
+//! triangles only (no analytic shapes or instances), lit by its emissive triangles and
+//! its point, spot and delta directional lights (no environment or sun disks; chosen by
+//! power or by a light tree for the shading point, one lane at a time, a punctual light's
+//! estimate made one lane at a time too), every emitter's and light's colour an RGB
+//! uplift or a constant, no material disperses or absorbs, at least one material is an untextured
 //! [`brdf::Lambert`] with such colours (the surfaces the lanes shade), and there is no
 //! diffuse-depth limit ([`LaneScene::of`], [`LaneScene::admits`]). Anything else runs the
 //! general loop. `spt render --no-lanes` (`PathSettings::lanes`) runs the general loop
@@ -33,11 +34,12 @@
 
 use super::{
     CameraSample, Chain, PathCounters, PathSettings, PathState, RR_MIN_TERMINATION, SHADOW_T_MAX, SceneView,
-    ShadingNormals, path_vertex, power_heuristic,
+    ShadingNormals, path_vertex, power_heuristic, punctual_geometry,
 };
 use crate::geometry::{HitSurface, SceneHit};
 use crate::lights::on_triangle;
 use crate::material::{ModelParams, Surface};
+use crate::punctual::PunctualLight;
 use crate::sampler::{LaneDraw, Sampler, SobolLanes};
 use crate::shading::MIN_SHADING_COSINE;
 use brdf::sampling::{sin_cos_quarter, uniform_triangle};
@@ -90,6 +92,10 @@ impl LaneColour {
 pub(crate) struct LaneScene {
     albedo: Vec<Option<LaneColour>>,
     emission: Vec<Option<LaneColour>>,
+    /// Each punctual light's colour (intensity or irradiance), by its index in
+    /// [`crate::scene::Scene::punctual_lights`]: point, spot and delta directional lights,
+    /// whose next-event estimates the lanes make too.
+    punctual: Vec<LaneColour>,
     /// Whether the mesh has shading normals, interpolated unless geometric shading ignores them.
     normals: bool,
     /// Whether the mesh has tangents, which orient the BSDF's frame about its normal.
@@ -106,7 +112,6 @@ impl LaneScene {
             && scene.instances.is_empty()
             && view.geometry.instances.is_none()
             && scene.environment.is_none()
-            && scene.punctual_lights.is_empty()
             && view.lights.suns().is_empty()
             && view.lights.environment_pmf() == 0.0
             && !view.dispersive
@@ -128,9 +133,10 @@ impl LaneScene {
                 None => None,
             });
         }
+        let punctual = scene.punctual_lights.iter().map(|l| LaneColour::of(l.colour())).collect::<Option<Vec<_>>>()?;
         // Without a surface for the lanes, the general loop is the faster.
         let (normals, tangents) = (!scene.normals.is_empty(), !scene.tangents.is_empty());
-        albedo.iter().any(Option::is_some).then_some(Self { albedo, emission, normals, tangents })
+        albedo.iter().any(Option::is_some).then_some(Self { albedo, emission, punctual, normals, tangents })
     }
 
     /// Whether the lanes render this scene with `settings` (the switch on, no
@@ -422,6 +428,8 @@ fn run<const N: usize, S: Sampler>(
     let (mut lv0, mut lv1, mut lv2) = (V3::default(), V3::default(), V3::default());
     let mut lpdf: F = [0.0; LANES];
     let mut light_colour = Gathered::default();
+    // The chosen punctual lights (by index in the scene), where `ldelta` says a lane has one.
+    let mut lpunctual = [0u32; LANES];
     let mut weight: F = [0.0; LANES];
     let mut origin = V3::default();
     // The direction samples, one array per coordinate (interleaved pairs kept the loop
@@ -640,16 +648,27 @@ fn run<const N: usize, S: Sampler>(
         draws.draw(2, &st, &live, block, &mut ux, &mut uy);
         // `Lights::sample_at` in two steps: the choice of a light (by power, or by the light
         // tree for the hit point) and its data, one lane at a time, then the points across
-        // the lanes. A lane scene's lights are all triangles (no environment, shapes or
-        // punctual lights); a lane without a light keeps `lemissive` false and its stale
-        // values are never used.
+        // the lanes. A lane scene's lights are triangles and punctual lights (no
+        // environment, shapes or sun disks); a lane without a light keeps `lemissive` and
+        // `ldelta` false and its stale values are never used. A punctual light's lane
+        // (`ldelta`) is left out of the triangles' vector loop and made after it.
         let mut lemissive: M = [false; LANES];
+        let (mut ldelta, mut linfinite): (M, M) = ([false; LANES], [false; LANES]);
         if !lights.is_empty() {
             let n = lanes_where(&live, &mut list);
             for &k in &list[..n] {
                 let k = k as usize;
                 let Some((i, x, pdf)) = lights.choose_at(ux[k], p.get(k), ng.get(k)) else { continue };
-                let Some(t) = lights.triangle_light(i) else { continue };
+                let Some(t) = lights.triangle_light(i) else {
+                    // `Lights::sample_entry`'s punctual case: its pdf is the choice's alone.
+                    if let Some(index) = lights.punctual_light(i) {
+                        ldelta[k] = true;
+                        lpunctual[k] = index as u32;
+                        lpdf[k] = pdf.unwrap_or_else(|| lights.punctual_pmf(index));
+                        light_colour.set(k, &ls.punctual[index]);
+                    }
+                    continue;
+                };
                 ux[k] = x;
                 lv0.set(k, t.vertices[0]);
                 lv1.set(k, t.vertices[1]);
@@ -668,7 +687,7 @@ fn run<const N: usize, S: Sampler>(
             lp.y[k] = on_triangle(b0, b1, [lv0.y[k], lv1.y[k], lv2.y[k]]);
             lp.z[k] = on_triangle(b0, b1, [lv0.z[k], lv1.z[k], lv2.z[k]]);
         }
-        let lle = light_colour.eval(&st.lambda, &st.d65, rgb);
+        let mut lle = light_colour.eval(&st.lambda, &st.d65, rgb);
         let mut shadow: M = [false; LANES];
         for k in 0..LANES {
             let d = (lp.x[k] - p.x[k], lp.y[k] - p.y[k], lp.z[k] - p.z[k]);
@@ -695,12 +714,40 @@ fn run<const N: usize, S: Sampler>(
             origin.y[k] = offset_coordinate(p.y[k], s * ng.y[k]);
             origin.z[k] = offset_coordinate(p.z[k], s * ng.z[k]);
         }
+        if !ls.punctual.is_empty() {
+            let n = lanes_where(&ldelta, &mut list);
+            for &k in &list[..n] {
+                let k = k as usize;
+                let light = &scene.punctual_lights[lpunctual[k] as usize];
+                linfinite[k] = delta_light_in_one_lane(
+                    light,
+                    k,
+                    p.get(k),
+                    &mut lle,
+                    &fr,
+                    [&fs, &ft, &nf],
+                    &ng,
+                    wol.z[k],
+                    cos_o[k],
+                    lpdf[k],
+                )
+                .map(|(ray_ok, w, at, infinite)| {
+                    (shadow[k], weight[k]) = (ray_ok, w);
+                    origin.set(k, at.0);
+                    lp.set(k, at.1);
+                    infinite
+                })
+                .unwrap_or(false);
+            }
+        }
         let n = lanes_where(&shadow, &mut list);
         counters.rays += n as u64;
         for &k in &list[..n] {
             let k = k as usize;
             let o = origin.get(k);
-            shadow[k] = !occluded(view, &Ray::segment(o, lp.get(k) - o, 0.0, SHADOW_T_MAX));
+            let ray =
+                if linfinite[k] { Ray::new(o, lp.get(k)) } else { Ray::segment(o, lp.get(k) - o, 0.0, SHADOW_T_MAX) };
+            shadow[k] = !occluded(view, &ray);
         }
         for k in 0..LANES {
             for i in 0..N {
@@ -888,6 +935,47 @@ fn closest_hit(view: &SceneView, ray: &Ray) -> Option<bvh::Hit> {
 #[inline(always)]
 fn occluded(view: &SceneView, ray: &Ray) -> bool {
     if view.cutouts { view.occluded(ray) } else { view.geometry.triangles.occluded(ray) }
+}
+
+/// Next-event estimation towards a punctual light in lane `k`, as `light_contribution`'s
+/// delta case: `lle`'s lane scaled by the light's falloff/d² (or a directional light's
+/// factor), and `Some((whether a shadow ray goes, the estimate's |cos θᵢ|/pdf, (the shadow
+/// ray's origin, the light's point or direction), whether the light is at infinity))`, or
+/// `None` for a point light at the shading point. A delta light takes no MIS weight: no
+/// BSDF sample can find it.
+#[allow(clippy::too_many_arguments)]
+#[inline(never)]
+fn delta_light_in_one_lane<const N: usize>(
+    light: &PunctualLight,
+    k: usize,
+    p: Vec3,
+    lle: &mut [F; N],
+    fr: &[F; N],
+    [fs, ft, nf]: [&V3; 3],
+    ng: &V3,
+    wo_z: f32,
+    cos_o: f32,
+    light_pdf: f32,
+) -> Option<(bool, f32, (Vec3, Vec3), bool)> {
+    let point = light.towards();
+    let (wi, dist, scale) = punctual_geometry(light, point, p)?;
+    for v in lle.iter_mut() {
+        v[k] *= scale;
+    }
+    let wi = (wi.x, wi.y, wi.z);
+    let wil = (dot_with(wi, fs, k), dot_with(wi, ft, k), dot_with(wi, nf, k));
+    let cos_i = dot_with(wi, ng, k);
+    let same_side = cos_i * cos_o > 0.0;
+    let same_hemisphere = wo_z * wil.2 > 0.0;
+    let s = if cos_i > 0.0 { 1.0 } else { -1.0 };
+    let origin = Vec3::new(
+        offset_coordinate(p.x, s * ng.x[k]),
+        offset_coordinate(p.y, s * ng.y[k]),
+        offset_coordinate(p.z, s * ng.z[k]),
+    );
+    // (Written so that a NaN pdf counts as unusable, as in `light_contribution`.)
+    let goes = light_pdf > 0.0 && !black(lle, k) && same_side && same_hemisphere && !black(fr, k);
+    Some((goes, wil.2.abs() / light_pdf, (origin, point), !dist.is_finite()))
 }
 
 /// Lane `k`'s vertex at `hit` (of a ray along `dir`) on a surface the lanes do not shade,
@@ -1145,6 +1233,56 @@ mod tests {
         lanes_equal_the_general_loop_with(&scene, hero, base, &pcg, LightSampler::Tree);
     }
 
+    /// Point, spot and delta directional lights beside the room's lamps: the lanes make
+    /// their next-event estimates one lane at a time, with the general loop's bits, whether
+    /// the lights are chosen by power or by a light tree (which holds the point and spot
+    /// lights, not the directional one). One point light sits on the floor (its samples
+    /// there have no direction) and one spot shines away from most of the room.
+    #[test]
+    fn lanes_light_by_point_spot_and_directional_lights_bit_for_bit() {
+        use crate::punctual::PunctualLight;
+        let base = PathSettings { rr_depth: 2, ..Default::default() };
+        let mut scene = room();
+        scene.punctual_lights = vec![
+            PunctualLight::point(Vec3::new(0.3, 1.6, 0.4), Colour::illuminant_rgb([1.0, 0.8, 0.4]).unwrap()),
+            PunctualLight::point(Vec3::new(-0.5, 0.0, 0.2), Colour::constant(0.5)),
+            PunctualLight::spot(
+                Vec3::new(-0.6, 1.8, 0.6),
+                Vec3::new(0.3, -1.0, -0.2).normalize(),
+                Colour::constant(3.0),
+                0.4,
+                0.7,
+            ),
+            PunctualLight::spot(
+                Vec3::new(0.6, 0.5, -0.6),
+                Vec3::Y,
+                Colour::illuminant_rgb([0.2, 0.5, 2.0]).unwrap(),
+                0.6,
+                1.2,
+            ),
+            PunctualLight::directional(
+                Vec3::new(0.2, -1.0, -0.5).normalize(),
+                Colour::illuminant_rgb([0.5, 0.5, 0.4]).unwrap(),
+            ),
+        ];
+        let hero = SampledWavelengths::<4>::sample_hero;
+        let pcg = |i: u32| Pcg32::for_sample(7, i, 0);
+        let layout = crate::sampler::ZSobolLayout::new(32, 32, 16, 5);
+        let zsobol = |i: u32| layout.sampler(i % 32, (i / 32) % 32, (i / 1024) % 16);
+        for light_sampler in [LightSampler::Power, LightSampler::Tree] {
+            lanes_equal_the_general_loop_with(&scene, hero, base, &pcg, light_sampler);
+            lanes_equal_the_general_loop_with(&scene, hero, base, &zsobol, light_sampler);
+            let rgb = |_| SampledWavelengths::<3>::rgb();
+            lanes_equal_the_general_loop_with(&scene, rgb, base, &pcg, light_sampler);
+        }
+        // Punctual lights alone (no emissive triangle).
+        for m in &mut scene.materials {
+            m.emission = None;
+        }
+        lanes_equal_the_general_loop_with(&scene, hero, base, &pcg, LightSampler::Power);
+        lanes_equal_the_general_loop_with(&scene, hero, base, &zsobol, LightSampler::Tree);
+    }
+
     #[test]
     fn the_lanes_offset_equals_the_library_offset() {
         let mut rng = Pcg32::for_sample(3, 0, 0);
@@ -1181,7 +1319,7 @@ mod tests {
         assert!(!runs(&view, &PathSettings { max_diffuse_depth: 2, ..Default::default() }));
         assert!(!runs(&view, &PathSettings { lanes: false, ..Default::default() }));
         // No surface for the lanes, a spectrum they do not evaluate, an environment,
-        // a point light, dispersive glass, absorbing glass.
+        // a sun disk (which escaping rays see), dispersive glass, absorbing glass.
         for change in 0..6 {
             let mut other = room();
             match change {
@@ -1199,10 +1337,11 @@ mod tests {
                         Some(Colour::from_spectrum(sun, spectral::spectrum::ColourRole::Illuminant));
                 }
                 2 => other.environment = Some(crate::scene::Environment::uniform(Colour::constant(0.1))),
-                3 => other.punctual_lights.push(crate::punctual::PunctualLight::Point {
-                    position: Vec3::new(0.0, 1.5, 0.0),
-                    intensity: Colour::constant(1.0),
-                }),
+                3 => other.punctual_lights.push(crate::punctual::PunctualLight::sun(
+                    Vec3::new(0.0, -1.0, 0.2).normalize(),
+                    Colour::constant(1.0),
+                    0.1,
+                )),
                 _ => {
                     use brdf::params::ParamValue;
                     let param = if change == 4 {
