@@ -78,6 +78,45 @@ fn renders_the_shared_cornell_box_with_defaults_but_small() {
     assert!(o.status.success() && !stderr(&o).contains("(lanes)"), "{}", stderr(&o));
 }
 
+/// Point, spot and directional lights keep a scene of diffuse triangles in the lanes,
+/// whose image is the general loop's to the byte; a sun disk (which escaping paths see)
+/// sends it to the general loop.
+#[test]
+fn punctual_lights_render_in_lanes_as_in_the_general_loop() {
+    let scene =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/scenes/cornell-box/CornellBox-Original.obj");
+    if !scene.exists() {
+        eprintln!("SKIPPED: {} is absent", scene.display());
+        return;
+    }
+    let dir = temp_dir("punctual-lanes");
+    let lights = [
+        "--light",
+        "point:0.2,1.5,0.3:0.8,0.6,0.4",
+        "--light",
+        "spot:-0.5,1.7,0.5:0.2,-1,-0.3:15,30:5",
+        "--light",
+        "sun:0,-1,-1:2",
+    ];
+    let render = |name: &str, extra: &[&str]| {
+        let out = dir.join(name);
+        let mut a = vec!["render", scene.to_str().unwrap(), "--width", "24", "--height", "24", "--spp", "4"];
+        a.extend_from_slice(&lights);
+        a.extend_from_slice(extra);
+        a.extend(["-o", out.to_str().unwrap()]);
+        let o = spt(&a);
+        assert!(o.status.success(), "{}", stderr(&o));
+        (stderr(&o), std::fs::read(out).unwrap())
+    };
+    let (msg, lanes) = render("lanes.exr", &[]);
+    assert!(msg.contains("2 emissive + 3 punctual") && msg.contains("cpu backend (lanes)"), "{msg}");
+    let (msg, general) = render("general.exr", &["--no-lanes"]);
+    assert!(!msg.contains("(lanes)"), "{msg}");
+    assert!(lanes == general, "the lanes' image differs from the general loop's");
+    let (msg, _) = render("sun.exr", &["--light", "sun:0,-1,-1:2:0.53"]);
+    assert!(!msg.contains("(lanes)"), "a sun disk: {msg}");
+}
+
 #[test]
 fn missing_file_is_a_clear_error() {
     let o = spt(&["render", "/nonexistent/scene.obj", "-o", "/tmp/x.png"]);
