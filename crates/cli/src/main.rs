@@ -571,8 +571,9 @@ struct SceneArgs {
     #[arg(long = "set", value_name = "KEY=VALUE")]
     sets: Vec<String>,
     /// Adds a light (repeatable): point:X,Y,Z:I, spot:X,Y,Z:DX,DY,DZ:INNER,OUTER:I or
-    /// sun:DX,DY,DZ:E, with I (radiant intensity) or E (irradiance) one value for white or
-    /// R,G,B in linear sRGB, cone half-angles in degrees, D the direction it shines in.
+    /// sun:DX,DY,DZ:E[:DIAMETER], with I (radiant intensity) or E (irradiance) one value for
+    /// white or R,G,B in linear sRGB, cone half-angles and the sun's angular diameter in
+    /// degrees (0, the default: a delta direction), D the direction it shines in.
     /// CPU backend only. A scene so lit gets no default sky.
     #[arg(long = "light", value_name = "LIGHT", value_parser = light_arg::parse_light, allow_hyphen_values = true)]
     lights: Vec<tracer::PunctualLight>,

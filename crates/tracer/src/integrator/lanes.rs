@@ -719,25 +719,15 @@ fn run<const N: usize, S: Sampler>(
             for &k in &list[..n] {
                 let k = k as usize;
                 let light = &scene.punctual_lights[lpunctual[k] as usize];
-                linfinite[k] = delta_light_in_one_lane(
-                    light,
-                    k,
-                    p.get(k),
-                    &mut lle,
-                    &fr,
-                    [&fs, &ft, &nf],
-                    &ng,
-                    wol.z[k],
-                    cos_o[k],
-                    lpdf[k],
-                )
-                .map(|(ray_ok, w, at, infinite)| {
-                    (shadow[k], weight[k]) = (ray_ok, w);
-                    origin.set(k, at.0);
-                    lp.set(k, at.1);
-                    infinite
-                })
-                .unwrap_or(false);
+                let frame = [&fs, &ft, &nf];
+                let wo = (wol.z[k], cos_o[k]);
+                let Some(e) = delta_light_in_one_lane(light, k, p.get(k), &mut lle, &fr, frame, &ng, wo, lpdf[k])
+                else {
+                    continue; // a point light at the shading point: no shadow ray
+                };
+                (shadow[k], weight[k], linfinite[k]) = (e.shadow_ray, e.weight, e.at_infinity);
+                origin.set(k, e.origin);
+                lp.set(k, e.point);
             }
         }
         let n = lanes_where(&shadow, &mut list);
@@ -937,12 +927,25 @@ fn occluded(view: &SceneView, ray: &Ray) -> bool {
     if view.cutouts { view.occluded(ray) } else { view.geometry.triangles.occluded(ray) }
 }
 
+/// One lane's next-event estimate towards a punctual light ([`delta_light_in_one_lane`]).
+struct DeltaEstimate {
+    /// Whether the light can contribute, so that a shadow ray goes.
+    shadow_ray: bool,
+    /// The estimate's |cos θᵢ| / pdf (no MIS weight).
+    weight: f32,
+    /// The shadow ray's origin.
+    origin: Vec3,
+    /// The light's position, or for a directional light the direction towards it.
+    point: Vec3,
+    /// Whether the light is at infinity (a directional light: an unbounded shadow ray).
+    at_infinity: bool,
+}
+
 /// Next-event estimation towards a punctual light in lane `k`, as `light_contribution`'s
 /// delta case: `lle`'s lane scaled by the light's falloff/d² (or a directional light's
-/// factor), and `Some((whether a shadow ray goes, the estimate's |cos θᵢ|/pdf, (the shadow
-/// ray's origin, the light's point or direction), whether the light is at infinity))`, or
-/// `None` for a point light at the shading point. A delta light takes no MIS weight: no
-/// BSDF sample can find it.
+/// factor), and the estimate; `None` for a point light at the shading point. A delta light
+/// takes no MIS weight: no BSDF sample can find it. `wo` is (ω_o's z in the shading frame,
+/// ω_o · n_g).
 #[allow(clippy::too_many_arguments)]
 #[inline(never)]
 fn delta_light_in_one_lane<const N: usize>(
@@ -953,10 +956,9 @@ fn delta_light_in_one_lane<const N: usize>(
     fr: &[F; N],
     [fs, ft, nf]: [&V3; 3],
     ng: &V3,
-    wo_z: f32,
-    cos_o: f32,
+    (wo_z, cos_o): (f32, f32),
     light_pdf: f32,
-) -> Option<(bool, f32, (Vec3, Vec3), bool)> {
+) -> Option<DeltaEstimate> {
     let point = light.towards();
     let (wi, dist, scale) = punctual_geometry(light, point, p)?;
     for v in lle.iter_mut() {
@@ -974,8 +976,8 @@ fn delta_light_in_one_lane<const N: usize>(
         offset_coordinate(p.z, s * ng.z[k]),
     );
     // (Written so that a NaN pdf counts as unusable, as in `light_contribution`.)
-    let goes = light_pdf > 0.0 && !black(lle, k) && same_side && same_hemisphere && !black(fr, k);
-    Some((goes, wil.2.abs() / light_pdf, (origin, point), !dist.is_finite()))
+    let shadow_ray = light_pdf > 0.0 && !black(lle, k) && same_side && same_hemisphere && !black(fr, k);
+    Some(DeltaEstimate { shadow_ray, weight: wil.2.abs() / light_pdf, origin, point, at_infinity: !dist.is_finite() })
 }
 
 /// Lane `k`'s vertex at `hit` (of a ray along `dir`) on a surface the lanes do not shade,
