@@ -589,11 +589,14 @@ impl Lights {
         (k, rescale(x, self.bounds[k], cdf[k]))
     }
 
-    /// Light `k` of [`Lights::choose`] if it is a punctual light: its index in
-    /// [`Scene::punctual_lights`].
+    /// [`Lights::sample_entry`]'s sample of light `k` if it is a punctual light: its
+    /// sample from `u` ([`Lights::sample_punctual`]), chosen with probability `pdf` (by
+    /// power where `None`).
     #[inline(always)]
-    pub(crate) fn punctual_light(&self, k: usize) -> Option<usize> {
-        k.checked_sub(self.prims.len()).and_then(|j| self.punctual_order.get(j)).map(|&i| i as usize)
+    pub(crate) fn punctual_entry(&self, scene: &Scene, k: usize, u: Vec2, pdf: Option<f32>) -> Option<LightSample> {
+        let index = *k.checked_sub(self.prims.len()).and_then(|j| self.punctual_order.get(j))? as usize;
+        let ls = Self::sample_punctual(scene, index, u);
+        Some(LightSample { pdf: ls.pdf * pdf.unwrap_or(self.punctual_pmf[index]), ..ls })
     }
 
     /// Light `k` of [`Lights::choose`] if it is one of the emissive triangles.
@@ -639,9 +642,8 @@ impl Lights {
     /// punctual light's sample, chosen with probability `pdf` (by power where `None`).
     #[inline(always)]
     fn sample_entry(&self, scene: &Scene, k: usize, u: Vec2, pdf: Option<f32>) -> Option<LightSample> {
-        if let Some(index) = self.punctual_light(k) {
-            let ls = Self::sample_punctual(scene, index, u);
-            return Some(LightSample { pdf: ls.pdf * pdf.unwrap_or(self.punctual_pmf[index]), ..ls });
+        if let Some(ls) = self.punctual_entry(scene, k, u, pdf) {
+            return Some(ls);
         }
         if let Some(t) = self.triangle_light(k) {
             let [v0, v1, v2] = t.vertices;

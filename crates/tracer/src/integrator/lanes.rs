@@ -37,7 +37,7 @@ use super::{
     ShadingNormals, path_vertex, power_heuristic, punctual_geometry,
 };
 use crate::geometry::{HitSurface, SceneHit};
-use crate::lights::on_triangle;
+use crate::lights::{LightSource, on_triangle};
 use crate::material::{ModelParams, Surface};
 use crate::punctual::PunctualLight;
 use crate::sampler::{LaneDraw, Sampler, SobolLanes};
@@ -428,8 +428,11 @@ fn run<const N: usize, S: Sampler>(
     let (mut lv0, mut lv1, mut lv2) = (V3::default(), V3::default(), V3::default());
     let mut lpdf: F = [0.0; LANES];
     let mut light_colour = Gathered::default();
-    // The chosen punctual lights (by index in the scene), where `ldelta` says a lane has one.
+    // The chosen punctual lights (by index in the scene) and their samples' points (a
+    // position, or the direction towards a directional light), where `ldelta` says a
+    // lane has one.
     let mut lpunctual = [0u32; LANES];
+    let mut lpoint = V3::default();
     let mut weight: F = [0.0; LANES];
     let mut origin = V3::default();
     // The direction samples, one array per coordinate (interleaved pairs kept the loop
@@ -660,12 +663,16 @@ fn run<const N: usize, S: Sampler>(
                 let k = k as usize;
                 let Some((i, x, pdf)) = lights.choose_at(ux[k], p.get(k), ng.get(k)) else { continue };
                 let Some(t) = lights.triangle_light(i) else {
-                    // `Lights::sample_entry`'s punctual case: its pdf is the choice's alone.
-                    if let Some(index) = lights.punctual_light(i) {
+                    // A punctual light: `Lights::sample_entry`'s own sample (its position
+                    // or direction, and the choice's probability).
+                    if let Some(s) = lights.punctual_entry(scene, i, Vec2::new(x, uy[k]), pdf)
+                        && let LightSource::Punctual(index) = s.source
+                    {
                         ldelta[k] = true;
-                        lpunctual[k] = index as u32;
-                        lpdf[k] = pdf.unwrap_or_else(|| lights.punctual_pmf(index));
-                        light_colour.set(k, &ls.punctual[index]);
+                        lpunctual[k] = index;
+                        lpdf[k] = s.pdf;
+                        lpoint.set(k, s.point);
+                        light_colour.set(k, &ls.punctual[index as usize]);
                     }
                     continue;
                 };
@@ -721,7 +728,8 @@ fn run<const N: usize, S: Sampler>(
                 let light = &scene.punctual_lights[lpunctual[k] as usize];
                 let frame = [&fs, &ft, &nf];
                 let wo = (wol.z[k], cos_o[k]);
-                let Some(e) = delta_light_in_one_lane(light, k, p.get(k), &mut lle, &fr, frame, &ng, wo, lpdf[k])
+                let Some(e) =
+                    delta_light_in_one_lane(light, lpoint.get(k), k, p.get(k), &mut lle, &fr, frame, &ng, wo, lpdf[k])
                 else {
                     continue; // a point light at the shading point: no shadow ray
                 };
@@ -941,7 +949,7 @@ struct DeltaEstimate {
     at_infinity: bool,
 }
 
-/// Next-event estimation towards a punctual light in lane `k`, as `light_contribution`'s
+/// Next-event estimation towards a punctual light sampled at `point` in lane `k`, as `light_contribution`'s
 /// delta case: `lle`'s lane scaled by the light's falloff/d² (or a directional light's
 /// factor), and the estimate; `None` for a point light at the shading point. A delta light
 /// takes no MIS weight: no BSDF sample can find it. `wo` is (ω_o's z in the shading frame,
@@ -950,6 +958,7 @@ struct DeltaEstimate {
 #[inline(never)]
 fn delta_light_in_one_lane<const N: usize>(
     light: &PunctualLight,
+    point: Vec3,
     k: usize,
     p: Vec3,
     lle: &mut [F; N],
@@ -959,7 +968,6 @@ fn delta_light_in_one_lane<const N: usize>(
     (wo_z, cos_o): (f32, f32),
     light_pdf: f32,
 ) -> Option<DeltaEstimate> {
-    let point = light.towards();
     let (wi, dist, scale) = punctual_geometry(light, point, p)?;
     for v in lle.iter_mut() {
         v[k] *= scale;
