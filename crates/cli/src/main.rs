@@ -1127,7 +1127,10 @@ fn run_render(args: RenderArgs) -> Result<()> {
         if stats.light_tree { " (chosen by a light tree)" } else { "" },
         stats.accelerator,
         stats.build.as_secs_f64() * 1e3,
-        stats.compile.map_or(String::new(), |c| format!(", kernel compiled in {:.1} ms", c.as_secs_f64() * 1e3))
+        match stats.hull_triangles {
+            0 => String::new(),
+            n => format!(" ({n} on the hull left out of shadow rays)"),
+        } + &stats.compile.map_or(String::new(), |c| format!(", kernel compiled in {:.1} ms", c.as_secs_f64() * 1e3))
             + &stats
                 .integrator
                 .map_or(String::new(), |c| format!(", integrator prepared in {:.1} ms", c.as_secs_f64() * 1e3)),

@@ -78,6 +78,32 @@ fn renders_the_shared_cornell_box_with_defaults_but_small() {
     assert!(o.status.success() && !stderr(&o).contains("(lanes)"), "{}", stderr(&o));
 }
 
+/// The box's walls, floor and ceiling (its hull's faces) are left out of shadow rays; a
+/// point light above the ceiling keeps the ceiling in, which stands between it and the room.
+#[test]
+fn shadow_rays_leave_out_the_cornell_boxs_walls_but_not_a_wall_a_light_is_behind() {
+    let scene =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/scenes/cornell-box/CornellBox-Original.obj");
+    if !scene.exists() {
+        eprintln!("SKIPPED: {} is absent", scene.display());
+        return;
+    }
+    let out = temp_dir("hull").join("hull.png");
+    let render = |extra: &[&str]| {
+        let mut a = vec!["render", scene.to_str().unwrap(), "--width", "8", "--height", "8", "--spp", "1"];
+        a.extend_from_slice(extra);
+        a.extend(["-o", out.to_str().unwrap()]);
+        let o = spt(&a);
+        assert!(o.status.success(), "{}", stderr(&o));
+        stderr(&o)
+    };
+    // Floor, ceiling and three walls: 10 triangles (this file's boxes have no bottoms).
+    let msg = render(&[]);
+    assert!(msg.contains("(10 on the hull left out of shadow rays)"), "{msg}");
+    let msg = render(&["--light", "point:0,3,5:1"]);
+    assert!(msg.contains("(8 on the hull left out of shadow rays)"), "{msg}");
+}
+
 /// Point, spot and directional lights keep a scene of diffuse triangles in the lanes,
 /// whose image is the general loop's to the byte; a sun disk (which escaping paths see)
 /// sends it to the general loop.

@@ -1493,6 +1493,7 @@ impl GpuBackend {
                 NodeLayout::Wide4 { .. } => "4-wide BVH",
                 NodeLayout::Wide8 { .. } => "8-wide BVH",
             },
+            hull_triangles: 0,
         };
         let mut prepared = GpuScene {
             ctx: Arc::clone(&self.ctx),

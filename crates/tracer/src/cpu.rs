@@ -104,6 +104,7 @@ impl<I: Integrator> CpuBackend<I> {
             emitters: lights.emitter_count(),
             light_tree: lights.has_tree(),
             accelerator: geometry.triangles.description(),
+            hull_triangles: geometry.hull_triangles(),
         };
         Ok(CpuScene {
             bounds: scene.bounds(),

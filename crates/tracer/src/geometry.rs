@@ -1,10 +1,13 @@
-//! Everything a ray can hit: the triangle meshes' 4-wide BVH and a BVH over the analytic
-//! shapes, queried together. Primitive ids number the triangles first, then the shapes.
+//! Everything a ray can hit: the triangle meshes' wide BVH and a BVH over the analytic
+//! shapes, queried together, and for shadow rays between points of the scene a second
+//! tree without the triangles on its convex hull ([`Occluders`]). Primitive ids number the
+//! triangles first, then the shapes.
 
 use crate::render::SceneOptions;
 use crate::scene::Scene;
 use crate::{Error, Result};
 use bvh::{Accelerator, BoxBvh, BuildConfig, BvhWidth, Instance, Ray, TriangleTest, TwoLevel, WideBvh};
+use glam::Vec3;
 use shapes::boxes::Cuboid;
 use shapes::implicit::Implicit;
 use shapes::polygon::Polygon;
@@ -94,7 +97,29 @@ pub struct Geometry {
     /// Instanced objects: a two-level BVH (a wide BVH per object, a binary one over the
     /// instances), or `None` for a scene without instances.
     pub instances: Option<Instanced>,
+    /// The triangles that can block a segment between two points of the scene
+    /// ([`Occluders`]): shadow rays towards lights in the scene test these alone.
+    pub occluders: Occluders,
+    hull_triangles: usize,
     triangle_count: u32,
+}
+
+/// What shadow rays between two points of the scene test of its triangles.
+///
+/// A triangle whose plane has the whole scene on one side (a wall, floor or ceiling of a
+/// room, the bottom of a box standing on the floor: a face of the scene's convex hull)
+/// cannot come between two points of the scene: a segment between two points of one
+/// closed half-space stays in it. Shadow rays towards a point on an emitter or a point or
+/// spot light (the lights' positions count as points of the scene) need not test such
+/// triangles; rays towards the environment, a directional light or the camera do.
+pub enum Occluders {
+    /// No triangle lies on a face of the hull: test the whole tree.
+    All,
+    /// A tree over the triangles that can block such a segment (primitive ids are its
+    /// own, so it answers occlusion alone).
+    Some(WideBvh),
+    /// No triangle can block such a segment (a bare room).
+    None,
 }
 
 /// The two-level structure over a scene's instances, and what shading needs to turn an
@@ -147,7 +172,21 @@ impl Geometry {
         }
         let instances =
             if scene.instances.is_empty() { None } else { Some(Self::build_instances(scene, test, width, config)?) };
-        Ok(Self { triangles, shapes, instances, triangle_count: scene.triangles.len() as u32 })
+        let interior = interior_triangles(scene);
+        let hull_triangles = interior.as_ref().map_or(0, |soup| scene.triangles.len() - soup.len());
+        let occluders = match interior {
+            None => Occluders::All,
+            Some(soup) if soup.is_empty() => Occluders::None,
+            Some(soup) => Occluders::Some(WideBvh::build(&soup, config, width)?.with_triangle_test(test)),
+        };
+        let triangle_count = scene.triangles.len() as u32;
+        Ok(Self { triangles, shapes, instances, occluders, hull_triangles, triangle_count })
+    }
+
+    /// How many of the scene's triangles shadow rays towards lights in the scene leave
+    /// out ([`Occluders`]; 0 where they test them all).
+    pub fn hull_triangles(&self) -> usize {
+        self.hull_triangles
     }
 
     fn build_instances(scene: &Scene, test: TriangleTest, width: BvhWidth, config: BuildConfig) -> Result<Instanced> {
@@ -222,16 +261,256 @@ impl Geometry {
         best
     }
 
+    /// [`Geometry::occluded`] for a segment whose ends both lie in the scene's convex
+    /// hull (points on its surfaces, a point or spot light's position): the triangles on
+    /// the hull's faces are left out ([`Occluders`]).
+    #[inline]
+    pub fn occluded_inside(&self, shapes: &[SceneShape], ray: &Ray) -> bool {
+        let triangles = match &self.occluders {
+            Occluders::All => self.triangles.occluded(ray),
+            Occluders::Some(tree) => tree.occluded(ray),
+            Occluders::None => false,
+        };
+        triangles || self.others_occlude(shapes, ray)
+    }
+
     /// True if anything is hit in (`ray.t_min`, `ray.t_max`).
     #[inline]
     pub fn occluded(&self, shapes: &[SceneShape], ray: &Ray) -> bool {
-        self.triangles.occluded(ray)
-            || self.instances.as_ref().is_some_and(|i| i.bvh.occluded(ray))
+        self.triangles.occluded(ray) || self.others_occlude(shapes, ray)
+    }
+
+    /// Whether the instances or the shapes block `ray`.
+    #[inline]
+    fn others_occlude(&self, shapes: &[SceneShape], ray: &Ray) -> bool {
+        self.instances.as_ref().is_some_and(|i| i.bvh.occluded(ray))
             || self
                 .shapes
                 .traverse(ray, ray.t_max, true, |k, t_max| {
                     shapes[k as usize].shape.shape().intersect(&Ray { t_max, ..*ray }).map(|h| h.t)
                 })
                 .is_some()
+    }
+}
+
+/// The scene's own triangles that can come between two points of the scene
+/// ([`Occluders`]), or `None` where leaving out the others would not pay: fewer than one
+/// triangle in [`HULL_SHARE`] lies on the scene's convex hull, or finding them would cost
+/// more than [`HULL_TEST_BUDGET`].
+///
+/// The points: every vertex, the corners of every shape's and instance's box, and the
+/// point and spot lights' positions. A triangle is left out where all of them lie on one
+/// side of its plane ([`hull_faces`]): a segment between two of them, or between points of
+/// the surfaces they span, cannot cross the plane.
+fn interior_triangles(scene: &Scene) -> Option<Vec<[Vec3; 3]>> {
+    use glam::DVec3;
+    let triangles = scene.triangle_soup();
+    let enough = triangles.len().div_ceil(HULL_SHARE).max(1);
+    let mut points: Vec<DVec3> = scene.positions.iter().map(|&p| Vec3::from_array(p).as_dvec3()).collect();
+    let mut corners = |b: bvh::Aabb| {
+        for k in 0..8 {
+            let pick = |bit: usize, lo: f32, hi: f32| f64::from(if k >> bit & 1 == 0 { lo } else { hi });
+            points.push(DVec3::new(pick(0, b.min.x, b.max.x), pick(1, b.min.y, b.max.y), pick(2, b.min.z, b.max.z)));
+        }
+    };
+    for s in &scene.shapes {
+        corners(s.shape.shape().bounds());
+    }
+    for i in &scene.instances {
+        corners(scene.objects[i.object as usize].bounds().transformed(&glam::Affine3A::from_mat4(i.transform)));
+    }
+    for l in &scene.punctual_lights {
+        if !matches!(l, crate::punctual::PunctualLight::Directional { .. }) {
+            points.push(l.towards().as_dvec3());
+        }
+    }
+    let on_hull = hull_faces(&triangles, &points, enough)?;
+    Some(triangles.iter().zip(&on_hull).filter(|&(_, &h)| !h).map(|(t, _)| *t).collect())
+}
+
+/// Which of `triangles` have every one of `points` on one side of their plane, within
+/// 10⁻⁶ of the largest coordinate (f32 vertices of one wall are coplanar to about 10⁻⁷ of
+/// it); `None` where fewer than `enough` do, or where the test would cost more than
+/// [`HULL_TEST_BUDGET`]. Each triangle is first tested against the points that reach
+/// furthest along 13 directions, which settles nearly every triangle that is not on the
+/// hull after a few points; the others are tested against all of them.
+fn hull_faces(triangles: &[[Vec3; 3]], points: &[glam::DVec3], enough: usize) -> Option<Vec<bool>> {
+    use glam::DVec3;
+    use rayon::prelude::*;
+    let scale = points.iter().fold(0.0f64, |m, p| m.max(p.abs().max_element()));
+    if triangles.is_empty() || !scale.is_finite() {
+        return None;
+    }
+    let tolerance = 1e-6 * scale;
+    // The points furthest along ±x, ±y, ±z, the 4 body diagonals and the 6 face diagonals.
+    let axes = [(1, 0, 0), (0, 1, 0), (0, 0, 1)];
+    let diagonals = [(1, 1, 1), (1, 1, -1), (1, -1, 1), (-1, 1, 1), (1, 1, 0), (1, -1, 0), (1, 0, 1), (1, 0, -1)];
+    let mut probes = Vec::new();
+    for (x, y, z) in axes.into_iter().chain(diagonals).chain([(0, 1, 1), (0, 1, -1)]) {
+        let d = DVec3::new(f64::from(x), f64::from(y), f64::from(z));
+        let by = |a: &&DVec3, b: &&DVec3| a.dot(d).total_cmp(&b.dot(d));
+        probes.extend(points.iter().min_by(by).copied());
+        probes.extend(points.iter().max_by(by).copied());
+    }
+    // Whether all of `set` lies on one side of the triangle's plane (false for a
+    // degenerate triangle, which has none: it is kept).
+    let one_side = |t: &[Vec3; 3], set: &[DVec3]| -> bool {
+        let [a, b, c] = t.map(|v| v.as_dvec3());
+        let n = (b - a).cross(c - a);
+        let len = n.length();
+        // (A NaN length, from a non-finite vertex, counts as degenerate.)
+        if len.is_nan() || len <= 0.0 {
+            return false;
+        }
+        let n = n / len;
+        let (mut above, mut below) = (false, false);
+        for p in set {
+            let d = n.dot(*p - a);
+            above |= d > tolerance;
+            below |= d < -tolerance;
+            if above && below {
+                return false;
+            }
+        }
+        true
+    };
+    let candidates: Vec<bool> = triangles.par_iter().map(|t| one_side(t, &probes)).collect();
+    let count = candidates.iter().filter(|&&c| c).count();
+    if count < enough || (count as u64).saturating_mul(points.len() as u64) > HULL_TEST_BUDGET {
+        return None;
+    }
+    let on_hull: Vec<bool> = triangles.par_iter().zip(&candidates).map(|(t, &c)| c && one_side(t, points)).collect();
+    (on_hull.iter().filter(|&&h| h).count() >= enough).then_some(on_hull)
+}
+
+/// Shadow rays leave the hull's triangles out ([`Occluders::Some`]) where they are at
+/// least one in this many of the scene's: in a small scene they share leaves with the rest (the
+/// Cornell box's walls with its boxes), and shadow rays test them in every leaf they
+/// visit; in a large one the tree already keeps them apart, and a second tree would
+/// cost its build and memory for little.
+pub const HULL_SHARE: usize = 16;
+
+/// The most point-against-plane tests [`interior_triangles`] makes (a fraction of a
+/// second on one core): a convex mesh of a million triangles, every one on its hull,
+/// keeps the whole tree for its shadow rays instead.
+const HULL_TEST_BUDGET: u64 = 400_000_000;
+
+#[cfg(test)]
+pub(crate) mod tests {
+    use super::*;
+    use crate::material::Material;
+    use crate::mesh::quad;
+    use crate::punctual::PunctualLight;
+    use spectral::spectrum::Colour;
+
+    /// A Cornell-like room: floor, ceiling and three walls 2 wide (10 triangles on the
+    /// hull), a block standing on the floor with all six faces (its bottom, 2 triangles,
+    /// on the hull too), a panel hanging in the room, and a lamp facing down just under the
+    /// ceiling: 26 triangles, 12 of them on the hull.
+    pub(crate) fn box_room() -> Scene {
+        let mut scene = Scene::default();
+        let white = || Material::diffuse("white", Colour::constant(0.7)).unwrap();
+        scene.add(&quad(Vec3::ZERO, Vec3::Y, 1.0), white());
+        scene.add(&quad(Vec3::new(0.0, 2.0, 0.0), -Vec3::Y, 1.0), white());
+        scene.add(&quad(Vec3::new(-1.0, 1.0, 0.0), Vec3::X, 1.0), white());
+        scene.add(&quad(Vec3::new(1.0, 1.0, 0.0), -Vec3::X, 1.0), white());
+        scene.add(&quad(Vec3::new(0.0, 1.0, -1.0), Vec3::Z, 1.0), white());
+        let (c, h) = (Vec3::new(0.3, 0.3, -0.2), 0.3);
+        for n in [Vec3::X, -Vec3::X, Vec3::Y, -Vec3::Y, Vec3::Z, -Vec3::Z] {
+            scene.add(&quad(c + n * h, n, h), white());
+        }
+        scene.add(&quad(Vec3::new(-0.4, 1.1, 0.1), Vec3::Z, 0.25), white());
+        let lamp = Material::diffuse("lamp", Colour::constant(0.0)).unwrap().with_emission(Colour::constant(5.0));
+        scene.add(&quad(Vec3::new(0.0, 1.98, 0.0), -Vec3::Y, 0.3), lamp);
+        scene
+    }
+
+    /// A point uniformly distributed over triangle `t` from two uniform numbers.
+    fn on_triangle(t: &[Vec3; 3], u: f32, v: f32) -> Vec3 {
+        let (u, v) = if u + v > 1.0 { (1.0 - u, 1.0 - v) } else { (u, v) };
+        t[0] + u * (t[1] - t[0]) + v * (t[2] - t[0])
+    }
+
+    /// The hull's faces are found, and leaving them out changes no answer for segments
+    /// between points of the scene's surfaces and points on its lamp.
+    #[test]
+    fn hull_faces_are_left_out_of_shadow_rays_between_scene_points() {
+        let scene = box_room();
+        let geometry = Geometry::build(&scene, &SceneOptions::default()).unwrap();
+        assert_eq!(scene.triangles.len(), 26);
+        assert_eq!(geometry.hull_triangles(), 12);
+        let Occluders::Some(tree) = &geometry.occluders else { panic!("a tree of the interior triangles") };
+        assert_eq!(tree.references(), 14);
+        let soup = scene.triangle_soup();
+        let lamp = &soup[24..];
+        let mut rng = rng::Pcg32::new(3, 1);
+        let mut blocked = 0;
+        for i in 0..20_000 {
+            let from = on_triangle(&soup[rng.next_u32() as usize % 24], rng.next_f32(), rng.next_f32());
+            // Half to the lamp (next-event estimation), half between any two surfaces.
+            let to = if i % 2 == 0 { lamp } else { &soup[..24] };
+            let to = on_triangle(&to[rng.next_u32() as usize % to.len()], rng.next_f32(), rng.next_f32());
+            let ray = Ray::segment(from, to - from, 1e-4, 1.0 - 1e-4);
+            let full = geometry.occluded(&scene.shapes, &ray);
+            assert_eq!(geometry.occluded_inside(&scene.shapes, &ray), full, "segment {from} → {to}");
+            blocked += usize::from(full);
+        }
+        // The block and the panel shadow a good share (the answers are not all "clear").
+        assert!((4_000..16_000).contains(&blocked), "{blocked} of 20000 segments blocked");
+    }
+
+    /// A point light outside a closed room is a point of the scene: the wall between it
+    /// and the room is not on the hull and still blocks its light; the far walls are.
+    #[test]
+    fn a_point_light_outside_keeps_the_wall_it_shines_through() {
+        let mut scene = box_room();
+        scene.add(
+            &quad(Vec3::new(0.0, 1.0, 1.0), -Vec3::Z, 1.0),
+            Material::diffuse("front", Colour::constant(0.5)).unwrap(),
+        );
+        scene.punctual_lights.push(PunctualLight::point(Vec3::new(3.0, 1.0, 0.0), Colour::constant(10.0)));
+        let geometry = Geometry::build(&scene, &SceneOptions::default()).unwrap();
+        // Floor, ceiling, back, front, left wall and the block's bottom; not the right wall.
+        assert_eq!(geometry.hull_triangles(), 12);
+        let ray = Ray::segment(Vec3::new(0.0, 1.0, 0.0), Vec3::new(3.0, 0.0, 0.0), 0.0, 1.0 - 1e-4);
+        assert!(geometry.occluded_inside(&scene.shapes, &ray), "the right wall stands between");
+    }
+
+    /// A point just behind a triangle's plane that reaches furthest along none of the
+    /// 13 directions the first test looks at: the full test still finds it, and the
+    /// triangle is not on the hull.
+    #[test]
+    fn the_hull_test_looks_past_the_furthest_points() {
+        use glam::DVec3;
+        let n = DVec3::new(1.0, 2.0, 3.0).normalize();
+        let (u, v) = (n.any_orthonormal_pair().0, n.any_orthonormal_pair().1);
+        let corner = |a: f64, b: f64| (u * a + v * b).as_vec3();
+        let triangle = [corner(0.0, 0.0), corner(1.0, 0.0), corner(0.0, 1.0)];
+        // A half ball of radius 10 in front of the plane, its rim in the plane.
+        let mut rng = rng::Pcg32::new(9, 2);
+        let mut points: Vec<DVec3> = Vec::new();
+        while points.len() < 2000 {
+            let p = DVec3::new(rng.next_f32().into(), rng.next_f32().into(), rng.next_f32().into()) * 20.0 - 10.0;
+            if p.length() < 10.0 {
+                points.push(if p.dot(n) < 0.0 { p - 2.0 * p.dot(n) * n } else { p });
+            }
+        }
+        points.extend((0..16).map(|k| (u * (k as f64).cos() + v * (k as f64).sin()) * 10.0));
+        assert_eq!(hull_faces(&[triangle], &points, 1), Some(vec![true]));
+        points.push(-0.001 * n);
+        assert_eq!(hull_faces(&[triangle], &points, 1), None, "a point behind the plane");
+    }
+
+    /// Where the hull's faces are few among many triangles (a room around a fine mesh),
+    /// shadow rays test the whole tree: no second tree is built.
+    #[test]
+    fn a_few_hull_faces_among_many_triangles_keep_one_tree() {
+        let mut scene = box_room();
+        let sphere = crate::mesh::uv_sphere(Vec3::new(0.0, 0.8, 0.3), 0.3, 16, 32, false);
+        scene.add(&sphere, Material::diffuse("ball", Colour::constant(0.5)).unwrap());
+        assert!(scene.triangles.len() > 12 * HULL_SHARE);
+        let geometry = Geometry::build(&scene, &SceneOptions::default()).unwrap();
+        assert!(matches!(geometry.occluders, Occluders::All));
+        assert_eq!(geometry.hull_triangles(), 0);
     }
 }

@@ -409,6 +409,15 @@ impl<'a> SceneView<'a> {
         }
     }
 
+    /// [`SceneView::occluded`] for a segment between two points of the scene (a shading
+    /// point and a point on an emitter or a point or spot light): the triangles on faces
+    /// of the scene's convex hull cannot block it and are not tested
+    /// ([`crate::geometry::Occluders`]).
+    #[inline]
+    pub fn occluded_inside(&self, ray: &Ray) -> bool {
+        if self.cutouts { self.occluded(ray) } else { self.geometry.occluded_inside(&self.scene.shapes, ray) }
+    }
+
     /// The first hit from `hit` on along `ray` that alpha does not let through: each hit
     /// on a material with alpha is tested at its texture coordinates, and the ray goes on
     /// past it where the surface is absent (a closest-hit query per layer: only scenes
@@ -817,7 +826,8 @@ fn light_contribution<const N: usize, B: Bsdf<N>>(
         Ray::new(origin, wi_world)
     };
     counters.rays += 1;
-    if view.occluded(&shadow) {
+    let blocked = if dist.is_finite() { view.occluded_inside(&shadow) } else { view.occluded(&shadow) };
+    if blocked {
         return None;
     }
     let w = match mis {

@@ -446,6 +446,9 @@ pub struct PrepareStats {
     pub light_tree: bool,
     /// The triangles' acceleration structure, for messages (e.g. "8-wide BVH (AVX2)").
     pub accelerator: &'static str,
+    /// Triangles on faces of the scene's convex hull that shadow rays towards its lights
+    /// leave out (the CPU's [`crate::geometry::Occluders`]; 0 where they test them all).
+    pub hull_triangles: usize,
 }
 
 /// A way of executing an integrator (CPU with rayon, GPU with wgpu): it prepares scenes,

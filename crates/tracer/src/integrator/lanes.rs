@@ -36,7 +36,7 @@ use super::{
     CameraSample, Chain, PathCounters, PathSettings, PathState, RR_MIN_TERMINATION, SHADOW_T_MAX, SceneView,
     ShadingNormals, path_vertex, power_heuristic, punctual_geometry,
 };
-use crate::geometry::{HitSurface, SceneHit};
+use crate::geometry::{HitSurface, Occluders, SceneHit};
 use crate::lights::{LightSource, on_triangle};
 use crate::material::{ModelParams, Surface};
 use crate::punctual::PunctualLight;
@@ -745,7 +745,7 @@ fn run<const N: usize, S: Sampler>(
             let o = origin.get(k);
             let ray =
                 if linfinite[k] { Ray::new(o, lp.get(k)) } else { Ray::segment(o, lp.get(k) - o, 0.0, SHADOW_T_MAX) };
-            shadow[k] = !occluded(view, &ray);
+            shadow[k] = !occluded(view, &ray, !linfinite[k]);
         }
         for k in 0..LANES {
             for i in 0..N {
@@ -929,10 +929,21 @@ fn closest_hit(view: &SceneView, ray: &Ray) -> Option<bvh::Hit> {
     Some(bvh::Hit { prim: hit.prim, t: hit.t, u, v })
 }
 
-/// `view.occluded` in the lanes' scenes, as [`closest_hit`].
+/// `view.occluded` in the lanes' scenes, as [`closest_hit`]; `inside`: the ray is a
+/// segment between two points of the scene ([`crate::geometry::Occluders`]).
 #[inline(always)]
-fn occluded(view: &SceneView, ray: &Ray) -> bool {
-    if view.cutouts { view.occluded(ray) } else { view.geometry.triangles.occluded(ray) }
+fn occluded(view: &SceneView, ray: &Ray, inside: bool) -> bool {
+    if view.cutouts {
+        return view.occluded(ray);
+    }
+    if !inside {
+        return view.geometry.triangles.occluded(ray);
+    }
+    match &view.geometry.occluders {
+        Occluders::All => view.geometry.triangles.occluded(ray),
+        Occluders::Some(tree) => tree.occluded(ray),
+        Occluders::None => false,
+    }
 }
 
 /// One lane's next-event estimate towards a punctual light ([`delta_light_in_one_lane`]).
@@ -1192,6 +1203,18 @@ mod tests {
         cut.materials[4] =
             cut.materials[4].clone().with_textures(MaterialTextures { alpha: Some(alpha), ..Default::default() });
         lanes_equal_the_general_loop(&cut, SampledWavelengths::<4>::sample_hero, base);
+    }
+
+    /// A small room whose walls shadow rays leave out (`Occluders`): the lanes and the
+    /// general loop test the same triangles.
+    #[test]
+    fn lanes_leave_out_the_hulls_triangles_as_the_general_loop() {
+        let scene = crate::geometry::tests::box_room();
+        let geometry = Geometry::build(&scene, &SceneOptions::default()).unwrap();
+        assert!(matches!(geometry.occluders, Occluders::Some(_)));
+        let base = PathSettings { rr_depth: 2, ..Default::default() };
+        lanes_equal_the_general_loop(&scene, SampledWavelengths::<4>::sample_hero, base);
+        lanes_equal_the_general_loop(&scene, |_| SampledWavelengths::<3>::rgb(), base);
     }
 
     /// The Sobol samplers' points are computed across the lanes (`SobolLanes`), from
