@@ -807,7 +807,8 @@ fn connection_transmittance<const N: usize>(
     entered_medium(s.material, s.it.ng, dir).map(|alpha| beer_lambert(alpha, dist, wl))
 }
 
-/// Whether nothing blocks the segment between two vertices.
+/// Whether nothing blocks the segment between two vertices on the scene's surfaces (the
+/// triangles on its hull cannot: [`SceneView::occluded_inside`]).
 fn visible<const N: usize>(
     view: &SceneView,
     a: &Vertex<'_, N>,
@@ -817,7 +818,7 @@ fn visible<const N: usize>(
     let from = a.origin_towards(b.p);
     let to = b.origin_towards(a.p);
     counters.rays += 1;
-    !view.occluded(&Ray::segment(from, to - from, 0.0, SHADOW_T_MAX))
+    !view.occluded_inside(&Ray::segment(from, to - from, 0.0, SHADOW_T_MAX))
 }
 
 /// s, t ≥ 2: light vertex s−1 connected to camera vertex t−1.
