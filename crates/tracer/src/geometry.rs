@@ -163,7 +163,8 @@ impl Geometry {
     pub fn build(scene: &Scene, options: &SceneOptions) -> Result<Self> {
         let (test, width) = (options.triangle_test, options.bvh_width);
         let config = Self::triangle_build_config_with(options.bvh_builder);
-        let triangles = WideBvh::build(&scene.triangle_soup(), config, width)?.with_triangle_test(test);
+        let soup = scene.triangle_soup();
+        let triangles = WideBvh::build(&soup, config, width)?.with_triangle_test(test);
         let boxes: Vec<_> = scene.shapes.iter().map(|s| s.shape.shape().bounds()).collect();
         let shapes = BoxBvh::build(&boxes, Self::shape_build_config())?;
         let count = scene.triangles.len() as u64 + scene.shapes.len() as u64 + scene.instanced_triangle_count();
@@ -172,7 +173,7 @@ impl Geometry {
         }
         let instances =
             if scene.instances.is_empty() { None } else { Some(Self::build_instances(scene, test, width, config)?) };
-        let interior = interior_triangles(scene);
+        let interior = interior_triangles(scene, &soup);
         let hull_triangles = interior.as_ref().map_or(0, |soup| scene.triangles.len() - soup.len());
         let occluders = match interior {
             None => Occluders::All,
@@ -294,17 +295,19 @@ impl Geometry {
 }
 
 /// The scene's own triangles that can come between two points of the scene
-/// ([`Occluders`]), or `None` where leaving out the others would not pay: fewer than one
-/// triangle in [`HULL_SHARE`] lies on the scene's convex hull, or finding them would cost
-/// more than [`HULL_TEST_BUDGET`].
+/// ([`Occluders`]), or `None` where leaving out the others would not pay: the scene has
+/// more than [`HULL_MAX_TRIANGLES`], fewer than one triangle in [`HULL_SHARE`] lies on its
+/// convex hull, or finding them would cost more than [`HULL_TEST_BUDGET`].
 ///
 /// The points: every vertex, the corners of every shape's and instance's box, and the
 /// point and spot lights' positions. A triangle is left out where all of them lie on one
 /// side of its plane ([`hull_faces`]): a segment between two of them, or between points of
 /// the surfaces they span, cannot cross the plane.
-fn interior_triangles(scene: &Scene) -> Option<Vec<[Vec3; 3]>> {
+fn interior_triangles(scene: &Scene, triangles: &[[Vec3; 3]]) -> Option<Vec<[Vec3; 3]>> {
     use glam::DVec3;
-    let triangles = scene.triangle_soup();
+    if triangles.len() > HULL_MAX_TRIANGLES {
+        return None;
+    }
     let enough = triangles.len().div_ceil(HULL_SHARE).max(1);
     let mut points: Vec<DVec3> = scene.positions.iter().map(|&p| Vec3::from_array(p).as_dvec3()).collect();
     let mut corners = |b: bvh::Aabb| {
@@ -324,7 +327,7 @@ fn interior_triangles(scene: &Scene) -> Option<Vec<[Vec3; 3]>> {
             points.push(l.towards().as_dvec3());
         }
     }
-    let on_hull = hull_faces(&triangles, &points, enough)?;
+    let on_hull = hull_faces(triangles, &points, enough)?;
     Some(triangles.iter().zip(&on_hull).filter(|&(_, &h)| !h).map(|(t, _)| *t).collect())
 }
 
@@ -390,10 +393,18 @@ fn hull_faces(triangles: &[[Vec3; 3]], points: &[glam::DVec3], enough: usize) ->
 /// cost its build and memory for little.
 pub const HULL_SHARE: usize = 16;
 
-/// The most point-against-plane tests [`interior_triangles`] makes (a fraction of a
-/// second on one core): a convex mesh of a million triangles, every one on its hull,
-/// keeps the whole tree for its shadow rays instead.
-const HULL_TEST_BUDGET: u64 = 400_000_000;
+/// The most triangles a scene may have for its hull's faces to be looked for: in larger
+/// scenes the tree keeps a room's few large triangles in leaves of their own (they could
+/// not be one in [`HULL_SHARE`] anyway, short of a finely tessellated convex mesh), and
+/// the test would add a fifth to every build (Sponza's 66K triangles: 10 of 50 ms).
+pub const HULL_MAX_TRIANGLES: usize = 1 << 14;
+
+/// The most point-against-plane tests [`hull_faces`] makes after the first pass (a few
+/// milliseconds): a scanned mesh, many of whose triangles have the furthest points all
+/// behind them, or a finely tessellated convex one keeps the whole tree for its shadow
+/// rays instead of paying for the test in every build (the bunny's 69K triangles cost
+/// 0.1–0.2 s with no bound).
+const HULL_TEST_BUDGET: u64 = 20_000_000;
 
 #[cfg(test)]
 pub(crate) mod tests {
@@ -512,5 +523,26 @@ pub(crate) mod tests {
         let geometry = Geometry::build(&scene, &SceneOptions::default()).unwrap();
         assert!(matches!(geometry.occluders, Occluders::All));
         assert_eq!(geometry.hull_triangles(), 0);
+    }
+
+    /// A convex mesh has every triangle on its hull: a small one leaves them all out of
+    /// shadow rays between its points (none can block one), a large one is not tested.
+    #[test]
+    fn a_convex_mesh_blocks_no_segment_between_its_points_unless_too_large_to_test() {
+        let ball = |rings: u32| {
+            let mut scene = Scene::default();
+            let mesh = crate::mesh::uv_sphere(Vec3::ZERO, 1.0, rings, 2 * rings, false);
+            scene.add(&mesh, Material::diffuse("ball", Colour::constant(0.5)).unwrap());
+            let geometry = Geometry::build(&scene, &SceneOptions::default()).unwrap();
+            (scene.triangles.len(), geometry)
+        };
+        let (count, small) = ball(12);
+        assert!(matches!(small.occluders, Occluders::None));
+        assert_eq!(small.hull_triangles(), count);
+        let through = Ray::segment(Vec3::new(0.0, 0.0, -0.99), Vec3::new(0.0, 0.0, 1.98), 0.0, 1.0);
+        assert!(!small.occluded_inside(&[], &through) && !small.occluded(&[], &through));
+        let (count, large) = ball(100);
+        assert!(count > HULL_MAX_TRIANGLES);
+        assert!(matches!(large.occluders, Occluders::All));
     }
 }
