@@ -267,12 +267,18 @@ impl Geometry {
     /// the hull's faces are left out ([`Occluders`]).
     #[inline]
     pub fn occluded_inside(&self, shapes: &[SceneShape], ray: &Ray) -> bool {
-        let triangles = match &self.occluders {
+        self.triangles_occlude_inside(ray) || self.others_occlude(shapes, ray)
+    }
+
+    /// Whether the scene's own triangles block a segment between two points of the
+    /// scene ([`Geometry::occluded_inside`] without the instances and shapes).
+    #[inline]
+    pub fn triangles_occlude_inside(&self, ray: &Ray) -> bool {
+        match &self.occluders {
             Occluders::All => self.triangles.occluded(ray),
             Occluders::Some(tree) => tree.occluded(ray),
             Occluders::None => false,
-        };
-        triangles || self.others_occlude(shapes, ray)
+        }
     }
 
     /// True if anything is hit in (`ray.t_min`, `ray.t_max`).

@@ -36,7 +36,7 @@ use super::{
     CameraSample, Chain, PathCounters, PathSettings, PathState, RR_MIN_TERMINATION, SHADOW_T_MAX, SceneView,
     ShadingNormals, path_vertex, power_heuristic, punctual_geometry,
 };
-use crate::geometry::{HitSurface, Occluders, SceneHit};
+use crate::geometry::{HitSurface, SceneHit};
 use crate::lights::{LightSource, on_triangle};
 use crate::material::{ModelParams, Surface};
 use crate::punctual::PunctualLight;
@@ -936,14 +936,7 @@ fn occluded(view: &SceneView, ray: &Ray, inside: bool) -> bool {
     if view.cutouts {
         return view.occluded(ray);
     }
-    if !inside {
-        return view.geometry.triangles.occluded(ray);
-    }
-    match &view.geometry.occluders {
-        Occluders::All => view.geometry.triangles.occluded(ray),
-        Occluders::Some(tree) => tree.occluded(ray),
-        Occluders::None => false,
-    }
+    if inside { view.geometry.triangles_occlude_inside(ray) } else { view.geometry.triangles.occluded(ray) }
 }
 
 /// One lane's next-event estimate towards a punctual light ([`delta_light_in_one_lane`]).
@@ -1056,7 +1049,7 @@ fn vertex_in_one_lane<const N: usize, S: Sampler>(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::geometry::Geometry;
+    use crate::geometry::{Geometry, Occluders};
     use crate::lights::{LightSampler, Lights};
     use crate::material::Material;
     use crate::mesh::{quad, uv_sphere};
