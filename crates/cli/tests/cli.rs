@@ -5,6 +5,19 @@ mod common;
 use common::*;
 use std::path::{Path, PathBuf};
 
+/// The shared Cornell box (`CornellBox-Original.obj`), or `None`, with a message, where
+/// the shared scenes are absent (the test is then skipped).
+fn shared_cornell_box() -> Option<PathBuf> {
+    let scene =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/scenes/cornell-box/CornellBox-Original.obj");
+    if scene.exists() {
+        Some(scene)
+    } else {
+        eprintln!("SKIPPED: {} is absent", scene.display());
+        None
+    }
+}
+
 #[test]
 fn renders_png_exr_and_standard_error() {
     let dir = temp_dir("ok");
@@ -47,12 +60,7 @@ fn renders_png_exr_and_standard_error() {
 
 #[test]
 fn renders_the_shared_cornell_box_with_defaults_but_small() {
-    let scene =
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/scenes/cornell-box/CornellBox-Original.obj");
-    if !scene.exists() {
-        eprintln!("SKIPPED: {} is absent", scene.display());
-        return;
-    }
+    let Some(scene) = shared_cornell_box() else { return };
     let out = temp_dir("cornell").join("cornell.png");
     let o = spt(&[
         "render",
@@ -82,12 +90,7 @@ fn renders_the_shared_cornell_box_with_defaults_but_small() {
 /// point light above the ceiling keeps the ceiling in, which stands between it and the room.
 #[test]
 fn shadow_rays_leave_out_the_cornell_boxs_walls_but_not_a_wall_a_light_is_behind() {
-    let scene =
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/scenes/cornell-box/CornellBox-Original.obj");
-    if !scene.exists() {
-        eprintln!("SKIPPED: {} is absent", scene.display());
-        return;
-    }
+    let Some(scene) = shared_cornell_box() else { return };
     let out = temp_dir("hull").join("hull.png");
     let render = |extra: &[&str]| {
         let mut a = vec!["render", scene.to_str().unwrap(), "--width", "8", "--height", "8", "--spp", "1"];
@@ -109,12 +112,7 @@ fn shadow_rays_leave_out_the_cornell_boxs_walls_but_not_a_wall_a_light_is_behind
 /// sends it to the general loop.
 #[test]
 fn punctual_lights_render_in_lanes_as_in_the_general_loop() {
-    let scene =
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/scenes/cornell-box/CornellBox-Original.obj");
-    if !scene.exists() {
-        eprintln!("SKIPPED: {} is absent", scene.display());
-        return;
-    }
+    let Some(scene) = shared_cornell_box() else { return };
     let dir = temp_dir("punctual-lanes");
     let lights = [
         "--light",
@@ -251,12 +249,7 @@ fn renders_built_in_shape_scenes_and_rejects_unknown_ones() {
 
 #[test]
 fn gpu_backend_renders_through_the_same_command_or_explains_itself() {
-    let scene =
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/scenes/cornell-box/CornellBox-Original.obj");
-    if !scene.exists() {
-        eprintln!("skipping: {} not found", scene.display());
-        return;
-    }
+    let Some(scene) = shared_cornell_box() else { return };
     let out = temp_dir("gpu").join("cornell.png");
     let args = ["render", scene.to_str().unwrap(), "--backend", "gpu", "--width", "16", "--height", "16"];
     let o = spt(&[&args[..], &["--spp", "2", "-o", out.to_str().unwrap()]].concat());
@@ -794,12 +787,7 @@ fn compare_charts_error_against_time() {
 /// from the device's accumulators on saving).
 #[test]
 fn the_gpu_viewer_shows_and_saves_the_image_a_render_of_its_samples_gives() {
-    let scene =
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/scenes/cornell-box/CornellBox-Original.obj");
-    if !scene.exists() {
-        eprintln!("skipping: {} not found", scene.display());
-        return;
-    }
+    let Some(scene) = shared_cornell_box() else { return };
     if gpu::require_gpu().is_none() {
         return;
     }
