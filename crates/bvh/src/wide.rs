@@ -79,9 +79,9 @@ pub struct BvhWide<const W: usize> {
     /// not edges, so that the watertight test sees each shared vertex bit for bit.
     soa: Vec<f32>,
     prim_ids: Vec<u32>,
-    /// Per triangle in leaf order, for a leaf's first: whether the leaf holds a sliver, on
-    /// which closest hits' t is refined in f64 (`traverse::refine`); empty if no leaf does.
-    slivers: Vec<bool>,
+    /// Bit `p` set where the triangle of primitive id `p` is a sliver, on which closest
+    /// hits' t is refined in f64 (`traverse::refine`); empty if no triangle is.
+    sliver_prims: Vec<u64>,
     costs: (f32, f32),
     test: TriangleTest,
     /// Recompute every closest hit's t in f64 ([`BvhWide::with_exact_t`]).
@@ -129,8 +129,7 @@ impl<const W: usize> BvhWide<W> {
     /// With `true`, every closest hit's t is recomputed in f64 from the hit triangle's
     /// plane: correctly rounded (within 6·10⁻⁸ relative) except where the ray is parallel
     /// to the plane, for about 14 % of the rays/s of coherent rays. By default only hits
-    /// near the ray origin relative to its coordinates and hits in leaves that hold a
-    /// sliver are, where the f32 tests' t loses most (see `traverse.rs`).
+    /// near the ray origin relative to its coordinates and hits on slivers are, where the f32 tests' t loses most (see `traverse.rs`).
     pub fn with_exact_t(mut self, exact: bool) -> Self {
         self.exact_t = exact;
         self
@@ -143,6 +142,13 @@ impl<const W: usize> BvhWide<W> {
     /// For each triangle in leaf order, its index in the input.
     pub fn prim_ids(&self) -> &[u32] {
         &self.prim_ids
+    }
+
+    /// Whether primitive `prim`'s triangle is a sliver (`collapse::SLIVER`): one bit by
+    /// the hit's id, so that only hits on slivers look for their slot in the leaf.
+    #[inline(always)]
+    pub(super) fn sliver_prim(&self, prim: u32) -> bool {
+        self.sliver_prims.get(prim as usize / 64).is_some_and(|w| w >> (prim % 64) & 1 == 1)
     }
 
     /// Node count, leaf count, depth and SAH cost.

@@ -75,7 +75,7 @@ impl<const W: usize> BvhWide<W> {
                     for (k, x) in v.iter().flat_map(|v| v.to_array()).enumerate() {
                         leaf[k * count + i] = x;
                     }
-                    slivers[first] |= is_sliver(&v);
+                    slivers[first + i] = is_sliver(&v);
                 }
                 first += count;
             }
@@ -86,15 +86,21 @@ impl<const W: usize> BvhWide<W> {
         } else {
             segments.into_iter().for_each(fill);
         }
-        // A tree without slivers keeps no flags: its traversal skips the check.
-        if !slivers.contains(&true) {
-            slivers = Vec::new();
+        // The flags by primitive id (pre-split pieces share their triangle's), a bit each;
+        // a tree without slivers keeps none: its traversal skips the check.
+        let mut sliver_prims = Vec::new();
+        if slivers.contains(&true) {
+            let ids = bvh.prim_ids();
+            sliver_prims = vec![0u64; ids.iter().max().map_or(0, |&m| m as usize / 64 + 1)];
+            for (&id, _) in ids.iter().zip(&slivers).filter(|&(_, &s)| s) {
+                sliver_prims[id as usize / 64] |= 1 << (id % 64);
+            }
         }
         let wide = Self {
             nodes,
             soa,
             prim_ids: bvh.prim_ids().to_vec(),
-            slivers,
+            sliver_prims,
             costs: (config.traversal_cost, config.intersection_cost),
             test: TriangleTest::default(),
             exact_t: false,

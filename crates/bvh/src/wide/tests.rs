@@ -787,16 +787,14 @@ fn near_hits_far_from_the_origin_have_a_precise_t() {
     }
 }
 
-#[test]
+/// Sponza's worst primary and diffuse rays beyond the rule for hits near the origin (t ≈
+/// 7.5–9.4 from origins whose largest coordinate is 5.5–12), verbatim: slivers 10.8 long
+/// and 0.01 wide, where the f32 test's t was off by 2.6·10⁻⁴, 2.2·10⁻⁴, 1.9·10⁻⁴, 2.7·10⁻⁵
+/// and 2.1·10⁻⁵ relative: (triangle, ray origin, ray direction).
 #[allow(clippy::excessive_precision, reason = "the rays' directions as Sponza's ray set has them")]
-fn hits_on_slivers_have_a_precise_t_at_any_distance() {
-    // Sponza's worst primary and diffuse rays beyond the rule for hits near the origin
-    // (t ≈ 7.5–9.4 from origins whose largest coordinate is 5.5–12), verbatim: slivers 10.8
-    // long and 0.01 wide, where the f32 test's t was off by 2.6·10⁻⁴, 2.2·10⁻⁴, 1.9·10⁻⁴,
-    // 2.7·10⁻⁵ and 2.1·10⁻⁵ relative. Leaves holding a sliver have their closest hits' t
-    // refined in f64.
+fn sponza_slivers() -> Vec<([Vec3; 3], Vec3, Vec3)> {
     let v = |x: f32, y: f32, z: f32| Vec3::new(x, y, z);
-    let cases = [
+    vec![
         (
             [v(0.00724, 5.873312, -2.426511), v(-10.81276, 5.863312, -2.41851), v(0.00724, 5.863312, -2.418511)],
             v(-12.0, 3.0, 0.0),
@@ -822,22 +820,54 @@ fn hits_on_slivers_have_a_precise_t_at_any_distance() {
             v(-0.530056, 5.493672, 2.518007),
             v(-0.62023997, 0.58429176, -0.52335984),
         ),
-    ];
-    let tris: Vec<[Vec3; 3]> = cases.iter().map(|c| c.0).collect();
-    let bvh4 = Bvh4::build(&tris, BuildConfig::default()).unwrap();
-    let bvh8 = Bvh8::build(&tris, BuildConfig::default()).unwrap();
-    let mut worst = 0.0f64;
-    for (i, &(_, o, d)) in cases.iter().enumerate() {
-        let r = Ray::new(o, d);
-        for h in [bvh4.intersect(&r), bvh8.intersect(&r)] {
-            let h = h.unwrap_or_else(|| panic!("ray {i} missed"));
-            assert_eq!(h.prim, i as u32);
-            // Beyond the near rule: only the sliver rule refines these.
-            assert!(h.t > 0.5 * o.abs().max_element(), "ray {i}: t {}", h.t);
-            worst = worst.max(t_error(&tris, &r, &h));
-        }
+    ]
+}
+
+#[test]
+fn hits_on_slivers_have_a_precise_t_at_any_distance() {
+    // Hits on slivers have their t refined in f64, found by the hit's primitive id: alone,
+    // among other triangles (their ids and leaf order no longer the slivers' own), and cut
+    // into pieces by the pre-split.
+    let cases = sponza_slivers();
+    // Small triangles far from the rays, before, between and after the slivers.
+    let filler = |k: usize| {
+        let c = Vec3::new(100.0 + k as f32, -50.0, 30.0 * (k % 3) as f32);
+        [c, c + Vec3::X, c + Vec3::Y]
+    };
+    let mut mixed = Vec::new();
+    let mut ids = Vec::new();
+    for (k, case) in cases.iter().enumerate() {
+        mixed.extend((0..7 * k + 3).map(|j| filler(10 * k + j)));
+        ids.push(mixed.len() as u32);
+        mixed.push(case.0);
     }
-    assert!(worst < 1e-6, "worst relative t error {worst:e}");
+    mixed.extend((0..11).map(|j| filler(90 + j)));
+    let alone: Vec<[Vec3; 3]> = cases.iter().map(|c| c.0).collect();
+    let presplit = BuildConfig { presplit: 0.3, ..BuildConfig::default() };
+    for (tris, ids, config) in [
+        (&alone, (0..cases.len() as u32).collect::<Vec<_>>(), BuildConfig::default()),
+        (&mixed, ids.clone(), BuildConfig::default()),
+        (&mixed, ids, presplit),
+    ] {
+        let bvh4 = Bvh4::build(tris, config).unwrap();
+        let bvh8 = Bvh8::build(tris, config).unwrap();
+        for p in 0..tris.len() as u32 {
+            assert_eq!(bvh8.sliver_prim(p), ids.contains(&p), "primitive {p}");
+            assert_eq!(bvh4.sliver_prim(p), ids.contains(&p), "primitive {p}");
+        }
+        let mut worst = 0.0f64;
+        for (i, &(_, o, d)) in cases.iter().enumerate() {
+            let r = Ray::new(o, d);
+            for h in [bvh4.intersect(&r), bvh8.intersect(&r)] {
+                let h = h.unwrap_or_else(|| panic!("ray {i} missed"));
+                assert_eq!(h.prim, ids[i]);
+                // Beyond the near rule: only the sliver rule refines these.
+                assert!(h.t > 0.5 * o.abs().max_element(), "ray {i}: t {}", h.t);
+                worst = worst.max(t_error(tris, &r, &h));
+            }
+        }
+        assert!(worst < 1e-6, "worst relative t error {worst:e}");
+    }
 }
 
 /// Long diagonal triangles (not slivers, whose t the tree refines in f64 and the oracle

@@ -49,21 +49,21 @@ fn sort_slots<const W: usize>(slots: &mut [u8; W], k: usize, t: &[f32; W]) {
 }
 
 /// A closest hit nearer than this fraction of the ray origin's largest coordinate gets its
-/// t recomputed in f64 ([`refine_t`]), as does one in a leaf that holds a sliver
-/// (`collapse::SLIVER`). The f32 tests' t carries an absolute error of a few ulps of the
+/// t recomputed in f64 ([`refine_t`]), as does one on a sliver (`collapse::SLIVER`). The f32 tests' t carries an absolute error of a few ulps of the
 /// coordinates, amplified on slivers (a long thin triangle's plane is ill-conditioned in
 /// f32, not in f64 from its exact float vertices): a large relative error when t is small —
 /// up to 1.2·10⁻² on Sponza's diffuse rays (its mouldings: 11 long, 0.015 wide; t ≈ 0.016
 /// from an origin at |x| ≈ 5.7) — and up to 2.6·10⁻⁴ at any distance on slivers (Sponza's
-/// primary rays). Checking both rules costs no more than the run-to-run noise; what they
+/// primary rays). Refining every hit in a leaf that held a sliver, as before the
+/// thirty-fourth session, cost 4 % of Sponza's primary rays/s (docs/figures.md); what they
 /// leave is at grazing incidence or just beyond this rule (`bench/t_error_slivers.py`,
 /// docs/figures.md). Refining every closest hit ([`BvhWide::with_exact_t`]) brings every
 /// t within 6·10⁻⁸ for 14 % of the bunny's primary rays/s (`spt rays trace --exact-t`).
 const REFINE_BELOW: f32 = 0.125;
 
 /// `best` with its t recomputed by [`refine_t`] if `always`, if it is nearer than
-/// [`REFINE_BELOW`] times the origin's largest coordinate, or if it lies in a leaf that
-/// holds a sliver (`leaf`: the leaf that holds it, `sliver`: whether that leaf does).
+/// [`REFINE_BELOW`] times the origin's largest coordinate, or if it lies on a sliver
+/// (`leaf`: the leaf that holds it, `sliver`: whether its triangle is one).
 #[inline(always)]
 pub(super) fn refine(ray: &Ray, mut best: Option<Hit>, leaf: Leaf, sliver: bool, always: bool) -> Option<Hit> {
     if let Some(hit) = &mut best
@@ -160,7 +160,6 @@ impl<const W: usize> BvhWide<W> {
         let kernel = K::new(ray);
         // The leaf of the closest hit so far, for `refine`.
         let mut best_leaf = Leaf { soa: &[], ids: &[] };
-        let mut best_first = 0;
         let watertight = (self.test == TriangleTest::Watertight).then(|| K::watertight_ray(ray));
         let mut t_max = ray.t_max;
         let mut best: Option<Hit> = None;
@@ -247,7 +246,6 @@ impl<const W: usize> BvhWide<W> {
                 }
                 if t_max < before {
                     best_leaf = leaf;
-                    best_first = first;
                 }
             }
             // Pop until a child that may still hold a closer hit.
@@ -256,8 +254,7 @@ impl<const W: usize> BvhWide<W> {
                     return if ANY_HIT {
                         best
                     } else {
-                        // Trees without slivers keep no flags (`slivers` empty).
-                        let sliver = self.slivers.get(best_first).is_some_and(|&s| s);
+                        let sliver = best.is_some_and(|h| self.sliver_prim(h.prim));
                         refine(ray, best, best_leaf, sliver, self.exact_t)
                     };
                 }
