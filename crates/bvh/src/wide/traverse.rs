@@ -68,11 +68,22 @@ const REFINE_BELOW: f32 = 0.125;
 pub(super) fn refine(ray: &Ray, mut best: Option<Hit>, leaf: Leaf, sliver: bool, always: bool) -> Option<Hit> {
     if let Some(hit) = &mut best
         && (always || sliver || hit.t < REFINE_BELOW * ray.origin.abs().max_element())
-        && let Some(i) = leaf.ids.iter().position(|&p| p == hit.prim)
+        && let Some(i) = slot_of(leaf.ids, hit.prim)
     {
         hit.t = refine_t(ray, leaf.vertices(i), hit.t);
     }
     best
+}
+
+/// The slot of primitive `prim` in a leaf's ids: every slot compared, with no exit at the
+/// match, whose position varies from hit to hit and mispredicted a branch.
+#[inline(always)]
+fn slot_of(ids: &[u32], prim: u32) -> Option<usize> {
+    let mut slot = usize::MAX;
+    for (i, &p) in ids.iter().enumerate() {
+        slot = if p == prim { i } else { slot };
+    }
+    (slot != usize::MAX).then_some(slot)
 }
 
 /// The ray's parameter at the plane of triangle `v`, in f64 (the f32 inputs' differences
