@@ -129,7 +129,8 @@ impl<const W: usize> BvhWide<W> {
     /// With `true`, every closest hit's t is recomputed in f64 from the hit triangle's
     /// plane: correctly rounded (within 6·10⁻⁸ relative) except where the ray is parallel
     /// to the plane, for about 14 % of the rays/s of coherent rays. By default only hits
-    /// near the ray origin relative to its coordinates and hits on slivers are, where the f32 tests' t loses most (see `traverse.rs`).
+    /// near the ray origin relative to its coordinates and hits on slivers are, where the
+    /// f32 tests' t loses most (see `traverse.rs`).
     pub fn with_exact_t(mut self, exact: bool) -> Self {
         self.exact_t = exact;
         self
