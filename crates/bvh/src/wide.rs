@@ -146,7 +146,8 @@ impl<const W: usize> BvhWide<W> {
     }
 
     /// Whether primitive `prim`'s triangle is a sliver (`collapse::SLIVER`): one bit by
-    /// the hit's id, so that only hits on slivers look for their slot in the leaf.
+    /// the hit's id, so that only hits on slivers look for their slot in the leaf
+    /// (`traverse::refine`).
     #[inline(always)]
     pub(super) fn sliver_prim(&self, prim: u32) -> bool {
         self.sliver_prims.get(prim as usize / 64).is_some_and(|w| w >> (prim % 64) & 1 == 1)

@@ -481,8 +481,7 @@ impl<const W: usize> BvhWide<W> {
             let (first, n) = (best.leaf[i].0 as usize, best.leaf[i].1 as usize);
             let leaf = self.leaf(first, n);
             let hit = Hit { prim: best.prim[i], t: p.t_max[i], u: best.u[i], v: best.v[i] };
-            let sliver = self.sliver_prim(hit.prim);
-            hits[i] = super::traverse::refine(&rays[i], Some(hit), leaf, sliver, self.exact_t);
+            hits[i] = self.refine(&rays[i], Some(hit), leaf);
         }
     }
 }

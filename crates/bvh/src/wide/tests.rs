@@ -843,14 +843,25 @@ fn hits_on_slivers_have_a_precise_t_at_any_distance() {
     }
     mixed.extend((0..11).map(|j| filler(90 + j)));
     let alone: Vec<[Vec3; 3]> = cases.iter().map(|c| c.0).collect();
+    // The Sponza slivers lie along an axis, where the pre-split finds nothing to cut: a
+    // further sliver along the cube's diagonal, away from the rays, is cut into pieces
+    // that share its bit.
+    let mut split = mixed.clone();
+    let mut split_ids = ids.clone();
+    let corner = Vec3::new(200.0, 0.0, 0.0);
+    split_ids.push(split.len() as u32);
+    split.push([corner, corner + Vec3::splat(10.0), corner + Vec3::new(0.01, 0.0, 0.0)]);
     let presplit = BuildConfig { presplit: 0.3, ..BuildConfig::default() };
     for (tris, ids, config) in [
         (&alone, (0..cases.len() as u32).collect::<Vec<_>>(), BuildConfig::default()),
-        (&mixed, ids.clone(), BuildConfig::default()),
-        (&mixed, ids, presplit),
+        (&mixed, ids, BuildConfig::default()),
+        (&split, split_ids, presplit),
     ] {
         let bvh4 = Bvh4::build(tris, config).unwrap();
         let bvh8 = Bvh8::build(tris, config).unwrap();
+        if config.presplit > 0.0 {
+            assert!(bvh8.prim_ids().len() > tris.len(), "the diagonal sliver is cut");
+        }
         for p in 0..tris.len() as u32 {
             assert_eq!(bvh8.sliver_prim(p), ids.contains(&p), "primitive {p}");
             assert_eq!(bvh4.sliver_prim(p), ids.contains(&p), "primitive {p}");

@@ -49,31 +49,19 @@ fn sort_slots<const W: usize>(slots: &mut [u8; W], k: usize, t: &[f32; W]) {
 }
 
 /// A closest hit nearer than this fraction of the ray origin's largest coordinate gets its
-/// t recomputed in f64 ([`refine_t`]), as does one on a sliver (`collapse::SLIVER`). The f32 tests' t carries an absolute error of a few ulps of the
-/// coordinates, amplified on slivers (a long thin triangle's plane is ill-conditioned in
-/// f32, not in f64 from its exact float vertices): a large relative error when t is small —
-/// up to 1.2·10⁻² on Sponza's diffuse rays (its mouldings: 11 long, 0.015 wide; t ≈ 0.016
-/// from an origin at |x| ≈ 5.7) — and up to 2.6·10⁻⁴ at any distance on slivers (Sponza's
-/// primary rays). Refining every hit in a leaf that held a sliver, as before the
-/// thirty-fourth session, cost 4 % of Sponza's primary rays/s (docs/figures.md); what they
-/// leave is at grazing incidence or just beyond this rule (`bench/t_error_slivers.py`,
-/// docs/figures.md). Refining every closest hit ([`BvhWide::with_exact_t`]) brings every
-/// t within 6·10⁻⁸ for 14 % of the bunny's primary rays/s (`spt rays trace --exact-t`).
+/// t recomputed in f64 ([`refine_t`]), as does one on a sliver (`collapse::SLIVER`). The
+/// f32 tests' t carries an absolute error of a few ulps of the coordinates, amplified on
+/// slivers (a long thin triangle's plane is ill-conditioned in f32, not in f64 from its
+/// exact float vertices): a large relative error when t is small — up to 1.2·10⁻² on
+/// Sponza's diffuse rays (its mouldings: 11 long, 0.015 wide; t ≈ 0.016 from an origin at
+/// |x| ≈ 5.7) — and up to 2.6·10⁻⁴ at any distance on slivers (Sponza's primary rays).
+/// Both rules cost about 4 % of Sponza's primary rays/s, half of it while every hit in a
+/// leaf that held a sliver was refined rather than hits on the sliver alone
+/// (docs/figures.md, thirty-fourth session); what they leave is at grazing incidence or
+/// just beyond this rule (`bench/t_error_slivers.py`, docs/figures.md). Refining every
+/// closest hit ([`BvhWide::with_exact_t`]) brings every t within 6·10⁻⁸ for 14 % of the
+/// bunny's primary rays/s (`spt rays trace --exact-t`).
 const REFINE_BELOW: f32 = 0.125;
-
-/// `best` with its t recomputed by [`refine_t`] if `always`, if it is nearer than
-/// [`REFINE_BELOW`] times the origin's largest coordinate, or if it lies on a sliver
-/// (`leaf`: the leaf that holds it, `sliver`: whether its triangle is one).
-#[inline(always)]
-pub(super) fn refine(ray: &Ray, mut best: Option<Hit>, leaf: Leaf, sliver: bool, always: bool) -> Option<Hit> {
-    if let Some(hit) = &mut best
-        && (always || sliver || hit.t < REFINE_BELOW * ray.origin.abs().max_element())
-        && let Some(i) = slot_of(leaf.ids, hit.prim)
-    {
-        hit.t = refine_t(ray, leaf.vertices(i), hit.t);
-    }
-    best
-}
 
 /// The slot of primitive `prim` in a leaf's ids: every slot compared, with no exit at the
 /// match, whose position varies from hit to hit and mispredicted a branch.
@@ -262,12 +250,7 @@ impl<const W: usize> BvhWide<W> {
             // Pop until a child that may still hold a closer hit.
             loop {
                 if sp == 0 {
-                    return if ANY_HIT {
-                        best
-                    } else {
-                        let sliver = best.is_some_and(|h| self.sliver_prim(h.prim));
-                        refine(ray, best, best_leaf, sliver, self.exact_t)
-                    };
+                    return if ANY_HIT { best } else { self.refine(ray, best, best_leaf) };
                 }
                 sp -= 1;
                 // SAFETY: entries below `sp` (≤ STACK_DEPTH) were all written by the pushes
@@ -279,6 +262,20 @@ impl<const W: usize> BvhWide<W> {
                 }
             }
         }
+    }
+
+    /// `best` with its t recomputed by [`refine_t`] if the tree refines every hit
+    /// ([`BvhWide::with_exact_t`]), if it is nearer than [`REFINE_BELOW`] times the origin's
+    /// largest coordinate, or if it lies on a sliver (`leaf`: the leaf that holds it).
+    #[inline(always)]
+    pub(super) fn refine(&self, ray: &Ray, mut best: Option<Hit>, leaf: Leaf) -> Option<Hit> {
+        if let Some(hit) = &mut best
+            && (self.exact_t || hit.t < REFINE_BELOW * ray.origin.abs().max_element() || self.sliver_prim(hit.prim))
+            && let Some(i) = slot_of(leaf.ids, hit.prim)
+        {
+            hit.t = refine_t(ray, leaf.vertices(i), hit.t);
+        }
+        best
     }
 
     /// The leaf of `count` triangles from `first`.
