@@ -112,7 +112,7 @@ impl Leaf<'_> {
     pub(super) fn vertices(&self, i: usize) -> [Vec3; 3] {
         let n = self.ids.len();
         let c = |row: usize| self.soa[row * n + i];
-        [0, 1, 2].map(|k| Vec3::new(c(3 * k), c(3 * k + 1), c(3 * k + 2)))
+        [Vec3::new(c(0), c(1), c(2)), Vec3::new(c(3), c(4), c(5)), Vec3::new(c(6), c(7), c(8))]
     }
 }
 
