@@ -6,9 +6,10 @@ at grazing incidence and how many lie fairly near the ray origin relative to its
 coordinates.
 
 Reads a ray-set folder of bench/embree_rays.py / `spt rays export` and the hits file an
-`spt rays trace DIR` run wrote there (<set>.bvh8.hits by default). Measures the rule of
-crates/bvh/src/wide/collapse.rs (SLIVER = 30): run it on the hits of a build without the
-rule to see what the rule catches, and on the current build to see what is left.
+`spt rays trace DIR` run wrote there (<set>.bvh8.hits by default). Written for the sliver
+rule of the sixth session (SLIVER = 30 in crates/bvh/src/wide/collapse.rs, since replaced:
+every closest hit's t is now recomputed in f64); run it on the hits of `spt rays trace DIR
+--raw-t` to see where the f32 test's own t is imprecise.
 
 Usage (from the repository root):
     target/release/spt rays trace bench/embree/build/rays/sponza --passes 1

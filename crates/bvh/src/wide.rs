@@ -79,12 +79,14 @@ pub struct BvhWide<const W: usize> {
     /// not edges, so that the watertight test sees each shared vertex bit for bit.
     soa: Vec<f32>,
     prim_ids: Vec<u32>,
-    /// Bit `p` set where the triangle of primitive id `p` is a sliver, on which closest
-    /// hits' t is refined in f64 (`traverse::refine`); empty if no triangle is.
-    sliver_prims: Vec<u64>,
+    /// Each triangle's plane in f64 by primitive id (`collapse::plane`), from which
+    /// `traverse::refine` recomputes closest hits' t; empty in trees of
+    /// `collapse::PLANE_TABLE_MAX` primitives or more, which recompute it from the hit
+    /// leaf's vertices.
+    planes: Vec<[f64; 4]>,
     costs: (f32, f32),
     test: TriangleTest,
-    /// Recompute every closest hit's t in f64 ([`BvhWide::with_exact_t`]).
+    /// Recompute every closest hit's t in f64 ([`BvhWide::with_exact_t`], the default).
     exact_t: bool,
 }
 
@@ -126,14 +128,32 @@ impl<const W: usize> BvhWide<W> {
         self
     }
 
-    /// With `true`, every closest hit's t is recomputed in f64 from the hit triangle's
-    /// plane: correctly rounded (within 6·10⁻⁸ relative) except where the ray is parallel
-    /// to the plane, for about 14 % of the rays/s of coherent rays. By default only hits
-    /// near the ray origin relative to its coordinates and hits on slivers are, where the
-    /// f32 tests' t loses most (see `traverse.rs`).
+    /// With `true` (the default), every closest hit's t is recomputed in f64 from the hit
+    /// triangle's plane: correctly rounded (within 6·10⁻⁸ relative) except where the ray is
+    /// parallel to the plane. The f32 tests' own t (`false`) is off by about ε·R/D
+    /// relative, R the coordinates' magnitude around the origin and D the origin's distance
+    /// to the plane: beyond 10⁻⁶ for about one hit in 10⁴–10⁵ of the ray sets (grazing
+    /// hits, hits near the origin beside large triangles, slivers), up to 2.6·10⁻⁴ on
+    /// Sponza's slivers. The refinement adds 4.9 % to the traversal instructions of the
+    /// Cornell box's ray sets, 1.6 % to the bunny's and 0.6 % to Sponza's, and 1.8 % to a
+    /// Cornell box render's (docs/figures.md, thirty-fifth session).
     pub fn with_exact_t(mut self, exact: bool) -> Self {
         self.exact_t = exact;
         self
+    }
+
+    /// The tree without its table of planes, refining t from the hit leaf's vertices as a
+    /// tree of `collapse::PLANE_TABLE_MAX` primitives or more does: for the tests of both.
+    #[cfg(test)]
+    pub(super) fn without_plane_table(mut self) -> Self {
+        self.planes = Vec::new();
+        self
+    }
+
+    /// Whether the tree keeps a table of its triangles' planes (`collapse::PLANE_TABLE_MAX`).
+    #[cfg(test)]
+    pub(super) fn has_plane_table(&self) -> bool {
+        !self.planes.is_empty()
     }
     /// The wide nodes (root first).
     pub fn nodes(&self) -> &[WideNode<W>] {
@@ -143,14 +163,6 @@ impl<const W: usize> BvhWide<W> {
     /// For each triangle in leaf order, its index in the input.
     pub fn prim_ids(&self) -> &[u32] {
         &self.prim_ids
-    }
-
-    /// Whether primitive `prim`'s triangle is a sliver (`collapse::SLIVER`): one bit by
-    /// the hit's id, so that only hits on slivers look for their slot in the leaf
-    /// (`traverse::refine`).
-    #[inline(always)]
-    pub(super) fn sliver_prim(&self, prim: u32) -> bool {
-        self.sliver_prims.get(prim as usize / 64).is_some_and(|w| w >> (prim % 64) & 1 == 1)
     }
 
     /// Node count, leaf count, depth and SAH cost.

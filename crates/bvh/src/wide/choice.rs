@@ -105,7 +105,7 @@ impl WideBvh {
         }
     }
 
-    /// Recomputes closest hits' t in f64 ([`BvhWide::with_exact_t`](super::BvhWide::with_exact_t)).
+    /// Whether closest hits' t is recomputed in f64, the default ([`BvhWide::with_exact_t`](super::BvhWide::with_exact_t)).
     pub fn with_exact_t(self, exact: bool) -> Self {
         match self {
             Self::Four(b) => Self::Four(b.with_exact_t(exact)),

@@ -42,7 +42,10 @@ impl<const W: usize> BvhWide<W> {
         let config = bvh.config();
         let triangles = bvh.prim_ids().len();
         let mut soa = vec![0.0; 9 * triangles + 7];
-        let mut slivers = vec![false; triangles];
+        // Each triangle's plane in leaf order, where the tree keeps a table of planes
+        // (`PLANE_TABLE_MAX`), scattered to primitive ids below.
+        let plane_table = bvh.prim_ids().iter().max().is_some_and(|&m| (m as usize) < PLANE_TABLE_MAX);
+        let mut leaf_planes = vec![[0.0f64; 4]; if plane_table { triangles } else { 0 }];
         // The leaves cover the triangles in contiguous ranges (`count_at`, made by the
         // collapse: a sort or a list of the leaves cost more, mostly in page faults;
         // docs/figures.md). Cut the arrays at leaf boundaries into segments of about
@@ -50,7 +53,7 @@ impl<const W: usize> BvhWide<W> {
         // cache-missing).
         const SEGMENT: usize = 16 * 1024;
         let mut segments = Vec::with_capacity(triangles / SEGMENT + 1);
-        let (mut soa_rest, mut slivers_rest, mut counts_rest) = (&mut soa[..], &mut slivers[..], &count_at[..]);
+        let (mut soa_rest, mut planes_rest, mut counts_rest) = (&mut soa[..], &mut leaf_planes[..], &count_at[..]);
         let mut at = 0;
         while at < triangles {
             let mut end = (at + SEGMENT).min(triangles);
@@ -58,13 +61,13 @@ impl<const W: usize> BvhWide<W> {
                 end += 1;
             }
             let (s, rest) = soa_rest.split_at_mut(9 * (end - at));
-            let (f, flags) = slivers_rest.split_at_mut(end - at);
+            let (p, planes) = planes_rest.split_at_mut(if plane_table { end - at } else { 0 });
             let (c, counts) = counts_rest.split_at(end - at);
-            segments.push((at, s, f, c));
-            (soa_rest, slivers_rest, counts_rest) = (rest, flags, counts);
+            segments.push((at, s, p, c));
+            (soa_rest, planes_rest, counts_rest) = (rest, planes, counts);
             at = end;
         }
-        let fill = |(start, soa, slivers, counts): (usize, &mut [f32], &mut [bool], &[u32])| {
+        let fill = |(start, soa, planes, counts): (usize, &mut [f32], &mut [[f64; 4]], &[u32])| {
             let mut first = 0;
             while first < counts.len() {
                 let count = counts[first] as usize;
@@ -75,7 +78,9 @@ impl<const W: usize> BvhWide<W> {
                     for (k, x) in v.iter().flat_map(|v| v.to_array()).enumerate() {
                         leaf[k * count + i] = x;
                     }
-                    slivers[first + i] = is_sliver(&v);
+                    if plane_table {
+                        planes[first + i] = plane(&v);
+                    }
                 }
                 first += count;
             }
@@ -86,24 +91,23 @@ impl<const W: usize> BvhWide<W> {
         } else {
             segments.into_iter().for_each(fill);
         }
-        // The flags by primitive id (pre-split pieces share their triangle's), a bit each;
-        // a tree without slivers keeps none: its traversal skips the check.
-        let mut sliver_prims = Vec::new();
-        if slivers.contains(&true) {
+        // By primitive id (pre-split pieces share their triangle's plane).
+        let mut planes = Vec::new();
+        if plane_table {
             let ids = bvh.prim_ids();
-            sliver_prims = vec![0u64; ids.iter().max().map_or(0, |&m| m as usize / 64 + 1)];
-            for (&id, _) in ids.iter().zip(&slivers).filter(|&(_, &s)| s) {
-                sliver_prims[id as usize / 64] |= 1 << (id % 64);
+            planes = vec![[0.0; 4]; ids.iter().max().map_or(0, |&m| m as usize + 1)];
+            for (&id, p) in ids.iter().zip(&leaf_planes) {
+                planes[id as usize] = *p;
             }
         }
         let wide = Self {
             nodes,
             soa,
             prim_ids: bvh.prim_ids().to_vec(),
-            sliver_prims,
+            planes,
             costs: (config.traversal_cost, config.intersection_cost),
             test: TriangleTest::default(),
-            exact_t: false,
+            exact_t: true,
         };
         debug_assert_eq!(depth, wide.stats().depth);
         assert!(
@@ -114,18 +118,20 @@ impl<const W: usize> BvhWide<W> {
     }
 }
 
-/// Longest edge² over twice the area above which a triangle counts as a sliver: the f32
-/// tests' t is refined in f64 on it (see `traverse::refine`). On Sponza, 99.9 % of the
-/// primary and 96 % of the diffuse hits whose t was off by more than 10⁻⁶ (relative) lay
-/// on triangles above 30 (`bench/t_error_slivers.py`; the mouldings reach 850, a right
-/// isosceles triangle is 2).
-const SLIVER: f32 = 30.0;
+/// Primitive ids below which a tree keeps a table of its triangles' planes in f64 (32 bytes
+/// each, 8 MiB at most), from which every closest hit's t is recomputed
+/// (`traverse::refine`). Above it the table would miss the caches: on the 1.1M-triangle
+/// mesh it cost 12–15 % of the primary rays/s against 1–6 % on the Cornell box, while
+/// refining from the hit leaf's vertices, which the test has just loaded, cost about 3 %
+/// there and 21 % on the box (docs/figures.md, thirty-fifth session).
+pub(super) const PLANE_TABLE_MAX: usize = 1 << 18;
 
-/// True if triangle `v` is a sliver ([`SLIVER`]; degenerate ones with an extent count).
-fn is_sliver(v: &[Vec3; 3]) -> bool {
-    let (a, b, c) = (v[1] - v[0], v[2] - v[1], v[0] - v[2]);
-    let longest = a.length_squared().max(b.length_squared()).max(c.length_squared());
-    longest > SLIVER * a.cross(c).length()
+/// Triangle `v`'s plane in f64: the normal (v1 − v0) × (v2 − v0) and its dot product with
+/// v0. From f32 vertices the differences are exact in f64 and the products nearly so.
+fn plane(v: &[Vec3; 3]) -> [f64; 4] {
+    let [a, b, c] = v.map(|v| v.as_dvec3());
+    let n = (b - a).cross(c - a);
+    [n.x, n.y, n.z, n.dot(a)]
 }
 
 /// Cost of a binary interior node, relative to one `W`-wide triangle test, in the SAH that

@@ -48,21 +48,6 @@ fn sort_slots<const W: usize>(slots: &mut [u8; W], k: usize, t: &[f32; W]) {
     }
 }
 
-/// A closest hit nearer than this fraction of the ray origin's largest coordinate gets its
-/// t recomputed in f64 ([`refine_t`]), as does one on a sliver (`collapse::SLIVER`). The
-/// f32 tests' t carries an absolute error of a few ulps of the coordinates, amplified on
-/// slivers (a long thin triangle's plane is ill-conditioned in f32, not in f64 from its
-/// exact float vertices): a large relative error when t is small — up to 1.2·10⁻² on
-/// Sponza's diffuse rays (its mouldings: 11 long, 0.015 wide; t ≈ 0.016 from an origin at
-/// |x| ≈ 5.7) — and up to 2.6·10⁻⁴ at any distance on slivers (Sponza's primary rays).
-/// Both rules cost about 4 % of Sponza's primary rays/s, half of it while every hit in a
-/// leaf that held a sliver was refined rather than hits on the sliver alone
-/// (docs/figures.md, thirty-fourth session); what they leave is at grazing incidence or
-/// just beyond this rule (`bench/t_error_slivers.py`, docs/figures.md). Refining every
-/// closest hit ([`BvhWide::with_exact_t`]) brings every t within 6·10⁻⁸ for 14 % of the
-/// bunny's primary rays/s (`spt rays trace --exact-t`).
-const REFINE_BELOW: f32 = 0.125;
-
 /// The slot of primitive `prim` in a leaf's ids: every slot compared, with no exit at the
 /// match, whose position varies from hit to hit and mispredicted a branch.
 #[inline(always)]
@@ -264,18 +249,34 @@ impl<const W: usize> BvhWide<W> {
         }
     }
 
-    /// `best` with its t recomputed by [`refine_t`] if the tree refines every hit
-    /// ([`BvhWide::with_exact_t`]), if it is nearer than [`REFINE_BELOW`] times the origin's
-    /// largest coordinate, or if it lies on a sliver (`leaf`: the leaf that holds it).
+    /// `best` with its t recomputed in f64 ([`BvhWide::with_exact_t`], the default): from
+    /// the tree's table of planes where it keeps one, else from the hit leaf's vertices
+    /// (`leaf`: the leaf that holds it), which the leaf test has just loaded.
     #[inline(always)]
     pub(super) fn refine(&self, ray: &Ray, mut best: Option<Hit>, leaf: Leaf) -> Option<Hit> {
         if let Some(hit) = &mut best
-            && (self.exact_t || hit.t < REFINE_BELOW * ray.origin.abs().max_element() || self.sliver_prim(hit.prim))
-            && let Some(i) = slot_of(leaf.ids, hit.prim)
+            && self.exact_t
         {
-            hit.t = refine_t(ray, leaf.vertices(i), hit.t);
+            if self.planes.is_empty() {
+                if let Some(i) = slot_of(leaf.ids, hit.prim) {
+                    hit.t = refine_t(ray, leaf.vertices(i), hit.t);
+                }
+            } else {
+                hit.t = self.plane_t(ray, hit.prim, hit.t);
+            }
         }
         best
+    }
+
+    /// The ray's parameter at primitive `prim`'s plane from the table, in f64 (`t` where it
+    /// is not finite and positive). Out of line: inlined, its values took registers from the
+    /// traversal loop (the Cornell box's primary rays −20 % against −4 %).
+    #[inline(never)]
+    fn plane_t(&self, ray: &Ray, prim: u32, t: f32) -> f32 {
+        let p = self.planes[prim as usize];
+        let n = glam::DVec3::new(p[0], p[1], p[2]);
+        let exact = (p[3] - n.dot(ray.origin.as_dvec3())) / n.dot(ray.dir.as_dvec3());
+        if exact.is_finite() && exact > 0.0 { exact as f32 } else { t }
     }
 
     /// The leaf of `count` triangles from `first`.
