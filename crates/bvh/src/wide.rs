@@ -155,6 +155,7 @@ impl<const W: usize> BvhWide<W> {
     pub(super) fn has_plane_table(&self) -> bool {
         !self.planes.is_empty()
     }
+
     /// The wide nodes (root first).
     pub fn nodes(&self) -> &[WideNode<W>] {
         &self.nodes

@@ -830,7 +830,7 @@ fn grazing_hits_and_hits_beside_large_triangles_have_a_precise_t() {
     let tris: Vec<[Vec3; 3]> = floor.into_iter().chain(wall).collect();
     let mut rays = Vec::new();
     for _ in 0..400 {
-        // Grazing the floor from 0.001–0.02 above it, 1–3 units away.
+        // Grazing the floor from 0.001–0.02 above it, at cos θ 10⁻⁴–0.05 to its normal.
         let o = Vec3::new(0.9 - 0.5 * u(), 0.001 + 0.019 * u(), 0.9 - 1.8 * u());
         let cos = 1e-4 + 0.05 * u();
         let along = Vec3::new(-1.0, 0.0, 0.6 * u() - 0.3).normalize();
@@ -844,8 +844,8 @@ fn grazing_hits_and_hits_beside_large_triangles_have_a_precise_t() {
     assert!(raw_worst > 1e-6, "the f32 test's own worst relative t error {raw_worst:e}");
 }
 
-/// Sponza's worst primary and diffuse rays beyond the rule for hits near the origin (t ≈
-/// 7.5–9.4 from origins whose largest coordinate is 5.5–12), verbatim: slivers 10.8 long
+/// Sponza's worst primary and diffuse rays on slivers, far from their origins (t ≈ 7.5–9.4
+/// from origins whose largest coordinate is 5.5–12), verbatim: slivers 10.8 long
 /// and 0.01 wide, where the f32 test's t was off by 2.6·10⁻⁴, 2.2·10⁻⁴, 1.9·10⁻⁴, 2.7·10⁻⁵
 /// and 2.1·10⁻⁵ relative: (triangle, ray origin, ray direction).
 #[allow(clippy::excessive_precision, reason = "the rays' directions as Sponza's ray set has them")]
