@@ -120,10 +120,10 @@ impl<const W: usize> BvhWide<W> {
 
 /// Primitive ids below which a tree keeps a table of its triangles' planes in f64 (32 bytes
 /// each, 8 MiB at most), from which every closest hit's t is recomputed
-/// (`traverse::refine`). Above it the table would miss the caches: on the 1.1M-triangle
-/// mesh it cost 12–15 % of the primary rays/s against 1–6 % on the Cornell box, while
-/// refining from the hit leaf's vertices, which the test has just loaded, cost about 3 %
-/// there and 21 % on the box (docs/figures.md, thirty-fifth session).
+/// (`traverse::refine`). Above it the table's lookups miss the caches: on the
+/// 1.1M-triangle mesh it traced 6 % fewer primary rays/s than refining from the hit leaf's
+/// vertices, which the leaf test has just loaded, where on the Cornell box it traced 21 %
+/// more (docs/figures.md, thirty-fifth session).
 pub(super) const PLANE_TABLE_MAX: usize = 1 << 18;
 
 /// Triangle `v`'s plane in f64: the normal (v1 − v0) × (v2 − v0) and its dot product with
