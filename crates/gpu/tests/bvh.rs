@@ -25,6 +25,7 @@ fn the_gpu_tree_finds_the_cpu_hits_inside_sponza() {
         (state >> 40) as f32 / (1u64 << 24) as f32
     };
     let (mut rays, mut hits, mut ties) = (0, 0, 0);
+    let mut worst_same_prim = 0.0f32;
     let mut disagreements = Vec::new();
     for _ in 0..20_000 {
         let o = Vec3::new(-15.0 + 30.0 * next(), 0.5 + 12.0 * next(), -6.0 + 12.0 * next());
@@ -33,8 +34,16 @@ fn the_gpu_tree_finds_the_cpu_hits_inside_sponza() {
         rays += 1;
         match (gpu_tree.intersect(&ray), cpu.intersect(&scene.shapes, &ray)) {
             (None, None) => {}
-            // (The 8-wide tree's SIMD test rounds t otherwise, and between Sponza's nearly
-            // coincident faces either may be found first.)
+            // The same triangle is the same hit, whatever t each test computes: the
+            // renderer keeps the watertight f32 test's t (`with_exact_t(false)`), which is
+            // off by up to 2e-3 of t on these rays (hits close to the origin and triangles
+            // seen nearly edge-on; the five such rays were off 1e-4 to 2e-3).
+            (Some(a), Some(b)) if a.prim == b.prim => {
+                hits += 1;
+                worst_same_prim = worst_same_prim.max((a.t - b.t).abs() / b.t);
+            }
+            // Another triangle at the same distance: between Sponza's nearly coincident
+            // faces either may be found first.
             (Some(a), Some(b)) if (a.t - b.t).abs() <= 1e-4 * b.t => {
                 hits += 1;
                 ties += (a.prim != b.prim) as u32;
@@ -42,7 +51,10 @@ fn the_gpu_tree_finds_the_cpu_hits_inside_sponza() {
             (a, b) => disagreements.push((o, d, a.map(|h| h.t), b.map(|h| h.t))),
         }
     }
-    println!("{rays} rays, {hits} hits at the same distance (within 1e-4; {ties} ties broken otherwise)");
+    println!(
+        "{rays} rays, {hits} hits on the same triangle or at the same distance (within 1e-4; {ties} ties \
+         broken otherwise); t on the same triangle differs by at most {worst_same_prim:.1e} of t"
+    );
     assert!(hits > rays / 2, "most rays inside Sponza hit something");
     assert!(disagreements.is_empty(), "{} disagreements, e.g. {:?}", disagreements.len(), &disagreements[..1]);
 }
