@@ -137,7 +137,8 @@ impl<const W: usize> BvhWide<W> {
     /// Sponza's slivers. The refinement adds 4.9 % to the traversal instructions of the
     /// Cornell box's ray sets, 1.6 % to the bunny's and 0.6 % to Sponza's, and 1.8 % to a
     /// Cornell box render's (docs/figures.md, thirty-fifth session). `false` also frees the
-    /// table of planes; turned on again, the tree refines from the hit leaf's vertices.
+    /// table of planes ([`BuildConfig::exact_t`] `false` does not build it); turned on
+    /// again, the tree refines from the hit leaf's vertices.
     pub fn with_exact_t(mut self, exact: bool) -> Self {
         self.exact_t = exact;
         if !exact {

@@ -92,9 +92,9 @@ pub struct TraceArgs {
     #[arg(long, value_parser = crate::parse_fraction)]
     pub presplit: Option<f32>,
     /// Keep the f32 triangle test's own t instead of recomputing every closest hit's t in
-    /// f64 from its triangle's plane (`BvhWide::with_exact_t`): a little faster, and off by
-    /// more than 10⁻⁶ relative on about one hit in 10⁴–10⁵ (grazing hits, hits near the
-    /// origin beside large triangles, slivers).
+    /// f64 from its triangle's plane (`BuildConfig::exact_t`): a little faster to build and
+    /// to trace, and off by more than 10⁻⁶ relative on about one hit in 10⁴–10⁵ (grazing
+    /// hits, hits near the origin beside large triangles, slivers).
     #[arg(long)]
     pub raw_t: bool,
     /// Rays in packets of 16 consecutive rays (one walk down the tree per packet,
@@ -219,10 +219,11 @@ fn trace(args: TraceArgs) -> Result<()> {
     if let Some(f) = args.presplit {
         config.presplit = f;
     }
+    config.exact_t = !args.raw_t;
     let bvh = pool.install(|| WideBvh::build(&triangles, config, args.bvh_width))?;
     let build = start.elapsed();
     let tracer = format!("bvh{}", bvh.width());
-    let bvh = bvh.with_triangle_test(args.triangle_test).with_exact_t(!args.raw_t);
+    let bvh = bvh.with_triangle_test(args.triangle_test);
     let sets = trace_sets(&bvh, args.packet.then_some(&bvh), &pool, &args, &tracer)?;
     println!(
         r#"{{"tracer": "{tracer}", "threads": {}, "triangles": {}, "references": {}, "nodes": {}, "build_ms": {:.3}, "sets": {{{}}}}}"#,

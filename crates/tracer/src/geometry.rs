@@ -162,13 +162,13 @@ impl Geometry {
     /// width and split method.
     pub fn build(scene: &Scene, options: &SceneOptions) -> Result<Self> {
         let (test, width) = (options.triangle_test, options.bvh_width);
-        let config = Self::triangle_build_config_with(options.bvh_builder);
-        let soup = scene.triangle_soup();
-        // The f32 test's own t, not the tree's f64 refinement (`BvhWide::with_exact_t`):
+        // The f32 test's own t, not the tree's f64 refinement (`BuildConfig::exact_t`):
         // shading reads a hit's barycentrics, not its t, and a cut-out's re-trace from the
         // hit (`through_cutouts`) must start at the t the test itself computes, or it meets
-        // the same surface again a few ulps on.
-        let triangles = WideBvh::build(&soup, config, width)?.with_triangle_test(test).with_exact_t(false);
+        // the same surface again a few ulps on. No tree builds its table of planes.
+        let config = BuildConfig { exact_t: false, ..Self::triangle_build_config_with(options.bvh_builder) };
+        let soup = scene.triangle_soup();
+        let triangles = WideBvh::build(&soup, config, width)?.with_triangle_test(test);
         let boxes: Vec<_> = scene.shapes.iter().map(|s| s.shape.shape().bounds()).collect();
         let shapes = BoxBvh::build(&boxes, Self::shape_build_config())?;
         let count = scene.triangles.len() as u64 + scene.shapes.len() as u64 + scene.instanced_triangle_count();
@@ -200,7 +200,7 @@ impl Geometry {
             .iter()
             .map(|o| {
                 let soup: Vec<_> = (0..o.triangles.len()).map(|i| o.triangle_vertices(i)).collect();
-                Ok(WideBvh::build(&soup, config, width)?.with_triangle_test(test).with_exact_t(false))
+                Ok(WideBvh::build(&soup, config, width)?.with_triangle_test(test))
             })
             .collect::<Result<Vec<_>>>()?;
         let mut first = (scene.triangles.len() + scene.shapes.len()) as u32;

@@ -44,7 +44,8 @@ impl<const W: usize> BvhWide<W> {
         let mut soa = vec![0.0; 9 * triangles + 7];
         // Each triangle's plane in leaf order, where the tree keeps a table of planes
         // (`PLANE_TABLE_MAX`), scattered to primitive ids below.
-        let plane_table = bvh.prim_ids().iter().max().is_some_and(|&m| (m as usize) < PLANE_TABLE_MAX);
+        let plane_table =
+            config.exact_t && bvh.prim_ids().iter().max().is_some_and(|&m| (m as usize) < PLANE_TABLE_MAX);
         let mut leaf_planes = vec![[0.0f64; 4]; if plane_table { triangles } else { 0 }];
         // The leaves cover the triangles in contiguous ranges (`count_at`, made by the
         // collapse: a sort or a list of the leaves cost more, mostly in page faults;
@@ -107,7 +108,7 @@ impl<const W: usize> BvhWide<W> {
             planes,
             costs: (config.traversal_cost, config.intersection_cost),
             test: TriangleTest::default(),
-            exact_t: true,
+            exact_t: config.exact_t,
         };
         debug_assert_eq!(depth, wide.stats().depth);
         assert!(

@@ -744,10 +744,15 @@ fn assert_t_correctly_rounded(tris: &[[Vec3; 3]], config: BuildConfig, rays: &[R
     let bvh8 = Bvh8::build(tris, config).unwrap();
     assert!(bvh4.has_plane_table() && bvh8.has_plane_table());
     let raw = Bvh8::build(tris, config).unwrap().with_exact_t(false);
+    // Built without the refinement: no table, and the f32 test's hits to the bit.
+    let raw_built = Bvh8::build(tris, BuildConfig { exact_t: false, ..config }).unwrap();
+    assert!(!raw_built.has_plane_table());
     let trees: [&dyn Accelerator; 4] =
         [&bvh4, &bvh8, &bvh4.clone().without_plane_table(), &bvh8.clone().without_plane_table()];
     let (mut hits, mut raw_worst) = (0, 0.0f64);
     for (i, r) in rays.iter().enumerate() {
+        let built_hit = raw_built.intersect(r).map(|h| (h.prim, h.t.to_bits()));
+        assert_eq!(built_hit, raw.intersect(r).map(|h| (h.prim, h.t.to_bits())), "ray {i}");
         let Some(f32_hit) = raw.intersect(r) else {
             assert!(trees.iter().all(|t| t.intersect(r).is_none()), "ray {i}");
             continue;
