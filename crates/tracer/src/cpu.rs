@@ -380,11 +380,7 @@ impl<I: Integrator> Pass<'_, I> {
                 &mut splats,
             );
             per_sample::linear_srgb(&block, &mut colours);
-            for (&i, rgb) in owners.iter().zip(&colours) {
-                if !pixels[i as usize].add(*rgb) {
-                    non_finite += 1;
-                }
-            }
+            non_finite += per_sample::add_to_pixels(&mut pixels, &owners, &colours);
             if splats.len() >= SPLAT_FLUSH || (samples.peek().is_none() && !splats.is_empty()) {
                 if let Some(image) = splat_image {
                     image.lock().expect("no thread panicked holding it").add(&splats);

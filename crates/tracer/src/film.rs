@@ -59,6 +59,101 @@ fn shift_round(m: u64, shift: i32) -> u128 {
     }
 }
 
+/// Samples whose channels a [`FixedPointChunk`] converts at a time.
+pub const CHUNK_SAMPLES: usize = 16;
+
+/// [`fixed_point`] of the channels of up to [`CHUNK_SAMPLES`] samples at once, by
+/// floating-point operations that vector instructions do for four or eight values at a
+/// time: one at a time, the integer form cost about 190 instructions per sample of a
+/// Cornell-box render (callgrind), 2.7 % of it. The same values to the bit (tested
+/// against [`fixed_point`]).
+///
+/// Each product is split into two integers below 2⁵², each rounded and converted exactly
+/// in f64: for a = |x| (exact in f64), round(a · 2⁶⁴) = h · 2⁴⁹ + round((a · 2¹⁵ − h) · 2⁴⁹)
+/// with h = ⌊a · 2¹⁵⌋ < 2⁴⁹, and round(x² · 2³⁶) = h · 2⁵² + round((x² · 2⁻¹⁶ − h) · 2⁵²)
+/// with h = ⌊x² · 2⁻¹⁶⌋ < 2⁵². Every step is exact: a has 24 significant bits and x² 48,
+/// scaling by powers of two loses none, t − ⌊t⌋ keeps t's bits below the point, and
+/// ⌊v + ½⌋ is v rounded half up (half away from zero, as v ≥ 0) for 0 ≤ v < 2⁵², where
+/// v + ½ is exact. An integer r ≤ 2⁵² is the difference of the bit patterns of r + 2⁵²
+/// and 2⁵² (AVX2 has no conversion from f64 to 64-bit integers).
+#[derive(Clone, Debug)]
+pub struct FixedPointChunk {
+    /// Low and high 64 bits of each value's round(x · 2⁶⁴), two's complement.
+    sum_low: [u64; 3 * CHUNK_SAMPLES],
+    sum_high: [u64; 3 * CHUNK_SAMPLES],
+    /// Low and high 64 bits of each value's round(x² · 2³⁶).
+    square_low: [u64; 3 * CHUNK_SAMPLES],
+    square_high: [u64; 3 * CHUNK_SAMPLES],
+}
+
+impl FixedPointChunk {
+    /// Converts `values` (at most 3 × [`CHUNK_SAMPLES`]; each finite with |x| <
+    /// [`MAX_SAMPLE_MAGNITUDE`] for a meaningful result, others give unspecified bits,
+    /// never a panic). Inlined, so that it is compiled for the vector instructions of its
+    /// caller; without SSE4.1 the floors are library calls, and [`PixelStats::add`] is
+    /// the faster form.
+    #[inline(always)]
+    pub fn convert(values: &[f32]) -> Self {
+        const TWO_52: f64 = 4_503_599_627_370_496.0;
+        // r as an integer, for an integer 0 ≤ r ≤ 2⁵² held in an f64.
+        let integer = |r: f64| (r + TWO_52).to_bits().wrapping_sub(TWO_52.to_bits());
+        let mut c = FixedPointChunk {
+            sum_low: [0; 3 * CHUNK_SAMPLES],
+            sum_high: [0; 3 * CHUNK_SAMPLES],
+            square_low: [0; 3 * CHUNK_SAMPLES],
+            square_high: [0; 3 * CHUNK_SAMPLES],
+        };
+        for (i, &x) in values.iter().enumerate().take(3 * CHUNK_SAMPLES) {
+            let a = (x as f64).abs();
+            let t = a * 32_768.0; // a · 2¹⁵
+            let high = t.floor();
+            let low = ((t - high) * 562_949_953_421_312.0 + 0.5).floor(); // (t − h) · 2⁴⁹, rounded
+            let (high, low) = (integer(high), integer(low));
+            // h · 2⁴⁹ + l in 128 bits (an or: l ≤ (1 − 2⁻²⁴) · 2⁴⁹, as t − h has at most
+            // 24 significant bits), then negated for negative x (all ones in `negative`).
+            let lo = (high << 49) | low;
+            let hi = high >> 15;
+            let negative = 0u64.wrapping_sub((x.to_bits() >> 31) as u64);
+            let lo_n = (lo ^ negative).wrapping_sub(negative);
+            c.sum_low[i] = lo_n;
+            c.sum_high[i] = (hi ^ negative).wrapping_add((lo_n == 0) as u64 & negative & 1);
+            let s = a * a * (1.0 / 65_536.0); // x² · 2⁻¹⁶
+            let high = s.floor();
+            let low = ((s - high) * TWO_52 + 0.5).floor();
+            let (high, low) = (integer(high), integer(low));
+            // l ≤ (1 − 2⁻⁴⁸) · 2⁵²: x² · 2⁻¹⁶ − h has at most 48 significant bits.
+            c.square_low[i] = (high << 52) | low;
+            c.square_high[i] = high >> 12;
+        }
+        c
+    }
+
+    /// Value `k`'s round(x · 2⁶⁴) and round(x² · 2³⁶).
+    #[inline(always)]
+    pub fn get(&self, k: usize) -> (i128, u128) {
+        let value = ((self.sum_high[k] as u128) << 64 | self.sum_low[k] as u128) as i128;
+        (value, (self.square_high[k] as u128) << 64 | self.square_low[k] as u128)
+    }
+}
+
+/// Adds sample `rgb[k]` to `pixels[owners[k]]` for every k, converting the samples'
+/// channels [`CHUNK_SAMPLES`] at a time ([`FixedPointChunk`]); returns how many were
+/// refused ([`PixelStats::add`]). Inlined, as [`FixedPointChunk::convert`].
+#[inline(always)]
+pub fn add_samples(pixels: &mut [PixelStats], owners: &[u32], rgb: &[[f32; 3]]) -> u64 {
+    assert_eq!(owners.len(), rgb.len(), "one owner per sample");
+    let mut refused = 0;
+    for (owners, rgb) in owners.chunks(CHUNK_SAMPLES).zip(rgb.chunks(CHUNK_SAMPLES)) {
+        let chunk = FixedPointChunk::convert(rgb.as_flattened());
+        for (k, (&i, rgb)) in owners.iter().zip(rgb).enumerate() {
+            if !pixels[i as usize].add_converted(*rgb, &chunk, 3 * k) {
+                refused += 1;
+            }
+        }
+    }
+    refused
+}
+
 /// One pixel's accumulator: count, sum and sum of squares per channel, in fixed point.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub struct PixelStats {
@@ -81,6 +176,22 @@ impl PixelStats {
         self.count += 1;
         for c in 0..3 {
             let (value, square) = fixed_point(rgb[c]);
+            self.sum[c] += value;
+            self.sum_sq[c] += square;
+        }
+        true
+    }
+
+    /// [`PixelStats::add`] of sample `rgb` whose channels are values `first`, `first + 1`
+    /// and `first + 2` of `chunk` (converted from the same floats).
+    #[inline(always)]
+    pub fn add_converted(&mut self, rgb: [f32; 3], chunk: &FixedPointChunk, first: usize) -> bool {
+        if !rgb.iter().all(|v| v.abs() < MAX_SAMPLE_MAGNITUDE) {
+            return false;
+        }
+        self.count += 1;
+        for c in 0..3 {
+            let (value, square) = chunk.get(first + c);
             self.sum[c] += value;
             self.sum_sq[c] += square;
         }
@@ -495,6 +606,80 @@ mod tests {
                 assert_eq!(fixed_point(x), reference(x), "{x:e}");
                 checked += 1;
             }
+        }
+    }
+
+    /// The chunked floating-point conversion gives the integer conversion's bits: on the
+    /// edge cases above, both signs of values at half a unit of either grid, a million
+    /// random bit patterns in range, and in chunks that are not full.
+    #[test]
+    fn chunks_convert_to_the_integer_conversions_bits() {
+        let check = |values: &[f32]| {
+            let chunk = FixedPointChunk::convert(values);
+            for (k, &x) in values.iter().enumerate() {
+                assert_eq!(chunk.get(k), fixed_point(x), "{x:e}");
+            }
+        };
+        let below_max = f32::from_bits(MAX_SAMPLE_MAGNITUDE.to_bits() - 1);
+        let mut edges = vec![0.0, -0.0, 1.0, 0.5, 1.5, 2.5, f32::MIN_POSITIVE, 1e-45, 2f32.powi(-18), below_max];
+        // Halves of the sums' grid (x · 2⁶⁴ = k + ½) and of the squares' (x² · 2³⁶ = k + ½),
+        // the carry from the low part into the high one, and neighbours of powers of two.
+        edges.extend([2f32.powi(-65), 3.0 * 2f32.powi(-66), 2f32.powi(-18) * 1.5, 2f32.powi(-19) * 3.0]);
+        edges.extend([f32::from_bits(1.0f32.to_bits() - 1), 2f32.powi(-15) * (1.0 - 2f32.powi(-24)), 65_536.0]);
+        edges.extend([2f32.powi(34 - 1) * 1.999_999_9, 4096.0 * (1.0 + f32::EPSILON)]);
+        let negated: Vec<f32> = edges.iter().map(|x| -x).collect();
+        edges.extend(negated);
+        for values in edges.chunks(3 * CHUNK_SAMPLES) {
+            check(values);
+        }
+        let mut rng = rng::Pcg32::new(12, 5);
+        let mut values = Vec::new();
+        while values.len() < 1_000_000 {
+            let x = f32::from_bits(rng.next_u32());
+            if x.is_finite() && x.abs() < MAX_SAMPLE_MAGNITUDE {
+                values.push(x);
+            }
+        }
+        for values in values.chunks(3 * CHUNK_SAMPLES) {
+            check(values);
+        }
+        // Samples of a render's magnitudes, in short chunks.
+        let values: Vec<f32> = (0..100_000).map(|_| (rng.next_f32() - 0.1) * 4.0).collect();
+        for values in values.chunks(7) {
+            check(values);
+        }
+    }
+
+    /// Adding a block of samples by chunks gives the pixels one-at-a-time addition gives,
+    /// and refuses the same samples (NaN, infinite, too large) whole.
+    #[test]
+    fn samples_added_by_chunks_equal_samples_added_one_at_a_time() {
+        let mut rng = rng::Pcg32::new(13, 7);
+        let bad = [f32::NAN, f32::INFINITY, -f32::INFINITY, MAX_SAMPLE_MAGNITUDE, -1e30];
+        let (mut owners, mut rgb) = (Vec::new(), Vec::new());
+        let mut owner = 0u32;
+        for _ in 0..5_000 {
+            if rng.next_f32() < 0.1 {
+                owner = (rng.next_f32() * 37.0) as u32;
+            }
+            let mut c = [0.0f32; 3].map(|_| (rng.next_f32() - 0.05) * 10f32.powf(rng.next_f32() * 12.0 - 6.0));
+            if rng.next_f32() < 0.02 {
+                c[(rng.next_f32() * 3.0) as usize % 3] = bad[(rng.next_f32() * 5.0) as usize % 5];
+            }
+            owners.push(owner);
+            rgb.push(c);
+        }
+        let mut expected = vec![PixelStats::default(); 37];
+        let refused_expected = owners.iter().zip(&rgb).filter(|&(&i, c)| !expected[i as usize].add(*c)).count();
+        assert!(refused_expected > 50, "the test has refused samples: {refused_expected}");
+        for len in [rgb.len(), 1, 16, 17, 1_000] {
+            let mut pixels = vec![PixelStats::default(); 37];
+            let mut refused = 0;
+            for (o, c) in owners.chunks(len).zip(rgb.chunks(len)) {
+                refused += add_samples(&mut pixels, o, c);
+            }
+            assert_eq!(refused as usize, refused_expected);
+            assert_eq!(pixels, expected, "blocks of {len}");
         }
     }
 
