@@ -358,6 +358,10 @@ impl Accelerator for Bvh {
     fn intersect_counted(&self, ray: &Ray, stats: &mut RayStats) -> Option<Hit> {
         self.traverse::<true>(ray, false, stats)
     }
+
+    fn occluded_counted(&self, ray: &Ray, stats: &mut RayStats) -> bool {
+        self.traverse::<true>(ray, true, stats).is_some()
+    }
 }
 
 #[cfg(test)]

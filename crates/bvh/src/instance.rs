@@ -73,7 +73,18 @@ impl<A: Accelerator> TwoLevel<A> {
         self.nodes.len()
     }
 
+    /// [`TwoLevel::traverse`] counting into `stats`, one ray per top-level query.
+    fn counted(&self, ray: &Ray, any_hit: bool, stats: &mut RayStats) -> Option<Hit> {
+        stats.rays += 1;
+        let before = stats.rays;
+        let hit = self.traverse(ray, any_hit, Some(stats));
+        // Bottom-level calls count their own rays; report one ray per top-level query.
+        stats.rays = before;
+        hit
+    }
+
     fn traverse(&self, ray: &Ray, any_hit: bool, stats: Option<&mut RayStats>) -> Option<Hit> {
+        let counting = stats.is_some();
         let mut local_stats = RayStats::default();
         let stats = stats.unwrap_or(&mut local_stats);
         if self.nodes.is_empty() {
@@ -124,7 +135,9 @@ impl<A: Accelerator> TwoLevel<A> {
                 );
                 let object = &self.objects[inst.object as usize];
                 if any_hit {
-                    if object.occluded(&local) {
+                    let blocked =
+                        if counting { object.occluded_counted(&local, stats) } else { object.occluded(&local) };
+                    if blocked {
                         return Some(Hit { prim: inst.prim_offset, t: 0.0, u: 0.0, v: 0.0 });
                     }
                 } else if let Some(h) = object.intersect_counted(&local, stats) {
@@ -155,12 +168,11 @@ impl<A: Accelerator> Accelerator for TwoLevel<A> {
     }
 
     fn intersect_counted(&self, ray: &Ray, stats: &mut RayStats) -> Option<Hit> {
-        stats.rays += 1;
-        let before = stats.rays;
-        let hit = self.traverse(ray, false, Some(stats));
-        // Bottom-level calls count their own rays; report one ray per top-level query.
-        stats.rays = before;
-        hit
+        self.counted(ray, false, stats)
+    }
+
+    fn occluded_counted(&self, ray: &Ray, stats: &mut RayStats) -> bool {
+        self.counted(ray, true, stats).is_some()
     }
 }
 

@@ -102,6 +102,14 @@ pub trait Accelerator: Send + Sync {
         let _ = stats;
         self.intersect(ray)
     }
+    /// [`Accelerator::occluded`], counting as [`Accelerator::intersect_counted`] does: a
+    /// shadow ray's walk stops at the first hit and may visit the children in another
+    /// order, so its counts differ from the closest hit's. Structures that do not count
+    /// just call [`Accelerator::occluded`].
+    fn occluded_counted(&self, ray: &Ray, stats: &mut RayStats) -> bool {
+        let _ = stats;
+        self.occluded(ray)
+    }
 }
 
 /// Per-ray traversal work, summed over rays.

@@ -106,8 +106,8 @@ pub struct TraceArgs {
     #[arg(long)]
     pub no_write: bool,
     /// After the timed passes, one more that counts per ray the wide nodes whose children
-    /// are box-tested and the triangles tested (closest-hit traversal, also for the shadow
-    /// set), added to each set's JSON.
+    /// are box-tested and the triangles tested (for the shadow set, by the shadow rays'
+    /// own walk, which stops at the first hit), added to each set's JSON.
     #[arg(long)]
     pub count: bool,
 }
@@ -271,7 +271,10 @@ fn trace_sets<A: Accelerator + Sync>(
         let counted = if args.count {
             let mut stats = bvh::RayStats::default();
             for r in &rays {
-                accel.intersect_counted(r, &mut stats);
+                match query {
+                    Query::Closest => _ = accel.intersect_counted(r, &mut stats),
+                    Query::Occluded => _ = accel.occluded_counted(r, &mut stats),
+                }
             }
             let per_ray = |x: u64| x as f64 / rays.len().max(1) as f64;
             format!(

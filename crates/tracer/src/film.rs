@@ -62,11 +62,12 @@ fn shift_round(m: u64, shift: i32) -> u128 {
 /// Samples whose channels a [`FixedPointChunk`] converts at a time.
 pub const CHUNK_SAMPLES: usize = 16;
 
-/// [`fixed_point`] of the channels of up to [`CHUNK_SAMPLES`] samples at once, by
-/// floating-point operations that vector instructions do for four or eight values at a
-/// time: one at a time, the integer form cost about 190 instructions per sample of a
-/// Cornell-box render (callgrind), 2.7 % of it. The same values to the bit (tested
-/// against [`fixed_point`]).
+/// The film's fixed-point values (round(x · 2⁶⁴), round(x² · 2³⁶), as [`PixelStats::add`]
+/// computes them from the f32's bits) of the channels of up to [`CHUNK_SAMPLES`] samples
+/// at once, by floating-point operations that vector instructions do for four or eight
+/// values at a time: one at a time, the integer form cost about 190 instructions per
+/// sample of a Cornell-box render (callgrind), 2.7 % of it. The same values to the bit
+/// (tested against the integer form).
 ///
 /// Each product is split into two integers below 2⁵², each rounded and converted exactly
 /// in f64: for a = |x| (exact in f64), round(a · 2⁶⁴) = h · 2⁴⁹ + round((a · 2¹⁵ − h) · 2⁴⁹)

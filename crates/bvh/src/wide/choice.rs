@@ -169,4 +169,11 @@ impl Accelerator for WideBvh {
             Self::Eight(b) => b.intersect_counted(ray, stats),
         }
     }
+
+    fn occluded_counted(&self, ray: &Ray, stats: &mut RayStats) -> bool {
+        match self {
+            Self::Four(b) => b.occluded_counted(ray, stats),
+            Self::Eight(b) => b.occluded_counted(ray, stats),
+        }
+    }
 }

@@ -1019,3 +1019,52 @@ fn presplit_trees_cut_long_triangles_and_find_every_hit() {
     assert!(bvh4.prim_ids().len() > tris.len());
     agree_with(&bvh4, &oracle, &tris, &rs);
 }
+
+/// Shadow rays counted by their own walk: the same answer as `occluded`, one ray per query,
+/// and per ray no more work than the closest hit's walk, which takes the same path up to
+/// the first hit and goes on from there (strictly less in all, in a dense soup).
+#[test]
+fn counted_shadow_rays_stop_at_their_first_hit() {
+    let tris = soup(53, 4000, 10.0, 2.0);
+    let rs = rays(54, 400, 10.0);
+    let instance = crate::Instance { object: 0, transform: glam::Affine3A::IDENTITY, prim_offset: 0 };
+    let two_level = crate::TwoLevel::new(
+        vec![Bvh8::build(&tris, BuildConfig::default()).unwrap()],
+        &[instance],
+        BuildConfig::default(),
+    )
+    .unwrap();
+    let accels: [(&str, Box<dyn Accelerator>); 4] = [
+        ("binary", Box::new(Bvh::build(&tris, BuildConfig::default()).unwrap())),
+        ("4-wide", Box::new(Bvh4::build(&tris, BuildConfig::default()).unwrap())),
+        ("8-wide", Box::new(Bvh8::build(&tris, BuildConfig::default()).unwrap())),
+        ("two-level", Box::new(two_level)),
+    ];
+    for (name, accel) in &accels {
+        let (mut any, mut closest) = (RayStats::default(), RayStats::default());
+        let mut blocked = 0;
+        for r in &rs {
+            let (any_before, closest_before) = (any, closest);
+            let occluded = accel.occluded_counted(r, &mut any);
+            assert_eq!(occluded, accel.occluded(r), "{name}");
+            blocked += occluded as u32;
+            accel.intersect_counted(r, &mut closest);
+            assert_eq!(any.rays, any_before.rays + 1, "{name}: one ray per query");
+            let (a, c) = (
+                any.triangles_tested - any_before.triangles_tested,
+                closest.triangles_tested - closest_before.triangles_tested,
+            );
+            assert!(a <= c, "{name}: {a} triangles tested by a shadow ray, {c} by its closest hit");
+            assert!(
+                any.nodes_visited - any_before.nodes_visited <= closest.nodes_visited - closest_before.nodes_visited,
+                "{name}: nodes"
+            );
+        }
+        assert!(blocked > 150, "{name}: {blocked} of 400 rays blocked");
+        assert!(any.triangles_tested < closest.triangles_tested, "{name}: {any:?} against {closest:?}");
+        assert!(
+            any.nodes_visited > 0 && any.nodes_visited < closest.nodes_visited,
+            "{name}: {any:?} against {closest:?}"
+        );
+    }
+}

@@ -334,6 +334,11 @@ impl Accelerator for Bvh4 {
     fn intersect_counted(&self, ray: &Ray, stats: &mut RayStats) -> Option<Hit> {
         self.traverse::<Kernel4, true, false>(ray, stats)
     }
+
+    /// Any hit, counting as [`Bvh4::intersect_counted`].
+    fn occluded_counted(&self, ray: &Ray, stats: &mut RayStats) -> bool {
+        self.traverse::<Kernel4, true, true>(ray, stats).is_some()
+    }
 }
 
 impl Bvh8 {
@@ -401,6 +406,11 @@ impl Accelerator for Bvh8 {
     /// Closest hit, counting wide nodes whose children are tested and triangle tests.
     fn intersect_counted(&self, ray: &Ray, stats: &mut RayStats) -> Option<Hit> {
         self.traverse_best::<true, false>(ray, stats)
+    }
+
+    /// Any hit, counting as [`Bvh8::intersect_counted`].
+    fn occluded_counted(&self, ray: &Ray, stats: &mut RayStats) -> bool {
+        self.traverse_best::<true, true>(ray, stats).is_some()
     }
 }
 
