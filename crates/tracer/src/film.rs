@@ -60,7 +60,7 @@ fn shift_round(m: u64, shift: i32) -> u128 {
 }
 
 /// Samples whose channels a [`FixedPointChunk`] converts at a time.
-pub const CHUNK_SAMPLES: usize = 16;
+const CHUNK_SAMPLES: usize = 16;
 
 /// The film's fixed-point values (round(x · 2⁶⁴), round(x² · 2³⁶), as [`PixelStats::add`]
 /// computes them from the f32's bits) of the channels of up to [`CHUNK_SAMPLES`] samples
@@ -78,7 +78,7 @@ pub const CHUNK_SAMPLES: usize = 16;
 /// v + ½ is exact. An integer r ≤ 2⁵² is the difference of the bit patterns of r + 2⁵²
 /// and 2⁵² (AVX2 has no conversion from f64 to 64-bit integers).
 #[derive(Clone, Debug)]
-pub struct FixedPointChunk {
+struct FixedPointChunk {
     /// Low and high 64 bits of each value's round(x · 2⁶⁴), two's complement.
     sum_low: [u64; 3 * CHUNK_SAMPLES],
     sum_high: [u64; 3 * CHUNK_SAMPLES],
@@ -94,7 +94,8 @@ impl FixedPointChunk {
     /// caller; without SSE4.1 the floors are library calls, and [`PixelStats::add`] is
     /// the faster form.
     #[inline(always)]
-    pub fn convert(values: &[f32]) -> Self {
+    fn convert(values: &[f32]) -> Self {
+        debug_assert!(values.len() <= 3 * CHUNK_SAMPLES);
         const TWO_52: f64 = 4_503_599_627_370_496.0;
         // r as an integer, for an integer 0 ≤ r ≤ 2⁵² held in an f64.
         let integer = |r: f64| (r + TWO_52).to_bits().wrapping_sub(TWO_52.to_bits());
@@ -131,23 +132,31 @@ impl FixedPointChunk {
 
     /// Value `k`'s round(x · 2⁶⁴) and round(x² · 2³⁶).
     #[inline(always)]
-    pub fn get(&self, k: usize) -> (i128, u128) {
+    fn get(&self, k: usize) -> (i128, u128) {
         let value = ((self.sum_high[k] as u128) << 64 | self.sum_low[k] as u128) as i128;
         (value, (self.square_high[k] as u128) << 64 | self.square_low[k] as u128)
     }
 }
 
-/// Adds sample `rgb[k]` to `pixels[owners[k]]` for every k, converting the samples'
-/// channels [`CHUNK_SAMPLES`] at a time ([`FixedPointChunk`]); returns how many were
-/// refused ([`PixelStats::add`]). Inlined, as [`FixedPointChunk::convert`].
+/// Adds sample `rgb[k]` to `pixels[owners[k]]` for every k, one at a time by
+/// [`PixelStats::add`]; returns how many were refused. The form for machines without
+/// SSE4.1, and what [`add_samples`] must equal.
+pub(crate) fn add_samples_one_at_a_time(pixels: &mut [PixelStats], owners: &[u32], rgb: &[[f32; 3]]) -> u64 {
+    assert_eq!(owners.len(), rgb.len(), "one owner per sample");
+    owners.iter().zip(rgb).filter(|&(&i, rgb)| !pixels[i as usize].add(*rgb)).count() as u64
+}
+
+/// [`add_samples_one_at_a_time`], converting the samples' channels [`CHUNK_SAMPLES`] at a
+/// time ([`FixedPointChunk`]): the same pixels to the bit. Inlined, as
+/// [`FixedPointChunk::convert`].
 #[inline(always)]
-pub fn add_samples(pixels: &mut [PixelStats], owners: &[u32], rgb: &[[f32; 3]]) -> u64 {
+pub(crate) fn add_samples(pixels: &mut [PixelStats], owners: &[u32], rgb: &[[f32; 3]]) -> u64 {
     assert_eq!(owners.len(), rgb.len(), "one owner per sample");
     let mut refused = 0;
     for (owners, rgb) in owners.chunks(CHUNK_SAMPLES).zip(rgb.chunks(CHUNK_SAMPLES)) {
         let chunk = FixedPointChunk::convert(rgb.as_flattened());
         for (k, (&i, rgb)) in owners.iter().zip(rgb).enumerate() {
-            if !pixels[i as usize].add_converted(*rgb, &chunk, 3 * k) {
+            if !pixels[i as usize].add_with(*rgb, |c| chunk.get(3 * k + c)) {
                 refused += 1;
             }
         }
@@ -171,28 +180,19 @@ impl PixelStats {
     /// or beyond [`MAX_SAMPLE_MAGNITUDE`].
     #[inline]
     pub fn add(&mut self, rgb: [f32; 3]) -> bool {
-        if !rgb.iter().all(|v| v.abs() < MAX_SAMPLE_MAGNITUDE) {
-            return false;
-        }
-        self.count += 1;
-        for c in 0..3 {
-            let (value, square) = fixed_point(rgb[c]);
-            self.sum[c] += value;
-            self.sum_sq[c] += square;
-        }
-        true
+        self.add_with(rgb, |c| fixed_point(rgb[c]))
     }
 
-    /// [`PixelStats::add`] of sample `rgb` whose channels are values `first`, `first + 1`
-    /// and `first + 2` of `chunk` (converted from the same floats).
+    /// Adds sample `rgb` whose channel c has the fixed-point values `fixed(c)` (computed
+    /// from `rgb[c]`, by [`fixed_point`] or a [`FixedPointChunk`]), unless `rgb` is refused.
     #[inline(always)]
-    pub fn add_converted(&mut self, rgb: [f32; 3], chunk: &FixedPointChunk, first: usize) -> bool {
+    fn add_with(&mut self, rgb: [f32; 3], fixed: impl Fn(usize) -> (i128, u128)) -> bool {
         if !rgb.iter().all(|v| v.abs() < MAX_SAMPLE_MAGNITUDE) {
             return false;
         }
         self.count += 1;
         for c in 0..3 {
-            let (value, square) = chunk.get(first + c);
+            let (value, square) = fixed(c);
             self.sum[c] += value;
             self.sum_sq[c] += square;
         }
@@ -624,7 +624,8 @@ mod tests {
         let below_max = f32::from_bits(MAX_SAMPLE_MAGNITUDE.to_bits() - 1);
         let mut edges = vec![0.0, -0.0, 1.0, 0.5, 1.5, 2.5, f32::MIN_POSITIVE, 1e-45, 2f32.powi(-18), below_max];
         // Halves of the sums' grid (x · 2⁶⁴ = k + ½) and of the squares' (x² · 2³⁶ = k + ½),
-        // the carry from the low part into the high one, and neighbours of powers of two.
+        // values whose sum has a zero low word (negated, the carry into the high word), and
+        // neighbours of powers of two.
         edges.extend([2f32.powi(-65), 3.0 * 2f32.powi(-66), 2f32.powi(-18) * 1.5, 2f32.powi(-19) * 3.0]);
         edges.extend([f32::from_bits(1.0f32.to_bits() - 1), 2f32.powi(-15) * (1.0 - 2f32.powi(-24)), 65_536.0]);
         edges.extend([2f32.powi(34 - 1) * 1.999_999_9, 4096.0 * (1.0 + f32::EPSILON)]);
@@ -671,7 +672,7 @@ mod tests {
             rgb.push(c);
         }
         let mut expected = vec![PixelStats::default(); 37];
-        let refused_expected = owners.iter().zip(&rgb).filter(|&(&i, c)| !expected[i as usize].add(*c)).count();
+        let refused_expected = add_samples_one_at_a_time(&mut expected, &owners, &rgb);
         assert!(refused_expected > 50, "the test has refused samples: {refused_expected}");
         for len in [rgb.len(), 1, 16, 17, 1_000] {
             let mut pixels = vec![PixelStats::default(); 37];
@@ -679,7 +680,7 @@ mod tests {
             for (o, c) in owners.chunks(len).zip(rgb.chunks(len)) {
                 refused += add_samples(&mut pixels, o, c);
             }
-            assert_eq!(refused as usize, refused_expected);
+            assert_eq!(refused, refused_expected);
             assert_eq!(pixels, expected, "blocks of {len}");
         }
     }

@@ -65,8 +65,8 @@ pub(super) fn add_to_pixels(pixels: &mut [PixelStats], owners: &[u32], rgb: &[[f
         Isa::Avx512 => unsafe { add_avx512(pixels, owners, rgb) },
         // SAFETY: as above.
         Isa::Avx2 => unsafe { add_avx2(pixels, owners, rgb) },
-        // SSE2 has no instruction for the conversion's floors: one sample at a time.
-        Isa::Baseline => owners.iter().zip(rgb).filter(|&(&i, rgb)| !pixels[i as usize].add(*rgb)).count() as u64,
+        // SSE2 has no instruction for the conversion's floors.
+        Isa::Baseline => crate::film::add_samples_one_at_a_time(pixels, owners, rgb),
     }
     #[cfg(not(target_arch = "x86_64"))]
     crate::film::add_samples(pixels, owners, rgb)
@@ -151,9 +151,9 @@ mod tests {
             })
             .collect();
         let mut expected = vec![PixelStats::default(); 50];
-        let refused = owners.iter().zip(&rgb).filter(|&(&i, c)| !expected[i as usize].add(*c)).count();
+        let refused = crate::film::add_samples_one_at_a_time(&mut expected, &owners, &rgb);
         let mut pixels = vec![PixelStats::default(); 50];
-        assert_eq!(add_to_pixels(&mut pixels, &owners, &rgb), refused as u64);
+        assert_eq!(add_to_pixels(&mut pixels, &owners, &rgb), refused);
         assert_eq!(refused, 31);
         assert_eq!(pixels, expected);
     }
